@@ -1,0 +1,1 @@
+"""JSBSim aircraft definitions and their truth files; ``path()`` finds them."""

@@ -1,0 +1,1 @@
+"""Identification methods; each returns an ``identification.estimate.Estimate``."""

@@ -1,0 +1,1 @@
+"""Input designs, flight cards, studies and the ``flightid`` command line."""

@@ -1,0 +1,1 @@
+"""The simulator: JSBSim flight core, truth derivatives, sensors, disturbances, bridge."""
