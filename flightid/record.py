@@ -182,10 +182,10 @@ def read(path: str | Path) -> FlightRecord:
             first = fh.readline()
         if first.startswith(_CSV_MARK):
             meta = RecordMeta.from_json(first[len(_CSV_MARK):])
-            frame = pd.read_csv(path, skiprows=1, float_precision="round_trip")
+            frame = pd.read_csv(path, skiprows=1)
         else:
             meta = RecordMeta(provenance=str(path))
-            frame = pd.read_csv(path, float_precision="round_trip")
+            frame = pd.read_csv(path)
     elif suffix == ".mat":
         from flightid.sidpac import read_mat
 

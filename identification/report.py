@@ -1,0 +1,148 @@
+"""HTML report of identification results: tables and plots in one self-contained file.
+
+Plots (PNG, embedded as base64 so the file opens anywhere): measured vs model time
+histories, residuals, and each estimate with its 2-sigma bar against the truth.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from flightid.identification.estimate import Estimate
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def time_history_figure(estimate: Estimate, title: str = ""):
+    """Measured vs model outputs and residuals on a shared time axis."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(estimate.outputs)
+    fig, axes = plt.subplots(len(names), 2, figsize=(11, 1.9 * len(names) + 0.6), sharex=True,
+                             squeeze=False)
+    t = estimate.time if estimate.time is not None else np.arange(
+        len(next(iter(estimate.outputs.values()))["measured"]))
+    for row, name in enumerate(names):
+        out = estimate.outputs[name]
+        axes[row, 0].plot(t, out["measured"], color="0.3", lw=1.0, label="measured")
+        axes[row, 0].plot(t, out["model"], color="tab:red", lw=1.0, ls="--", label="model")
+        axes[row, 0].set_ylabel(name)
+        axes[row, 1].plot(t, np.asarray(out["measured"]) - np.asarray(out["model"]),
+                          color="tab:blue", lw=0.8)
+        axes[row, 1].set_ylabel(f"{name} residual")
+        for ax in axes[row]:
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=8)
+    axes[0, 0].set_title(title or f"{estimate.method}: measured and model")
+    axes[0, 1].set_title("residuals (measured - model)")
+    axes[-1, 0].set_xlabel("time (s)")
+    axes[-1, 1].set_xlabel("time (s)")
+    fig.tight_layout()
+    return fig
+
+
+def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None):
+    """Each derivative normalised by its truth (or value) with 2-sigma bars."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in estimate.names if n.startswith("C")]
+    fig, ax = plt.subplots(figsize=(8, 0.32 * len(names) + 1.2))
+    y = np.arange(len(names))
+    for i, n in enumerate(names):
+        v, s = estimate[n], estimate.std_of(n)
+        ref = truth.get(n) if truth else None
+        scale = abs(ref) if ref else (abs(v) or 1.0)
+        ax.errorbar(v / scale, i, xerr=2 * s / scale, fmt="o", color="tab:blue", capsize=3)
+        if ref is not None:
+            ax.plot(ref / scale, i, "k|", ms=14, mew=2)
+    ax.set_yticks(y, names)
+    ax.invert_yaxis()
+    ax.axvline(0, color="0.8", lw=0.8)
+    ax.set_xlabel("estimate / |truth|  (bar: 2 sigma; black tick: truth)" if truth
+                  else "estimate / |estimate| (bar: 2 sigma)")
+    ax.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    return fig
+
+
+def _table(rows: Sequence[Sequence[object]], header: Sequence[str]) -> str:
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(_fmt(c))}</td>" for c in r) + "</tr>" for r in rows
+    )
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _fmt(x: object) -> str:
+    if isinstance(x, float | np.floating):
+        return "" if not np.isfinite(x) else f"{x:.5g}"
+    return str(x)
+
+
+def write_html(
+    path: str | Path,
+    title: str,
+    estimates: Sequence[Estimate],
+    truth: dict[str, float] | None = None,
+    notes: Sequence[str] = (),
+    extra_figures: Sequence[tuple[str, object]] = (),
+) -> Path:
+    """Write a self-contained HTML report with tables and plots; returns the path."""
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'>",
+        f"<title>{html.escape(title)}</title>",
+        "<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
+        "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;"
+        "padding:2px 8px;text-align:right}th{background:#eee}img{max-width:100%}</style>",
+        f"</head><body><h1>{html.escape(title)}</h1>",
+    ]
+    parts += [f"<p>{html.escape(n)}</p>" for n in notes]
+    for est in estimates:
+        parts.append(f"<h2>{html.escape(est.method)}</h2>")
+        rows = []
+        for n, v, s in zip(est.names, est.values, est.std, strict=True):
+            ref = truth.get(n) if truth else None
+            err = v - ref if ref is not None else float("nan")
+            rows.append([n, ref if ref is not None else "", v, s, err,
+                         abs(err) / s if ref is not None and s > 0 else ""])
+        parts.append(_table(rows, ["parameter", "truth", "estimate", "std", "error",
+                                   "|error|/std"]))
+        if est.unidentifiable:
+            parts.append("<p><b>Unidentifiable:</b></p><ul>" + "".join(
+                f"<li>{html.escape(k)}: {html.escape(v)}</li>"
+                for k, v in est.unidentifiable.items()) + "</ul>")
+        fit_rows = [[k, v] for k, v in est.fit.items() if isinstance(v, int | float | str | bool)]
+        if fit_rows:
+            parts.append(_table(fit_rows, ["fit statistic", "value"]))
+        if est.outputs:
+            parts.append(f"<img alt='time histories' src='data:image/png;base64,"
+                         f"{_png(time_history_figure(est))}'>")
+        if any(n.startswith("C") for n in est.names):
+            parts.append(f"<img alt='estimates' src='data:image/png;base64,"
+                         f"{_png(estimates_figure(est, truth))}'>")
+    for caption, fig in extra_figures:
+        parts.append(f"<h2>{html.escape(caption)}</h2><img alt='{html.escape(caption)}' "
+                     f"src='data:image/png;base64,{_png(fig)}'>")
+    parts.append("</body></html>")
+    path = Path(path)
+    path.write_text("\n".join(parts), encoding="utf-8")
+    return path
