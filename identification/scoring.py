@@ -1,0 +1,164 @@
+"""Score estimates against truth: a row per derivative, a one-line verdict, table and JSON.
+
+error = estimate - truth; error/std says how many standard errors (Cramer-Rao bounds,
+corrected for colored residuals where the method did so) the estimate is off. An
+estimate within ``n_sigma`` (3 by default: 99.7 % for a Gaussian estimator whose bound
+is right) counts as consistent with the truth. Unidentifiable parameters are shown as
+such, never as numbers; truth values that no estimate covers are "not estimated".
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from flightid.identification.estimate import Estimate
+
+STATUS_ESTIMATED = "estimated"
+STATUS_UNIDENTIFIABLE = "unidentifiable"
+STATUS_NOT_ESTIMATED = "not estimated"
+
+
+@dataclass
+class ScoreRow:
+    """One derivative: truth, estimate, standard error, error and error in standard errors."""
+
+    name: str
+    truth: float
+    estimate: float | None
+    std: float | None
+    error: float | None
+    sigmas: float | None  # error / std
+    status: str
+    reason: str = ""
+
+
+@dataclass
+class Score:
+    """All rows of a comparison with truth and the one-line verdict."""
+
+    rows: list[ScoreRow]
+    n_sigma: float
+    verdict: str
+    method: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready form: {"method", "n_sigma", "verdict", "rows": [...]}."""
+        return {
+            "method": self.method,
+            "n_sigma": self.n_sigma,
+            "verdict": self.verdict,
+            "rows": [{k: _finite(v) for k, v in asdict(r).items()} for r in self.rows],
+        }
+
+    def to_json(self, indent: int = 2) -> str:
+        """The dict form as JSON text."""
+        return json.dumps(self.as_dict(), indent=indent)
+
+    def table(self):  # -> rich.table.Table
+        """A rich Table of the rows with the verdict as caption."""
+        from rich.table import Table
+
+        table = Table(title=f"{self.method} vs truth" if self.method else "estimate vs truth",
+                      caption=self.verdict)
+        for col in ("derivative", "truth", "estimate", "std", "error", "error/std"):
+            table.add_column(col, justify="left" if col == "derivative" else "right")
+        for r in self.rows:
+            if r.status == STATUS_ESTIMATED:
+                style = "" if abs(r.sigmas) <= self.n_sigma else "red"
+                table.add_row(r.name, f"{r.truth:.5g}", f"{r.estimate:.5g}", f"{r.std:.3g}",
+                              f"{r.error:+.3g}", f"{r.sigmas:+.2f}", style=style)
+            else:
+                label = r.status + (f": {r.reason}" if r.reason else "")
+                table.add_row(r.name, f"{r.truth:.5g}", label, "", "", "", style="yellow")
+        return table
+
+    def print(self, console=None) -> None:
+        """Print the table with rich (to the given console or stdout)."""
+        from rich.console import Console
+
+        (console or Console()).print(self.table())
+
+
+def score(
+    estimate: Estimate | Iterable[Estimate],
+    truth: Mapping[str, float],
+    n_sigma: float = 3.0,
+) -> Score:
+    """Compare one or several estimates with truth values {derivative name: value}."""
+    estimates = [estimate] if isinstance(estimate, Estimate) else list(estimate)
+    if not estimates:
+        raise ValueError("no estimate to score")
+    rows = []
+    for name, true_value in truth.items():
+        rows.append(_row(name, float(true_value), estimates))
+    method = ", ".join(sorted({e.method for e in estimates}))
+    return Score(rows, n_sigma, verdict(rows, n_sigma), method)
+
+
+def verdict(rows: list[ScoreRow], n_sigma: float = 3.0) -> str:
+    """One line: '18 of 18 within 3 sigma; worst Cn_p at 2.1 sigma' (+ unidentifiable)."""
+    done = [r for r in rows if r.status == STATUS_ESTIMATED]
+    parts = []
+    if done:
+        inside = sum(abs(r.sigmas) <= n_sigma for r in done)
+        worst = max(done, key=lambda r: abs(r.sigmas))
+        parts.append(f"{inside} of {len(done)} within {n_sigma:g} sigma; worst {worst.name} "
+                     f"at {abs(worst.sigmas):.1f} sigma")
+    else:
+        parts.append("nothing estimated")
+    for status in (STATUS_UNIDENTIFIABLE, STATUS_NOT_ESTIMATED):
+        names = [r.name for r in rows if r.status == status]
+        if names:
+            parts.append(f"{len(names)} {status} ({', '.join(names)})")
+    return "; ".join(parts)
+
+
+def load_truth(path: str | Path) -> dict[str, float]:
+    """Truth values from JSON: {name: value} or {name: {"value": ...}} (also under "truth")."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
+    if isinstance(data, dict) and isinstance(data.get("truth"), dict):
+        data = data["truth"]
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a JSON object of derivative values")
+    out = {}
+    for name, value in data.items():
+        if isinstance(value, dict):
+            if "value" not in value:
+                raise ValueError(f"{path}: field {name!r} has no 'value'")
+            value = value["value"]
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            raise ValueError(f"{path}: field {name!r}: expected a number, got {value!r}")
+        out[name] = float(value)
+    return out
+
+
+def _row(name: str, truth: float, estimates: list[Estimate]) -> ScoreRow:
+    for est in estimates:
+        if name in est.unidentifiable:
+            return ScoreRow(name, truth, None, None, None, None, STATUS_UNIDENTIFIABLE,
+                            est.unidentifiable[name])
+    for est in estimates:
+        if name in est.names:
+            value, std = est[name], est.std_of(name)
+            error = value - truth
+            if std > 0:
+                sig = error / std
+            else:
+                sig = 0.0 if error == 0 else math.copysign(math.inf, error)
+            return ScoreRow(name, truth, value, std, error, sig, STATUS_ESTIMATED)
+    return ScoreRow(name, truth, None, None, None, None, STATUS_NOT_ESTIMATED)
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    return value

@@ -1,0 +1,616 @@
+"""Sensor suites: from a truth FlightRecord (fast internal rate) to the measured record.
+
+A ``SensorSuite`` maps each measured channel to an ordered list of effects
+(``flightid.sim.effects``), plus mounting effects that act on the whole record before the
+per-channel chains: ``LeverArm`` (IMU away from the CG), ``Vanes`` (alpha/beta vanes on a
+boom, with upwash/sidewash) and ``EngineVibration`` (``flightid.sim.vibration``).
+``measure(truth, suite, seed)`` runs them and resamples every channel to one output rate.
+Built-in suites ``hobby`` and ``research`` carry the source of each value in its
+``source`` field; ``suite_from_dict`` builds a suite from a card table.
+
+Random streams are independent per channel and per mounting effect (seeded from
+``seed`` and the channel name), so adding a channel leaves the others' noise unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import zlib
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from flightid.sim.effects import (
+    Bias,
+    Delay,
+    Effect,
+    Quantization,
+    RandomWalk,
+    Sample,
+    Saturation,
+    SecondOrder,
+    WhiteNoise,
+    effect_from_dict,
+    parse_params,
+)
+from flightid.sim.vibration import AXES, EngineVibration
+
+from flightid.channels import CHANNELS
+from flightid.record import FlightRecord
+from flightid.units import DEG, FT, G0
+
+# -- mounting effects --------------------------------------------------------------
+
+
+@dataclass(kw_only=True)
+class MountingEffect:
+    """Base of the effects that act on several channels of the record at once."""
+
+    name: ClassVar[str] = ""
+    requires: ClassVar[tuple[str, ...]] = ()
+    source: str = field(default="", compare=False)
+
+    def apply_record(
+        self, t: np.ndarray, channels: dict[str, np.ndarray], rng: np.random.Generator
+    ) -> dict[str, np.ndarray]:
+        """The channels this effect changes, computed from ``channels`` on times ``t`` (s)."""
+        raise NotImplementedError
+
+    def parameters(self) -> dict[str, float]:
+        """Parameters by name (SI floats)."""
+        return {
+            f.name: float(getattr(self, f.name))
+            for f in dataclasses.fields(self)
+            if f.name != "source"
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"effect": name, **parameters}`` plus the source if any."""
+        d: dict[str, Any] = {"effect": self.name, **self.parameters()}
+        if self.source:
+            d["source"] = self.source
+        return d
+
+    def check(self, channels: dict[str, np.ndarray]) -> None:
+        """Raise naming the missing channels this effect needs."""
+        missing = [c for c in self.requires if c not in channels]
+        if missing:
+            raise ValueError(
+                f"{self.name} needs truth channels {', '.join(missing)}, which the record lacks"
+            )
+
+
+def _rate_derivative(t: np.ndarray, channels: dict[str, np.ndarray], name: str, of: str):
+    if name in channels:
+        return channels[name]
+    return np.gradient(channels[of], t)  # numerical derivative when the truth lacks it
+
+
+@dataclass(kw_only=True)
+class LeverArm(MountingEffect):
+    """Accelerometers at (x, y, z) m from the CG, body axes (x fwd, y right, z down).
+
+    a_sensor = a_cg + omega_dot x r + omega x (omega x r) (Morelli & Klein 2016, eq.
+    10.9; seed 001 FDP CG transfer). Needs p, q, r; pdot, qdot, rdot are differentiated
+    from the rates if the truth lacks them. Gyros are unaffected.
+    """
+
+    name: ClassVar[str] = "lever_arm"
+    requires: ClassVar[tuple[str, ...]] = ("ax", "ay", "az", "p", "q", "r")
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+    def apply_record(self, t, channels, rng):
+        self.check(channels)
+        p, q, r = channels["p"], channels["q"], channels["r"]
+        pd = _rate_derivative(t, channels, "pdot", "p")
+        qd = _rate_derivative(t, channels, "qdot", "q")
+        rd = _rate_derivative(t, channels, "rdot", "r")
+        x, y, z = self.x, self.y, self.z
+        c1, c2, c3 = q * z - r * y, r * x - p * z, p * y - q * x  # omega x r
+        return {
+            "ax": channels["ax"] + (qd * z - rd * y) + (q * c3 - r * c2),
+            "ay": channels["ay"] + (rd * x - pd * z) + (r * c1 - p * c3),
+            "az": channels["az"] + (pd * y - qd * x) + (p * c2 - q * c1),
+        }
+
+
+@dataclass(kw_only=True)
+class Vanes(MountingEffect):
+    """Alpha and beta vanes at body positions (m) with upwash and sidewash factors.
+
+    The local air velocity at a vane is V_cg + omega x r_vane, so to first order
+    alpha_v = alpha - x_a q / V + y_a p / V and beta_v = beta + x_b r / V - z_b p / V
+    (seed 001 App. I/J: alpha_m = K_a (alpha - x_a q / V), beta_m = K_b (beta - z_b p / V
+    + x_b r / V); Morelli & Klein 2016, 10.2). Computed exactly from the local velocity,
+    then scaled by (1 + upwash) and (1 + sidewash): the flow-amplification K of seed 001.
+    """
+
+    name: ClassVar[str] = "vanes"
+    requires: ClassVar[tuple[str, ...]] = ("V", "alpha", "beta", "p", "q", "r")
+    alpha_x: float = 0.0
+    alpha_y: float = 0.0
+    alpha_z: float = 0.0
+    beta_x: float = 0.0
+    beta_y: float = 0.0
+    beta_z: float = 0.0
+    upwash: float = 0.0
+    sidewash: float = 0.0
+
+    def apply_record(self, t, channels, rng):
+        self.check(channels)
+        V, a, b = channels["V"], channels["alpha"], channels["beta"]
+        p, q, r = channels["p"], channels["q"], channels["r"]
+        u, v, w = V * np.cos(a) * np.cos(b), V * np.sin(b), V * np.sin(a) * np.cos(b)
+
+        def local(x: float, y: float, z: float) -> tuple[np.ndarray, ...]:
+            return u + q * z - r * y, v + r * x - p * z, w + p * y - q * x
+
+        ua, _, wa = local(self.alpha_x, self.alpha_y, self.alpha_z)
+        ub, vb, wb = local(self.beta_x, self.beta_y, self.beta_z)
+        alpha_v = np.arctan2(wa, ua)
+        beta_v = np.arcsin(np.clip(vb / np.sqrt(ub**2 + vb**2 + wb**2), -1.0, 1.0))
+        return {"alpha": (1 + self.upwash) * alpha_v, "beta": (1 + self.sidewash) * beta_v}
+
+
+MOUNTING: dict[str, type] = {c.name: c for c in (LeverArm, Vanes, EngineVibration)}
+
+
+# -- the suite ---------------------------------------------------------------------
+
+
+@dataclass
+class SensorSuite:
+    """Measured channels with their ordered effects, mounting effects and output rate (Hz).
+
+    ``output_rate`` 0 means the highest channel rate; ``passthrough`` channels are copied
+    from the truth (e.g. mass properties known from weighing), interpolated to the output.
+    """
+
+    name: str = ""
+    channels: dict[str, list[Effect]] = field(default_factory=dict)
+    mounting: list[Any] = field(default_factory=list)
+    output_rate: float = 0.0
+    passthrough: tuple[str, ...] = ()
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        for ch, chain in self.channels.items():
+            n = sum(isinstance(e, Sample) for e in chain)
+            if n > 1:
+                raise ValueError(f"channels.{ch}: {n} 'sample' effects; a channel is sampled once")
+        if sum(isinstance(m, EngineVibration) for m in self.mounting) > 1:
+            raise ValueError("mounting: at most one engine_vibration effect")
+        if self.output_rate < 0:
+            raise ValueError(f"field 'output_rate' must be >= 0 Hz, got {self.output_rate}")
+
+    def sample_rate(self, channel: str) -> float | None:
+        """The rate (Hz) at which ``channel`` is sampled, None if it is not."""
+        for e in self.channels[channel]:
+            if isinstance(e, Sample):
+                return e.rate
+        return None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The suite as a plain dict (inverse of ``suite_from_dict``)."""
+        return {
+            "name": self.name,
+            "description": self.description,
+            "output_rate": self.output_rate,
+            "passthrough": list(self.passthrough),
+            "mounting": [m.to_dict() for m in self.mounting],
+            "channels": {c: [e.to_dict() for e in chain] for c, chain in self.channels.items()},
+        }
+
+
+def _rng(seed: int, key: str) -> np.random.Generator:
+    return np.random.default_rng([int(seed), zlib.crc32(key.encode())])
+
+
+def run_chain(
+    t: np.ndarray, x: np.ndarray, chain: list[Effect], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Apply ``chain`` in order to ``x`` on times ``t`` (s); returns the final (t, x)."""
+    x = np.asarray(x, float)
+    for e in chain:
+        if isinstance(e, Sample):
+            t_new = e.output_time(t)
+            x = e.apply(t, x, rng)
+            t = t_new
+        else:
+            x = e.apply(t, x, rng)
+    return t, x
+
+
+def _vibration_grid(t: np.ndarray, rate: float, f_max: float) -> np.ndarray:
+    """A uniform grid from t[0] to t[-1] fine enough for lines up to ``f_max`` (Hz).
+
+    At least 10 samples per cycle of the highest line and the truth's own rate, and an
+    integer multiple of the sensor ``rate`` so its sample instants fall on the grid.
+    """
+    fast = (t.size - 1) / (t[-1] - t[0])
+    fine = rate * np.ceil(max(10.0 * f_max, fast) / rate - 1e-9)
+    n = int(np.floor((t[-1] - t[0]) * fine + 1e-9)) + 1
+    return t[0] + np.arange(n) / fine
+
+
+def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRecord:
+    """The record as measured by ``suite``: channels in SI at the suite's output rate.
+
+    Mounting effects act on the truth at its fast rate; vibrating IMU channels are
+    evaluated on a finer grid (``_vibration_grid``) so that lines above the sensor's
+    Nyquist frequency alias correctly. Channels sampled slower than the output rate are
+    held (zero-order hold, the latest sample, as a recorder logs it); unsampled channels
+    are linearly interpolated. ``meta.extra['measurement']`` records how.
+    """
+    t = truth.time
+    if t.size < 2:
+        raise ValueError("measure needs a truth record with at least two samples")
+    missing = [c for c in (*suite.channels, *suite.passthrough) if c not in truth]
+    if missing:
+        raise ValueError(
+            f"suite {suite.name!r} measures {', '.join(missing)}, which the truth record "
+            f"lacks; it has {', '.join(sorted(truth.channels))}"
+        )
+    ch = dict(truth.channels)
+    vib = None
+    for i, m in enumerate(suite.mounting):
+        if isinstance(m, EngineVibration):
+            vib = m
+            continue
+        ch.update(m.apply_record(t, ch, _rng(seed, f"mounting:{i}:{m.name}")))
+    phases = None
+    if vib is not None:
+        if "rpm" not in ch:
+            raise ValueError(
+                f"suite {suite.name!r}: engine_vibration needs the truth channel 'rpm' "
+                "(engine speed, 1/min), which the record lacks"
+            )
+        phases = vib.phases(_rng(seed, "mounting:engine_vibration"))
+
+    fast_rate = (t.size - 1) / (t[-1] - t[0])
+    measured: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    rates: dict[str, float] = {}
+    for name, chain in suite.channels.items():
+        x, tc = ch[name], t
+        rate = suite.sample_rate(name)
+        if vib is not None and name in AXES and getattr(vib, name) != 0:
+            f_max = vib.max_frequency(ch["rpm"])
+            tc = _vibration_grid(t, rate or fast_rate, f_max)
+            if tc.size != t.size or not np.allclose(tc, t):
+                x = np.interp(tc, t, x)
+                rpm = np.interp(tc, t, ch["rpm"])
+            else:
+                rpm = ch["rpm"]
+            x = x + vib.signal(tc, rpm, name, phases)
+        try:
+            measured[name] = run_chain(tc, x, chain, _rng(seed, f"channel:{name}"))
+        except ValueError as exc:
+            raise ValueError(f"channel {name!r}: {exc}") from None
+        rates[name] = rate if rate is not None else fast_rate
+
+    out_rate = suite.output_rate or max(rates.values(), default=fast_rate)
+    n = int(np.floor((t[-1] - t[0]) * out_rate + 1e-9)) + 1
+    t_out = t[0] + np.arange(n) / out_rate
+    out: dict[str, np.ndarray] = {}
+    how: dict[str, str] = {}
+    for name, (tc, x) in measured.items():
+        if tc.size == t_out.size and np.allclose(tc, t_out, rtol=0, atol=1e-9):
+            out[name], how[name] = x, "as sampled"
+        elif suite.sample_rate(name) is not None:
+            idx = np.searchsorted(tc, t_out + 1e-9, side="right") - 1
+            out[name], how[name] = x[np.clip(idx, 0, None)], "zero-order hold of the latest sample"
+        else:
+            out[name], how[name] = np.interp(t_out, tc, x), "linear interpolation (unsampled)"
+    for name in suite.passthrough:
+        out[name], how[name] = np.interp(t_out, t, truth[name]), "truth, linear interpolation"
+
+    units = {c: truth.meta.units[c] for c in out if c in truth.meta.units}
+    extra = dict(truth.meta.extra)
+    extra["measurement"] = {
+        "suite": suite.name,
+        "seed": int(seed),
+        "output_rate_hz": out_rate,
+        "channel_rates_hz": rates,
+        "resampling": how,
+        "definition": suite.to_dict(),
+    }
+    provenance = f"{truth.meta.provenance}; measured by sensor suite {suite.name!r} seed {seed}"
+    meta = dataclasses.replace(
+        truth.meta, sample_rate=out_rate, units=units, extra=extra, provenance=provenance
+    )
+    return FlightRecord(t_out, out, meta)
+
+
+# -- building suites from dicts --------------------------------------------------------
+
+
+def mounting_from_dict(d: dict[str, Any], context: str = "") -> Any:
+    """Build a mounting effect (lever_arm, vanes, engine_vibration) from a table."""
+    pre = f"{context}." if context else ""
+    if not isinstance(d, dict) or "effect" not in d:
+        raise ValueError(f"field {pre + 'effect'!r} is missing; one of {', '.join(MOUNTING)}")
+    if d["effect"] not in MOUNTING:
+        raise ValueError(
+            f"field {pre + 'effect'!r}: unknown mounting effect {d['effect']!r}; "
+            f"known: {', '.join(MOUNTING)}"
+        )
+    cls = MOUNTING[d["effect"]]
+    try:
+        return cls(**parse_params(cls, d, context))
+    except ValueError as exc:
+        raise ValueError(f"{context}: {exc}") from None
+
+
+def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
+    """Build a suite from a table; ``base`` starts from a built-in suite.
+
+    Keys: name, description, base, output_rate (Hz), passthrough (list), mounting (list
+    of tables), channels (table of channel -> list of effect tables). With ``base``, a
+    listed channel replaces that channel's chain and a given ``mounting`` replaces the
+    mounting list. Errors name the field, e.g. ``channels.q[1].sigma``.
+    """
+    if not isinstance(d, dict):
+        raise ValueError(f"suite: expected a table, got {type(d).__name__}")
+    allowed = {"name", "description", "base", "output_rate", "passthrough", "mounting", "channels"}
+    for key in d:
+        if key not in allowed:
+            raise ValueError(
+                f"field {key!r} is not a suite field; allowed: {', '.join(sorted(allowed))}"
+            )
+    suite = builtin_suite(d["base"]) if "base" in d else SensorSuite()
+    channels = dict(suite.channels)
+    raw_channels = d.get("channels", {})
+    if not isinstance(raw_channels, dict):
+        raise ValueError("field 'channels' must be a table of channel -> list of effects")
+    for name, chain in raw_channels.items():
+        if name not in CHANNELS:
+            raise ValueError(f"field 'channels.{name}': {name!r} is not a canonical channel")
+        if not isinstance(chain, list):
+            raise ValueError(f"field 'channels.{name}' must be a list of effect tables")
+        unit = CHANNELS[name].unit
+        channels[name] = [
+            effect_from_dict(e, f"channels.{name}[{i}]", unit) for i, e in enumerate(chain)
+        ]
+    mounting = suite.mounting
+    if "mounting" in d:
+        if not isinstance(d["mounting"], list):
+            raise ValueError("field 'mounting' must be a list of effect tables")
+        mounting = [mounting_from_dict(m, f"mounting[{i}]") for i, m in enumerate(d["mounting"])]
+    rate = d.get("output_rate", suite.output_rate)
+    if isinstance(rate, bool) or not isinstance(rate, int | float):
+        raise ValueError(f"field 'output_rate' must be a number (Hz), got {rate!r}")
+    passthrough = d.get("passthrough", list(suite.passthrough))
+    if not isinstance(passthrough, list | tuple) or not all(
+        isinstance(c, str) for c in passthrough
+    ):
+        raise ValueError(
+            f"field 'passthrough' must be a list of channel names, got {passthrough!r}"
+        )
+    return SensorSuite(
+        name=d.get("name", suite.name or "custom"),
+        channels=channels,
+        mounting=mounting,
+        output_rate=float(rate),
+        passthrough=tuple(passthrough),
+        description=d.get("description", suite.description),
+    )
+
+
+# -- built-in suites ---------------------------------------------------------------------
+
+_MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz")
+S000 = "seed 000 (Telemaster thesis)"
+S003 = "seed 003 (Boomerang 60)"
+TOTTER = (
+    "estimated from the NASA Twin Otter record totter_f1_017 (50 Hz): std of the residual "
+    "from an 11-point cubic Savitzky-Golay fit; an upper bound, the fit leaves some signal"
+)
+TOTTER_Q = "smallest step of the Twin Otter record totter_f1_017"
+
+
+def hobby_suite() -> SensorSuite:
+    """Hobby MEMS IMU and potentiometer vanes, Telemaster / Boomerang class (seeds 000, 003)."""
+    imu = Sample(
+        rate=100.0,
+        source=f"{S003}: O-Navi Phoenix IMU, 100 Hz binary on RS-232; "
+        "no anti-alias filter in either seed",
+    )
+    das = Sample(rate=25.0, source=f"{S000} 6: 8-bit DAS at 25 Hz, no anti-alias filter")
+    gyro_range = Saturation(limit=600 * DEG, source=f"{S003}: gyros 600 deg/s (OCR-unsure)")
+    acc_range = Saturation(limit=10 * G0, source=f"{S003}: accelerometers +-10 g (OCR '#0g')")
+
+    def gyro() -> list[Effect]:
+        return [
+            Bias(value=0.5 * DEG, source="assumption: hobby gyro null offset 0.5 deg/s"),
+            RandomWalk(
+                sigma=0.02 * DEG,
+                source=f"assumption, order of MEMS rate random walk; "
+                f"{S003} measured gyro drift but its values are lost",
+            ),
+            gyro_range,
+            imu,
+            WhiteNoise(sigma=1.2 * DEG, source=f"{S000} Table 8-6: rate noise 1.2 deg/s"),
+            Quantization(
+                resolution=1200 * DEG / 2**16, source="assumption: 16-bit over 1200 deg/s"
+            ),
+        ]
+
+    def acc() -> list[Effect]:
+        return [
+            Bias(value=0.02 * G0, source="assumption: MEMS accelerometer offset 0.02 g"),
+            acc_range,
+            imu,
+            WhiteNoise(
+                sigma=0.02 * G0, source=f"{S000} Table 2-1: accelerometer resolution 0.02 g"
+            ),
+            Quantization(resolution=20 * G0 / 2**16, source="assumption: 16-bit over 20 g"),
+        ]
+
+    def vane() -> list[Effect]:
+        return [
+            SecondOrder(wn=108.0, zeta=0.19, source=f"{S000} App. 2: vane 108 rad/s, damping 0.19"),
+            das,
+            WhiteNoise(sigma=0.7 * DEG, source=f"{S000} Table 8-6: alpha, beta noise 0.7 deg"),
+            Quantization(resolution=0.4 * DEG, source=f"{S000} Fig. 6-3: vane resolution 0.4 deg"),
+        ]
+
+    def surface(sigma_deg: float) -> list[Effect]:
+        return [
+            das,
+            WhiteNoise(sigma=sigma_deg * DEG, source=f"{S000} Table 8-6: {sigma_deg} deg"),
+            Quantization(resolution=0.25 * DEG, source=f"{S000} Fig. 6-3: servo pot 0.25 deg"),
+        ]
+
+    return SensorSuite(
+        name="hobby",
+        description="hobby MEMS IMU at 100 Hz without anti-alias filter (seed 003) and an "
+        "8-bit 25 Hz DAS with potentiometer vanes and servo pots (seed 000)",
+        channels={
+            "p": gyro(),
+            "q": gyro(),
+            "r": gyro(),
+            "ax": acc(),
+            "ay": acc(),
+            "az": acc(),
+            "alpha": vane(),
+            "beta": vane(),
+            "de": surface(0.2),
+            "da": surface(0.2),
+            "dr": surface(0.3),
+            "V": [
+                Delay(tau=0.003, source=f"{S000} App. 2: pitot tubing delay 3 ms per metre, 1 m"),
+                das,
+                WhiteNoise(sigma=0.8, source=f"{S000} 6: airspeed accuracy +-0.8 m/s"),
+            ],
+            "rpm": [das, Quantization(resolution=100.0, source=f"{S000} Fig. 6-3: 100 rpm")],
+        },
+        mounting=[
+            LeverArm(
+                x=0.05,
+                y=0.0,
+                z=0.08,
+                source=f"assumption: {S000} says the IMU is "
+                f"'not located exactly on the CG'; {S003} box under the fuselage",
+            ),
+            Vanes(
+                alpha_x=1.0,
+                beta_x=1.0,
+                upwash=0.0136,
+                sidewash=0.0136,
+                source=f"{S000} App. 2: vanes 1 m ahead of the CG, boom K = 0.0136",
+            ),
+            EngineVibration(
+                ax=2.0,
+                ay=2.0,
+                az=3.0,
+                p=2 * DEG,
+                q=2 * DEG,
+                r=1 * DEG,
+                harmonics=2.0,
+                blades=2.0,
+                blade_amplitude=0.5,
+                source=f"assumption for amplitudes; {S000} 3.5: vibration buried the rate "
+                f"gyros unless at idle; {S003}: 16,000 rpm glow engine",
+            ),
+        ],
+        output_rate=100.0,
+        passthrough=_MASS,
+    )
+
+
+def research_suite() -> SensorSuite:
+    """Research instrumentation, Twin Otter / Navion class: 50 Hz, anti-aliased, low noise."""
+    aa = Sample(
+        rate=50.0,
+        antialias=10.0,
+        order=4.0,
+        source="50 Hz as the NASA Twin Otter record; 4-pole Butterworth at 40 % of "
+        f"Nyquist ({S000} 3.6, literature rule)",
+    )
+
+    def chan(sigma: float, q: float) -> list[Effect]:
+        return [
+            aa,
+            WhiteNoise(sigma=sigma, source=TOTTER),
+            Quantization(resolution=q, source=TOTTER_Q),
+        ]
+
+    return SensorSuite(
+        name="research",
+        description="research flight-test instrumentation, Twin Otter class: 50 Hz with "
+        "anti-alias filters, noise levels estimated from the NASA Twin Otter record",
+        channels={
+            "V": chan(0.034 * FT, 0.0),
+            "alpha": chan(0.0048 * DEG, 1e-6 * DEG),
+            "beta": chan(0.0046 * DEG, 1e-6 * DEG),
+            "p": chan(0.033 * DEG, 0.001 * DEG),
+            "q": chan(0.0061 * DEG, 0.001 * DEG),
+            "r": chan(0.0086 * DEG, 0.001 * DEG),
+            "phi": chan(0.0066 * DEG, 0.01 * DEG),
+            "theta": chan(0.0044 * DEG, 0.01 * DEG),
+            "ax": chan(0.00032 * G0, 0.0001 * G0),
+            "ay": chan(0.00075 * G0, 0.0001 * G0),
+            "az": chan(0.00075 * G0, 0.0001 * G0),
+            "de": chan(0.0048 * DEG, 0.01 * DEG),
+            "da": chan(0.030 * DEG, 0.005 * DEG),
+            "dr": chan(0.0064 * DEG, 0.01 * DEG),
+            "h": chan(0.41 * FT, 0.5 * FT),
+        },
+        mounting=[
+            LeverArm(x=0.3, y=0.0, z=0.2, source="assumption: IMU near the CG of a Twin Otter"),
+            Vanes(
+                alpha_x=4.5,
+                beta_x=4.5,
+                upwash=0.06,
+                sidewash=0.10,
+                source="seed 001: nose-boom vanes, K_alpha 1.06, K_beta 1.06-1.20; FPR "
+                "default vane position 4.5 m",
+            ),
+        ],
+        output_rate=50.0,
+        passthrough=_MASS,
+    )
+
+
+def ideal_suite(rate: float = 100.0) -> SensorSuite:
+    """Perfect sensors sampled at ``rate`` (Hz): the truth at a recorder's rate."""
+    names = (
+        "V",
+        "alpha",
+        "beta",
+        "p",
+        "q",
+        "r",
+        "phi",
+        "theta",
+        "psi",
+        "ax",
+        "ay",
+        "az",
+        "de",
+        "da",
+        "dr",
+        "throttle",
+        "h",
+    )
+    return SensorSuite(
+        name="ideal",
+        channels={c: [Sample(rate=rate)] for c in names},
+        output_rate=rate,
+        description="no sensor errors",
+    )
+
+
+SUITES = {"hobby": hobby_suite, "research": research_suite, "ideal": ideal_suite}
+
+
+def builtin_suite(name: str) -> SensorSuite:
+    """A built-in suite by name (``SUITES``)."""
+    try:
+        return SUITES[name]()
+    except KeyError:
+        raise ValueError(
+            f"field 'base': unknown suite {name!r}; built-in: {', '.join(SUITES)}"
+        ) from None
