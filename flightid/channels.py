@@ -31,6 +31,7 @@ _TABLE: tuple[tuple[str, str, str], ...] = (
     ("beta", "rad", "angle of sideslip"),
     ("qbar", "Pa", "dynamic pressure"),
     ("rho", "kg/m^3", "air density"),
+    ("p_static", "Pa", "static (ambient) pressure"),
     ("h", "m", "altitude above sea level"),
     ("mach", "-", "Mach number"),
     ("u", "m/s", "body x velocity relative to the air mass"),

@@ -90,10 +90,29 @@ def run_stepwise(
     ]
 
 
+def run_output_error(
+    record: FlightRecord, model: str = "lateral", options: Mapping[str, Any] | None = None
+) -> list[Estimate]:
+    """Output error (maximum likelihood) on a linear model preset: lateral, longitudinal,
+    short_period."""
+    from flightid.identification import output_error
+
+    return [output_error.run(record, model, options)]
+
+
 METHODS: dict[str, Callable[[FlightRecord, str, Mapping[str, Any] | None], list[Estimate]]] = {
     "ee": run_equation_error,
     "swr": run_stepwise,
+    "oe": run_output_error,
+    "fem": lambda record, model, options: [_filter_error().run(record, model, options)],
 }
+
+
+def _filter_error():
+    """The filter-error module, imported on first use (scipy Riccati solvers are heavy)."""
+    from flightid.identification import filter_error
+
+    return filter_error
 
 
 def identify(

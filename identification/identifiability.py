@@ -1,0 +1,132 @@
+"""Which parameters a flight can determine: unexcited inputs, zero sensitivity, collinearity.
+
+Works on the Fisher information matrix M = sum_i S_i^T R^-1 S_i of an output-error fit
+(Morelli & Klein 2016, sec. 6.3; Jategaonkar 2015, sec. 4.17) and on the inputs of the
+record. Each test returns ``{parameter: reason}`` for the parameters it finds cannot be
+separated, so the caller can fix them at their a priori values and estimate the rest.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+# An input that moves less than this (rad) carries no excitation: it is below the
+# resolution of control-position sensors (about 0.1 deg) and far below any test input.
+MIN_INPUT_RANGE = 1e-3
+# Smallest eigenvalue of the normalised information matrix (unit diagonal) below which it
+# is treated as singular: a combination of parameters whose estimate would have a
+# variance 1e8 times that of an uncorrelated one (pairwise correlation 1 - 5e-9).
+SINGULAR_EIGENVALUE = 1e-8
+# A parameter whose whitened sensitivity is this small relative to the largest one has
+# no effect on the outputs.
+ZERO_SENSITIVITY = 1e-9
+
+
+def unexcited_inputs(
+    inputs: Sequence[str], data: np.ndarray, min_range: float = MIN_INPUT_RANGE
+) -> dict[str, float]:
+    """Inputs whose peak-to-peak range (in their SI unit) is below ``min_range``: {name: range}."""
+    ranges = np.ptp(np.asarray(data, dtype=float), axis=0)
+    return {n: float(r) for n, r in zip(inputs, ranges, strict=True) if r < min_range}
+
+
+def input_only_parameters(
+    names: Sequence[str], dA: np.ndarray, dB: np.ndarray, dC: np.ndarray, dD: np.ndarray
+) -> dict[str, int]:
+    """Parameters that enter the model only through one input column of B and D: {name: column}.
+
+    Such a parameter (a control derivative) is multiplied by that input alone, so it can
+    only be estimated when the input moves.
+    """
+    found: dict[str, int] = {}
+    for k, name in enumerate(names):
+        if np.any(dA[k]) or np.any(dC[k]):
+            continue
+        cols = np.flatnonzero(np.any(dB[k] != 0, axis=0) | np.any(dD[k] != 0, axis=0))
+        if cols.size == 1:
+            found[name] = int(cols[0])
+    return found
+
+
+def normalized_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D^-1 M D^-1, D) with D = sqrt(diag M): the information matrix on a unit diagonal."""
+    scale = np.sqrt(np.clip(np.diag(information), 0.0, None))
+    safe = np.where(scale > 0, scale, 1.0)
+    return information / np.outer(safe, safe), scale
+
+
+def zero_sensitivity(
+    names: Sequence[str], information: np.ndarray, values: np.ndarray,
+    tolerance: float = ZERO_SENSITIVITY,
+) -> dict[str, str]:
+    """Parameters that hardly change the outputs at all, with the reason."""
+    # sensitivity norm times a parameter scale (|value|, at least 1e-2) makes it unit-free
+    scale = np.maximum(np.abs(values), 1e-2)
+    strength = np.sqrt(np.clip(np.diag(information), 0.0, None)) * scale
+    top = strength.max() if strength.size else 0.0
+    out: dict[str, str] = {}
+    for name, s in zip(names, strength, strict=True):
+        if top == 0.0 or s <= tolerance * top:
+            out[name] = (
+                f"zero sensitivity: the outputs do not depend on {name} in this flight "
+                f"(whitened sensitivity {s:.3g} vs {top:.3g} for the strongest parameter)"
+            )
+    return out
+
+
+def collinear(
+    names: Sequence[str], information: np.ndarray, prefer_keep: Sequence[str] = (),
+    tolerance: float = SINGULAR_EIGENVALUE,
+) -> dict[str, str]:
+    """Parameters to fix, one per (near-)null direction of the normalised information matrix.
+
+    Repeatedly takes the eigenvector of the smallest eigenvalue of D^-1 M D^-1; while it is
+    below ``tolerance`` the parameters with large components in it cannot be separated.
+    The one fixed is the largest component, preferring parameters not in ``prefer_keep``
+    (biases, which absorb trim terms). Returns {name: reason naming the combination}.
+    """
+    names = list(names)
+    keep = list(range(len(names)))
+    out: dict[str, str] = {}
+    while len(keep) > 1:
+        sub = information[np.ix_(keep, keep)]
+        normalized, _ = normalized_information(sub)
+        eigval, eigvec = np.linalg.eigh(normalized)
+        if eigval[0] >= tolerance:
+            break
+        vec = eigvec[:, 0]
+        order = np.argsort(-np.abs(vec))
+        members = [i for i in order if abs(vec[i]) >= 0.1 * abs(vec[order[0]])]
+        candidates = [i for i in members if names[keep[i]] not in prefer_keep] or members
+        drop = max(candidates, key=lambda i: abs(vec[i]))
+        combo = " ".join(f"{vec[i]:+.3f} {names[keep[i]]}" for i in members)
+        partners = [names[keep[i]] for i in members if i != drop]
+        out[names[keep[drop]]] = (
+            "cannot be separated from " + (", ".join(partners) or "the other parameters")
+            + f": the normalised information matrix is singular along [{combo}] "
+            f"(eigenvalue {eigval[0]:.2g} < {tolerance:g})"
+        )
+        del keep[drop]
+    return out
+
+
+def correlation(covariance: np.ndarray) -> np.ndarray:
+    """Correlation matrix of a parameter covariance."""
+    s = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    s = np.where(s > 0, s, 1.0)
+    return covariance / np.outer(s, s)
+
+
+def high_correlations(
+    names: Sequence[str], covariance: np.ndarray, threshold: float = 0.9
+) -> list[tuple[str, str, float]]:
+    """Pairs of parameters whose estimates correlate more than ``threshold`` in magnitude."""
+    corr = correlation(covariance)
+    pairs = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if abs(corr[i, j]) > threshold:
+                pairs.append((names[i], names[j], float(corr[i, j])))
+    return sorted(pairs, key=lambda p: -abs(p[2]))

@@ -1,0 +1,489 @@
+"""Linear perturbation model structures parameterised by nondimensional derivatives.
+
+The models of Morelli & Klein (2016) ch. 6 (example 6.1 and SIDPAC's ``lat``/``lon``
+model files): continuous-time state space
+
+    xdot = A(theta) x + B(theta) [u; 1],    y = C(theta) x + D(theta) [u; 1]
+
+whose entries are built from nondimensional stability and control derivatives (names of
+``flightid.derivatives``), the mass, inertia, reference geometry and the reference
+(trim) flight condition. The last input column is the constant 1: the bias parameters
+``bias_<x>dot`` (state equations, SI units of the state rate) and ``bias_<y>`` (outputs, SI
+units of the output) multiply it. States, inputs and outputs are the *measured* channels
+(absolute values, SI units): the biases absorb the trim terms (CY_0, g cos(theta0) theta0,
+trim control deflections ...), so no trim value has to be subtracted first, as in SIDPAC.
+
+A model is a plain description (names, start values, one ``build`` function). ``build``
+takes a mapping from parameter name to value and uses only arithmetic, so complex-step
+differentiation of the matrices (``matrix_sensitivities``) is exact to rounding.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flightid.record import FlightRecord
+from flightid.units import G0
+
+Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True)
+class FlightCondition:
+    """Reference condition and mass properties of a perturbation model (SI units, rad).
+
+    V true airspeed (m/s), qbar dynamic pressure (Pa), alpha and theta trim angle of attack
+    and pitch angle (rad), mass (kg), inertias (kg m^2, Ixz positive as in Etkin), area
+    (m^2), span and chord (m), g (m/s^2).
+    """
+
+    V: float
+    qbar: float
+    alpha: float
+    theta: float
+    mass: float
+    Ixx: float
+    Iyy: float
+    Izz: float
+    Ixz: float
+    area: float
+    span: float
+    chord: float
+    g: float = G0
+
+    def __post_init__(self) -> None:
+        for name in ("V", "qbar", "mass", "Ixx", "Iyy", "Izz", "area", "span", "chord", "g"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value <= 0:
+                raise ValueError(
+                    f"flight condition {name} must be positive and finite, got {value}"
+                )
+
+
+_CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
+
+
+def condition_from_record(record: FlightRecord, **override: float) -> FlightCondition:
+    """Reference condition of a record: channel means (SI) and meta.reference geometry.
+
+    Any field of FlightCondition can be given as a keyword to override the record (needed
+    when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
+    """
+    values: dict[str, float] = {}
+    for name in _CONDITION_CHANNELS:
+        if name in override:
+            continue
+        if name not in record:
+            raise ValueError(
+                f"record has no channel {name!r} for the reference condition; pass "
+                f"{name}=<value in SI units> to condition_from_record"
+            )
+        values[name] = float(np.mean(record[name]))
+    ref = record.meta.reference
+    if ref is None and not {"area", "span", "chord"} <= set(override):
+        raise ValueError(
+            "record has no meta.reference (area, span, chord); set it or pass area=, span=, chord="
+        )
+    if ref is not None:
+        values.update(area=ref.area, span=ref.span, chord=ref.chord)
+    values.update(override)
+    return FlightCondition(**values)
+
+
+@dataclass
+class LinearModel:
+    """A linear model structure: names, a priori values, and the matrix builder.
+
+    ``build(values)`` returns continuous-time (A, B, C, D) with B and D having one column
+    per input plus a last column for the constant 1 (bias parameters).
+    ``start`` holds the a priori value of every parameter (start of the iteration, and
+    the value a parameter is fixed at when it is not estimated or not identifiable).
+    """
+
+    name: str
+    states: tuple[str, ...]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    parameters: tuple[str, ...]
+    start: dict[str, float]
+    build: Callable[[Mapping[str, complex]], Matrices]
+    condition: FlightCondition | None = None
+    description: str = ""
+    state_channels: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        missing = [p for p in self.parameters if p not in self.start]
+        if missing:
+            raise ValueError(f"model {self.name}: no start value for {', '.join(missing)}")
+        unknown = [p for p in self.start if p not in self.parameters]
+        if unknown:
+            raise ValueError(f"model {self.name}: start values for unknown {', '.join(unknown)}")
+        if not self.state_channels:
+            self.state_channels = {s: s for s in self.states}
+
+    def values(self, **changes: float) -> dict[str, float]:
+        """All parameter values: the start values with ``changes`` applied (names checked)."""
+        unknown = [k for k in changes if k not in self.parameters]
+        if unknown:
+            raise KeyError(
+                f"model {self.name} has no parameter {', '.join(unknown)}; it has "
+                f"{', '.join(self.parameters)}"
+            )
+        return {**self.start, **changes}
+
+    def matrices(self, values: Mapping[str, float] | None = None) -> Matrices:
+        """Continuous-time (A, B, C, D) at ``values`` (default: the start values)."""
+        return self.build(self.values() if values is None else {**self.start, **values})
+
+    def with_start(self, **changes: float) -> LinearModel:
+        """A copy whose start (a priori) values have ``changes`` applied."""
+        return LinearModel(
+            self.name, self.states, self.inputs, self.outputs, self.parameters,
+            self.values(**changes), self.build, self.condition, self.description,
+            dict(self.state_channels),
+        )
+
+
+def matrix_sensitivities(
+    model: LinearModel, values: Mapping[str, float], names: Sequence[str]
+) -> tuple[Matrices, tuple[np.ndarray, ...]]:
+    """(A, B, C, D) and their derivatives with respect to ``names`` (stacked on axis 0).
+
+    Complex step (Martins et al. 2003): d M / d p = Im M(p + i h) / h, exact to rounding
+    for the arithmetic builders here.
+    """
+    base = {k: complex(v) for k, v in {**model.start, **values}.items()}
+    mats = [np.real(m).astype(float) for m in model.build(base)]
+    h = 1e-30
+    grads: list[list[np.ndarray]] = [[], [], [], []]
+    for name in names:
+        shifted = dict(base)
+        shifted[name] = base[name] + 1j * h
+        for slot, m in enumerate(model.build(shifted)):
+            grads[slot].append(np.imag(np.asarray(m, dtype=complex)) / h)
+    stacked = tuple(
+        np.stack(g) if g else np.zeros((0, *mats[i].shape)) for i, g in enumerate(grads)
+    )
+    return tuple(mats), stacked  # type: ignore[return-value]
+
+
+# --------------------------------------------------------------------------- lateral
+
+LATERAL_DERIVATIVES: tuple[str, ...] = (
+    "CY_beta", "CY_p", "CY_r", "CY_da", "CY_dr",
+    "Cl_beta", "Cl_p", "Cl_r", "Cl_da", "Cl_dr",
+    "Cn_beta", "Cn_p", "Cn_r", "Cn_da", "Cn_dr",
+)
+# the 13 derivatives of Morelli & Klein example 6.1 (Twin Otter, SIDPAC ``lat``)
+LATERAL_EXAMPLE_6_1: tuple[str, ...] = (
+    "CY_beta", "CY_r", "CY_dr",
+    "Cl_beta", "Cl_p", "Cl_r", "Cl_da", "Cl_dr",
+    "Cn_beta", "Cn_p", "Cn_r", "Cn_da", "Cn_dr",
+)
+LATERAL_BIASES: tuple[str, ...] = (
+    "bias_betadot", "bias_pdot", "bias_rdot", "bias_phidot", "bias_ay",
+)
+
+
+def lateral(
+    condition: FlightCondition,
+    derivatives: Sequence[str] = LATERAL_EXAMPLE_6_1,
+    start: Mapping[str, float] | None = None,
+    biases: Sequence[str] = LATERAL_BIASES,
+) -> LinearModel:
+    """Lateral-directional perturbation model (Morelli & Klein 2016, example 6.1).
+
+    States beta (rad), p, r (rad/s), phi (rad); inputs da, dr (rad); outputs beta, p, r,
+    phi, ay (m/s^2). Body-axis rates, inertia coupling through Ixz:
+      betadot = qbar S/(m V) CY + p sin(alpha0) - r cos(alpha0) + g cos(theta0)/V phi
+      [pdot; rdot] = [[Ixx, -Ixz], [-Ixz, Izz]]^-1 qbar S b [Cl; Cn]
+      phidot  = p + tan(theta0) r
+      ay      = qbar S CY / m
+    with CY, Cl, Cn linear in beta, phat = p b/2V, rhat = r b/2V, da, dr, plus biases.
+    Derivatives not listed in ``derivatives`` are absent (zero).
+    """
+    _check_names(derivatives, LATERAL_DERIVATIVES, "lateral")
+    _check_names(biases, LATERAL_BIASES, "lateral")
+    c = condition
+    parameters = tuple(derivatives) + tuple(biases)
+    start_values = {p: 0.0 for p in parameters}
+    start_values.update(_typical_start(derivatives, LATERAL_TYPICAL))
+    if start:
+        start_values.update(_checked(start, parameters, "lateral"))
+    gamma = c.Ixx * c.Izz - c.Ixz**2
+    k_y = c.qbar * c.area / (c.mass * c.V)  # betadot per unit CY
+    k_ay = c.qbar * c.area / c.mass  # ay per unit CY
+    k_m = c.qbar * c.area * c.span  # moment per unit Cl or Cn
+    rate = c.span / (2 * c.V)  # phat per p
+    # inverse inertia rows (Etkin; Morelli & Klein eq. 3.37)
+    c3, c4, c9 = c.Izz / gamma, c.Ixz / gamma, c.Ixx / gamma
+    sa, ca = np.sin(c.alpha), np.cos(c.alpha)
+    g_v = c.g * np.cos(c.theta) / c.V
+    tt = np.tan(c.theta)
+    present = set(parameters)
+
+    def build(v: Mapping[str, complex]) -> Matrices:
+        def d(n: str) -> complex:
+            return v[n] if n in present else 0.0
+
+        def row(coef: str) -> tuple[list[complex], list[complex]]:
+            # d C<coef> / d [beta, p, r, phi] and / d [da, dr]
+            xs = [d(f"C{coef}_beta"), d(f"C{coef}_p") * rate, d(f"C{coef}_r") * rate, 0.0]
+            us = [d(f"C{coef}_da"), d(f"C{coef}_dr")]
+            return xs, us
+
+        yx, yu = row("Y")
+        lx, lu = row("l")
+        nx, nu = row("n")
+        dtype = complex if any(isinstance(x, complex) for x in v.values()) else float
+        A = np.zeros((4, 4), dtype=dtype)
+        B = np.zeros((4, 3), dtype=dtype)
+        C = np.zeros((5, 4), dtype=dtype)
+        D = np.zeros((5, 3), dtype=dtype)
+        A[0] = np.array(yx) * k_y + np.array([0.0, sa, -ca, g_v])
+        B[0, :2] = np.array(yu) * k_y
+        for j in range(4):
+            A[1, j] = k_m * (c3 * lx[j] + c4 * nx[j])
+            A[2, j] = k_m * (c4 * lx[j] + c9 * nx[j])
+        for j in range(2):
+            B[1, j] = k_m * (c3 * lu[j] + c4 * nu[j])
+            B[2, j] = k_m * (c4 * lu[j] + c9 * nu[j])
+        A[3] = [0.0, 1.0, tt, 0.0]
+        B[:, 2] = [d("bias_betadot"), d("bias_pdot"), d("bias_rdot"), d("bias_phidot")]
+        C[:4, :4] = np.eye(4)
+        C[4] = np.array(yx) * k_ay
+        D[4, :2] = np.array(yu) * k_ay
+        D[4, 2] = d("bias_ay")
+        return A, B, C, D
+
+    return LinearModel(
+        name="lateral",
+        states=("beta", "p", "r", "phi"),
+        inputs=("da", "dr"),
+        outputs=("beta", "p", "r", "phi", "ay"),
+        parameters=parameters,
+        start=start_values,
+        build=build,
+        condition=condition,
+        description="lateral-directional perturbation model, Morelli & Klein example 6.1",
+    )
+
+
+# --------------------------------------------------------------------------- longitudinal
+
+SHORT_PERIOD_DERIVATIVES: tuple[str, ...] = (
+    "CL_alpha", "CL_q", "CL_de", "Cm_alpha", "Cm_q", "Cm_de", "Cm_alphadot",
+)
+SHORT_PERIOD_DEFAULT: tuple[str, ...] = (
+    "CL_alpha", "CL_de", "Cm_alpha", "Cm_q", "Cm_de",
+)
+SHORT_PERIOD_BIASES: tuple[str, ...] = ("bias_alphadot", "bias_qdot", "bias_az")
+
+LONGITUDINAL_DERIVATIVES: tuple[str, ...] = (
+    "CD_0", "CD_alpha", "CD_de", "CL_0", "CL_alpha", "CL_q", "CL_de",
+    "Cm_alpha", "Cm_q", "Cm_de", "Cm_alphadot",
+)
+LONGITUDINAL_DEFAULT: tuple[str, ...] = (
+    "CD_0", "CD_alpha", "CL_0", "CL_alpha", "CL_de", "Cm_alpha", "Cm_q", "Cm_de",
+)
+LONGITUDINAL_BIASES: tuple[str, ...] = (
+    "bias_Vdot", "bias_alphadot", "bias_qdot", "bias_thetadot", "bias_az",
+)
+
+# plausible a priori values (light aircraft, per rad), used only as start values
+LATERAL_TYPICAL: dict[str, float] = {
+    "CY_beta": -0.5, "Cl_beta": -0.05, "Cl_p": -0.4, "Cl_r": 0.1, "Cl_da": -0.1,
+    "Cn_beta": 0.05, "Cn_r": -0.1, "Cn_dr": -0.05,
+}
+LONGITUDINAL_TYPICAL: dict[str, float] = {
+    "CL_alpha": 5.0, "CL_0": 0.4, "CD_0": 0.04, "CD_alpha": 0.2, "CL_de": 0.3,
+    "Cm_alpha": -0.5, "Cm_q": -10.0, "Cm_de": -1.0,
+}
+
+
+def short_period(
+    condition: FlightCondition,
+    derivatives: Sequence[str] = SHORT_PERIOD_DEFAULT,
+    start: Mapping[str, float] | None = None,
+    biases: Sequence[str] = SHORT_PERIOD_BIASES,
+) -> LinearModel:
+    """Short-period model: states alpha (rad), q (rad/s); input de; outputs alpha, q, az.
+
+    Morelli & Klein (2016) eq. 6.?? / SIDPAC ``lon`` short period, lift in stability axes:
+      alphadot = -qbar S/(m V) CL + q + bias_alphadot
+      qdot     = qbar S cbar/Iyy Cm + bias_qdot
+      az       = -qbar S/m CL + bias_az          (m/s^2, specific force, z down)
+    CL = CL_alpha alpha + CL_q qhat + CL_de de, Cm = Cm_alpha alpha + Cm_q qhat + Cm_de de
+    + Cm_alphadot alphadot cbar/2V (qhat = q cbar/2V). The gravity and trim terms are
+    constant over a short maneuver and are absorbed by the biases.
+    """
+    _check_names(derivatives, SHORT_PERIOD_DERIVATIVES, "short_period")
+    _check_names(biases, SHORT_PERIOD_BIASES, "short_period")
+    c = condition
+    parameters = tuple(derivatives) + tuple(biases)
+    start_values = {p: 0.0 for p in parameters}
+    start_values.update(_typical_start(derivatives, LONGITUDINAL_TYPICAL))
+    if start:
+        start_values.update(_checked(start, parameters, "short_period"))
+    k_z = c.qbar * c.area / (c.mass * c.V)
+    k_az = c.qbar * c.area / c.mass
+    k_m = c.qbar * c.area * c.chord / c.Iyy
+    rate = c.chord / (2 * c.V)
+    present = set(parameters)
+
+    def build(v: Mapping[str, complex]) -> Matrices:
+        def d(n: str) -> complex:
+            return v[n] if n in present else 0.0
+
+        dtype = complex if any(isinstance(x, complex) for x in v.values()) else float
+        lift_x = np.array([d("CL_alpha"), d("CL_q") * rate], dtype=dtype)
+        lift_u = np.array([d("CL_de")], dtype=dtype)
+        A = np.zeros((2, 2), dtype=dtype)
+        B = np.zeros((2, 2), dtype=dtype)
+        A[0] = -k_z * lift_x + np.array([0.0, 1.0])
+        B[0, 0] = -k_z * lift_u[0]
+        B[0, 1] = d("bias_alphadot")
+        # Cm_alphadot: alphadot is the first state equation, substituted (bilinear terms)
+        mad = d("Cm_alphadot") * rate
+        A[1] = k_m * (np.array([d("Cm_alpha"), d("Cm_q") * rate]) + mad * A[0])
+        B[1, 0] = k_m * (d("Cm_de") + mad * B[0, 0])
+        B[1, 1] = d("bias_qdot") + k_m * mad * B[0, 1]
+        C = np.zeros((3, 2), dtype=dtype)
+        D = np.zeros((3, 2), dtype=dtype)
+        C[:2] = np.eye(2)
+        C[2] = -k_az * lift_x
+        D[2, 0] = -k_az * lift_u[0]
+        D[2, 1] = d("bias_az")
+        return A, B, C, D
+
+    return LinearModel(
+        name="short_period",
+        states=("alpha", "q"),
+        inputs=("de",),
+        outputs=("alpha", "q", "az"),
+        parameters=parameters,
+        start=start_values,
+        build=build,
+        condition=condition,
+        description="short-period perturbation model (alpha, q), Morelli & Klein ch. 6",
+    )
+
+
+def longitudinal(
+    condition: FlightCondition,
+    derivatives: Sequence[str] = LONGITUDINAL_DEFAULT,
+    start: Mapping[str, float] | None = None,
+    biases: Sequence[str] = LONGITUDINAL_BIASES,
+) -> LinearModel:
+    """Full longitudinal model: states V (m/s), alpha (rad), q (rad/s), theta (rad); input de.
+
+    Outputs V, alpha, q, theta, az (m/s^2). Stability-axis forces with the dynamic-pressure
+    dependence of the trim coefficients CD_0, CL_0 (Etkin & Reid; Morelli & Klein ch. 3):
+      Vdot     = -qbar S/m (2 CD_0 dV/V + CD_alpha alpha + CD_de de) - g cos(gamma0)(theta - alpha)
+      alphadot = -qbar S/(m V)(2 CL_0 dV/V + CL_alpha alpha + CL_q qhat + CL_de de) + q
+                 - g sin(gamma0)/V (theta - alpha)
+      qdot     = qbar S cbar/Iyy (Cm_alpha alpha + Cm_q qhat + Cm_de de
+                                  + Cm_alphadot alphadot cbar/2V)
+      thetadot = q
+      az       = -qbar S/m (2 CL_0 dV/V + CL_alpha alpha + CL_q qhat + CL_de de)
+    plus biases, gamma0 = theta0 - alpha0. The thrust change with speed is not modelled
+    (it is absorbed in CD_0 as an effective speed damping). CL_0 starts at the weight
+    balance m g cos(gamma0) / (qbar S).
+    """
+    _check_names(derivatives, LONGITUDINAL_DERIVATIVES, "longitudinal")
+    _check_names(biases, LONGITUDINAL_BIASES, "longitudinal")
+    c = condition
+    parameters = tuple(derivatives) + tuple(biases)
+    start_values = {p: 0.0 for p in parameters}
+    start_values.update(_typical_start(derivatives, LONGITUDINAL_TYPICAL))
+    gamma0 = c.theta - c.alpha
+    if "CL_0" in parameters:
+        start_values["CL_0"] = c.mass * c.g * np.cos(gamma0) / (c.qbar * c.area)
+    if start:
+        start_values.update(_checked(start, parameters, "longitudinal"))
+    k_f = c.qbar * c.area / c.mass
+    k_m = c.qbar * c.area * c.chord / c.Iyy
+    rate = c.chord / (2 * c.V)
+    present = set(parameters)
+    gc, gs = c.g * np.cos(gamma0), c.g * np.sin(gamma0)
+
+    def build(v: Mapping[str, complex]) -> Matrices:
+        def d(n: str) -> complex:
+            return v[n] if n in present else 0.0
+
+        dtype = complex if any(isinstance(x, complex) for x in v.values()) else float
+        # state order V, alpha, q, theta
+        drag_x = np.array([2 * d("CD_0") / c.V, d("CD_alpha"), 0.0, 0.0], dtype=dtype)
+        lift_x = np.array(
+            [2 * d("CL_0") / c.V, d("CL_alpha"), d("CL_q") * rate, 0.0], dtype=dtype
+        )
+        A = np.zeros((4, 4), dtype=dtype)
+        B = np.zeros((4, 2), dtype=dtype)
+        A[0] = -k_f * drag_x + np.array([0.0, gc, 0.0, -gc])
+        B[0] = [-k_f * d("CD_de"), d("bias_Vdot")]
+        A[1] = -k_f / c.V * lift_x + np.array([0.0, gs / c.V, 1.0, -gs / c.V])
+        B[1] = [-k_f / c.V * d("CL_de"), d("bias_alphadot")]
+        mad = d("Cm_alphadot") * rate
+        A[2] = k_m * (np.array([0.0, d("Cm_alpha"), d("Cm_q") * rate, 0.0]) + mad * A[1])
+        B[2] = [k_m * (d("Cm_de") + mad * B[1, 0]), d("bias_qdot") + k_m * mad * B[1, 1]]
+        A[3] = [0.0, 0.0, 1.0, 0.0]
+        B[3] = [0.0, d("bias_thetadot")]
+        C = np.zeros((5, 4), dtype=dtype)
+        D = np.zeros((5, 2), dtype=dtype)
+        C[:4] = np.eye(4)
+        C[4] = -k_f * lift_x
+        D[4] = [-k_f * d("CL_de"), d("bias_az")]
+        return A, B, C, D
+
+    return LinearModel(
+        name="longitudinal",
+        states=("V", "alpha", "q", "theta"),
+        inputs=("de",),
+        outputs=("V", "alpha", "q", "theta", "az"),
+        parameters=parameters,
+        start=start_values,
+        build=build,
+        condition=condition,
+        description="full longitudinal perturbation model (V, alpha, q, theta)",
+    )
+
+
+MODELS: dict[str, Callable[..., LinearModel]] = {
+    "lateral": lateral,
+    "short_period": short_period,
+    "longitudinal": longitudinal,
+}
+
+
+def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
+    """Model ``kind`` ('lateral', 'short_period', 'longitudinal') at the record's condition."""
+    if kind not in MODELS:
+        raise ValueError(f"unknown model {kind!r}; known: {', '.join(MODELS)}")
+    return MODELS[kind](condition_from_record(record), **kwargs)
+
+
+def _check_names(names: Sequence[str], allowed: Sequence[str], model: str) -> None:
+    bad = [n for n in names if n not in allowed]
+    if bad:
+        raise ValueError(
+            f"{model} model has no parameter {', '.join(bad)}; allowed: {', '.join(allowed)}"
+        )
+    if len(set(names)) != len(names):
+        raise ValueError(f"{model} model: duplicate parameter names in {list(names)}")
+
+
+def _checked(values: Mapping[str, float], parameters: Sequence[str], model: str) -> dict:
+    bad = [n for n in values if n not in parameters]
+    if bad:
+        raise ValueError(
+            f"{model} model: start value for {', '.join(bad)}, which is not a parameter "
+            f"({', '.join(parameters)})"
+        )
+    return {k: float(v) for k, v in values.items()}
+
+
+def _typical_start(derivatives: Sequence[str], typical: Mapping[str, float]) -> dict:
+    return {n: typical[n] for n in derivatives if n in typical}

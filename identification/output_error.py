@@ -1,0 +1,640 @@
+"""Output-error (maximum likelihood) estimation for linear models, with Cramer-Rao bounds.
+
+Morelli & Klein (2016) ch. 6 and Jategaonkar (2015) ch. 4: minimise
+    J(theta) = 1/2 sum_i v_i^T R^-1 v_i,   v_i = z_i - y_i(theta)
+by Gauss-Newton (modified Newton-Raphson) with Levenberg-Marquardt damping, the
+measurement-noise covariance R re-estimated from the residuals at every iteration
+(relaxation algorithm, M&K eq. 6.27). Output sensitivities come from the exact derivative
+of the zero-order-hold discretisation: for each parameter the augmented system
+[[A, 0], [A_k, A]], [[B], [B_k]] is discretised with one matrix exponential (batched),
+and the state and all sensitivities are propagated together.
+
+Cramer-Rao bounds are sqrt(diag M^-1) with M = sum_i S_i^T R^-1 S_i (M&K eq. 6.50);
+``colored=True`` applies the correction for colored residuals (M&K eq. 6.54, SIDPAC
+``m_colores``), evaluated with FFTs. Parameters the flight cannot determine (see
+``identifiability``) are fixed at their a priori values and listed with the reason in
+``Estimate.unidentifiable``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from flightid.identification import identifiability as ident
+from flightid.identification.estimate import Estimate
+from flightid.identification.linear_models import LinearModel, matrix_sensitivities
+from flightid.record import FlightRecord
+
+METHOD = "oe"
+HOLDS = ("foh", "zoh")
+
+
+@dataclass
+class Problem:
+    """The data and model of one output-error fit, arranged for fast evaluation."""
+
+    model: LinearModel
+    time: np.ndarray
+    dt: float
+    u: np.ndarray  # (N, m + 1): inputs and the constant 1
+    w: np.ndarray  # per-step input of the discrete model (see hold_inputs)
+    hold: str  # 'foh' or 'zoh'
+    z: np.ndarray  # (N, ny): measured outputs
+    x0: np.ndarray  # (n,) initial state when it is not estimated
+    fixed: dict[str, float]  # every model parameter not estimated, at its value
+    x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
+    noise_floor: np.ndarray  # smallest admitted noise variance per output
+
+
+
+def problem_from_record(
+    record: FlightRecord, model: LinearModel, initial_state: str = "measured",
+    hold: str = "foh",
+) -> Problem:
+    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling)."""
+    missing = [c for c in (*model.inputs, *model.outputs) if c not in record]
+    if missing:
+        raise ValueError(
+            f"record lacks channel(s) {', '.join(missing)} needed by the {model.name} model "
+            f"(inputs {', '.join(model.inputs)}; outputs {', '.join(model.outputs)})"
+        )
+    time = record.time
+    if time.size < 10:
+        raise ValueError(f"record has {time.size} samples; output error needs at least 10")
+    steps = np.diff(time)
+    dt = float(np.mean(steps))
+    if np.max(np.abs(steps - dt)) > 1e-6 * dt + 1e-9:
+        i = int(np.argmax(np.abs(steps - dt)))
+        raise ValueError(
+            f"record is not uniformly sampled (step {steps[i]:.6g} s at sample {i}, mean "
+            f"{dt:.6g} s); resample it before output error"
+        )
+    u = np.column_stack([*(record[c] for c in model.inputs), np.ones(time.size)])
+    z = np.column_stack([record[c] for c in model.outputs])
+    bad = [c for c in (*model.inputs, *model.outputs) if not np.all(np.isfinite(record[c]))]
+    if bad:
+        raise ValueError(f"channel(s) {', '.join(bad)} contain NaN or inf values")
+    if initial_state not in ("measured", "estimate", "zero"):
+        raise ValueError(
+            f"initial_state must be 'measured', 'estimate' or 'zero', got {initial_state!r}"
+        )
+    x0 = np.zeros(len(model.states))
+    if initial_state == "measured":
+        for j, state in enumerate(model.states):
+            channel = model.state_channels.get(state, state)
+            if channel in record:
+                x0[j] = record[channel][0]
+    x0_names = tuple(f"x0_{s}" for s in model.states) if initial_state == "estimate" else ()
+    if hold not in HOLDS:
+        raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
+    # variance floor: rounding level of each output (1e-10 of its range, squared)
+    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
+    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor)
+
+
+# ------------------------------------------------------------------ simulation
+
+
+def discretize(
+    A: np.ndarray, B: np.ndarray, dt: float, dA: np.ndarray, dB: np.ndarray,
+    hold: str = "foh",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Phi, Gamma and their parameter derivatives dPhi, dGamma (stacked on axis 0).
+
+    x_{i+1} = Phi x_i + Gamma w_i with w_i = u_i ('zoh', input held over the sample) or
+    w_i = [u_i; u_{i+1}] ('foh', input interpolated linearly between samples). One batched
+    matrix exponential per parameter k of the block matrix (Van Loan 1978)
+        [[A, 0, B, 0], [A_k, A, B_k, 0], [0, 0, 0, I/dt], [0, 0, 0, 0]] dt
+    (without the last block row and column for 'zoh'); its blocks are Phi, dPhi/dk and
+    the input matrices with their derivatives. The sensitivities are thus the exact
+    derivatives of the discrete model that is simulated.
+    """
+    if hold not in HOLDS:
+        raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
+    n, m = B.shape
+    npar = dA.shape[0]
+    foh = hold == "foh"
+    batch = max(npar, 1)
+    size = 2 * n + (2 * m if foh else m)
+    big = np.zeros((batch, size, size))
+    big[:, :n, :n] = A * dt
+    big[:, n:2 * n, n:2 * n] = A * dt
+    big[:, :n, 2 * n:2 * n + m] = B * dt
+    if npar:
+        big[:, n:2 * n, :n] = dA * dt
+        big[:, n:2 * n, 2 * n:2 * n + m] = dB * dt
+    if foh:
+        big[:, 2 * n:2 * n + m, 2 * n + m:] = np.eye(m)
+    e = scipy.linalg.expm(big)
+    phi = e[0, :n, :n]
+    dphi = e[:npar, n:2 * n, :n]
+    if not foh:
+        return phi, e[0, :n, 2 * n:], dphi, e[:npar, n:2 * n, 2 * n:]
+    # x_{i+1} = Phi x_i + G0 u_i + G1 (u_{i+1} - u_i)
+    g0, g1 = e[:, :, 2 * n:2 * n + m], e[:, :, 2 * n + m:]
+    gam = np.concatenate([g0 - g1, g1], axis=2)
+    return phi, gam[0, :n], dphi, gam[:npar, n:2 * n]
+
+
+def hold_inputs(u: np.ndarray, hold: str) -> np.ndarray:
+    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh')."""
+    if hold == "zoh":
+        return u
+    return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
+
+
+def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """x_{i+1} = phi x_i + forcing_i from x0; forcing (N, n[, k]) -> states of the same shape.
+
+    Blocked recursion so that Python loops run about 2 sqrt(N) times instead of N: within
+    blocks of L samples the zero-state responses of all blocks are advanced together, the
+    block-start states are chained with phi^L, and phi^j x_block is added back.
+    """
+    squeeze = forcing.ndim == 2
+    f = forcing[:, :, None] if squeeze else forcing
+    x0 = np.asarray(x0, dtype=float).reshape(f.shape[1], f.shape[2])
+    n_samples, n, k = f.shape
+    size = max(1, int(np.ceil(np.sqrt(n_samples))))
+    blocks = -(-n_samples // size)
+    padded = np.zeros((blocks * size, n, k))
+    padded[:n_samples] = f
+    fb = padded.reshape(blocks, size, n, k)
+    local = np.empty((blocks, size, n, k))
+    state = np.zeros((blocks, n, k))
+    for j in range(size):
+        local[:, j] = state
+        state = phi @ state + fb[:, j]
+    powers = np.empty((size + 1, n, n))
+    powers[0] = np.eye(n)
+    for j in range(size):
+        powers[j + 1] = phi @ powers[j]
+    starts = np.empty((blocks, n, k))
+    starts[0] = x0
+    for b in range(blocks - 1):
+        starts[b + 1] = powers[size] @ starts[b] + state[b]
+    out = (np.matmul(powers[None, :size], starts[:, None]) + local).reshape(-1, n, k)
+    out = out[:n_samples]
+    return out[:, :, 0] if squeeze else out
+
+
+def simulate(model: LinearModel, values: Mapping[str, float], time: np.ndarray,
+             inputs: np.ndarray, x0: np.ndarray | None = None, hold: str = "foh") -> np.ndarray:
+    """Outputs (N, ny) of ``model`` at ``values`` for inputs (N, m) sampled at ``time`` (s).
+
+    Inputs in the model's order and SI units; x0 the initial state (default zero).
+    """
+    time = np.asarray(time, dtype=float)
+    u = np.column_stack([np.asarray(inputs, dtype=float).reshape(len(time), -1),
+                         np.ones(len(time))])
+    A, B, C, D = model.matrices(values)
+    x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, dtype=float)
+    return _simulate(A, B, C, D, float(np.mean(np.diff(time))), u, hold_inputs(u, hold), x0,
+                     hold)
+
+
+def _simulate(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
+    phi, gam, _, _ = discretize(A, B, dt, np.zeros((0, *A.shape)), np.zeros((0, *B.shape)),
+                                hold)
+    x = propagate(phi, w @ gam.T, x0)
+    return x @ C.T + u @ D.T
+
+
+def _outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
+    A, B, C, D = problem.model.build({**problem.model.start, **problem.fixed,
+                                      **_model_values(problem, values)})
+    return _simulate(A, B, C, D, problem.dt, problem.u, problem.w, _x0_of(problem, values),
+                     problem.hold)
+
+
+def _stacked_product(mats: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """out[i, a, k] = sum_b mats[k, a, b] x[i, b], as one matrix product."""
+    k, a, b = mats.shape
+    if k == 0:
+        return np.zeros((x.shape[0], a, 0))
+    return (x @ mats.reshape(k * a, b).T).reshape(x.shape[0], k, a).transpose(0, 2, 1)
+
+
+def _outputs_and_sensitivities(
+    problem: Problem, values: Mapping[str, float], names: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs (N, ny) and their sensitivities (N, ny, len(names)) to the named parameters."""
+    model_names = [n for n in names if n not in problem.x0_names]
+    (A, B, C, D), (dA, dB, dC, dD) = matrix_sensitivities(
+        problem.model, {**problem.fixed, **_model_values(problem, values)}, model_names
+    )
+    phi, gam, dphi, dgam = discretize(A, B, problem.dt, dA, dB, problem.hold)
+    u, w = problem.u, problem.w
+    x = propagate(phi, w @ gam.T, _x0_of(problem, values))
+    n = A.shape[0]
+    columns = {name: k for k, name in enumerate(model_names)}
+    x0_cols = [n_ for n_ in names if n_ in problem.x0_names]
+    # forcing of the sensitivity equations: dPhi_k x_i + dGamma_k w_i, shape (N, n, np)
+    forcing = _stacked_product(dphi, x) + _stacked_product(dgam, w)
+    start = np.zeros((n, len(model_names) + len(x0_cols)))
+    if x0_cols:
+        forcing = np.concatenate([forcing, np.zeros((len(u), n, len(x0_cols)))], axis=2)
+        for j, name in enumerate(x0_cols):
+            columns[name] = len(model_names) + j
+            start[problem.x0_names.index(name), len(model_names) + j] = 1.0
+    xs = propagate(phi, forcing, start)
+    y = x @ C.T + u @ D.T
+    sens = np.matmul(C, xs)
+    if model_names:
+        nm = len(model_names)
+        sens[:, :, :nm] += _stacked_product(dC, x) + _stacked_product(dD, u)
+    order = [columns[name] for name in names]
+    return y, sens[:, :, order]
+
+
+# ------------------------------------------------------------------ statistics
+
+
+def _noise_covariance(residuals: np.ndarray, full: bool, floor: np.ndarray) -> np.ndarray:
+    """Measurement-noise covariance estimate R = 1/N sum v v^T (M&K eq. 6.26).
+
+    The diagonal is kept above ``floor`` (variances) so that an output fitted to rounding
+    (noise-free simulated data) does not make R singular.
+    """
+    r = residuals.T @ residuals / residuals.shape[0]
+    if not full:
+        r = np.diag(np.diag(r))
+    r[np.diag_indices_from(r)] = np.maximum(np.diag(r), floor)
+    return r
+
+
+def colored_residual_covariance(
+    sens: np.ndarray, residuals: np.ndarray, weight: np.ndarray, information: np.ndarray
+) -> np.ndarray:
+    """Parameter covariance corrected for colored residuals (M&K eq. 6.54, SIDPAC m_colores).
+
+    M^-1 [sum_i sum_j S_i^T W R_vv(i-j) W S_j] M^-1 with the sample autocorrelation R_vv
+    over all lags, computed as (1/(L N)) sum_f w_f^H w_f with w_f = V_f^H (W S)_f (FFTs of
+    length L >= 2N - 1, so the circular correlation equals the linear one).
+    """
+    n = residuals.shape[0]
+    size = int(2 ** np.ceil(np.log2(2 * n)))
+    ws = np.einsum("ab,ibk->iak", weight, sens)
+    fs = np.fft.rfft(ws, n=size, axis=0)
+    fv = np.fft.rfft(residuals, n=size, axis=0)
+    w = np.einsum("fa,fak->fk", fv.conj(), fs)
+    power = (w.conj()[:, :, None] * w[:, None, :]).real
+    # rfft keeps f = 0 .. L/2: every other bin stands for itself and its mirror image
+    factor = np.full(power.shape[0], 2.0)
+    factor[0] = 1.0
+    if size % 2 == 0:
+        factor[-1] = 1.0
+    middle = np.einsum("f,fjk->jk", factor, power) / (size * n)
+    inv = np.linalg.inv(information)
+    cov = inv @ middle @ inv
+    return 0.5 * (cov + cov.T)
+
+
+# ------------------------------------------------------------------ estimation
+
+
+def estimate(
+    record: FlightRecord,
+    model: LinearModel,
+    *,
+    free: Sequence[str] | None = None,
+    start: Mapping[str, float] | str | None = None,
+    initial_state: str = "measured",
+    hold: str = "foh",
+    full_noise_covariance: bool = False,
+    colored: bool = False,
+    max_iterations: int = 50,
+    step_tolerance: float = 1e-3,
+    cost_tolerance: float = 1e-7,
+    check_identifiability: bool = True,
+    min_input_range: float = ident.MIN_INPUT_RANGE,
+    singular_eigenvalue: float = ident.SINGULAR_EIGENVALUE,
+) -> Estimate:
+    """Output-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
+
+    free: parameters to estimate (default all); the others stay at their start values.
+    start: start (a priori) values overriding the model's, or "equation_error" to take
+    them from ``start_from_equation_error``. initial_state: 'measured' (x0
+    from the first sample of the state channels), 'estimate' (x0_<state> parameters, SI
+    units) or 'zero'. Values are nondimensional derivatives and SI-unit biases; standard
+    errors are Cramer-Rao bounds (corrected for colored residuals when ``colored``).
+    Converged when the last step changed no parameter by more than ``step_tolerance``
+    of its standard error, or the ML cost N/2 ln det R by less than ``cost_tolerance``.
+    """
+    if isinstance(start, str):
+        if start != "equation_error":
+            raise ValueError(f"start must be a mapping or 'equation_error', got {start!r}")
+        start = start_from_equation_error(record, model)
+    if start:
+        model = model.with_start(**start)
+    problem = problem_from_record(record, model, initial_state, hold)
+    names = list(model.parameters if free is None else free)
+    unknown = [n for n in names if n not in model.parameters]
+    if unknown:
+        raise ValueError(
+            f"{', '.join(unknown)} not parameter(s) of the {model.name} model "
+            f"({', '.join(model.parameters)})"
+        )
+    names += list(problem.x0_names)
+    values = {n: model.start[n] for n in names if n in model.start}
+    values.update({n: problem.x0[j] for j, n in enumerate(problem.x0_names)})
+    problem.fixed = {n: v for n, v in model.start.items() if n not in names}
+
+    unidentifiable: dict[str, str] = {}
+    if check_identifiability:
+        unidentifiable.update(_unexcited(problem, names, values, min_input_range))
+    x0_start = dict(zip(problem.x0_names, problem.x0, strict=False))
+    for _ in range(len(names) + 1):
+        active = [n for n in names if n not in unidentifiable]
+        problem.fixed = {n: v for n, v in {**model.start, **x0_start}.items()
+                         if n not in active}
+        current = {n: values[n] for n in active}
+        if check_identifiability:
+            # at the start values first, so that the iteration never meets a singular M
+            probe = _iterate(problem, active, current, 0, full_noise_covariance,
+                             step_tolerance, cost_tolerance)
+            found = _singular(active, probe, singular_eigenvalue)
+            if found:
+                unidentifiable.update(found)
+                continue
+        fit = _iterate(problem, active, current, max_iterations, full_noise_covariance,
+                       step_tolerance, cost_tolerance)
+        found = _singular(active, fit, singular_eigenvalue) if check_identifiability else {}
+        if not found:
+            break
+        unidentifiable.update(found)
+        values.update(fit.values)
+    return _result(problem, fit, unidentifiable, colored, full_noise_covariance)
+
+
+_EE_TERMS = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
+             "de": "de", "da": "da", "dr": "dr"}
+
+
+def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[str, float]:
+    """Start values for ``model``'s derivatives from equation error on the same record.
+
+    As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
+    (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
+    regression cannot estimate keep the model's start values.
+    """
+    from flightid.derivatives import is_derivative, split
+    from flightid.identification import equation_error
+
+    groups: dict[str, list[str]] = {}
+    for name in model.parameters:
+        if is_derivative(name):
+            coef, var = split(name)
+            if var in _EE_TERMS:
+                groups.setdefault(f"C{coef}", []).append(var)
+    out: dict[str, float] = {}
+    for coefficient, variables in groups.items():
+        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables])
+        for var in variables:
+            name = f"{coefficient}_{var}"
+            if name in fit.names and name not in fit.unidentifiable:
+                out[name] = fit[name]
+    return out
+
+
+RUN_OPTIONS = ("free", "start", "initial_state", "hold", "full_noise_covariance", "colored",
+               "max_iterations", "step_tolerance", "cost_tolerance", "check_identifiability",
+               "min_input_range", "singular_eigenvalue", "derivatives")
+
+
+def run(record: FlightRecord, model: str = "lateral",
+        options: Mapping[str, object] | None = None) -> Estimate:
+    """Output error with a preset model ('lateral', 'longitudinal', 'short_period') at the
+    record's reference condition; ``options`` are keywords of ``estimate`` plus
+    ``derivatives`` (the derivative names of the model structure)."""
+    from flightid.identification.linear_models import MODELS, model_for_record
+
+    if model not in MODELS:
+        raise ValueError(f"output error needs a model preset ({', '.join(MODELS)}), "
+                         f"got {model!r}")
+    opts = dict(options or {})
+    opts.pop("coefficients", None)
+    unknown = [k for k in opts if k not in RUN_OPTIONS]
+    if unknown:
+        raise ValueError(f"unknown output-error options {unknown}; known: {', '.join(RUN_OPTIONS)}")
+    structure = {"derivatives": tuple(opts.pop("derivatives"))} if "derivatives" in opts else {}
+    return estimate(record, model_for_record(model, record, **structure), **opts)
+
+
+def _x0_of(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
+    if not problem.x0_names:
+        return problem.x0
+    return np.array([values.get(n, problem.fixed.get(n, problem.x0[j]))
+                     for j, n in enumerate(problem.x0_names)])
+
+
+def _model_values(problem: Problem, values: Mapping[str, float]) -> dict[str, float]:
+    return {k: v for k, v in values.items() if k not in problem.x0_names}
+
+
+def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, float],
+               min_range: float) -> dict[str, str]:
+    model = problem.model
+    flat = ident.unexcited_inputs(model.inputs, problem.u[:, :-1], min_range)
+    if not flat:
+        return {}
+    params = [n for n in names if n in model.parameters]
+    _, (dA, dB, dC, dD) = matrix_sensitivities(model, {**model.start, **values}, params)
+    only = ident.input_only_parameters(params, dA, dB, dC, dD)
+    out = {}
+    for name, col in only.items():
+        if col < len(model.inputs) and model.inputs[col] in flat:
+            inp = model.inputs[col]
+            out[name] = (
+                f"input {inp} is not excited (peak-to-peak {flat[inp]:.3g} rad < "
+                f"{min_range:g}): {name} multiplies only {inp}, so it cannot be separated "
+                "from the bias terms"
+            )
+    return out
+
+
+@dataclass
+class _Fit:
+    names: list[str]
+    values: dict[str, float]
+    y: np.ndarray
+    sens: np.ndarray
+    residuals: np.ndarray
+    noise: np.ndarray
+    information: np.ndarray
+    converged: bool
+    reason: str
+    iterations: int
+    cost_history: list[float]
+    step_history: list[float]
+
+
+def _information(sens: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    if np.count_nonzero(weight - np.diag(np.diag(weight))) == 0:
+        s = sens * np.sqrt(np.diag(weight))[None, :, None]
+        flat = s.reshape(-1, s.shape[2])
+        return flat.T @ flat
+    return np.einsum("iak,ab,ibl->kl", sens, weight, sens)
+
+
+def _concentrated_cost(residuals: np.ndarray, full: bool, floor: np.ndarray) -> float:
+    """ML cost with R at its optimum for these residuals: N/2 ln det R (M&K eq. 6.22)."""
+    noise = _noise_covariance(residuals, full, floor)
+    return 0.5 * residuals.shape[0] * float(np.linalg.slogdet(noise)[1])
+
+
+def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
+             full: bool, step_tol: float, cost_tol: float) -> _Fit:
+    """Newton-Raphson on the ML cost with R concentrated out, Levenberg-Marquardt safeguard.
+
+    R is re-estimated from the residuals at every iteration (M&K eq. 6.26). The Newton
+    matrix is the Gauss-Newton information matrix M (M&K eq. 6.33) minus the term from
+    the dependence of R on theta,
+        H_kl = M_kl - 1/(2N) tr(W C_k W C_l),  C_k = B_k + B_k^T,  B_k = sum_i s_ik v_i^T,
+    which restores fast convergence when the residuals are large (real data), where the
+    plain relaxation algorithm creeps along one direction. H is used when it is positive
+    definite, M otherwise; a step is accepted only if it lowers N/2 ln det R.
+    """
+    z = problem.z
+    n_samples = z.shape[0]
+    floor = problem.noise_floor
+    cost_history: list[float] = []
+    step_history: list[float] = []
+    lam = 0.0
+    converged, reason = False, f"no convergence in {max_iterations} iterations"
+    theta = np.array([values[n] for n in names], dtype=float)
+    iterations = 0
+    while True:
+        current = dict(zip(names, theta, strict=True))
+        y, sens = _outputs_and_sensitivities(problem, current, names)
+        v = z - y
+        noise = _noise_covariance(v, full, floor)
+        weight = np.linalg.inv(noise)
+        cost_history.append(0.5 * n_samples * float(np.linalg.slogdet(noise)[1]))
+        info = _information(sens, weight)
+        if not names:
+            converged, reason = True, "no free parameters"
+            break
+        if step_history and step_history[-1] < step_tol:
+            converged, reason = True, f"parameter change below {step_tol:g} standard errors"
+            break
+        if len(cost_history) > 1 and abs(cost_history[-1] - cost_history[-2]) < cost_tol:
+            converged, reason = True, f"ML cost change below {cost_tol:g}"
+            break
+        if iterations >= max_iterations:
+            break
+        grad = sens.reshape(-1, sens.shape[2]).T @ (v @ weight).reshape(-1)
+        scale = np.sqrt(np.diag(info))
+        scale = np.where(scale > 0, scale, 1.0)
+        info_n = info / np.outer(scale, scale)
+        hess_n = _concentrated_hessian(sens, v, weight, info, full) / np.outer(scale, scale)
+        try:
+            np.linalg.cholesky(hess_n)
+        except np.linalg.LinAlgError:
+            hess_n = info_n
+        grad_n = grad / scale
+        cost0 = cost_history[-1]
+        accepted = False
+        eye = np.eye(len(names))
+        for _ in range(14):
+            step_n = np.linalg.lstsq(hess_n + lam * eye, grad_n, rcond=None)[0]
+            trial = theta + step_n / scale
+            cost1 = _concentrated_cost(z - _outputs(problem, dict(zip(names, trial, strict=True))),
+                                       full, floor)
+            if np.isfinite(cost1) and cost1 <= cost0:
+                accepted = True
+                break
+            lam = max(10.0 * lam, 1e-3)
+        iterations += 1
+        if not accepted:
+            newton = np.linalg.lstsq(info_n, grad_n, rcond=None)[0]
+            converged = bool(np.max(np.abs(newton)) < step_tol)
+            reason = "no damped step lowers the cost: " + (
+                "at the minimum to within rounding" if converged else "stopped away from a minimum")
+            break
+        # the change relative to each parameter's Cramer-Rao bound sqrt(diag M^-1)
+        std = np.sqrt(np.abs(np.diag(np.linalg.pinv(info_n)))) / scale
+        step_history.append(float(np.max(np.abs(trial - theta) / std)))
+        theta = trial
+        lam = lam / 10.0 if lam > 1e-6 else 0.0
+    return _Fit(names, dict(zip(names, theta, strict=True)), y, sens, v, noise, info,
+                converged, reason, iterations, cost_history, step_history)
+
+
+def _concentrated_hessian(sens: np.ndarray, v: np.ndarray, weight: np.ndarray,
+                          info: np.ndarray, full: bool) -> np.ndarray:
+    n, ny, k = sens.shape
+    b = (sens.transpose(2, 1, 0).reshape(k * ny, n) @ v).reshape(k, ny, ny)
+    c = b + b.transpose(0, 2, 1)
+    if not full:
+        c = np.einsum("kaa->ka", c)  # only the diagonal of R is estimated
+        wd = np.diag(weight)
+        return info - np.einsum("ka,a,la->kl", c, wd**2, c) / (2 * v.shape[0])
+    wc = np.einsum("ab,kbc->kac", weight, c)
+    return info - np.einsum("kab,lba->kl", wc, wc) / (2 * v.shape[0])
+
+
+def _singular(names: list[str], fit: _Fit, tol: float) -> dict[str, str]:
+    values = np.array([fit.values[n] for n in names])
+    found = ident.zero_sensitivity(names, fit.information, values)
+    if found:
+        return found
+    biases = [n for n in names if n.startswith("bias_") or n.startswith("x0_")]
+    return ident.collinear(names, fit.information, prefer_keep=biases, tolerance=tol)
+
+
+def _result(problem: Problem, fit: _Fit, unidentifiable: dict[str, str], colored: bool,
+            full: bool) -> Estimate:
+    names = fit.names
+    weight = np.linalg.inv(fit.noise)
+    if names:
+        cov = np.linalg.inv(fit.information)
+        std_kind = "cramer-rao"
+        if colored:
+            cov = colored_residual_covariance(fit.sens, fit.residuals, weight, fit.information)
+            std_kind = "cramer-rao corrected for colored residuals"
+    else:
+        cov, std_kind = np.zeros((0, 0)), "none"
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    outputs = {
+        name: {"measured": problem.z[:, j], "model": fit.y[:, j],
+               "residual": fit.residuals[:, j]}
+        for j, name in enumerate(problem.model.outputs)
+    }
+    fixed = {n: float(v) for n, v in problem.fixed.items()}
+    spread = np.sum((problem.z - problem.z.mean(axis=0)) ** 2, axis=0)
+    r2 = {o: float(1 - np.sum(fit.residuals[:, j] ** 2) / spread[j]) if spread[j] > 0
+          else float("nan") for j, o in enumerate(problem.model.outputs)}
+    fit_stats = {
+        "model": problem.model.name,
+        "converged": fit.converged,
+        "reason": fit.reason,
+        "iterations": fit.iterations,
+        "cost_history": list(fit.cost_history),
+        "step_history": list(fit.step_history),
+        "cost": fit.cost_history[-1],
+        "noise_std": {o: float(np.sqrt(fit.noise[j, j]))
+                      for j, o in enumerate(problem.model.outputs)},
+        "noise_covariance": fit.noise,
+        "R2_per_output": r2,
+        "R2": float(np.nanmean(list(r2.values()))),
+        "fixed": fixed,
+        "std_kind": std_kind,
+        "samples": int(problem.z.shape[0]),
+        "high_correlations": ident.high_correlations(names, cov, 0.9) if names else [],
+        "full_noise_covariance": full,
+    }
+    return Estimate(
+        method=METHOD,
+        names=list(names),
+        values=np.array([fit.values[n] for n in names]),
+        std=std,
+        covariance=cov,
+        fit=fit_stats,
+        unidentifiable=dict(unidentifiable),
+        outputs=outputs,
+        time=problem.time.copy(),
+    )
