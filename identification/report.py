@@ -42,14 +42,15 @@ def time_history_figure(estimate: Estimate, title: str = ""):
         out = estimate.outputs[name]
         axes[row, 0].plot(t, out["measured"], color="0.3", lw=1.0, label="measured")
         axes[row, 0].plot(t, out["model"], color="tab:red", lw=1.0, ls="--", label="model")
-        axes[row, 0].set_ylabel(name)
+        axes[row, 0].set_ylabel(f"{name} ({_unit(name)})")
         axes[row, 1].plot(t, np.asarray(out["measured"]) - np.asarray(out["model"]),
                           color="tab:blue", lw=0.8)
         axes[row, 1].set_ylabel(f"{name} residual")
         for ax in axes[row]:
             ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=8)
-    axes[0, 0].set_title(title or f"{estimate.method}: measured and model")
+    model = estimate.fit.get("model", "")
+    axes[0, 0].set_title(title or f"{estimate.method} {model}: measured and model")
     axes[0, 1].set_title("residuals (measured - model)")
     axes[-1, 0].set_xlabel("time (s)")
     axes[-1, 1].set_xlabel("time (s)")
@@ -58,30 +59,48 @@ def time_history_figure(estimate: Estimate, title: str = ""):
 
 
 def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None):
-    """Each derivative normalised by its truth (or value) with 2-sigma bars."""
+    """Each derivative against truth: estimate/|truth| with 2-sigma bars, and error/std."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     names = [n for n in estimate.names if n.startswith("C")]
-    fig, ax = plt.subplots(figsize=(8, 0.32 * len(names) + 1.2))
-    y = np.arange(len(names))
+    scored = [n for n in names if truth and n in truth]
+    fig, axes = plt.subplots(1, 2 if scored else 1, figsize=(11, 0.32 * len(names) + 1.2),
+                             sharey=True, squeeze=False)
+    ax = axes[0, 0]
     for i, n in enumerate(names):
         v, s = estimate[n], estimate.std_of(n)
         ref = truth.get(n) if truth else None
         scale = abs(ref) if ref else (abs(v) or 1.0)
         ax.errorbar(v / scale, i, xerr=2 * s / scale, fmt="o", color="tab:blue", capsize=3)
-        if ref is not None:
-            ax.plot(ref / scale, i, "k|", ms=14, mew=2)
-    ax.set_yticks(y, names)
+        if ref:
+            ax.plot(np.sign(ref), i, "k|", ms=14, mew=2)
+    ax.set_yticks(np.arange(len(names)), names)
     ax.invert_yaxis()
     ax.axvline(0, color="0.8", lw=0.8)
-    ax.set_xlabel("estimate / |truth|  (bar: 2 sigma; black tick: truth)" if truth
-                  else "estimate / |estimate| (bar: 2 sigma)")
+    ax.set_xlabel("estimate / |truth| (bar: 2 sigma; tick: truth); zero truth: / |estimate|")
     ax.grid(alpha=0.3, axis="x")
+    if scored:
+        ax = axes[0, 1]
+        for i, n in enumerate(names):
+            if n in scored and estimate.std_of(n) > 0:
+                z = (estimate[n] - truth[n]) / estimate.std_of(n)
+                ax.plot(z, i, "o", color="tab:red" if abs(z) > 3 else "tab:green")
+        for x in (-3, 3):
+            ax.axvline(x, color="tab:red", lw=0.8, ls="--")
+        ax.axvline(0, color="0.5", lw=0.8)
+        ax.set_xlabel("(estimate - truth) / std  (dashed: 3 sigma)")
+        ax.grid(alpha=0.3, axis="x")
     fig.tight_layout()
     return fig
+
+
+def _unit(name: str) -> str:
+    from flightid.channels import CHANNELS
+
+    return CHANNELS[name].unit if name in CHANNELS else "-"
 
 
 def _table(rows: Sequence[Sequence[object]], header: Sequence[str]) -> str:
@@ -104,9 +123,12 @@ def write_html(
     estimates: Sequence[Estimate],
     truth: dict[str, float] | None = None,
     notes: Sequence[str] = (),
-    extra_figures: Sequence[tuple[str, object]] = (),
+    figures: Sequence[tuple[str, object]] = (),
 ) -> Path:
-    """Write a self-contained HTML report with tables and plots; returns the path."""
+    """Write a self-contained HTML report with tables and plots; returns the path.
+
+    ``figures`` are (caption, matplotlib figure or PNG path) pairs added at the end.
+    """
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",
         f"<title>{html.escape(title)}</title>",
@@ -139,9 +161,11 @@ def write_html(
         if any(n.startswith("C") for n in est.names):
             parts.append(f"<img alt='estimates' src='data:image/png;base64,"
                          f"{_png(estimates_figure(est, truth))}'>")
-    for caption, fig in extra_figures:
+    for caption, fig in figures:
+        data = (base64.b64encode(Path(fig).read_bytes()).decode()
+                if isinstance(fig, str | Path) else _png(fig))
         parts.append(f"<h2>{html.escape(caption)}</h2><img alt='{html.escape(caption)}' "
-                     f"src='data:image/png;base64,{_png(fig)}'>")
+                     f"src='data:image/png;base64,{data}'>")
     parts.append("</body></html>")
     path = Path(path)
     path.write_text("\n".join(parts), encoding="utf-8")

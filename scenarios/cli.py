@@ -28,6 +28,18 @@ def version() -> None:
 
 
 @app.command()
+def demo(
+    card: Annotated[str, typer.Option(help="library card name or TOML path")] = "navion-demo",
+    seed: Annotated[int | None, typer.Option(help="random seed (default: the card's)")] = None,
+    report: Annotated[str, typer.Option(help="HTML report to write")] = "flightid-demo.html",
+) -> None:
+    """The main job: fly the built-in Navion card, identify by output error, score, report."""
+    from flightid.scenarios.demo import run_cli as demo_cli
+
+    demo_cli(card, seed, report)
+
+
+@app.command()
 def identify(
     record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
     method: Annotated[str, typer.Option(help="ee, swr, ... (dispatch.METHODS)")] = "ee",

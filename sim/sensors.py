@@ -400,7 +400,10 @@ def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
 
 # -- built-in suites ---------------------------------------------------------------------
 
-_MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz")
+# recorded exactly: mass properties (from the weight-and-balance sheet), the throttle
+# lever position and the engine-model thrust (the NASA Twin Otter record carries thrust
+# computed from an engine model the same way)
+_MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz", "throttle", "thrust")
 S000 = "seed 000 (Telemaster thesis)"
 S003 = "seed 003 (Boomerang 60)"
 TOTTER = (
@@ -484,6 +487,11 @@ def hobby_suite() -> SensorSuite:
                 das,
                 WhiteNoise(sigma=0.8, source=f"{S000} 6: airspeed accuracy +-0.8 m/s"),
             ],
+            "qbar": [
+                das,
+                WhiteNoise(sigma=19.0, source="the airspeed sensor's noise as dynamic pressure: "
+                           "rho V sigma_V at 20 m/s (assumption, same sensor as V)"),
+            ],
             "rpm": [das, Quantization(resolution=100.0, source=f"{S000} Fig. 6-3: 100 rpm")],
         },
         mounting=[
@@ -557,6 +565,8 @@ def research_suite() -> SensorSuite:
             "da": chan(0.030 * DEG, 0.005 * DEG),
             "dr": chan(0.0064 * DEG, 0.01 * DEG),
             "h": chan(0.41 * FT, 0.5 * FT),
+            # the airspeed noise as dynamic pressure, rho V sigma_V at 54 m/s (same sensor)
+            "qbar": chan(0.7, 0.01),
         },
         mounting=[
             LeverArm(x=0.3, y=0.0, z=0.2, source="assumption: IMU near the CG of a Twin Otter"),

@@ -36,6 +36,7 @@ def smooth_truth(duration: float, fs: float, seed: int, rpm: float = 16000.0) ->
 
     ch = {
         "V": sig(1.0, 25.0),
+        "qbar": sig(20.0, 380.0),
         "alpha": sig(0.03, 0.06),
         "beta": sig(0.03),
         "p": sig(0.3),
@@ -52,6 +53,7 @@ def smooth_truth(duration: float, fs: float, seed: int, rpm: float = 16000.0) ->
         "da": sig(0.03),
         "dr": sig(0.03),
         "throttle": sig(0.05, 0.6),
+        "thrust": sig(5.0, 40.0),
         "rpm": rpm + 0 * t,
         "mass": 10 + 0 * t,
         "Ixx": 1 + 0 * t,

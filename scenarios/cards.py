@@ -1,0 +1,454 @@
+"""Flight cards: one TOML file says what to fly, and ``fly_card`` flies it.
+
+Schema (every length in m, speed in m/s, time in s, rate in Hz; angles in rad, or in
+degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a commented card.
+
+    name = "navion-demo"        # optional, default: the file name
+    description = "one line"    # shown by `flightid simulate --list`
+    source = "seed 004 ..."     # where the flight test comes from
+    aircraft = "navion"         # a project aircraft or one shipped with JSBSim
+    duration = 50.0             # s of flight after trim
+    rate = 100.0                # Hz of the truth record (JSBSim runs at >= 400 Hz)
+    seed = 1                    # default random seed (noise, turbulence, pilot)
+
+    [condition]                 # trimmed start: altitude and speed required
+    altitude = 0.0              # m above sea level
+    speed = 53.64               # m/s true airspeed
+    gamma_deg = 0.0             # flight-path angle; bank_deg, flaps_deg likewise
+
+    [[maneuver]]                # any number; kinds of flightid.scenarios.inputs.INPUT_KINDS
+    kind = "3211"               # doublet 21 211 3211 pulse multistep step sweep multisine
+    surface = "de"              # orthogonal_multisine pullup_pushover throttle_cut
+    start = 5.0                 # bank_to_bank figure_eight (hand-flown, seeded pilot)
+    base = 0.5
+    amplitude_deg = 2.0
+
+    [sensors]                   # optional; without it the measured record is the truth
+    suite = "research"          # built-in suite (hobby, research, ideal) to start from
+    output_rate = 50.0          # other keys as flightid.sim.sensors.suite_from_dict
+    drop = ["rpm"]              # channels or mounting effects to remove from the suite
+    [sensors.channels]          # per-channel overrides replace that channel's chain
+    q = [{effect = "sample", rate = 50.0}, {effect = "noise", sigma_deg = 0.1}]
+
+    [[disturbance]]             # kinds of flightid.sim.disturbances.DISTURBANCES
+    kind = "turbulence"         # turbulence, wind, gust, engine_vibration
+    intensity = "light"
+
+``load_card(path) -> Card`` validates everything and raises ``CardError`` naming the file,
+the line and the field. ``fly_card(card, seed) -> (measured, truth)`` is a pure function
+of its arguments: same card and seed, identical records; another seed changes only the
+random parts (sensor noise, turbulence, the hand-flying pilot). Each random part draws
+from its own stream derived from the seed, so adding one leaves the others unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import tomllib
+import zlib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flightid.record import FlightRecord
+from flightid.scenarios.input_design import InputDesign
+from flightid.scenarios.inputs import input_from_dict, total_signals
+from flightid.scenarios.toml_locate import line_index, line_of
+from flightid.units import DEG
+
+LIBRARY = Path(__file__).resolve().parent / "library"
+TOP_FIELDS = ("name", "description", "source", "aircraft", "duration", "rate", "seed",
+              "condition", "maneuver", "sensors", "disturbance")
+CONDITION_FIELDS = ("altitude", "speed", "gamma", "bank", "flaps")
+NO_SENSORS = "none"
+
+
+class CardError(ValueError):
+    """A mistake in a flight card: ``path``, ``line`` (1-based or None) and ``field``."""
+
+    def __init__(self, path: str, line: int | None, field: str | None, message: str) -> None:
+        where = f"{path}:{line}" if line else str(path)
+        what = f"field '{field}': " if field and f"'{field}'" not in message else ""
+        super().__init__(f"{where}: {what}{message}")
+        self.path = str(path)
+        self.line = line
+        self.field = field
+        self.message = message
+
+
+@dataclass(frozen=True)
+class Condition:
+    """Trimmed start: altitude (m), true airspeed (m/s), gamma, bank, flaps (rad)."""
+
+    altitude_m: float
+    speed_m_s: float
+    gamma_rad: float = 0.0
+    bank_rad: float = 0.0
+    flaps_rad: float = 0.0
+
+
+@dataclass
+class Card:
+    """A validated flight card; ``data`` is the card as parsed (plain dict, card units)."""
+
+    name: str
+    aircraft: str
+    condition: Condition
+    duration: float
+    rate: float
+    seed: int
+    maneuvers: tuple[InputDesign, ...] = ()
+    sensors: Any = None  # flightid.sim.sensors.SensorSuite or None
+    disturbances: tuple[Any, ...] = ()
+    description: str = ""
+    source: str = ""
+    path: str = ""
+    data: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The card as written (a JSON-able dict), for record metadata."""
+        return _plain(self.data)
+
+
+def _plain(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_plain(v) for v in x]
+    return x
+
+
+# -- locating cards -----------------------------------------------------------------------
+
+
+def library_cards() -> dict[str, Path]:
+    """Library card names -> paths (scenarios/library/*.toml)."""
+    return {p.stem: p for p in sorted(LIBRARY.glob("*.toml"))}
+
+
+def find_card(name_or_path: str | Path) -> Path:
+    """Path of a card given as a file path or a library card name."""
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    lib = library_cards()
+    stem = p.stem if p.suffix == ".toml" else p.name
+    if str(name_or_path) == stem and stem in lib:
+        return lib[stem]
+    raise CardError(str(name_or_path), None, None,
+                    f"no such card file, and not a library card; library cards: "
+                    f"{', '.join(lib) or 'none'}")
+
+
+def describe(path: Path) -> str:
+    """The one-line description of a card file (without validating it)."""
+    try:
+        return str(tomllib.loads(path.read_text(encoding="utf-8")).get("description", ""))
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        return f"(unreadable: {exc})"
+
+
+# -- parsing --------------------------------------------------------------------------------
+
+
+_FIELD = re.compile(r"field '([^']+)'")
+_LEAD = re.compile(r"^([A-Za-z_][\w.\[\]]*): ")
+
+
+def _path_of(field_name: str) -> tuple:
+    """'maneuver[2].amplitude_deg' -> ('maneuver', 2, 'amplitude_deg')."""
+    out: list = []
+    for part in field_name.split("."):
+        m = re.fullmatch(r"([^\[\]]+)((?:\[\d+\])*)", part)
+        if not m:
+            out.append(part)
+            continue
+        out.append(m.group(1))
+        out.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    return tuple(out)
+
+
+class _Checker:
+    """Raises CardError with file, line and field for a card being parsed."""
+
+    def __init__(self, path: str, text: str | None) -> None:
+        self.path = path
+        self.index = line_index(text) if text else {}
+
+    def fail(self, field_name: str, message: str) -> CardError:
+        line = line_of(self.index, _path_of(field_name)) if self.index else None
+        return CardError(self.path, line, field_name, message)
+
+    def wrap(self, exc: Exception, context: str) -> CardError:
+        """A CardError from a builder's ValueError, locating the field it names."""
+        msg = str(exc)
+        m = _FIELD.search(msg) or _LEAD.search(msg)
+        name = m.group(1) if m else context
+        if not (name == context or name.startswith(context + ".")
+                or name.startswith(context + "[")):
+            name = f"{context}.{name}"
+        return self.fail(name, msg)
+
+    def number(self, d: dict, key: str, where: str, default: float | None = None,
+               positive: bool = False) -> float:
+        if key not in d:
+            if default is None:
+                raise self.fail(where, "is required")
+            return default
+        v = d[key]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise self.fail(where, f"must be a number, got {v!r}")
+        if positive and not v > 0:
+            raise self.fail(where, f"must be > 0, got {v!r}")
+        return float(v)
+
+
+def _angle(chk: _Checker, d: dict, name: str, where: str) -> float:
+    if name in d and f"{name}_deg" in d:
+        raise chk.fail(f"{where}.{name}_deg", f"given twice (as {name!r} and {name}_deg)")
+    if f"{name}_deg" in d:
+        return chk.number(d, f"{name}_deg", f"{where}.{name}_deg") * DEG
+    return chk.number(d, name, f"{where}.{name}", default=0.0)
+
+
+def _condition(chk: _Checker, d: Any) -> Condition:
+    if not isinstance(d, dict):
+        raise chk.fail("condition", "must be a table ([condition])")
+    for key in d:
+        base = key[:-4] if key.endswith("_deg") else key
+        if base not in CONDITION_FIELDS or (key.endswith("_deg") and base in ("altitude",
+                                                                              "speed")):
+            raise chk.fail(f"condition.{key}", "unknown field; allowed: altitude, speed, "
+                           "gamma(_deg), bank(_deg), flaps(_deg)")
+    altitude = chk.number(d, "altitude", "condition.altitude")
+    speed = chk.number(d, "speed", "condition.speed", positive=True)
+    if altitude < 0:
+        raise chk.fail("condition.altitude", f"must be >= 0 m, got {altitude}")
+    return Condition(altitude, speed, _angle(chk, d, "gamma", "condition"),
+                     _angle(chk, d, "bank", "condition"), _angle(chk, d, "flaps", "condition"))
+
+
+def _maneuvers(chk: _Checker, items: Any, duration: float) -> tuple[InputDesign, ...]:
+    if not isinstance(items, list):
+        raise chk.fail("maneuver", "must be an array of tables ([[maneuver]])")
+    out = []
+    for i, d in enumerate(items):
+        where = f"maneuver[{i}]"
+        if not isinstance(d, dict):
+            raise chk.fail(where, f"must be a table, got {d!r}")
+        try:
+            design = input_from_dict(d, where)
+        except ValueError as exc:
+            raise chk.wrap(exc, where) from None
+        if design.start < 0:
+            raise chk.fail(f"{where}.start", f"starts at {design.start:g} s, before the flight")
+        if design.start >= duration:
+            raise chk.fail(f"{where}.start", f"starts at {design.start:g} s, after the flight "
+                           f"ends ({duration:g} s)")
+        if design.end > duration + 1e-9:
+            raise chk.fail(f"{where}.start" if "start" in d else where,
+                           f"the {design.kind} runs from {design.start:g} to "
+                           f"{design.end:g} s, beyond the flight's duration {duration:g} s")
+        out.append(design)
+    return tuple(out)
+
+
+def _sensors(chk: _Checker, d: Any) -> Any:
+    from flightid.sim.sensors import suite_from_dict
+
+    if d == NO_SENSORS:
+        return None
+    if isinstance(d, str):
+        d = {"suite": d}
+    if not isinstance(d, dict):
+        raise chk.fail("sensors", f"must be a table or a suite name, got {d!r}")
+    if d.get("suite") == NO_SENSORS:
+        if len(d) > 1:
+            raise chk.fail("sensors.suite", "suite 'none' takes no other sensor fields")
+        return None
+    body = {("base" if k == "suite" else k): v for k, v in d.items() if k != "drop"}
+    if "base" in body and not isinstance(body["base"], str):
+        raise chk.fail("sensors.suite", f"must be a suite name, got {body['base']!r}")
+    try:
+        suite = suite_from_dict(body)
+    except ValueError as exc:
+        msg = str(exc).replace("field 'base'", "field 'suite'")
+        raise chk.wrap(ValueError(msg), "sensors") from None
+    drop = d.get("drop", [])
+    if not isinstance(drop, list) or not all(isinstance(x, str) for x in drop):
+        raise chk.fail("sensors.drop", f"must be a list of channel or mounting-effect names, "
+                       f"got {drop!r}")
+    mounting = {m.name for m in suite.mounting}
+    for i, name in enumerate(drop):
+        if name not in suite.channels and name not in mounting:
+            raise chk.fail(f"sensors.drop[{i}]", f"{name!r} is neither a channel nor a "
+                           f"mounting effect of the suite; it has {', '.join(suite.channels)}; "
+                           f"{', '.join(mounting) or 'no mounting effects'}")
+    return dataclasses.replace(
+        suite, channels={c: e for c, e in suite.channels.items() if c not in drop},
+        mounting=[m for m in suite.mounting if m.name not in drop])
+
+
+def _disturbances(chk: _Checker, items: Any, duration: float) -> tuple[Any, ...]:
+    from flightid.sim.disturbances import Gust, disturbance_from_dict, vibration_of
+
+    if not isinstance(items, list):
+        raise chk.fail("disturbance", "must be an array of tables ([[disturbance]])")
+    out = []
+    for i, d in enumerate(items):
+        where = f"disturbance[{i}]"
+        try:
+            dist = disturbance_from_dict(d, where)
+        except ValueError as exc:
+            raise chk.wrap(exc, where) from None
+        if isinstance(dist, Gust) and dist.start >= duration:
+            raise chk.fail(f"{where}.start", f"gust at {dist.start:g} s is after the flight "
+                           f"ends ({duration:g} s)")
+        out.append(dist)
+    try:
+        vibration_of(out)
+    except ValueError as exc:
+        raise chk.fail("disturbance", str(exc)) from None
+    return tuple(out)
+
+
+def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None = None) -> Card:
+    """Validate a parsed card; ``text`` (the TOML source) lets errors name the line."""
+    from flightid.sim.model import available
+
+    chk = _Checker(path, text)
+    for key in data:
+        if key not in TOP_FIELDS:
+            raise chk.fail(key, f"unknown field; allowed: {', '.join(TOP_FIELDS)}")
+    for key in ("name", "description", "source"):
+        if key in data and not isinstance(data[key], str):
+            raise chk.fail(key, f"must be a string, got {data[key]!r}")
+    if "aircraft" not in data:
+        raise chk.fail("aircraft", "is required")
+    aircraft = data["aircraft"]
+    if not isinstance(aircraft, str):
+        raise chk.fail("aircraft", f"must be a string, got {aircraft!r}")
+    known = available()
+    if aircraft not in known["project"] and aircraft not in known["jsbsim"]:
+        raise chk.fail("aircraft", f"unknown aircraft {aircraft!r}; project aircraft: "
+                       f"{', '.join(known['project'])} (or any aircraft shipped with JSBSim)")
+    duration = chk.number(data, "duration", "duration", positive=True)
+    rate = chk.number(data, "rate", "rate", default=100.0, positive=True)
+    seed = data.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise chk.fail("seed", f"must be a whole number >= 0, got {seed!r}")
+    if "condition" not in data:
+        raise chk.fail("condition", "is required ([condition] with altitude and speed)")
+    condition = _condition(chk, data["condition"])
+    maneuvers = _maneuvers(chk, data.get("maneuver", []), duration)
+    sensors = _sensors(chk, data["sensors"]) if "sensors" in data else None
+    disturbances = _disturbances(chk, data.get("disturbance", []), duration)
+    from flightid.sim.disturbances import vibration_of
+
+    if vibration_of(disturbances) is not None and sensors is None:
+        raise chk.fail("disturbance", "engine_vibration acts on the sensors; give a [sensors] "
+                       "table")
+    default_name = Path(path).stem if path != "<card>" else "card"
+    return Card(name=data.get("name", default_name), aircraft=aircraft, condition=condition,
+                duration=duration, rate=rate, seed=seed, maneuvers=maneuvers,
+                sensors=sensors, disturbances=disturbances,
+                description=data.get("description", ""), source=data.get("source", ""),
+                path=str(path), data=data)
+
+
+def load_card(path: str | Path) -> Card:
+    """Read and validate a card file (path or library name); CardError names line and field."""
+    p = find_card(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CardError(str(p), None, None, f"cannot read the card: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise CardError(str(p), int(m.group(1)) if m else None, None,
+                        f"TOML syntax error: {exc}") from None
+    return card_from_dict(data, str(p), text)
+
+
+# -- flying -----------------------------------------------------------------------------------
+
+
+def sub_seed(seed: int, purpose: str) -> int:
+    """An independent 32-bit seed for one random part of a flight (e.g. 'sensors')."""
+    ss = np.random.SeedSequence([int(seed), zlib.crc32(purpose.encode())])
+    return int(ss.generate_state(1)[0])
+
+
+def _flown_designs(card: Card, seed: int) -> list[InputDesign]:
+    """The card's maneuvers with each hand-flying pilot reseeded from the flight's seed."""
+    out = []
+    for i, d in enumerate(card.maneuvers):
+        if any(f.name == "seed" for f in dataclasses.fields(d)):
+            d = dataclasses.replace(d, seed=sub_seed(seed, f"pilot:{i}:{d.seed}"))
+        out.append(d)
+    return out
+
+
+def fly_card(card: Card, seed: int | None = None,
+             progress: Callable[[int, int], None] | None = None
+             ) -> tuple[FlightRecord, FlightRecord]:
+    """Fly a card: (measured, truth) records; a pure function of the card and the seed.
+
+    The truth is sampled at the card's rate; the measured record is the truth through
+    the card's sensor suite (the truth itself without one). Both carry the card
+    (``meta.scenario['card']``) and the seed (``meta.scenario['seed']``). Raises
+    TrimError or DepartureError (with ``.record``) from the flight core.
+    """
+    from flightid.sim.disturbances import (
+        atmosphere_for,
+        fly_disturbed,
+        vibration_of,
+        wind_schedule,
+    )
+    from flightid.sim.flight import DepartureError
+    from flightid.sim.model import load
+    from flightid.sim.sensors import measure
+    from flightid.sim.trim import trim
+
+    seed = card.seed if seed is None else int(seed)
+    c = card.condition
+    model = load(card.aircraft)
+    trimmed = trim(model, c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
+    n = int(round(card.duration * card.rate)) + 1
+    t = np.arange(n) / card.rate
+    designs = _flown_designs(card, seed)
+    controls = total_signals(designs, t) if designs else {}
+    rng = np.random.default_rng(sub_seed(seed, "turbulence"))
+    gusts, turb = wind_schedule(card.disturbances, n, card.rate, trimmed, rng)
+    scenario = {"card": card.to_dict(), "seed": seed, "name": card.name}
+    try:
+        truth = fly_disturbed(model, trimmed, controls, card.duration, card.rate,
+                              atmosphere_for(card.disturbances, sub_seed(seed, "jsbsim")),
+                              wind=gusts, turbulence=turb, scenario=scenario,
+                              progress=progress)
+    except DepartureError as exc:
+        raise DepartureError(f"{exc.reason} (card {card.name}, seed {seed})", exc.time,
+                             exc.record) from None
+    truth.meta.extra["inputs"] = [d.to_dict() for d in designs]
+    truth.meta.extra["disturbances"] = [d.to_dict() for d in card.disturbances]
+    if card.sensors is None:
+        return truth, truth
+    suite = card.sensors
+    vib = vibration_of(card.disturbances)
+    if vib is not None:
+        from flightid.sim.vibration import EngineVibration
+
+        suite = dataclasses.replace(suite, mounting=[
+            m for m in suite.mounting if not isinstance(m, EngineVibration)] + [vib])
+    return measure(truth, suite, sub_seed(seed, "sensors")), truth
+
+
+__all__ = ["Card", "CardError", "Condition", "card_from_dict", "find_card", "fly_card",
+           "library_cards", "load_card", "sub_seed"]
