@@ -113,6 +113,9 @@ def bias_name(coefficient: str) -> str:
     return f"C{_letter(coefficient)}_0"
 
 
+THRUST_COEFFICIENTS = ("CX", "CL", "CD")
+
+
 def channel_values(record: FlightRecord, channel: str) -> np.ndarray:
     """A channel of the record, or one derived from it (phat qhat rhat, alphadot_hat)."""
     if channel in record:
@@ -125,7 +128,10 @@ def channel_values(record: FlightRecord, channel: str) -> np.ndarray:
         alphadot = smoothed_derivative(record["alpha"], record.dt)
         return alphadot * record.meta.reference.chord / (2.0 * record["V"])
     if channel in COEFFICIENT_CHANNELS:
-        return force_moment_coefficients(record)[channel]
+        # only the x force (CX, and CL, CD through it) needs the thrust to be subtracted
+        needs_thrust = channel in THRUST_COEFFICIENTS
+        return force_moment_coefficients(
+            record, include_thrust=needs_thrust or "thrust" in record)[channel]
     raise KeyError(
         f"record has no channel {channel!r} (and it cannot be derived); it has "
         f"{', '.join(sorted(record.channels))}"

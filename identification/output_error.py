@@ -18,7 +18,7 @@ Cramer-Rao bounds are sqrt(diag M^-1) with M = sum_i S_i^T R^-1 S_i (M&K eq. 6.5
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -379,7 +379,8 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
 
     As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
     (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
-    regression cannot estimate keep the model's start values.
+    regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
+    a thrust channel), keep the model's start values.
     """
     from flightid.derivatives import is_derivative, split
     from flightid.identification import equation_error
@@ -392,6 +393,9 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
                 groups.setdefault(f"C{coef}", []).append(var)
     out: dict[str, float] = {}
     for coefficient, variables in groups.items():
+        if (coefficient in equation_error.THRUST_COEFFICIENTS and coefficient not in record
+                and "thrust" not in record):
+            continue  # no thrust channel: the x force cannot be made aerodynamic
         fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables])
         for var in variables:
             name = f"{coefficient}_{var}"
@@ -488,7 +492,29 @@ def _concentrated_cost(residuals: np.ndarray, full: bool, floor: np.ndarray) -> 
 
 def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
              full: bool, step_tol: float, cost_tol: float) -> _Fit:
+    """``maximum_likelihood`` on a linear-model problem (outputs from ``_outputs``)."""
+    return maximum_likelihood(
+        problem.z, problem.noise_floor,
+        lambda current: _outputs_and_sensitivities(problem, current, names),
+        lambda trial: _outputs(problem, trial),
+        names, values, max_iterations, full, step_tol, cost_tol,
+    )
+
+
+def maximum_likelihood(
+    z: np.ndarray, floor: np.ndarray,
+    outputs_and_sensitivities: Callable[[dict[str, float]], tuple[np.ndarray, np.ndarray]],
+    outputs: Callable[[dict[str, float]], np.ndarray],
+    names: list[str], values: Mapping[str, float], max_iterations: int,
+    full: bool, step_tol: float, cost_tol: float,
+) -> _Fit:
     """Newton-Raphson on the ML cost with R concentrated out, Levenberg-Marquardt safeguard.
+
+    The model enters only through two functions of the parameter values {name: value}:
+    ``outputs_and_sensitivities`` returns y (N, ny) and dy/dtheta (N, ny, len(names)),
+    ``outputs`` returns y alone; z (N, ny) are the measurements and ``floor`` the smallest
+    admitted noise variance per output. Shared by the linear and the nonlinear 6-DOF
+    output error (``nonlinear_6dof``).
 
     R is re-estimated from the residuals at every iteration (M&K eq. 6.26). The Newton
     matrix is the Gauss-Newton information matrix M (M&K eq. 6.33) minus the term from
@@ -498,9 +524,7 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_i
     plain relaxation algorithm creeps along one direction. H is used when it is positive
     definite, M otherwise; a step is accepted only if it lowers N/2 ln det R.
     """
-    z = problem.z
     n_samples = z.shape[0]
-    floor = problem.noise_floor
     cost_history: list[float] = []
     step_history: list[float] = []
     lam = 0.0
@@ -509,7 +533,7 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_i
     iterations = 0
     while True:
         current = dict(zip(names, theta, strict=True))
-        y, sens = _outputs_and_sensitivities(problem, current, names)
+        y, sens = outputs_and_sensitivities(current)
         v = z - y
         noise = _noise_covariance(v, full, floor)
         weight = np.linalg.inv(noise)
@@ -542,7 +566,7 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_i
         for _ in range(14):
             step_n = np.linalg.lstsq(hess_n + lam * eye, grad_n, rcond=None)[0]
             trial = theta + step_n / scale
-            cost1 = _concentrated_cost(z - _outputs(problem, dict(zip(names, trial, strict=True))),
+            cost1 = _concentrated_cost(z - outputs(dict(zip(names, trial, strict=True))),
                                        full, floor)
             if np.isfinite(cost1) and cost1 <= cost0:
                 accepted = True

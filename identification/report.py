@@ -17,6 +17,13 @@ import numpy as np
 from flightid.identification.estimate import Estimate
 
 
+METHOD_NAMES = {
+    "ee": "equation error", "swr": "stepwise regression", "oe": "output error",
+    "fem": "filter error", "fdee": "frequency-domain equation error",
+    "fdoe": "frequency-domain output error", "fr": "frequency-response fit",
+}
+
+
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
@@ -139,7 +146,9 @@ def write_html(
     ]
     parts += [f"<p>{html.escape(n)}</p>" for n in notes]
     for est in estimates:
-        parts.append(f"<h2>{html.escape(est.method)}</h2>")
+        model = est.fit.get("model") or est.fit.get("coefficient") or ""
+        parts.append(f"<h2>{html.escape(METHOD_NAMES.get(est.method, est.method))}"
+                     f"{': ' + html.escape(str(model)) if model else ''}</h2>")
         rows = []
         for n, v, s in zip(est.names, est.values, est.std, strict=True):
             ref = truth.get(n) if truth else None

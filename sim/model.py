@@ -121,6 +121,21 @@ class Model:
 
         return self.get("inertia/mass-slugs") * SLUG
 
+    def mass_properties(self) -> dict[str, float]:
+        """Mass (kg) and inertias (kg m^2, Ixz positive as in Etkin) as loaded."""
+        from flightid.units import SLUG_FT2
+
+        m = self.copy()
+        m.fdm.run_ic()  # JSBSim balances mass (with fuel) on initialisation
+        return {
+            "mass": m.mass_kg(),
+            "Ixx": m.get("inertia/ixx-slugs_ft2") * SLUG_FT2,
+            "Iyy": m.get("inertia/iyy-slugs_ft2") * SLUG_FT2,
+            "Izz": m.get("inertia/izz-slugs_ft2") * SLUG_FT2,
+            # JSBSim reports the tensor element -Ixz; Etkin's Ixz is its negative
+            "Ixz": -m.get("inertia/ixz-slugs_ft2") * SLUG_FT2,
+        }
+
 
 @contextlib.contextmanager
 def quiet() -> Iterator[None]:

@@ -426,6 +426,15 @@ def convert_tlog(
         aircraft=aircraft, sample_rate=fs,
         provenance=f"MAVLink tlog {path} converted by flightid.sim.recorder", extra=extra,
     )
+    if aircraft:
+        # MAVLink carries no mass properties or geometry: take them from the aircraft
+        # definition, as a flight-test engineer takes them from the weight-and-balance sheet
+        from flightid.sim.model import load
+
+        model = load(aircraft)
+        meta.reference = model.reference
+        out.update({k: np.full(grid.size, v) for k, v in model.mass_properties().items()})
+        extra["bridge"]["a_priori"] = f"mass properties and reference geometry of {aircraft!r}"
     return FlightRecord(grid, out, meta)
 
 
