@@ -105,7 +105,17 @@ METHODS: dict[str, Callable[[FlightRecord, str, Mapping[str, Any] | None], list[
     "swr": run_stepwise,
     "oe": run_output_error,
     "fem": lambda record, model, options: [_filter_error().run(record, model, options)],
+    "fdee": lambda record, model, options: _frequency_domain().run_fdee(record, model, options),
+    "fdoe": lambda record, model, options: _frequency_domain().run_fdoe(record, model, options),
+    "fr": lambda record, model, options: _frequency_domain().run_fr(record, model, options),
 }
+
+
+def _frequency_domain():
+    """The frequency-domain module (fdee, fdoe, fr), imported on first use."""
+    from flightid.identification import frequency_domain
+
+    return frequency_domain
 
 
 def _filter_error():
@@ -115,11 +125,32 @@ def _filter_error():
     return filter_error
 
 
+def parse_options(texts: list[str]) -> dict[str, Any]:
+    """{key: value} from 'key=value' texts; values read as JSON where they parse (true,
+    3, 0.5, ["a"]), else kept as strings."""
+    import json
+
+    out: dict[str, Any] = {}
+    for text in texts:
+        key, sep, value = text.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"option {text!r}: expected KEY=VALUE")
+        try:
+            out[key.strip()] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key.strip()] = value
+    return out
+
+
+MODEL_ALIASES = {"lon": "longitudinal", "lat": "lateral"}
+
+
 def identify(
     record: FlightRecord, method: str, model: str = "lateral",
     options: Mapping[str, Any] | None = None,
 ) -> list[Estimate]:
     """Run the named method (a key of METHODS) and return its estimates as a list."""
+    model = MODEL_ALIASES.get(model, model)
     try:
         run = METHODS[method]
     except KeyError:
@@ -129,7 +160,8 @@ def identify(
 
 
 def run_cli(
-    path: str, method: str, model: str, coefficients: list[str], truth: str | None, fmt: str
+    path: str, method: str, model: str, coefficients: list[str], truth: str | None, fmt: str,
+    report: str | None = None, option_texts: list[str] | None = None,
 ) -> None:
     """The ``flightid identify`` command: read, identify, print a table or JSON, score."""
     import json
@@ -143,9 +175,17 @@ def run_cli(
     if fmt not in ("table", "json"):
         raise SystemExit(f"--format must be table or json, got {fmt!r}")
     record = read(path)
-    options = {"coefficients": coefficients} if coefficients else {}
+    options = parse_options(option_texts or [])
+    if coefficients:
+        options["coefficients"] = coefficients
     estimates = identify(record, method, model, options)
-    scored = score(estimates, load_truth(truth)) if truth else None
+    truth_values = load_truth(truth) if truth else None
+    scored = score(estimates, truth_values) if truth_values else None
+    if report:
+        from flightid.identification.report import write_html
+
+        write_html(report, f"flightid identify {path} --method {method} --model {model}",
+                   estimates, truth_values, notes=[scored.verdict] if scored else [])
     if fmt == "json":
         out: dict[str, Any] = {"estimates": {}, "fit": {}, "unidentifiable": {}}
         for est in estimates:

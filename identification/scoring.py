@@ -119,7 +119,11 @@ def verdict(rows: list[ScoreRow], n_sigma: float = 3.0) -> str:
 
 
 def load_truth(path: str | Path) -> dict[str, float]:
-    """Truth values from JSON: {name: value} or {name: {"value": ...}} (also under "truth")."""
+    """Truth values from JSON: {name: value} or {name: {"value": ...}} (also under "truth").
+
+    The output of ``flightid truth --format json`` reads as is; keys that are not
+    derivative names (``trim``, ``flags``) are metadata and skipped.
+    """
     path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
@@ -129,8 +133,12 @@ def load_truth(path: str | Path) -> dict[str, float]:
         data = data["truth"]
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object of derivative values")
+    from flightid.derivatives import is_derivative
+
     out = {}
     for name, value in data.items():
+        if not is_derivative(name):
+            continue  # metadata of `flightid truth --format json`: "trim", "flags", ...
         if isinstance(value, dict):
             if "value" not in value:
                 raise ValueError(f"{path}: field {name!r} has no 'value'")

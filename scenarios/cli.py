@@ -44,18 +44,23 @@ def identify(
     record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
     method: Annotated[str, typer.Option(help="ee, swr, ... (dispatch.METHODS)")] = "ee",
     model: Annotated[
-        str, typer.Option(help="preset (lateral, longitudinal, all) or 'Cn=beta+phat+rhat; ...'")
+        str, typer.Option(help="preset (lat[eral], lon[gitudinal], short_period, 6dof, all) "
+                          "or 'Cn=beta+phat+rhat; ...' (ee, swr)")
     ] = "lateral",
     coefficient: Annotated[
         list[str] | None, typer.Option(help="restrict to this coefficient (repeatable)")
     ] = None,
     truth: Annotated[str | None, typer.Option(help="JSON of true derivative values")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
+    report: Annotated[str | None, typer.Option(help="write an HTML report here")] = None,
+    option: Annotated[list[str] | None, typer.Option(
+        help="method option KEY=VALUE (repeatable), e.g. colored=true, "
+             "initial_state=estimate")] = None,
 ) -> None:
     """Identify stability and control derivatives from a flight record."""
     from flightid.identification.dispatch import run_cli
 
-    run_cli(record, method, model, coefficient or [], truth, format)
+    run_cli(record, method, model, coefficient or [], truth, format, report, option or [])
 
 
 @app.command("frequency-response")
