@@ -216,5 +216,19 @@ def simulate_command(
     simulate_cli(card, output, truth, plot, seed, list_cards)
 
 
+@app.command("compatibility")
+def compatibility_command(
+    record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
+    output: Annotated[str | None, typer.Option("-o", "--output",
+                                               help="write the corrected record here")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+) -> None:
+    """Data compatibility: flight path reconstruction of sensor biases, scale factors and
+    vane calibration; optionally write the corrected record."""
+    from flightid.identification.compatibility import run_cli as compatibility_cli
+
+    compatibility_cli(record, output, format)
+
+
 if __name__ == "__main__":
     app()

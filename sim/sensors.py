@@ -235,6 +235,9 @@ def _vibration_grid(t: np.ndarray, rate: float, f_max: float) -> np.ndarray:
     return t[0] + np.arange(n) / fine
 
 
+WRAPPED_ANGLES = ("psi",)  # channels that jump by 2 pi; measured continuous, rewrapped
+
+
 def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRecord:
     """The record as measured by ``suite``: channels in SI at the suite's output rate.
 
@@ -284,10 +287,17 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
             else:
                 rpm = ch["rpm"]
             x = x + vib.signal(tc, rpm, name, phases)
+        wrapped = name in WRAPPED_ANGLES
+        if wrapped:  # filter the continuous angle, not the jump at +-pi
+            x = np.unwrap(x)
         try:
-            measured[name] = run_chain(tc, x, chain, _rng(seed, f"channel:{name}"))
+            y = run_chain(tc, x, chain, _rng(seed, f"channel:{name}"))
         except ValueError as exc:
             raise ValueError(f"channel {name!r}: {exc}") from None
+        if wrapped:
+            tc_out, x_out = y
+            y = (tc_out, np.angle(np.exp(1j * x_out)))
+        measured[name] = y
         rates[name] = rate if rate is not None else fast_rate
 
     out_rate = suite.output_rate or max(rates.values(), default=fast_rate)
