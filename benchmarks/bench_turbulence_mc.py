@@ -211,6 +211,8 @@ def plot(table: dict, names: list[str], path: Path) -> None:
                    label=f"within {THRESHOLD:g} Cramer-Rao bounds")
         ax.axhline(0.0, color="0.4", lw=0.8)
         ax.set_yscale("symlog", linthresh=3.0)
+        ticks = [-100, -30, -10, -3, 0, 3, 10, 30, 100]
+        ax.set_yticks(ticks, [str(t) for t in ticks])
         ax.set_ylabel("(estimate - truth) / own CRB")
         ax.set_title(f"Navion, moderate Dryden turbulence, {case} gusts")
         ax.legend(loc="upper right", fontsize=8)

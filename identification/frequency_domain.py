@@ -56,6 +56,8 @@ from flightid.identification.transfer_function import COHERENCE_MIN, cifer_resid
 from flightid.record import FlightRecord
 from flightid.units import DEG, FT
 
+NOISE_MODELS = ("full", "diagonal")
+
 # regressor channel -> derivative variable (flightid.derivatives)
 REGRESSOR_VARIABLES: dict[str, str] = {
     "alpha": "alpha", "beta": "beta", "phat": "p", "qhat": "q", "rhat": "r",
@@ -147,7 +149,7 @@ def equation_error(
         values=theta,
         std=np.sqrt(np.diag(cov)),
         covariance=cov,
-        fit={"r_squared": fit_z, "residual_variance": s2, "frequencies_hz": f,
+        fit={"R2": fit_z, "residual_variance": s2, "frequencies_hz": f,
              "std_kind": "frequency-domain least squares, residual variance",
              "coefficient": coefficient},
     )
@@ -195,22 +197,33 @@ def model_outputs(model: LinearModel, values: Mapping[str, float], omega: np.nda
 
 
 def output_error(
-    record: FlightRecord,
+    record: FlightRecord | Sequence[FlightRecord],
     model: LinearModel,
     *,
     estimate: Sequence[str] | None = None,
     frequencies: np.ndarray | None = None,
     start: Mapping[str, float] | None = None,
     end_terms: bool = True,
+    noise: str = "full",
     max_relaxations: int = 20,
 ) -> Estimate:
     """Frequency-domain output error (maximum likelihood) of a linear model's parameters.
 
-    ``estimate`` names the parameters to fit (default: every parameter of the model but
-    the biases, which the mean removal and end terms replace; the rest stay at their
-    start values). ``frequencies`` in Hz (default 0.1-1.5 Hz spaced 1/T). Returns
-    derivatives with Cramer-Rao standard errors.
+    ``record`` is one maneuver or several (e.g. a roll and a yaw sweep, each exciting one
+    input): their transformed data are fitted together with one residual spectral
+    density. ``estimate`` names the parameters to fit (default: every parameter of the
+    model but the biases, which the mean removal and end terms replace; the rest stay at
+    their start values). ``frequencies`` in Hz (default 0.1-1.5 Hz spaced 1/T, per
+    record). ``noise``: "full" estimates the real part of the residual spectral matrix
+    S = Re(1/n sum v v^H) (outputs' residuals correlated, as in Morelli & Klein
+    eq. 7.32), "diagonal" only its diagonal. Returns derivatives with Cramer-Rao
+    standard errors.
     """
+    if noise not in NOISE_MODELS:
+        raise ValueError(f"noise must be one of {', '.join(NOISE_MODELS)}, got {noise!r}")
+    records = [record] if isinstance(record, FlightRecord) else list(record)
+    if not records:
+        raise ValueError("give at least one record")
     names = list(estimate) if estimate is not None else [
         p for p in model.parameters if not p.startswith("bias_")]
     bad = [n for n in names if n not in model.parameters]
@@ -219,15 +232,13 @@ def output_error(
     if any(n.startswith("bias_") for n in names):
         raise ValueError("biases are not identifiable in the frequency domain after mean "
                          "removal; leave them out of estimate=")
-    for ch in (*model.inputs, *model.outputs):
-        if ch not in record:
-            raise ValueError(f"record has no channel {ch!r} needed by model {model.name}")
-    f = default_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
+    parts = [_transformed(rec, model, frequencies, end_terms, k)
+             for k, rec in enumerate(records)]
+    f = np.concatenate([p[0] for p in parts])
     omega = 2 * np.pi * f
-    data = fourier_data(record, list(dict.fromkeys([*model.inputs, *model.outputs])), f)
-    u = np.column_stack([data[c] for c in model.inputs])
-    z = np.column_stack([data[c] for c in model.outputs])
-    ends = _endpoint_terms(record, model, omega) if end_terms else None
+    u = np.vstack([p[1] for p in parts])
+    z = np.vstack([p[2] for p in parts])
+    ends = np.vstack([p[3] for p in parts]) if end_terms else None
     values = dict(model.start)
     if start:
         values.update(start)
@@ -242,11 +253,13 @@ def output_error(
         return np.concatenate([w.real.ravel(), w.imag.ravel()])
 
     def noise_density(th: np.ndarray) -> np.ndarray:
-        # diagonal S = 1/n_w sum |v|^2 per output: residuals of different outputs taken
-        # as uncorrelated (the option in SIDPAC estsvv); on the Twin Otter record the full
-        # matrix moves Cn_r by 6 published standard errors from example 7.1
+        # S = Re(1/n_w sum v v^H): the residuals [Re v, Im v] stacked as real numbers with
+        # one covariance for both parts. The complex (Hermitian) S would also weight
+        # the quadrature correlation between outputs; on the Twin Otter record it moves
+        # Cn_r by 6 published standard errors from example 7.1, the real part does not.
         v = z - predict(th)
-        return np.diag(np.sum(np.abs(v) ** 2, axis=0) / f.size).astype(complex)
+        s_full = np.real(v.conj().T @ v) / f.size
+        return s_full if noise == "full" else np.diag(np.diag(s_full))
 
     s_mat = noise_density(theta)
     history = []
@@ -256,7 +269,7 @@ def output_error(
                             ftol=1e-12, gtol=1e-12, max_nfev=200 * (len(names) + 1))
         theta = sol.x
         new = noise_density(theta)
-        change = np.max(np.abs(np.diag(new - s_mat)) / np.abs(np.diag(s_mat)))
+        change = np.max(np.abs(new - s_mat)) / np.max(np.abs(np.diag(s_mat)))
         s_mat = new
         history.append(float(2 * sol.cost))
         if change < 1e-3:
@@ -270,6 +283,8 @@ def output_error(
     fit = {
         "cost": float(np.real(np.sum(np.conj(v) * (v @ np.linalg.inv(s_mat).T)))),
         "frequencies_hz": f,
+        "records": len(records),
+        "noise": noise,
         "noise_density_diag": np.real(np.diag(s_mat)),
         "outputs": list(model.outputs),
         "fit_error_percent": {o: float(100 * np.linalg.norm(v[:, i]) / np.linalg.norm(z[:, i]))
@@ -281,6 +296,22 @@ def output_error(
     }
     return Estimate(method="fdoe", names=names, values=theta,
                     std=np.sqrt(np.diag(cov)), covariance=cov, fit=fit)
+
+
+def _transformed(record: FlightRecord, model: LinearModel, frequencies: np.ndarray | None,
+                 end_terms: bool, index: int):
+    """(f, U, Z, end terms) of one record for output error; channels checked."""
+    for ch in (*model.inputs, *model.outputs):
+        if ch not in record:
+            raise ValueError(f"record {index} has no channel {ch!r} needed by model "
+                             f"{model.name}")
+    f = default_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
+    omega = 2 * np.pi * f
+    data = fourier_data(record, list(dict.fromkeys([*model.inputs, *model.outputs])), f)
+    u = np.column_stack([data[c] for c in model.inputs])
+    z = np.column_stack([data[c] for c in model.outputs])
+    ends = _endpoint_terms(record, model, omega) if end_terms else None
+    return f, u, z, ends
 
 
 def _jacobian(fun, theta: np.ndarray) -> np.ndarray:
@@ -457,3 +488,136 @@ def verify_time_domain(
            for i, o in enumerate(outs)}
     return {"J_rms": j_rms, "tic": tic, "time": record.time, "measured": z, "model": y,
             "outputs": outs, "biases": coef}
+
+
+# ----------------------------------------------------------------------------- dispatch
+def run_fdee(record: FlightRecord, model: str = "lateral",
+             options: Mapping[str, object] | None = None) -> list[Estimate]:
+    """``flightid identify --method fdee``: frequency-domain equation error for every
+    coefficient of a dispatch model ('lateral', 'longitudinal' or 'Cn=beta+rhat; ...');
+    options: coefficients, frequencies (Hz)."""
+    from flightid.identification.dispatch import _restrict, parse_model
+
+    opts = dict(options or {})
+    structure = _restrict(parse_model(model), opts)
+    freqs = opts.get("frequencies")
+    return [equation_error(record, c, terms, frequencies=freqs)
+            for c, terms in structure.items()]
+
+
+def _linear_model(record: FlightRecord, model: str, derivatives=None) -> LinearModel:
+    from flightid.identification.linear_models import MODELS, model_for_record
+
+    if model not in MODELS:
+        raise ValueError(f"frequency-domain output error needs a linear model preset "
+                         f"({', '.join(MODELS)}), got {model!r}")
+    kw = {"derivatives": tuple(derivatives)} if derivatives else {}
+    return model_for_record(model, record, **kw)
+
+
+FDOE_OPTIONS = ("frequencies", "noise", "end_terms", "estimate", "derivatives", "start")
+
+
+def run_fdoe(record: FlightRecord, model: str = "lateral",
+             options: Mapping[str, object] | None = None) -> list[Estimate]:
+    """``flightid identify --method fdoe``: frequency-domain output error with a linear
+    model preset; default frequencies 0.1-1.5 Hz spaced 0.02 Hz as in Morelli & Klein
+    example 7.1 (SIDPAC ``sidpac_text_examples``)."""
+    opts = _run_options(options, FDOE_OPTIONS)
+    lin = _linear_model(record, model, opts.pop("derivatives", None))
+    opts.setdefault("frequencies", np.arange(0.1, 1.5 + 1e-9, 0.02))
+    return [output_error(record, lin, **opts)]
+
+
+# outputs whose responses the CIFER fit uses, per linear model preset
+FR_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"), "short_period": ("alpha", "q", "az"),
+              "longitudinal": ("V", "alpha", "q", "theta", "az")}
+FR_OPTIONS = ("frequencies", "windows", "coherence_min", "max_cost", "estimate",
+              "derivatives", "start")
+
+
+def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral",
+           options: Mapping[str, object] | None = None) -> list[Estimate]:
+    """``flightid identify --method fr``: conditioned frequency responses of every model
+    output to every excited input (composite windows), then the CIFER state-space fit.
+
+    With ``max_cost`` (100 is the guideline of Tischler & Remple sec. 11.5) the pairs
+    whose cost exceeds it after a first fit are dropped and the fit repeated; the pairs
+    kept and dropped are in ``fit['pairs']`` and ``fit['dropped_pairs']``. Start values
+    come from ``output_error`` on the same records unless ``start`` is given.
+    """
+    from flightid.identification.frequency_response import frequency_response_arrays
+
+    opts = _run_options(options, FR_OPTIONS)
+    records = [record] if isinstance(record, FlightRecord) else list(record)
+    lin = _linear_model(records[0], model, opts.pop("derivatives", None))
+    lin = lin.with_start(**{p: 0.0 for p in lin.parameters if p.startswith("bias_")})
+    windows = opts.get("windows")
+    coh_min = float(opts.get("coherence_min", COHERENCE_MIN))
+    max_cost = opts.get("max_cost")
+    responses = []
+    for rec in records:
+        _check_uniform(rec)
+        # an input is excited when its spread is at least a tenth of the largest one
+        # (sensor noise on a surface held at trim is not an excitation)
+        spread = {i: float(np.std(rec[i])) for i in lin.inputs if i in rec}
+        top = max(spread.values(), default=0.0)
+        excited = [i for i, s in spread.items() if top > 0 and s >= 0.1 * top]
+        if not excited:
+            raise ValueError(f"no input of model {lin.name} ({', '.join(lin.inputs)}) "
+                             "varies in the record")
+        duration = rec.time[-1] - rec.time[0]
+        wins = tuple(windows) if windows else _fr_windows(duration, rec.dt, len(excited))
+        freqs = opts.get("frequencies")
+        if freqs is None:
+            freqs = np.geomspace(max(2.0 / max(wins), 0.1), min(2.0, 0.2 / rec.dt), 60)
+        for out in FR_OUTPUTS.get(model, lin.outputs):
+            if out not in rec:
+                continue
+            resp = frequency_response_arrays({i: rec[i] for i in excited}, rec[out], rec.dt,
+                                             output_name=out, windows=wins,
+                                             frequencies=freqs)
+            responses.extend(r for r in resp.values() if r.valid(coh_min).sum() >= 3)
+    if not responses:
+        raise ValueError(f"no frequency response has 3 or more points with coherence >= "
+                         f"{coh_min}")
+    names = opts.get("estimate")
+    start = opts.get("start")
+    if start is None:
+        # the CIFER cost has local minima far from the answer: start from the
+        # frequency-domain output error of the same maneuvers
+        first = output_error(records, lin, estimate=names)
+        start = dict(zip(first.names, first.values, strict=True))
+    est = fit_state_space(responses, lin, estimate=names, coherence_min=coh_min, start=start)
+    costs = est.fit["cost_per_pair"]
+    dropped = [] if max_cost is None else [k for k, c in costs.items() if c > max_cost]
+    if dropped and len(dropped) < len(costs):
+        kept = [r for r in responses if f"{r.output}/{r.input}" not in dropped]
+        est = fit_state_space(kept, lin, estimate=names, coherence_min=coh_min, start=start)
+    est.method = "fr"
+    est.fit.update(pairs=list(est.fit["cost_per_pair"]), dropped_pairs=dropped,
+                   windows=wins, responses=len(responses))
+    return [est]
+
+
+def _fr_windows(duration: float, dt: float, n_inputs: int) -> tuple[float, ...]:
+    """Composite windows (s): the longest that still gives n_inputs + 1 half-overlapped
+    segments (T 2/(q + 2): 2/3 of the record for one input), half and a quarter of it,
+    none under 40 samples.
+
+    Long windows matter: the Hann window widens a lightly damped resonance, and the
+    short windows alone would overstate the Dutch-roll damping (Cn_r 20 % too large on
+    the Navion yaw sweep with 40/20/10 s windows, 8 % with 64/32/16 s).
+    """
+    longest = 2.0 * duration / (n_inputs + 2)
+    wins = [longest, longest / 2, longest / 4]
+    return tuple(w for w in wins if w >= 40 * dt) or (longest,)
+
+
+def _run_options(options: Mapping[str, object] | None, allowed: tuple[str, ...]) -> dict:
+    opts = dict(options or {})
+    opts.pop("coefficients", None)
+    unknown = [k for k in opts if k not in allowed]
+    if unknown:
+        raise ValueError(f"unknown options {unknown}; this method takes {', '.join(allowed)}")
+    return opts

@@ -326,10 +326,16 @@ def responses_from_spectra(
     h = np.full((g.shape[0], q), np.nan + 0j)
     partial = np.zeros((g.shape[0], q))
     multiple = np.zeros(g.shape[0])
-    for k in range(g.shape[0]):
+    # with no more segments than inputs the spectral matrix has rank <= n_segments: the
+    # coherence is 1 whatever the data, so nothing can be validated
+    for k in range(g.shape[0] if spectra.n_segments > q else 0):
         if not np.all(np.isfinite(g[k])) or np.linalg.cond(gxx[k]) > 1e12 or gyy[k] <= 0:
             continue  # input spectra singular here (no excitation, or inputs fully correlated)
         h[k] = np.linalg.solve(gxx[k], gxy[k])
+        if np.linalg.cond(g[k]) > 1e12:
+            # output exactly linear in the inputs (e.g. a single segment): coherence 1
+            multiple[k], partial[k] = 1.0, 1.0
+            continue
         d = np.linalg.inv(g[k])
         multiple[k] = 1.0 - 1.0 / (gyy[k] * d[q, q].real)
         partial[k] = np.abs(d[:q, q]) ** 2 / (d.diagonal()[:q].real * d[q, q].real)
@@ -428,7 +434,7 @@ def composite(responses: Sequence[FrequencyResponse]) -> FrequencyResponse:
     eps = np.array([r.random_error for r in responses])
     coh = np.array([r.coherence for r in responses])
     ok = np.isfinite(eps) & np.isfinite(h)
-    wgt = np.where(ok, 1.0 / np.where(ok, eps, 1.0) ** 2, 0.0)
+    wgt = np.where(ok, 1.0 / np.maximum(np.where(ok, eps, 1.0), 1e-9) ** 2, 0.0)
     total = wgt.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         hc = np.where(total > 0, (wgt * np.where(ok, h, 0)).sum(axis=0) / total, np.nan)
@@ -570,3 +576,47 @@ def run_cli(record_path: str, input: str, output: str, other_inputs: Sequence[st
         fig = bode_figure([r], title=f"{rec.meta.aircraft or record_path}: {output}/{input}")
         fig.savefig(plot, dpi=110)
         print(f"# Bode plot written to {plot}")
+
+
+def bode_overlay_figure(measured: Sequence[FrequencyResponse], model: Sequence[np.ndarray],
+                        coherence_min: float = 0.6, title: str = ""):
+    """Matplotlib figure: measured responses (points where coherence >= coherence_min)
+    with the identified model's responses (lines, complex arrays on the same frequencies)
+    overlaid: magnitude (dB), phase (deg), coherence against frequency (Hz)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if len(measured) != len(model):
+        raise ValueError(f"{len(measured)} measured responses but {len(model)} model ones")
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True,
+                             gridspec_kw={"height_ratios": [2, 2, 1]})
+    for k, (r, h) in enumerate(zip(measured, model, strict=True)):
+        colour = f"C{k % 10}"
+        ok = r.valid(coherence_min)
+        h = np.asarray(h, dtype=complex)
+        phase_model = np.degrees(np.unwrap(np.angle(h)))
+        phase_meas = np.degrees(np.angle(r.response))
+        # measured phase put on the model's branch, so the two overlay
+        phase_meas = phase_model + ((phase_meas - phase_model + 180.0) % 360.0 - 180.0)
+        axes[0].semilogx(r.frequency[ok], r.magnitude_db[ok], "o", ms=3, color=colour,
+                         label=f"{r.output}/{r.input}")
+        axes[0].semilogx(r.frequency, 20 * np.log10(np.abs(h)), "-", color=colour)
+        axes[1].semilogx(r.frequency[ok], phase_meas[ok], "o", ms=3, color=colour)
+        axes[1].semilogx(r.frequency, phase_model, "-", color=colour)
+        axes[2].semilogx(r.frequency, r.coherence, "-", color=colour)
+    axes[0].set_ylabel("magnitude (dB)")
+    axes[1].set_ylabel("phase (deg)")
+    axes[2].set_ylabel("coherence")
+    axes[2].axhline(coherence_min, color="0.5", ls="--", lw=0.8)
+    axes[2].set_ylim(0, 1.05)
+    axes[2].set_xlabel("frequency (Hz)")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2, title="points: measured, lines: model",
+                   title_fontsize=7)
+    if title:
+        axes[0].set_title(title)
+    fig.tight_layout()
+    return fig

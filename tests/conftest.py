@@ -1,7 +1,11 @@
-"""Shared test settings: where the real NASA Twin Otter record lies."""
+"""Shared test settings: BLAS threads, and where the real NASA Twin Otter record lies."""
 
 import os
 from pathlib import Path
+
+# thousands of small matrix products: one BLAS thread is faster than several on 2 cores
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 # shared/ sits beside the checkout (as in CI: a fresh clone with shared/ next to it);
 # FLIGHTID_SHARED overrides it

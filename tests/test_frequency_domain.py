@@ -69,21 +69,24 @@ def twin_otter():
 
 
 def test_twin_otter_output_error_matches_example_7_1(twin_otter):
-    # Real flight data, 0.1-1.5 Hz. Published values (Morelli & Klein example 7.1):
-    # 11 of the 13 derivatives lie within 2 published standard errors; Cl_p and Cl_da
-    # within 3 (both about 2 % smaller in magnitude than published, 2.4 and 2.8 sigma):
-    # a difference of detail (frequency grid, noise spectrum, end terms) we could not
-    # resolve. Our Cramer-Rao bounds are 1.2-1.8 times the published ones: the default
-    # grid spaces the frequencies 1/T = 0.05 Hz apart (independent points); a finer grid
-    # adds correlated points and shrinks the bounds (0.04 Hz: 1.1-1.5 times).
+    # Real flight data, example 7.1's frequencies (0.1:0.02:1.5 Hz, SIDPAC
+    # sidpac_text_examples.m). Every derivative within 2 published standard errors (measured:
+    # at most 1.8, Cl_da). What it takes: the residual spectral matrix with its off-diagonal
+    # terms (real part); with only its diagonal Cl_p and Cl_da sit at 2.4 and 2.5 sigma.
     model = model_for_record("lateral", twin_otter)
-    est = output_error(twin_otter, model, frequencies=default_frequencies(twin_otter))
+    grid = np.arange(0.1, 1.5 + 1e-9, 0.02)
+    est = output_error(twin_otter, model, frequencies=grid)
     dev = {n: (est[n] - v) / s for n, (v, s) in PUBLISHED_7_1.items()}
-    within2 = [n for n, d in dev.items() if abs(d) <= 2.0]
-    assert len(within2) >= 11, dev
-    assert all(abs(d) <= 3.0 for d in dev.values()), dev
+    assert all(abs(d) <= 2.0 for d in dev.values()), dev
+    diag = output_error(twin_otter, model, frequencies=grid, noise="diagonal")
+    assert (diag["Cl_da"] - PUBLISHED_7_1["Cl_da"][0]) / PUBLISHED_7_1["Cl_da"][1] > 2.0
+    # 0.02 Hz is finer than 1/T = 0.05 Hz: neighbouring points are correlated and the
+    # bounds come out 0.75-0.85 times the published ones; on the 1/T grid 1.2-1.4 times
     for n, (_, s) in PUBLISHED_7_1.items():
-        assert 1.0 < est.std_of(n) / s < 2.0, (n, est.std_of(n), s)
+        assert 0.6 < est.std_of(n) / s < 1.0, (n, est.std_of(n), s)
+    coarse = output_error(twin_otter, model, frequencies=default_frequencies(twin_otter))
+    for n, (_, s) in PUBLISHED_7_1.items():
+        assert 1.0 < coarse.std_of(n) / s < 2.0, (n, coarse.std_of(n), s)
 
 
 def test_twin_otter_equation_error_in_frequency_domain(twin_otter):

@@ -1,0 +1,99 @@
+"""Frequency-domain identification of the Navion from the library's sweep cards (seed 004,
+Table 4-1) and the fdee/fdoe/fr methods through the command line on the Twin Otter."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from flightid.identification import frequency_domain as fd
+from flightid.identification import linear_models as lm
+from flightid.identification.frequency_response import (
+    bode_overlay_figure,
+    frequency_response_arrays,
+)
+from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed
+from flightid.scenarios.cli import app
+from flightid.sim import trim as trimming
+from flightid.sim import truth
+from flightid.sim.sensors import measure, research_suite
+
+TWIN_OTTER = Path("/work/shared/data/twin_otter/totter_f1_017_data.mat")
+
+
+@pytest.fixture(scope="module")
+def navion_sweeps():
+    """Roll and yaw sweep cards flown (seed 11), measured by the research suite without
+    its vane and lever-arm errors (what data compatibility would hand over), and the
+    truth derivatives at the cards' trim."""
+    records = []
+    for name in ("navion-sweep-roll", "navion-sweep-yaw"):
+        card = load_card(find_card(name))
+        _, true_record = fly_card(dataclasses.replace(card, sensors=None), 11)
+        suite = dataclasses.replace(research_suite(), mounting=[])
+        records.append(measure(true_record, suite, sub_seed(11, "sensors")))
+    c = card.condition
+    trim = trimming.trim("navion", c.altitude_m, c.speed_m_s)
+    return records, truth.derivatives("navion", trim, axes="body")
+
+
+def test_navion_sweeps_cifer_fit_against_truth(navion_sweeps, tmp_path):
+    records, true = navion_sweeps
+    names = [n for n in lm.LATERAL_EXAMPLE_6_1 if n != "CY_r"]  # CY_r is 0 in the Navion
+    (est,) = fd.run_fr(records, "lateral", {"estimate": names})
+    dev = {n: (est[n] - true[n]) / est.std_of(n) for n in names}
+    # done-when of issue 6: every derivative within 3 standard errors of the truth (CIFER
+    # Cramer-Rao bounds scaled by the fit's residual variance, so model error counts;
+    # measured: |dev| <= 2.8, Cl_dr)
+    assert all(abs(d) < 3.0 for d in dev.values()), {n: round(d, 2) for n, d in dev.items()}
+    # every pair meets the cost guideline of 100 but ay/da (the side force of a roll
+    # sweep is tiny; measured 375). Dropping it, as CIFER practice would, leaves Cn_r
+    # 5 sigma (9 %) high: Hann-window bias of the Dutch-roll damping, see _fr_windows.
+    costs = est.fit["cost_per_pair"]
+    assert all(c < 100 for k, c in costs.items() if k != "ay/da"), costs
+    # Bode overlay of the identified model on the measured responses
+    model = lm.lateral(lm.condition_from_record(records[0]))
+    values = dict(zip(est.names, est.values, strict=True))
+    measured = []
+    for rec, inp in zip(records, ("da", "dr"), strict=True):
+        for out in ("p", "r", "beta"):
+            measured.append(frequency_response_arrays(
+                {inp: rec[inp]}, rec[out], rec.dt, output_name=out,
+                windows=est.fit["windows"], frequencies=np.geomspace(0.1, 2.0, 60))[inp])
+    curves = [fd.model_response(model, values, r.output, r.input, r.frequency)
+              for r in measured]
+    fig = bode_overlay_figure(measured, curves, title="Navion sweeps: CIFER fit")
+    png = tmp_path / "navion_bode.png"
+    fig.savefig(png, dpi=80)
+    assert png.stat().st_size > 10_000
+    # where the coherence is high the model passes through the measured points
+    for r, h in zip(measured, curves, strict=True):
+        ok = r.valid(0.9)
+        err_db = np.abs(20 * np.log10(np.abs(h[ok] / r.response[ok])))
+        assert np.median(err_db) < 1.0, (r.output, r.input, np.median(err_db))
+
+
+@pytest.mark.skipif(not TWIN_OTTER.exists(), reason="Twin Otter record not available")
+@pytest.mark.parametrize("method", ["fdee", "fdoe", "fr"])
+def test_frequency_methods_through_the_cli(method):
+    result = CliRunner().invoke(app, ["identify", str(TWIN_OTTER), "--method", method,
+                                      "--format", "json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.output[result.output.index("{"):])
+    est = out["estimates"]
+    if method == "fdoe":
+        # Morelli & Klein example 7.1 (published Cn_dr -0.13737 +- 0.00077)
+        assert abs(est["Cn_dr"]["value"] + 0.13737) < 2 * 0.00077
+    elif method == "fdee":
+        assert set(est) >= {"Cl_p", "Cn_r", "CY_beta"}
+        assert est["Cn_r"]["value"] == pytest.approx(-0.193, rel=0.1)
+    else:
+        # a 20 s doublet maneuver is a poor CIFER case (responses only above 0.2 Hz);
+        # the best-excited control derivatives are still within 15 % of example 7.1
+        assert est["Cl_da"]["value"] == pytest.approx(-0.2330, rel=0.15)
+        assert est["Cn_dr"]["value"] == pytest.approx(-0.13737, rel=0.15)
