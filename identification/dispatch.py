@@ -94,9 +94,14 @@ def run_output_error(
     record: FlightRecord, model: str = "lateral", options: Mapping[str, Any] | None = None
 ) -> list[Estimate]:
     """Output error (maximum likelihood) on a linear model preset: lateral, longitudinal,
-    short_period."""
+    short_period; or on the nonlinear 6-DOF equations: 6dof (body-axis forces CX CY CZ),
+    6dof_stability (lift and drag)."""
     from flightid.identification import output_error
 
+    if model in ("6dof", "6dof_stability"):
+        from flightid.identification import nonlinear_6dof
+
+        return [nonlinear_6dof.run(record, model, options)]
     return [output_error.run(record, model, options)]
 
 
