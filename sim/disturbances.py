@@ -25,9 +25,10 @@ back. How each one reaches JSBSim:
   effects and leaves the truth alone.
 
 Time series are generated on the record grid and held over the JSBSim substeps.
-``fly_disturbed`` is the flight loop with these hooks; the truth channels ``turb_u/v/w``
-carry all turbulence (JSBSim's and ours, body axes) and ``wind_north/east/down`` the
-steady wind plus gusts.
+``fly_disturbed`` flies them through the flight core's one loop (``sim.flight.fly`` with
+its ``wind`` and ``turbulence`` schedules); the truth channels ``turb_u/v/w`` carry all
+turbulence (JSBSim's and ours, body axes) and ``wind_north/east/down`` the steady wind
+plus gusts.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ import numpy as np
 from scipy import linalg, signal
 
 from flightid.record import FlightRecord
-from flightid.sim.flight import Atmosphere, DepartureError, Limits, Simulation, _inside
+from flightid.sim.flight import Atmosphere, Limits, fly
 from flightid.sim.model import Model
 from flightid.sim.trim import Trim
 from flightid.sim.vibration import EngineVibration
@@ -404,86 +405,26 @@ def vibration_of(disturbances: Sequence[Any]) -> EngineVibration | None:
     return vib[0] if vib else None
 
 
-_GUST_PROPS = ("atmosphere/gust-north-fps", "atmosphere/gust-east-fps",
-               "atmosphere/gust-down-fps")
-
-
 def fly_disturbed(model: Model, trim: Trim, controls: Mapping[str, np.ndarray],
                   duration_s: float, rate_hz: float, atmosphere: Atmosphere | None = None,
                   wind: np.ndarray | None = None, turbulence: np.ndarray | None = None,
                   limits: Limits | None = None, scenario: dict[str, Any] | None = None,
                   progress: Callable[[int, int], None] | None = None) -> FlightRecord:
-    """Fly from trim like ``sim.flight.fly``, with time-varying wind (n x 3 NED, m/s).
+    """Fly from trim through the flight core's loop (``sim.flight.fly``) with wind schedules.
 
-    ``wind`` (gusts) and ``turbulence`` are written into JSBSim's gust properties before
-    each record step and held over its substeps. ``controls`` are increment arrays of
-    n = duration_s * rate_hz + 1 samples. ``progress(k, n)`` is called every second of
-    flight. Raises DepartureError with the record up to the departure.
+    ``wind`` (gusts) and ``turbulence`` (n x 3 NED, m/s, e.g. from ``wind_schedule``) are
+    written into JSBSim's gust properties before each record step and held over its
+    substeps. ``controls`` are increment arrays of exactly n = duration_s * rate_hz + 1
+    samples. ``progress(k, n)`` is called every second of flight. Raises DepartureError
+    with the record up to the departure.
     """
-    sim = Simulation(model, rate_hz=rate_hz, atmosphere=atmosphere, limits=limits)
     n = int(round(duration_s * rate_hz)) + 1
-    names = list(controls)
-    columns = [np.asarray(controls[c], float) for c in names]
-    for c, col in zip(names, columns, strict=True):
-        if col.shape != (n,):
-            raise ValueError(f"control {c!r} has {col.shape} samples, the flight needs {n}")
-    extra = np.zeros((n, 3))
-    for part in (wind, turbulence):
-        if part is not None:
-            if part.shape != (n, 3):
-                raise ValueError(f"wind schedule has shape {part.shape}, needs ({n}, 3)")
-            extra = extra + part
-    gusty = bool(np.any(extra))
-    sim.reset(trim, {c: float(col[0]) for c, col in zip(names, columns, strict=True)})
-    # after reset: the flight core may give the model a fresh FGFDMExec there
-    fdm = sim.model.fdm
-    nodes = [sim.model.node(p) for p in _GUST_PROPS]
-    if gusty:
-        for node, value in zip(nodes, extra[0] / FT, strict=True):
-            node.set_double_value(float(value))
-        fdm.suspend_integration()  # re-evaluate t = 0 with the gust, without integrating
-        fdm.run()
-        fdm.resume_integration()
-    rows = np.empty((n, len(sim._read())))
-    rows[0] = sim._read()
-    sim._limits_cache = sim._bounds()
-    departure = sim._departure(list(rows[0]))
-    every = max(1, int(round(rate_hz)))
-    k = 1
-    while departure is None and k < n:
-        if gusty:
-            g = extra[k] / FT
-            nodes[0].set_double_value(g[0])
-            nodes[1].set_double_value(g[1])
-            nodes[2].set_double_value(g[2])
-        rows[k] = sim._advance({c: col[k] for c, col in zip(names, columns, strict=True)})
-        if not _inside(rows[k], sim):
-            departure = sim._departure(list(rows[k]))
-        if progress is not None and k % every == 0:
-            progress(k, n)
-        k += 1
-    channels = sim.convert(rows[:k])
-    if turbulence is not None and np.any(turbulence):
-        _move_turbulence(channels, turbulence[:k])
-    record = FlightRecord(np.arange(k) / rate_hz, channels, sim.meta(scenario))
-    if departure is not None:
-        raise DepartureError(departure, (k - 1) / rate_hz, record)
-    return record
-
-
-def _move_turbulence(ch: dict[str, np.ndarray], turb_ned: np.ndarray) -> None:
-    """Book our turbulence under turb_u/v/w (body axes) instead of wind_north/east/down."""
-    for i, axis in enumerate(("north", "east", "down")):
-        ch[f"wind_{axis}"] = ch[f"wind_{axis}"] - turb_ned[:, i]
-    phi, theta, psi = ch["phi"], ch["theta"], ch["psi"]
-    cf, sf, ct, st, cp, sp = (np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta),
-                              np.cos(psi), np.sin(psi))
-    n, e, d = turb_ned.T
-    ch["turb_u"] = ch["turb_u"] + ct * cp * n + ct * sp * e - st * d
-    ch["turb_v"] = ch["turb_v"] + ((sf * st * cp - cf * sp) * n + (sf * st * sp + cf * cp) * e
-                                   + sf * ct * d)
-    ch["turb_w"] = ch["turb_w"] + ((cf * st * cp + sf * sp) * n + (cf * st * sp - sf * cp) * e
-                                   + cf * ct * d)
+    for c, col in controls.items():
+        shape = np.shape(col)
+        if shape != (n,):
+            raise ValueError(f"control {c!r} has {shape} samples, the flight needs {n}")
+    return fly(model, trim, controls, duration_s, rate_hz, atmosphere, limits, scenario,
+               wind=wind, turbulence=turbulence, progress=progress)
 
 
 __all__ = ["DISTURBANCES", "Gust", "Turbulence", "Wind", "atmosphere_for",

@@ -1,7 +1,12 @@
 """Fly a trimmed JSBSim aircraft with scripted control inputs and record the truth channels.
 
-``Simulation`` is the stepping core (reset to a trim, step one record interval, read
-the channels); ``fly`` is a thin loop over it that returns a FlightRecord.
+``Simulation`` is the stepping core: ``reset(trim)``, then either ``step(controls)`` once
+per record interval (a controller, the bridge, a gym environment) or ``fly(...)`` for a
+whole scripted flight. ``Simulation.fly`` is the one flight loop of the project: the
+module-level ``fly``, the disturbance runner (``sim.disturbances.fly_disturbed``) and the
+flight cards all go through it. Its hooks: control increments (arrays, callables or
+constants), a gust schedule and a turbulence schedule (n x 3 NED, m/s, written into
+JSBSim's ``atmosphere/gust-*-fps``), and a ``progress(k, n)`` callback.
 
 Timing. JSBSim integrates at ``substeps`` times the record rate (at least
 ``MIN_INTERNAL_HZ`` = 400 Hz: 100 Hz record -> 400 Hz internal, 4 substeps). JSBSim runs
@@ -12,24 +17,44 @@ the state at t_k, the surfaces at ``controls`` and the forces they produce, and 
 controls act from t_k on (held for one interval). A record therefore pairs each state
 with the surface positions acting at that instant, with no hidden delay; a controller
 driving ``step`` sees a one-sample transport delay, like a digital flight computer.
+Gust and turbulence samples k are written before the substeps that lead to t_k.
 
 Controls are increments on the trim values: de, da, dr in rad (project signs,
 flightid/channels.py), throttle as a fraction. Surface increments are mapped to JSBSim's
 normalised pilot commands through the FCS's own command -> position map, measured at
 reset (so gearing, asymmetric travel and trim summers are honoured); the recorded de,
 da, dr are the actual surface positions JSBSim used.
+
+Speed. Per sample the loop steps JSBSim, writes the pilot commands and gusts that changed
+(the commands of the whole flight are mapped before it, one vectorised ``np.interp`` per
+control; JSBSim's models read these inputs and do not write them, so a value written
+once holds), reads the raw properties through cached property nodes and packs them into
+one buffer of doubles; the conversion to SI channels runs once, vectorised, after the
+flight. With JSBSim's own turbulence off (``Atmosphere.turbulence == "none"``) JSBSim's
+turbulence velocities and rates are zero, so the aero-relative rates equal the body
+rates and the total wind is the steady wind plus the gusts written by the loop: those
+nine properties are filled in after the flight instead of read (and checked against
+JSBSim at the last sample). ``step`` converts its one sample with plain float
+arithmetic, by the same formulas (``_channels``). benchmarks/bench_runner.py measures it.
+
+Property nodes belong to one FGFDMExec, and ``reset`` after the first gives the model a
+fresh one (bit-identical restarts): nodes taken from ``sim.model`` before a reset are
+stale afterwards. ``Simulation.get`` / ``Simulation.set`` resolve on the current one.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections.abc import Callable, Mapping
+import struct
+from bisect import bisect_right
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flightid.record import FlightRecord, RecordMeta
+from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sim.model import COMMANDS, SURFACES, Model, as_model, quiet
 from flightid.sim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.trim import Trim, apply
@@ -59,7 +84,10 @@ class Atmosphere:
     turbulence: "none", "milspec" or "tustin" (Dryden spectra, MIL-F-8785C; JSBSim
     ``atmosphere/turb-type`` 3 and 4), "standard" or "culp" (JSBSim's older models).
     For milspec/tustin, ``windspeed_20ft_m_s`` sets the low-altitude intensity and
-    ``severity`` the probability-of-exceedance index (0..7, 3 = moderate) above 2000 ft.
+    ``severity`` the probability-of-exceedance curve of MIL-F-8785C Fig. 7 used above
+    2000 ft: 0 off, 1 POE 2e-1, 2 1e-1, 3 1e-2 (light), 4 1e-3 (moderate), 5 1e-4,
+    6 1e-5 (severe), 7 1e-6 (JSBSim FGWinds: "3=light, 4=moderate, 6=severe"; the
+    matching windspeeds at 20 ft are 15, 30 and 45 kt).
     For standard/culp, ``turb_gain`` and ``turb_rate`` are JSBSim's turb-gain/turb-rate.
     """
 
@@ -91,7 +119,12 @@ class Limits:
     min_speed_m_s: float | None = None  # default: 0.3 x trim speed
 
 
-# raw JSBSim properties read every sample, in this order (JSBSim units)
+# departure only (not channels): the flight loop reads them only within _NEAR_GROUND_FT
+# of the trim's terrain (the height above sea level, read anyway, tells)
+_AGL, _WOW = "position/h-agl-ft", "gear/wow"
+_NEAR_GROUND_FT = 300.0
+
+# raw JSBSim properties of every sample, in row order (JSBSim units)
 _RAW = (
     "velocities/u-aero-fps", "velocities/v-aero-fps", "velocities/w-aero-fps",
     "velocities/p-rad_sec", "velocities/q-rad_sec", "velocities/r-rad_sec",
@@ -110,11 +143,24 @@ _RAW = (
     "atmosphere/total-wind-north-fps", "atmosphere/total-wind-east-fps",
     "atmosphere/total-wind-down-fps",
     "atmosphere/turb-north-fps", "atmosphere/turb-east-fps", "atmosphere/turb-down-fps",
-    "position/lat-geod-rad", "position/long-gc-rad", "position/h-agl-ft", "gear/wow",
+    "position/lat-geod-rad", "position/long-gc-rad", _AGL, _WOW,
 )
-_OPTIONAL = ("fcs/flap-pos-rad", "propulsion/engine[0]/propeller-rpm",
-             "propulsion/engine[0]/engine-rpm")
-_I = {name: i for i, name in enumerate(_RAW)}
+_FLAP = "fcs/flap-pos-rad"
+# rotation speed, first one the aircraft has: a JSBSim propeller, a JSBSim engine, or an
+# FCS function (the Telemaster computes its propeller rpm from the throttle)
+_RPM = ("propulsion/engine[0]/propeller-rpm", "propulsion/engine[0]/engine-rpm",
+        "fcs/propeller-rpm")
+_AXES = ("north", "east", "down")
+_GUST = tuple(f"atmosphere/gust-{a}-fps" for a in _AXES)
+_STEADY_WIND = tuple(f"atmosphere/wind-{a}-fps" for a in _AXES)
+_TOTAL_WIND = tuple(f"atmosphere/total-wind-{a}-fps" for a in _AXES)
+_TURB = tuple(f"atmosphere/turb-{a}-fps" for a in _AXES)
+_RATES = ("velocities/p-rad_sec", "velocities/q-rad_sec", "velocities/r-rad_sec")
+_AERO_RATES = ("velocities/p-aero-rad_sec", "velocities/q-aero-rad_sec",
+               "velocities/r-aero-rad_sec")
+# not read per sample when JSBSim's turbulence is off (FGAuxiliary: aero rates = body
+# rates - turbulence rates; FGWinds: total wind = wind + gust + cosine gust + turbulence)
+_CALM_FILLED = _AERO_RATES + _TURB + _TOTAL_WIND
 
 
 _MAPS: dict[tuple, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
@@ -161,8 +207,26 @@ def _command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | 
     return pos[keep], cmds[keep]
 
 
+def _interp(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
+    """``np.interp`` of one point with numpy's arithmetic (same result, no array overhead)."""
+    if x <= xp[0]:
+        return fp[0]
+    if x >= xp[-1]:
+        return fp[-1]
+    j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
+    if xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    y = slope * (x - xp[j]) + fp[j]
+    if y != y:  # nan from an infinite slope: numpy retries from the right end
+        y = slope * (x - xp[j + 1]) + fp[j + 1]
+        if y != y and fp[j] == fp[j + 1]:
+            y = fp[j]
+    return y
+
+
 class Simulation:
-    """Stepping core: ``reset(trim)``, then ``step(controls)`` once per record interval."""
+    """Stepping core: ``reset(trim)``, then ``step(controls)`` per interval, or ``fly``."""
 
     def __init__(self, model: Model | str, rate_hz: float = 100.0,
                  atmosphere: Atmosphere | None = None, limits: Limits | None = None) -> None:
@@ -179,27 +243,52 @@ class Simulation:
         self._used = False  # the private model is fresh until the first reset
         self._k = 0
         self.model.fdm.set_dt(1.0 / self.internal_hz)
+        model = self.model
+        # the raw columns of a sample: fixed for the aircraft, so decided once
+        flap = (_FLAP,) if model.has(_FLAP) else ()
+        self._rpm = next((p for p in _RPM if model.has(p)), None)
+        self.columns: tuple[str, ...] = _RAW + flap + ((self._rpm,) if self._rpm else ())
+        self._col = {name: i for i, name in enumerate(self.columns)}
+        # what the flight loop reads per sample (the rest is filled in after the flight)
+        self._calm = self.atmosphere.turbulence == "none"
+        self._loop_columns = tuple(c for c in self.columns if c not in (_AGL, _WOW)
+                                   and not (self._calm and c in _CALM_FILLED))
         self._bind()
-        self._maps: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._maps: dict[str, tuple[list[float], list[float]]] = {}
         self._trim_cmd: dict[str, float] = {}
+        self._trim_pos: dict[str, float] = {}
         self._trim_throttle = 0.0
 
     def _bind(self) -> None:
-        """Cache the property nodes of the current FGFDMExec."""
+        """Take the property nodes of the current FGFDMExec (again after a reload)."""
         model = self.model
         # gear/wow is absent on aircraft without gear: created, it stays 0
-        self._nodes = [model.node(p, create=(p == "gear/wow")) for p in _RAW]
-        self._optional_names = [p for p in _OPTIONAL if model.has(p)]
-        self._optional = [model.node(p) for p in self._optional_names]
-        self._cmd_nodes = {c: model.node(COMMANDS[c][0]) for c in ("de", "da", "dr")
-                           if model.has(COMMANDS[c][0])}
-        self._throttle_nodes = [model.node(p) for p in model.throttle_props() if model.has(p)]
+        node = {p: model.node(p, create=(p == _WOW)) for p in self.columns}
+        self._agl_node, self._wow_node = node[_AGL], node[_WOW]
+        self._nodes = [node[p] for p in self.columns]
+        self._loop_nodes = [node[p] for p in self._loop_columns]
+        # the unbound method, mapped over the nodes: the cheapest read from Python
+        self._get = type(self._nodes[0]).get_double_value
+        self._cmd_setters = {c: model.node(COMMANDS[c][0]).set_double_value
+                             for c in ("de", "da", "dr") if model.has(COMMANDS[c][0])}
+        self._throttle_setters = [model.node(p).set_double_value
+                                  for p in model.throttle_props() if model.has(p)]
+        self._gust_setters = [model.node(p).set_double_value for p in _GUST]
+        self._run = model.fdm.run
 
     # -- setup ---------------------------------------------------------------------
     @property
     def time(self) -> float:
         """Time since reset (s)."""
         return self._k / self.rate_hz
+
+    def get(self, prop: str) -> float:
+        """A JSBSim property of the current FGFDMExec (JSBSim units); valid across resets."""
+        return self.model.get(prop)
+
+    def set(self, prop: str, value: float) -> None:
+        """Set a JSBSim property of the current FGFDMExec (JSBSim units); see ``get``."""
+        self.model.node(prop).set_double_value(float(value))
 
     def _set_atmosphere(self) -> None:
         fdm, a = self.model.fdm, self.atmosphere
@@ -216,8 +305,14 @@ class Simulation:
         """Restore the trimmed state (t = 0) with optional control increments; returns the sample.
 
         With a steady wind the aircraft keeps its trimmed airspeed and attitude relative to
-        the air mass (the ground speed changes).
+        the air mass (the ground speed changes). Every reset after the first gives
+        ``self.model`` a fresh FGFDMExec: property nodes taken from it before are stale
+        (``get``/``set`` and the simulation's own nodes follow the new one).
         """
+        self._reset(trim, controls)
+        return self._sample(self._read())
+
+    def _reset(self, trim: Trim, controls: Mapping[str, float] | None) -> None:
         if trim.aircraft != self.model.name:
             raise ValueError(f"trim is for {trim.aircraft!r}, simulation flies {self.model.name!r}")
         # a fresh FGFDMExec makes a flight independent of what the model did before
@@ -229,13 +324,15 @@ class Simulation:
         model, fdm = self.model, self.model.fdm
         apply(model, trim)  # the same sequence on every reset: identical flights
         if self.trim is not trim:
-            self._maps = _command_maps(model, trim)
-            self._trim_cmd = {c: trim.jsbsim.get(COMMANDS[c][0], 0.0) for c in self._cmd_nodes}
+            self._maps = {c: (pos.tolist(), cmds.tolist())
+                          for c, (pos, cmds) in _command_maps(model, trim).items()}
+            self._trim_cmd = {c: trim.jsbsim.get(COMMANDS[c][0], 0.0) for c in self._cmd_setters}
+            self._trim_pos = {"de": trim.elevator, "da": trim.aileron, "dr": trim.rudder}
             self._trim_throttle = trim.throttle
             self.trim = trim
         self._restart(trim)
         self._k = 0
-        self._limits_cache = self._bounds()
+        self._envelope = self._bounds()
         self._lat0 = fdm["position/lat-geod-rad"]
         self._lon0 = fdm["position/long-gc-rad"]
         self._apply_controls(controls)
@@ -250,11 +347,14 @@ class Simulation:
             # run_ic resets the wind to the IC's (horizontal only): add the vertical part
             # and re-evaluate every model at t = 0 without integrating
             fdm["atmosphere/wind-down-fps"] = self.atmosphere.wind_ned_m_s[2] / FT
-            fdm.suspend_integration()
-            fdm.run()
-            fdm.resume_integration()
-        row = self._read()
-        return self._row_dict(np.asarray(row)[None, :])
+            self._evaluate()
+
+    def _evaluate(self) -> None:
+        """Re-run every JSBSim model at the current time without integrating."""
+        fdm = self.model.fdm
+        fdm.suspend_integration()
+        fdm.run()
+        fdm.resume_integration()
 
     def _restart(self, trim: Trim) -> None:
         """Re-initialise every JSBSim model (turbulence filters, actuators) at the trim state."""
@@ -283,49 +383,184 @@ class Simulation:
         fdm["propulsion/set-running"] = -1
         self._set_atmosphere()
 
-    # -- stepping ------------------------------------------------------------------
+    # -- controls ------------------------------------------------------------------
     def _command_for(self, control: str, increment: float) -> float:
         """JSBSim pilot command that puts the surface at trim + increment (rad)."""
         m = self._maps.get(control)
         if m is None:
             return self._trim_cmd[control]
-        pos, cmds = m
-        trim_pos = {"de": self.trim.elevator, "da": self.trim.aileron, "dr": self.trim.rudder}
-        return float(np.interp(trim_pos[control] + increment, pos, cmds))
+        return _interp(self._trim_pos[control] + increment, *m)
 
     def _apply_controls(self, controls: Mapping[str, float] | None) -> None:
         controls = controls or {}
-        for c, node in self._cmd_nodes.items():
-            inc = controls.get(c, 0.0)
-            node.set_double_value(self._command_for(c, inc) if inc else self._trim_cmd[c])
-        thr = min(1.0, max(0.0, self._trim_throttle + controls.get("throttle", 0.0)))
-        for node in self._throttle_nodes:
-            node.set_double_value(thr)
-        unknown = set(controls) - {"de", "da", "dr", "throttle"}
+        unknown = controls.keys() - {"de", "da", "dr", "throttle"}
         if unknown:
             raise ValueError(f"unknown controls {sorted(unknown)}; use de, da, dr, throttle")
+        for c, set_cmd in self._cmd_setters.items():
+            inc = controls.get(c, 0.0)
+            set_cmd(self._command_for(c, inc) if inc else self._trim_cmd[c])
+        thr = min(1.0, max(0.0, self._trim_throttle + controls.get("throttle", 0.0)))
+        for set_thr in self._throttle_setters:
+            set_thr(thr)
 
+    def _command_schedule(self, inputs: Mapping[str, np.ndarray], n: int
+                          ) -> list[tuple[Callable[[float], None], np.ndarray]]:
+        """(setter, command per sample) of every pilot command node for a whole flight.
+
+        The same mapping as ``_apply_controls`` (a zero increment keeps the trim command
+        exactly), one vectorised call per control.
+        """
+        out = []
+        for c, set_cmd in self._cmd_setters.items():
+            inc = inputs.get(c)
+            trim_cmd = self._trim_cmd[c]
+            if inc is None or c not in self._maps:
+                cmd = np.full(n, trim_cmd)
+            else:
+                pos, cmds = self._maps[c]
+                cmd = np.where(inc != 0.0, np.interp(self._trim_pos[c] + inc, pos, cmds),
+                               trim_cmd)
+            out.append((set_cmd, cmd))
+        thr = np.clip(self._trim_throttle + inputs.get("throttle", np.zeros(n)), 0.0, 1.0)
+        out.extend((set_thr, thr) for set_thr in self._throttle_setters)
+        return out
+
+    # -- stepping ------------------------------------------------------------------
     def _read(self) -> list[float]:
-        row = [n.get_double_value() for n in self._nodes]
-        row.extend(n.get_double_value() for n in self._optional)
-        return row
+        return list(map(self._get, self._nodes))
 
-    def _advance(self, controls: Mapping[str, float] | None) -> list[float]:
-        run = self.model.fdm.run
+    def step(self, controls: Mapping[str, float] | None = None) -> dict[str, float]:
+        """Advance one record interval; ``controls`` (trim increments) act from the new sample.
+
+        Returns the canonical SI channels of the new sample (floats).
+        """
+        if self.trim is None:
+            raise RuntimeError("call reset(trim) before step()")
+        run = self._run
         for _ in range(self.substeps - 1):
             run()
         self._apply_controls(controls)
         run()
         self._k += 1
-        return self._read()
+        row = self._read()
+        reason = self._departure(row, self._col)
+        if reason:
+            raise DepartureError(reason, self.time)
+        return self._sample(row)
 
-    def step(self, controls: Mapping[str, float] | None = None) -> dict[str, float]:
-        """Advance one record interval; ``controls`` (trim increments) act from the new sample."""
-        if self.trim is None:
-            raise RuntimeError("call reset(trim) before step()")
-        row = self._advance(controls)
-        self._check(row)
-        return self._row_dict(np.asarray(row)[None, :])
+    def fly(self, trim: Trim, controls: Mapping[str, Control] | None = None,
+            duration_s: float = 10.0, *, wind: np.ndarray | None = None,
+            turbulence: np.ndarray | None = None,
+            progress: Callable[[int, int], None] | None = None,
+            scenario: dict[str, Any] | None = None) -> FlightRecord:
+        """Fly from trim for duration_s (s), recording every 1 / rate_hz s: the flight loop.
+
+        ``controls``: de/da/dr (rad) and throttle (fraction) increments, as arrays on the
+        record grid (at least duration_s * rate_hz + 1 samples), callables of time (s) or
+        constants. ``wind`` (gusts, booked as wind_north/east/down) and ``turbulence``
+        (booked as turb_u/v/w): n x 3 NED velocities (m/s) on the record grid, written
+        into JSBSim's gust properties and held over the substeps. ``progress(k, n)`` is
+        called every second of flight. Raises DepartureError with the record up to the
+        departure.
+        """
+        if not duration_s > 0:
+            raise ValueError(f"duration_s must be positive, got {duration_s}")
+        rate_hz = self.rate_hz
+        n = int(round(duration_s * rate_hz)) + 1
+        inputs = _sampled(controls or {}, n, rate_hz)
+        extra = np.zeros((n, 3))
+        for label, part in (("wind", wind), ("turbulence", turbulence)):
+            if part is not None:
+                part = np.asarray(part, dtype=float)
+                if part.shape != (n, 3):
+                    raise ValueError(f"{label} schedule has shape {part.shape}, needs ({n}, 3)")
+                if not np.all(np.isfinite(part)):
+                    raise ValueError(f"{label} schedule has non-finite values")
+                extra = extra + part
+        gust_fps = extra / FT
+        self._reset(trim, {c: float(v[0]) for c, v in inputs.items()})
+        # JSBSim's pilot commands and gust velocities are inputs that no JSBSim model writes:
+        # set at reset, they need writing again only when they change; turbulence changes
+        # every sample and is written every sample
+        commands = _changes(self._command_schedule(inputs, n), n)
+        every_sample = np.count_nonzero(np.any(np.diff(extra, axis=0), axis=1)) > n // 4
+        gusts = _changes([] if every_sample else zip(self._gust_setters, gust_fps.T, strict=True),
+                         n)
+        gust_n, gust_e, gust_d = gust_fps.T.tolist() if every_sample else ([], [], [])
+        set_n, set_e, set_d = self._gust_setters
+        if np.any(extra[0]):  # (reset left the gusts at zero)
+            for set_gust, value in zip(self._gust_setters, gust_fps[0].tolist(), strict=True):
+                set_gust(value)
+            self._evaluate()  # t = 0 with the gust, without integrating
+        columns, col = self._loop_columns, {c: i for i, c in enumerate(self._loop_columns)}
+        get, nodes = self._get, self._loop_nodes
+        row = list(map(get, nodes))
+        departure = self._departure(row, col)
+        # each row is packed into one growing buffer of doubles (struct is the cheapest way
+        # from Python floats to a C array): its floats die young, no list of lists builds up
+        pack = struct.Struct(f"{len(columns)}d").pack
+        buffer = bytearray(pack(*row))
+
+        # the loop: locals only, no dicts, no numpy
+        run, store = self._run, buffer.extend
+        substeps = range(self.substeps - 1)
+        a_lo, a_hi, v_lo, v_hi = self._envelope
+        i_alpha, i_vt = col["aero/alpha-rad"], col["velocities/vt-fps"]
+        i_h, h_guard = col["position/h-sl-ft"], trim.terrain_m / FT + _NEAR_GROUND_FT
+        every = max(1, int(round(rate_hz)))
+        k = 1
+        while departure is None and k < n:
+            if every_sample:
+                set_n(gust_n[k])
+                set_e(gust_e[k])
+                set_d(gust_d[k])
+            for set_gust, value in gusts[k]:
+                set_gust(value)
+            for _ in substeps:
+                run()
+            for set_cmd, value in commands[k]:
+                set_cmd(value)
+            run()
+            row = tuple(map(get, nodes))
+            store(pack(*row))
+            # (a non-finite state makes the airspeed nan or inf: it fails here too)
+            if not (a_lo <= row[i_alpha] <= a_hi and v_lo <= row[i_vt] <= v_hi
+                    and row[i_h] > h_guard):
+                departure = self._departure(row, col)
+            if progress is not None and k % every == 0:
+                progress(k, n)
+            k += 1
+        self._k = k - 1
+        values = np.frombuffer(buffer, dtype=float).reshape(k, len(columns))
+        raw = {c: values[:, i] for i, c in enumerate(columns)}
+        if self._calm:
+            self._fill_calm(raw, gust_fps[:k])
+        channels = self.convert(raw)
+        if turbulence is not None and np.any(turbulence):
+            _book_turbulence(channels, np.asarray(turbulence, dtype=float)[:k])
+        record = FlightRecord(np.arange(k) / rate_hz, channels, self.meta(scenario))
+        if departure is not None:
+            raise DepartureError(departure, (k - 1) / rate_hz, record)
+        return record
+
+    def _fill_calm(self, raw: dict[str, np.ndarray], gust_fps: np.ndarray) -> None:
+        """Columns not read with JSBSim's turbulence off, from what JSBSim computes them of.
+
+        Checked against JSBSim's own values at the last sample, so that a JSBSim whose
+        winds work otherwise fails loudly instead of recording wrong winds.
+        """
+        steady = [self.get(p) for p in _STEADY_WIND]
+        n = len(gust_fps)
+        for p, aero in zip(_RATES, _AERO_RATES, strict=True):
+            raw[aero] = raw[p]
+        for i in range(3):
+            raw[_TURB[i]] = np.zeros(n)
+            raw[_TOTAL_WIND[i]] = steady[i] + gust_fps[:, i]
+        for p in _CALM_FILLED:
+            actual, filled = self.get(p), float(raw[p][-1])
+            if not (actual == filled or (math.isnan(actual) and math.isnan(filled))):
+                raise RuntimeError(f"{p} is {actual!r} in JSBSim but {filled!r} as filled in "
+                                   "with its turbulence off: JSBSim's wind model changed")
 
     # -- departure -------------------------------------------------------------------
     def _bounds(self) -> tuple[float, float, float, float]:
@@ -341,14 +576,17 @@ class Simulation:
         v_lo = lim.min_speed_m_s if lim.min_speed_m_s is not None else 0.3 * trim.speed_m_s
         return a_lo, a_hi, v_lo / FT, v_hi / FT
 
-    def _departure(self, row: list[float]) -> str | None:
-        alpha, vt = row[_I["aero/alpha-rad"]], row[_I["velocities/vt-fps"]]
+    def _departure(self, row: Sequence[float], col: Mapping[str, int]) -> str | None:
+        """Why the sample ``row`` (raw values, column index ``col``) left the envelope, or None."""
         if not all(map(math.isfinite, row)):
-            bad = [p for p, x in zip(_RAW, row, strict=False) if not math.isfinite(x)]
+            bad = [p for p, i in col.items() if not math.isfinite(row[i])]
             return f"state is not finite ({', '.join(bad[:4])})"
-        a_lo, a_hi, v_lo, v_hi = self._limits_cache
-        if row[_I["position/h-agl-ft"]] <= 0 or row[_I["gear/wow"]] > 0:
-            return f"ground contact (altitude AGL {row[_I['position/h-agl-ft']] * FT:.1f} m)"
+        alpha, vt = row[col["aero/alpha-rad"]], row[col["velocities/vt-fps"]]
+        a_lo, a_hi, v_lo, v_hi = self._envelope
+        agl = row[col[_AGL]] if _AGL in col else self._agl_node.get_double_value()
+        wow = row[col[_WOW]] if _WOW in col else self._wow_node.get_double_value()
+        if agl <= 0 or wow > 0:
+            return f"ground contact (altitude AGL {agl * FT:.1f} m)"
         if not a_lo <= alpha <= a_hi:
             return (f"alpha {math.degrees(alpha):.1f} deg left the range "
                     f"{math.degrees(a_lo):.1f}..{math.degrees(a_hi):.1f} deg")
@@ -358,90 +596,22 @@ class Simulation:
             return f"airspeed {vt * FT:.1f} m/s fell below {v_lo * FT:.1f} m/s"
         return None
 
-    def _check(self, row: list[float]) -> None:
-        reason = self._departure(row)
-        if reason:
-            raise DepartureError(reason, self.time)
-
     # -- conversion --------------------------------------------------------------------
-    def _row_dict(self, rows: np.ndarray) -> dict[str, float]:
-        return {k: float(v[0]) for k, v in self.convert(rows).items()}
+    def _sample(self, row: Sequence[float]) -> dict[str, float]:
+        """Canonical SI channels of one raw sample (all columns), as floats."""
+        raw = dict(zip(self.columns, row, strict=True))
+        try:
+            return _channels(raw, self.model.reference, self._lat0, self._lon0, self._rpm,
+                             math.sin, math.cos)
+        except ZeroDivisionError:  # qbar or V = 0: let numpy give inf / nan as in a record
+            arrays = {k: np.array([v]) for k, v in raw.items()}
+            return {k: float(v[0]) for k, v in self.convert(arrays).items()}
 
-    def convert(self, rows: np.ndarray) -> dict[str, np.ndarray]:
-        """Canonical SI channels from raw JSBSim rows (n x properties), vectorised."""
-        col = {name: rows[:, i] for i, name in enumerate(_RAW)}
-        for j, name in enumerate(self._optional_names):
-            col[name] = rows[:, len(_RAW) + j]
-        ref = self.model.reference
-        V = col["velocities/vt-fps"] * FT
-        alpha = col["aero/alpha-rad"]
-        mass_slug = col["inertia/mass-slugs"]
-        qs = col["aero/qbar-psf"] * PSF * ref.area  # N
+    def convert(self, raw: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Canonical SI channels from raw JSBSim columns (property -> array), vectorised."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            fx, fy, fz = (col[f"forces/fb{a}-aero-lbs"] * LBF / qs for a in "xyz")
-            cl = col["moments/l-aero-lbsft"] * LBF * FT / (qs * ref.span)
-            cm = col["moments/m-aero-lbsft"] * LBF * FT / (qs * ref.chord)
-            cn = col["moments/n-aero-lbsft"] * LBF * FT / (qs * ref.span)
-            half_v = 2.0 * V
-            phat = col["velocities/p-aero-rad_sec"] * ref.span / half_v
-            qhat = col["velocities/q-aero-rad_sec"] * ref.chord / half_v
-            rhat = col["velocities/r-aero-rad_sec"] * ref.span / half_v
-        phi, theta, psi = (col[f"attitude/{a}-rad"] for a in ("phi", "theta", "psi"))
-        turb_ned = np.stack([col[f"atmosphere/turb-{a}-fps"] * FT
-                             for a in ("north", "east", "down")])
-        turb_body = _ned_to_body(turb_ned, phi, theta, psi)
-        lat, lon = col["position/lat-geod-rad"], col["position/long-gc-rad"]
-        out = {
-            "u": col["velocities/u-aero-fps"] * FT,
-            "v": col["velocities/v-aero-fps"] * FT,
-            "w": col["velocities/w-aero-fps"] * FT,
-            "p": col["velocities/p-rad_sec"], "q": col["velocities/q-rad_sec"],
-            "r": col["velocities/r-rad_sec"],
-            "phi": phi, "theta": theta, "psi": psi,
-            "alpha": alpha, "beta": col["aero/beta-rad"], "V": V,
-            "qbar": col["aero/qbar-psf"] * PSF,
-            "rho": col["atmosphere/rho-slugs_ft3"] * SLUG_FT3,
-            "h": col["position/h-sl-ft"] * FT, "mach": col["velocities/mach"],
-            # specific force = non-gravitational force / mass (what an accelerometer reads)
-            "ax": col["forces/fbx-total-lbs"] / mass_slug * FT,
-            "ay": col["forces/fby-total-lbs"] / mass_slug * FT,
-            "az": col["forces/fbz-total-lbs"] / mass_slug * FT,
-            "pdot": col["accelerations/pdot-rad_sec2"],
-            "qdot": col["accelerations/qdot-rad_sec2"],
-            "rdot": col["accelerations/rdot-rad_sec2"],
-            "de": col["fcs/elevator-pos-rad"] * SURFACES["de"][1],
-            "da": col["fcs/left-aileron-pos-rad"] * SURFACES["da"][1],
-            "dr": col["fcs/rudder-pos-rad"] * SURFACES["dr"][1],
-            "throttle": col["fcs/throttle-pos-norm"],
-            "thrust": col["forces/fbx-prop-lbs"] * LBF,
-            "mass": mass_slug * SLUG,
-            "Ixx": col["inertia/ixx-slugs_ft2"] * SLUG_FT2,
-            "Iyy": col["inertia/iyy-slugs_ft2"] * SLUG_FT2,
-            "Izz": col["inertia/izz-slugs_ft2"] * SLUG_FT2,
-            # JSBSim reports the tensor element -Ixz; the channel is Etkin's Ixz
-            "Ixz": -col["inertia/ixz-slugs_ft2"] * SLUG_FT2,
-            "CX": fx, "CY": fy, "CZ": fz, "Cl": cl, "Cm": cm, "Cn": cn,
-            "CL": fx * np.sin(alpha) - fz * np.cos(alpha),
-            "CD": -fx * np.cos(alpha) - fz * np.sin(alpha),
-            "phat": phat, "qhat": qhat, "rhat": rhat,
-            "wind_north": (col["atmosphere/total-wind-north-fps"]
-                           - col["atmosphere/turb-north-fps"]) * FT,
-            "wind_east": (col["atmosphere/total-wind-east-fps"]
-                          - col["atmosphere/turb-east-fps"]) * FT,
-            "wind_down": (col["atmosphere/total-wind-down-fps"]
-                          - col["atmosphere/turb-down-fps"]) * FT,
-            "turb_u": turb_body[0], "turb_v": turb_body[1], "turb_w": turb_body[2],
-            "latitude": lat, "longitude": lon,
-            "north": (lat - self._lat0) * EARTH_RADIUS_M,
-            "east": (lon - self._lon0) * EARTH_RADIUS_M * math.cos(self._lat0),
-        }
-        if "fcs/flap-pos-rad" in col:
-            out["df"] = col["fcs/flap-pos-rad"]
-        rpm = col.get("propulsion/engine[0]/propeller-rpm",
-                      col.get("propulsion/engine[0]/engine-rpm"))
-        if rpm is not None:
-            out["rpm"] = rpm
-        return out
+            return _channels(raw, self.model.reference, self._lat0, self._lon0, self._rpm,
+                             np.sin, np.cos)
 
     def meta(self, scenario: dict[str, Any] | None = None) -> RecordMeta:
         """Record metadata for flights of this simulation."""
@@ -462,16 +632,117 @@ class Simulation:
         )
 
 
-def _ned_to_body(vec: np.ndarray, phi: np.ndarray, theta: np.ndarray,
-                 psi: np.ndarray) -> np.ndarray:
-    """Rotate NED vectors (3 x n) into body axes with the 3-2-1 Euler angles (Etkin)."""
-    cf, sf, ct, st, cp, sp = (np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta),
-                              np.cos(psi), np.sin(psi))
-    n, e, d = vec
+def _channels(c: Mapping[str, Any], ref: Reference, lat0: float, lon0: float,
+              rpm: str | None, sin: Callable, cos: Callable) -> dict[str, Any]:
+    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy)."""
+    V = c["velocities/vt-fps"] * FT
+    alpha = c["aero/alpha-rad"]
+    mass_slug = c["inertia/mass-slugs"]
+    qs = c["aero/qbar-psf"] * PSF * ref.area  # N
+    fx = c["forces/fbx-aero-lbs"] * LBF / qs
+    fy = c["forces/fby-aero-lbs"] * LBF / qs
+    fz = c["forces/fbz-aero-lbs"] * LBF / qs
+    half_v = 2.0 * V
+    phi, theta, psi = c["attitude/phi-rad"], c["attitude/theta-rad"], c["attitude/psi-rad"]
+    turb = _rotate_to_body(*(c[p] * FT for p in _TURB), phi, theta, psi, sin, cos)
+    lat, lon = c["position/lat-geod-rad"], c["position/long-gc-rad"]
+    out = {
+        "u": c["velocities/u-aero-fps"] * FT,
+        "v": c["velocities/v-aero-fps"] * FT,
+        "w": c["velocities/w-aero-fps"] * FT,
+        "p": c["velocities/p-rad_sec"], "q": c["velocities/q-rad_sec"],
+        "r": c["velocities/r-rad_sec"],
+        "phi": phi, "theta": theta, "psi": psi,
+        "alpha": alpha, "beta": c["aero/beta-rad"], "V": V,
+        "qbar": c["aero/qbar-psf"] * PSF,
+        "rho": c["atmosphere/rho-slugs_ft3"] * SLUG_FT3,
+        "h": c["position/h-sl-ft"] * FT, "mach": c["velocities/mach"],
+        # specific force = non-gravitational force / mass (what an accelerometer reads)
+        "ax": c["forces/fbx-total-lbs"] / mass_slug * FT,
+        "ay": c["forces/fby-total-lbs"] / mass_slug * FT,
+        "az": c["forces/fbz-total-lbs"] / mass_slug * FT,
+        "pdot": c["accelerations/pdot-rad_sec2"],
+        "qdot": c["accelerations/qdot-rad_sec2"],
+        "rdot": c["accelerations/rdot-rad_sec2"],
+        "de": c["fcs/elevator-pos-rad"] * SURFACES["de"][1],
+        "da": c["fcs/left-aileron-pos-rad"] * SURFACES["da"][1],
+        "dr": c["fcs/rudder-pos-rad"] * SURFACES["dr"][1],
+        "throttle": c["fcs/throttle-pos-norm"],
+        "thrust": c["forces/fbx-prop-lbs"] * LBF,
+        "mass": mass_slug * SLUG,
+        "Ixx": c["inertia/ixx-slugs_ft2"] * SLUG_FT2,
+        "Iyy": c["inertia/iyy-slugs_ft2"] * SLUG_FT2,
+        "Izz": c["inertia/izz-slugs_ft2"] * SLUG_FT2,
+        # JSBSim reports the tensor element -Ixz; the channel is Etkin's Ixz
+        "Ixz": -c["inertia/ixz-slugs_ft2"] * SLUG_FT2,
+        "CX": fx, "CY": fy, "CZ": fz,
+        "Cl": c["moments/l-aero-lbsft"] * LBF * FT / (qs * ref.span),
+        "Cm": c["moments/m-aero-lbsft"] * LBF * FT / (qs * ref.chord),
+        "Cn": c["moments/n-aero-lbsft"] * LBF * FT / (qs * ref.span),
+        "CL": fx * sin(alpha) - fz * cos(alpha),
+        "CD": -fx * cos(alpha) - fz * sin(alpha),
+        "phat": c["velocities/p-aero-rad_sec"] * ref.span / half_v,
+        "qhat": c["velocities/q-aero-rad_sec"] * ref.chord / half_v,
+        "rhat": c["velocities/r-aero-rad_sec"] * ref.span / half_v,
+        "wind_north": (c["atmosphere/total-wind-north-fps"] - c["atmosphere/turb-north-fps"]) * FT,
+        "wind_east": (c["atmosphere/total-wind-east-fps"] - c["atmosphere/turb-east-fps"]) * FT,
+        "wind_down": (c["atmosphere/total-wind-down-fps"] - c["atmosphere/turb-down-fps"]) * FT,
+        "turb_u": turb[0], "turb_v": turb[1], "turb_w": turb[2],
+        "latitude": lat, "longitude": lon,
+        "north": (lat - lat0) * EARTH_RADIUS_M,
+        "east": (lon - lon0) * EARTH_RADIUS_M * math.cos(lat0),
+    }
+    if _FLAP in c:
+        out["df"] = c[_FLAP]
+    if rpm is not None:
+        out["rpm"] = c[rpm]
+    return out
+
+
+def _changes(schedules: Iterable[tuple[Callable[[float], None], np.ndarray]], n: int
+             ) -> list[tuple[tuple[Callable[[float], None], float], ...]]:
+    """Per sample k, the (setter, value) pairs to write before it: those whose value
+    differs from sample k - 1, or every sample for a schedule that changes most of them."""
+    dense = []
+    sparse: dict[int, list[tuple[Callable[[float], None], float]]] = {}
+    for setter, values in schedules:
+        values = np.asarray(values, dtype=float)
+        changed = np.flatnonzero(values[1:] != values[:-1]) + 1
+        if len(changed) > n // 4:
+            dense.append(zip(itertools.repeat(setter), values.tolist(), strict=False))
+        else:
+            for k in changed.tolist():
+                sparse.setdefault(k, []).append((setter, float(values[k])))
+    out: list[tuple[tuple[Callable[[float], None], float], ...]]
+    out = list(zip(*dense, strict=True)) if dense else [()] * n
+    for k, pairs in sparse.items():
+        out[k] = out[k] + tuple(pairs)
+    return out
+
+
+def _rotate_to_body(n: Any, e: Any, d: Any, phi: Any, theta: Any, psi: Any,
+                    sin: Callable, cos: Callable) -> tuple[Any, Any, Any]:
+    """NED components into body axes with the 3-2-1 Euler angles (Etkin); floats or arrays."""
+    cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(theta), sin(theta), cos(psi), sin(psi)
     x = ct * cp * n + ct * sp * e - st * d
     y = (sf * st * cp - cf * sp) * n + (sf * st * sp + cf * cp) * e + sf * ct * d
     z = (cf * st * cp + sf * sp) * n + (cf * st * sp - sf * cp) * e + cf * ct * d
-    return np.stack([x, y, z])
+    return x, y, z
+
+
+def _ned_to_body(vec: np.ndarray, phi: np.ndarray, theta: np.ndarray,
+                 psi: np.ndarray) -> np.ndarray:
+    """Rotate NED vectors (3 x n) into body axes with the 3-2-1 Euler angles (Etkin)."""
+    return np.stack(_rotate_to_body(*vec, phi, theta, psi, np.sin, np.cos))
+
+
+def _book_turbulence(ch: dict[str, np.ndarray], turb_ned: np.ndarray) -> None:
+    """Book a turbulence schedule (n x 3 NED, m/s) under turb_u/v/w, not wind_*."""
+    for i, axis in enumerate(_AXES):
+        ch[f"wind_{axis}"] = ch[f"wind_{axis}"] - turb_ned[:, i]
+    body = _rotate_to_body(*turb_ned.T, ch["phi"], ch["theta"], ch["psi"], np.sin, np.cos)
+    for axis, b in zip("uvw", body, strict=True):
+        ch[f"turb_{axis}"] = ch[f"turb_{axis}"] + b
 
 
 def _sampled(controls: Mapping[str, Control], n: int, rate_hz: float) -> dict[str, np.ndarray]:
@@ -502,43 +773,22 @@ def _sampled(controls: Mapping[str, Control], n: int, rate_hz: float) -> dict[st
 def fly(model: Model | str, trim: Trim, controls: Mapping[str, Control] | None = None,
         duration_s: float = 10.0, rate_hz: float = 100.0,
         atmosphere: Atmosphere | None = None, limits: Limits | None = None,
-        scenario: dict[str, Any] | None = None) -> FlightRecord:
+        scenario: dict[str, Any] | None = None, *, wind: np.ndarray | None = None,
+        turbulence: np.ndarray | None = None,
+        progress: Callable[[int, int], None] | None = None) -> FlightRecord:
     """Fly from trim for duration_s (s) with control increments, recording at rate_hz (Hz).
 
     ``controls`` maps de/da/dr (rad) and throttle (fraction) to arrays sampled at rate_hz
     (at least duration_s * rate_hz + 1 samples), callables of time (s) or constants.
+    ``wind`` / ``turbulence``: optional n x 3 NED schedules (m/s) of gusts and turbulence,
+    ``progress(k, n)``: called every second of flight (see ``Simulation.fly``).
     Raises DepartureError (with ``.record`` up to the departure) if the flight departs.
     """
     if not duration_s > 0:
         raise ValueError(f"duration_s must be positive, got {duration_s}")
     sim = Simulation(model, rate_hz=rate_hz, atmosphere=atmosphere, limits=limits)
-    n = int(round(duration_s * rate_hz)) + 1
-    inputs = _sampled(controls or {}, n, rate_hz)
-    names = list(inputs)
-    columns = [inputs[c] for c in names]
-    sim.reset(trim, {c: float(col[0]) for c, col in zip(names, columns, strict=True)})
-    rows = np.empty((n, len(_RAW) + len(sim._optional)))
-    rows[0] = sim._read()
-    sim._limits_cache = sim._bounds()
-    departure = sim._departure(list(rows[0]))
-    k = 1
-    while departure is None and k < n:
-        rows[k] = sim._advance({c: col[k] for c, col in zip(names, columns, strict=True)})
-        departure = sim._departure(list(rows[k])) if not _inside(rows[k], sim) else None
-        k += 1
-    record = FlightRecord(np.arange(k) / rate_hz, sim.convert(rows[:k]), sim.meta(scenario))
-    if departure is not None:
-        raise DepartureError(departure, (k - 1) / rate_hz, record)
-    return record
-
-
-def _inside(row: np.ndarray, sim: Simulation) -> bool:
-    """Fast envelope test (the detailed reason is built only when it fails)."""
-    a_lo, a_hi, v_lo, v_hi = sim._limits_cache
-    alpha, vt = row[_I["aero/alpha-rad"]], row[_I["velocities/vt-fps"]]
-    return (a_lo <= alpha <= a_hi and v_lo <= vt <= v_hi
-            and row[_I["position/h-agl-ft"]] > 0 and row[_I["gear/wow"]] <= 0
-            and math.isfinite(row[_I["velocities/u-aero-fps"]]))
+    return sim.fly(trim, controls, duration_s, wind=wind, turbulence=turbulence,
+                   progress=progress, scenario=scenario)
 
 
 __all__ = ["Atmosphere", "DepartureError", "Limits", "Simulation", "fly"]
