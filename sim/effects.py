@@ -15,6 +15,7 @@ need a uniform time grid.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -233,9 +234,15 @@ def antialias(t: np.ndarray, x: np.ndarray, cutoff: float, order: int, who: str)
             f"{who}: anti-alias cutoff {cutoff} Hz is at or above the Nyquist frequency "
             f"{0.5 / dt} Hz of the signal it filters"
         )
-    sos = signal.butter(order, cutoff, fs=1.0 / dt, output="sos")
-    zi = signal.sosfilt_zi(sos) * x[0]
-    return signal.sosfilt(sos, x, zi=zi)[0]
+    sos, zi = _butter(int(order), float(cutoff), round(1.0 / dt, 9))
+    return signal.sosfilt(sos, x, zi=zi * x[0])[0]
+
+
+@functools.lru_cache(maxsize=64)
+def _butter(order: int, cutoff: float, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """Butterworth sections and their unit-step initial state (one design per suite rate)."""
+    sos = signal.butter(order, cutoff, fs=fs, output="sos")
+    return sos, signal.sosfilt_zi(sos)
 
 
 @dataclass(kw_only=True)
