@@ -43,6 +43,7 @@ import numpy as np
 from scipy import linalg, signal
 
 from flightid.record import FlightRecord
+from flightid.sim.effects import NamedEffect
 from flightid.sim.flight import Atmosphere, Limits, fly
 from flightid.sim.model import Model
 from flightid.sim.trim import Trim
@@ -144,20 +145,10 @@ def filtered_noise(num: Sequence[float], den: Sequence[float], sigma: float, n: 
 
 
 @dataclass(kw_only=True)
-class Disturbance:
+class Disturbance(NamedEffect):
     """Base: a named effect with float parameters (SI); string fields choose its form."""
 
-    name: ClassVar[str] = ""
-
-    def parameters(self) -> dict[str, float]:
-        """Float parameters by name (SI): what a gap diagnosis can fit."""
-        return {f.name: float(getattr(self, f.name)) for f in dataclasses.fields(self)
-                if isinstance(getattr(self, f.name), int | float)}
-
-    def to_dict(self) -> dict[str, Any]:
-        """``{"kind": name, **fields}`` (inverse of ``disturbance_from_dict``)."""
-        return {"kind": self.name, **{f.name: getattr(self, f.name)
-                                      for f in dataclasses.fields(self)}}
+    key: ClassVar[str] = "kind"
 
 
 @dataclass(kw_only=True)

@@ -26,30 +26,45 @@ from flightid.units import DEG, G0
 
 
 @dataclass(kw_only=True)
-class Effect:
-    """Base of the per-channel effects."""
+class NamedEffect:
+    """A named, parametrised effect: the common form of sensor errors, mounting effects and
+    disturbances, so the simulator can inject any of them and a diagnosis fit it back.
+
+    ``parameters()`` are the float fields (SI), what can be fitted; string fields choose a
+    form (e.g. a turbulence model); ``source`` says where the values come from.
+    """
 
     name: ClassVar[str] = ""
+    key: ClassVar[str] = "effect"  # the card-table key that names the effect
     source: str = dataclasses.field(default="", compare=False)
+
+    def parameters(self) -> dict[str, float]:
+        """Float parameters by name (SI units)."""
+        return {
+            f.name: float(value)
+            for f in dataclasses.fields(self)
+            if f.name != "source"
+            and isinstance(value := getattr(self, f.name), int | float)
+            and not isinstance(value, bool)
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{key: name, **fields}`` plus the source if any (inverse of the from-dict builders)."""
+        d: dict[str, Any] = {self.key: self.name}
+        d.update({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                  if f.name != "source"})
+        if self.source:
+            d["source"] = self.source
+        return d
+
+
+@dataclass(kw_only=True)
+class Effect(NamedEffect):
+    """Base of the per-channel effects."""
 
     def apply(self, t: np.ndarray, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """The measured signal on times ``t`` (s) given the input signal ``x``."""
         raise NotImplementedError
-
-    def parameters(self) -> dict[str, float]:
-        """The effect's parameters by name (SI floats)."""
-        return {
-            f.name: float(getattr(self, f.name))
-            for f in dataclasses.fields(self)
-            if f.name != "source"
-        }
-
-    def to_dict(self) -> dict[str, Any]:
-        """``{"effect": name, **parameters}`` plus the source if any."""
-        d: dict[str, Any] = {"effect": self.name, **self.parameters()}
-        if self.source:
-            d["source"] = self.source
-        return d
 
 
 def _positive(value: float, field: str, name: str, strict: bool = True) -> None:

@@ -20,10 +20,14 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
+
+from flightid.channels import CHANNELS
+from flightid.record import FlightRecord
 from flightid.sim.effects import (
     Bias,
     Delay,
     Effect,
+    NamedEffect,
     Quantization,
     RandomWalk,
     Sample,
@@ -34,42 +38,22 @@ from flightid.sim.effects import (
     parse_params,
 )
 from flightid.sim.vibration import AXES, EngineVibration
-
-from flightid.channels import CHANNELS
-from flightid.record import FlightRecord
 from flightid.units import DEG, FT, G0
 
 # -- mounting effects --------------------------------------------------------------
 
 
 @dataclass(kw_only=True)
-class MountingEffect:
+class MountingEffect(NamedEffect):
     """Base of the effects that act on several channels of the record at once."""
 
-    name: ClassVar[str] = ""
     requires: ClassVar[tuple[str, ...]] = ()
-    source: str = field(default="", compare=False)
 
     def apply_record(
         self, t: np.ndarray, channels: dict[str, np.ndarray], rng: np.random.Generator
     ) -> dict[str, np.ndarray]:
         """The channels this effect changes, computed from ``channels`` on times ``t`` (s)."""
         raise NotImplementedError
-
-    def parameters(self) -> dict[str, float]:
-        """Parameters by name (SI floats)."""
-        return {
-            f.name: float(getattr(self, f.name))
-            for f in dataclasses.fields(self)
-            if f.name != "source"
-        }
-
-    def to_dict(self) -> dict[str, Any]:
-        """``{"effect": name, **parameters}`` plus the source if any."""
-        d: dict[str, Any] = {"effect": self.name, **self.parameters()}
-        if self.source:
-            d["source"] = self.source
-        return d
 
     def check(self, channels: dict[str, np.ndarray]) -> None:
         """Raise naming the missing channels this effect needs."""

@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
-from flightid.sim.effects import Effect
 from scipy.integrate import cumulative_trapezoid
+
+from flightid.sim.effects import Effect
 
 AXES: tuple[str, ...] = ("ax", "ay", "az", "p", "q", "r")
 
