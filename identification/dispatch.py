@@ -14,7 +14,6 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from flightid.identification.estimate import Estimate
-
 from flightid.record import FlightRecord
 
 LATERAL = ("beta", "phat", "rhat", "da", "dr")
@@ -171,10 +170,10 @@ def run_cli(
     """The ``flightid identify`` command: read, identify, print a table or JSON, score."""
     import json
 
-    from flightid.identification.scoring import load_truth, score
     from rich.console import Console
     from rich.table import Table
 
+    from flightid.identification.scoring import load_truth, score
     from flightid.record import read
 
     if fmt not in ("table", "json"):

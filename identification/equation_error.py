@@ -31,6 +31,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import fftconvolve
+
 from flightid.identification.coefficients import (
     COEFFICIENT_CHANNELS,
     force_moment_coefficients,
@@ -38,8 +40,6 @@ from flightid.identification.coefficients import (
     smoothed_derivative,
 )
 from flightid.identification.estimate import Estimate
-from scipy.signal import fftconvolve
-
 from flightid.record import FlightRecord
 
 # coefficient channel -> letter of its derivative names (flightid.derivatives)

@@ -45,7 +45,8 @@ class Estimate:
         try:
             return float(self.values[self.names.index(name)])
         except ValueError:
-            raise KeyError(f"{name} was not estimated; estimated: {', '.join(self.names)}") from None
+            raise KeyError(
+                f"{name} was not estimated; estimated: {', '.join(self.names)}") from None
 
     def __contains__(self, name: str) -> bool:
         return name in self.names

@@ -16,7 +16,6 @@ import numpy as np
 
 from flightid.identification.estimate import Estimate
 
-
 METHOD_NAMES = {
     "ee": "equation error", "swr": "stepwise regression", "oe": "output error",
     "fem": "filter error", "fdee": "frequency-domain equation error",

@@ -32,9 +32,9 @@ from collections.abc import Iterable, Sequence
 from itertools import combinations_with_replacement
 
 import numpy as np
+
 from flightid.identification import equation_error as ee
 from flightid.identification.estimate import Estimate
-
 from flightid.record import FlightRecord
 
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from flightid.identification.equation_error import predict as ee_predict
-from flightid.identification.estimate import Estimate
 from scipy.stats import chi2
 
+from flightid.identification.equation_error import predict as ee_predict
+from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 
 

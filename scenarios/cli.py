@@ -192,7 +192,8 @@ def convert_command(
     align: Annotated[str, typer.Option(help="auto, timesync, xcorr or none")] = "auto",
     reference: Annotated[str | None, typer.Option(help="clock source 'sysid/compid'")] = None,
     rate: Annotated[float | None, typer.Option(help="output rate, Hz")] = None,
-    aircraft: Annotated[str, typer.Option(help="aircraft: adds its mass properties and geometry (MAVLink has none)")] = "",
+    aircraft: Annotated[str, typer.Option(
+        help="aircraft: adds its mass properties and geometry (MAVLink has none)")] = "",
 ) -> None:
     """Convert a MAVLink .tlog to a flight record (SI channels, aligned, uniform time)."""
     from flightid.sim.bridge_cli import convert_cli

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+
 from flightid.scenarios.input_design import (
     EDGE_TOL,
     InputDesign,

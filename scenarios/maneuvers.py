@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from flightid.scenarios.input_design import InputDesign, check_time, require
 
+from flightid.scenarios.input_design import InputDesign, check_time, require
 from flightid.units import DEG
 
 

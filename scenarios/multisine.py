@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from scipy.optimize import minimize
+
 from flightid.scenarios.input_design import (
     EDGE_TOL,
     InputDesign,
@@ -25,7 +27,6 @@ from flightid.scenarios.input_design import (
     check_time,
     require,
 )
-from scipy.optimize import minimize
 
 
 @dataclass(frozen=True)

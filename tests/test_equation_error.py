@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from flightid.identification import coefficients as coef
 from flightid.identification import equation_error as ee
 from flightid.identification import validation as va
-
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sidpac import read_mat
 

@@ -6,6 +6,8 @@ import re
 
 import numpy as np
 import pytest
+from scipy.signal import hilbert
+
 from flightid.scenarios.input_design import EDGE_TOL, rate_limit
 from flightid.scenarios.inputs import (
     INPUT_KINDS,
@@ -26,8 +28,6 @@ from flightid.scenarios.multisine import (
     schroeder_phases,
     split_harmonics,
 )
-from scipy.signal import hilbert
-
 from flightid.units import DEG
 
 

@@ -7,11 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
+
 from flightid.identification.dispatch import METHODS, identify, parse_model
 from flightid.identification.estimate import Estimate
 from flightid.identification.scoring import load_truth, score
 from flightid.scenarios.cli import app
-from typer.testing import CliRunner
 
 TWIN_OTTER = (
     Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"

@@ -6,6 +6,11 @@ import re
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize_scalar
+from scipy.signal import butter, sosfiltfilt
+
+from flightid.record import FlightRecord, RecordMeta
+from flightid.record import read as read_record
 from flightid.sim.effects import EFFECTS, Lag, SecondOrder, effect_from_dict
 from flightid.sim.sensors import (
     LeverArm,
@@ -16,11 +21,6 @@ from flightid.sim.sensors import (
     suite_from_dict,
 )
 from flightid.sim.vibration import EngineVibration
-from scipy.optimize import minimize_scalar
-from scipy.signal import butter, sosfiltfilt
-
-from flightid.record import FlightRecord, RecordMeta
-from flightid.record import read as read_record
 from flightid.units import G0
 
 

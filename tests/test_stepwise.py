@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from flightid.identification import stepwise as sw
 
+from flightid.identification import stepwise as sw
 from flightid.record import FlightRecord, RecordMeta
 from flightid.sidpac import read_mat
 
