@@ -14,8 +14,15 @@ drag in the local stability axes, ``force_axes="stability"``: CX = CL sin(alpha)
 cos(alpha), CZ = -CL cos(alpha) - CD sin(alpha)). Rates are nondimensional, phat = p b/2V,
 qhat = q cbar/2V, rhat = r b/2V, computed from the model's own states; the references are
 the record means, as in equation error, so the biases C_0 are the coefficients at the mean
-condition and the equation-error start values carry over unchanged. Moment coefficients
-may carry an alphadot term (alphadot cbar/2V, alphadot from the translational equations at
+condition and the equation-error start values carry over unchanged. With
+``moment_axes="stability"`` the rolling and yawing moments are those of the stability
+axes (Cl_s, Cn_s), with the stability-axis rates phat = (p cos(alpha) + r sin(alpha)) b/2V
+and rhat = (r cos(alpha) - p sin(alpha)) b/2V in every coefficient, rotated to the body axes
+at the instantaneous alpha: Cl = Cl_s cos(alpha) - Cn_s sin(alpha), Cn = Cl_s sin(alpha) +
+Cn_s cos(alpha) (Morelli & Klein 2016 ch. 3; the stability-axis convention of most lateral
+data sets); a body-axis model of such an aircraft misses the products of the alpha
+perturbation with the lateral terms. Moment coefficients may carry an alphadot term
+(alphadot cbar/2V, alphadot from the translational equations at
 the same instant). ``rotor_momentum`` adds the angular momentum of the engine rotor
 ``h_engine`` (N m s), whose gyroscopic moment is otherwise read as aerodynamics;
 ``engine_torque`` a constant engine rolling moment ``L_engine`` (N m), which a coefficient
@@ -67,6 +74,7 @@ TORQUE = "L_engine"
 INITIAL_STATES = ("measured", "estimate")
 CONTROL_HOLDS = ("linear", "zoh")
 MODELS = {"6dof": "body", "6dof_stability": "stability"}
+MOMENT_AXES = ("body", "stability")
 # plausible light-aircraft values (per rad), used only when no equation-error start is asked
 TYPICAL = {
     "CX_alpha": 0.2, "CZ_alpha": -4.5, "CZ_q": -4.0, "CZ_de": -0.4, "CZ_0": -0.4,
@@ -115,9 +123,13 @@ class SixDofModel:
     engine_torque: bool = False
     start: dict[str, float] = field(default_factory=dict)
     name: str = "6dof"
+    moment_axes: str = "body"
 
     def __post_init__(self) -> None:
         _check_structure(self.structure, self.force_axes)
+        if self.moment_axes not in MOMENT_AXES:
+            raise ValueError(f"moment_axes must be one of {', '.join(MOMENT_AXES)}, got "
+                             f"{self.moment_axes!r}")
         bad = [o for o in self.outputs if o not in OUTPUTS]
         if bad:
             raise ValueError(f"unknown 6-DOF output(s) {', '.join(bad)}; known: "
@@ -211,6 +223,7 @@ def model_from_record(
     engine_torque: bool = False,
     start: Mapping[str, float] | None = None,
     gravity: float | None = None,
+    moment_axes: str = "body",
 ) -> SixDofModel:
     """The 6-DOF model at a record's mass properties, geometry and mean references.
 
@@ -219,7 +232,8 @@ def model_from_record(
     default to those of OUTPUTS the record has. ``rotor_momentum`` adds h_engine (N m s),
     ``engine_torque`` L_engine (N m, constant rolling moment of the engine). Gravity
     (m/s^2) defaults to the local effective gravity at the record's mean latitude and
-    altitude (``rigid_body.local_gravity``), else G0.
+    altitude (``rigid_body.local_gravity``), else G0. ``moment_axes`` "stability" makes Cl
+    and Cn stability-axis coefficients on stability-axis rates (see the module docstring).
     """
     from flightid.identification.coefficients import mass_properties
     from flightid.identification.equation_error import channel_values
@@ -245,7 +259,8 @@ def model_from_record(
     if outputs is None:
         outputs = tuple(o for o in OUTPUTS if o in record)
     return SixDofModel(structure, force_axes, mass, record.meta.reference, references,
-                       tuple(outputs), rotor_momentum, engine_torque, dict(start or {}))
+                       tuple(outputs), rotor_momentum, engine_torque, dict(start or {}),
+                       moment_axes=moment_axes)
 
 
 def _density(record: FlightRecord) -> np.ndarray:
@@ -355,17 +370,24 @@ def _aero(model: SixDofModel, x, controls: tuple, thrust, rho, combine, xp=np) -
     alpha = xp.arctan(w / u)
     beta = xp.arcsin(v / speed)
     inv2v = 0.5 / speed
+    uw = xp.sqrt(uw2)
+    ca, sa = u / uw, w / uw  # cos(alpha), sin(alpha)
+    p, r = x[3], x[5]
+    stability_moments = model.moment_axes == "stability"
+    if stability_moments:
+        p, r = p * ca + r * sa, r * ca - p * sa
     coef = combine((alpha - refs.get("alpha", 0.0), beta - refs.get("beta", 0.0),
-                    x[3] * (ref.span * inv2v) - refs.get("p", 0.0),
+                    p * (ref.span * inv2v) - refs.get("p", 0.0),
                     x[4] * (ref.chord * inv2v) - refs.get("q", 0.0),
-                    x[5] * (ref.span * inv2v) - refs.get("r", 0.0), *controls))
+                    r * (ref.span * inv2v) - refs.get("r", 0.0), *controls))
+    if stability_moments:
+        cl, cn = coef[3], coef[5]
+        coef = (coef[0], coef[1], coef[2], cl * ca - cn * sa, coef[4], cl * sa + cn * ca)
     qs = (0.5 * ref.area) * rho * speed2
     if model.force_axes == "body":
         cx, cz = coef[0], coef[2]
     else:
         # lift and drag in the local stability axes (rotation by alpha)
-        uw = xp.sqrt(uw2)
-        ca, sa = u / uw, w / uw
         cx = coef[2] * sa - coef[0] * ca
         cz = -coef[2] * ca - coef[0] * sa
     return qs * cx + thrust, qs * coef[1], qs * cz, coef, qs, speed, alpha, beta, inv2v
@@ -639,6 +661,7 @@ def estimate(
     est = oe._result(problem, fit, unidentifiable, colored, full_noise_covariance)
     est.fit.update({
         "force_axes": model.force_axes,
+        "moment_axes": model.moment_axes,
         "structure": {c: list(t) for c, t in model.structure.items()},
         "references": dict(model.references),
         "integration": f"RK4 at the record rate ({1.0 / problem.dt:g} Hz), controls "
@@ -678,7 +701,7 @@ def _singular(names: list[str], fit: oe._Fit, tol: float) -> dict[str, str]:
 RUN_OPTIONS = ("free", "start", "initial_state", "controls", "full_noise_covariance", "colored",
                "max_iterations", "step_tolerance", "cost_tolerance", "check_identifiability",
                "min_input_range", "singular_eigenvalue", "structure", "alphadot",
-               "rotor_momentum", "engine_torque", "outputs", "gravity")
+               "rotor_momentum", "engine_torque", "outputs", "gravity", "moment_axes")
 
 
 def run(record: FlightRecord, model: str = "6dof",
@@ -686,7 +709,7 @@ def run(record: FlightRecord, model: str = "6dof",
     """6-DOF output error for the dispatcher: model '6dof' (body-axis forces) or
     '6dof_stability' (lift and drag); ``options`` are keywords of ``estimate`` and of
     ``model_from_record`` (structure, alphadot, rotor_momentum, engine_torque, outputs,
-    gravity)."""
+    gravity, moment_axes)."""
     if model not in MODELS:
         raise ValueError(f"6-DOF output error takes model {' or '.join(MODELS)}, got {model!r}")
     opts = dict(options or {})
@@ -696,6 +719,7 @@ def run(record: FlightRecord, model: str = "6dof",
         raise ValueError(f"unknown 6-DOF output-error options {unknown}; known: "
                          f"{', '.join(RUN_OPTIONS)}")
     model_kw = {k: opts.pop(k) for k in ("structure", "alphadot", "rotor_momentum",
-                                         "engine_torque", "outputs", "gravity") if k in opts}
+                                         "engine_torque", "outputs", "gravity", "moment_axes")
+                if k in opts}
     six = model_from_record(record, force_axes=MODELS[model], **model_kw)
     return estimate(record, six, **opts)

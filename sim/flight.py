@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta, Reference
-from flightid.sim.model import COMMANDS, SURFACES, Model, as_model, quiet
+from flightid.sim.model import COMMANDS, SURFACES, Model, as_model, quiet, set_integrators
 from flightid.sim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.trim import Trim, apply
 from flightid.units import FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
@@ -381,6 +381,7 @@ class Simulation:
             if not prop.startswith("ic/"):
                 fdm[prop] = value
         fdm["propulsion/set-running"] = -1
+        set_integrators(fdm)  # InitModel restored JSBSim's defaults
         self._set_atmosphere()
 
     # -- controls ------------------------------------------------------------------

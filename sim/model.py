@@ -201,6 +201,20 @@ def _alpha_limits(root: ET.Element) -> tuple[float, float] | None:
     return float(lo) * scale, float(hi) * scale
 
 
+# JSBSim integrates the body rates with rectangular Euler by default, a half-step lag
+# (1.25 ms at 400 Hz) that an exact 6-DOF model reads as extra damping: Navion Cm_alphadot
+# -1.24 % -> -0.05 %, CL_q -3.9 % -> +0.65 %, Cn_r -1.78 % -> -0.89 % with Adams-Bashforth 2
+# (JSBSim code 3; tests/test_truth_recovery.py). FGPropagate::InitModel restores JSBSim's
+# defaults, so every reset applies these again.
+INTEGRATORS = {"simulation/integrator/rate/rotational": 3}
+
+
+def set_integrators(fdm: jsbsim.FGFDMExec) -> None:
+    """Use the project's JSBSim integrators (see INTEGRATORS)."""
+    for prop, code in INTEGRATORS.items():
+        fdm[prop] = code
+
+
 def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     """Load an aircraft by name (project aircraft/ first, then jsbsim's) or XML path.
 
@@ -223,6 +237,7 @@ def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     if not ok:
         raise ValueError(f"{xml}: JSBSim could not load the aircraft (see the XML)")
     fdm.set_dt(1.0 / rate_hz)
+    set_integrators(fdm)
     text = xml.read_text(encoding="utf-8", errors="replace")
     root = ET.fromstring(text)
     propulsion = fdm.get_propulsion()

@@ -1,16 +1,13 @@
-"""Output error on the nonlinear 6-DOF equations, scored against JSBSim truth (body axes).
+"""Output error on the nonlinear 6-DOF equations, scored against JSBSim truth.
 
 Flights: the Navion at Teper's condition (sea level, 53.6 m/s) and the Twin Otter at
 TM-4099's (1,897 m, 61.7 m/s), 50 Hz, an elevator 3211, an aileron doublet and a rudder
-2-1-1 one after the other. Truth: ``sim.truth.derivatives(..., axes="body")``.
+2-1-1 one after the other. Truth: ``sim.truth.derivatives`` in the axes of the model.
 
-What limits the noise-free agreement (measured, see the README section): JSBSim
-integrates the body rates with its default rectangular-Euler integrator at 400 Hz, which
-lags the rate response by half a step (1.25 ms); the 6-DOF model is integrated exactly
-(RK4), so the fit absorbs the lag into the damping derivatives (residual in q during the
-3211: 3.6e-4 rad/s at JSBSim's 400 Hz, 1.4e-4 rad/s at 1000 Hz, independent of the
-record rate). That costs 1.7 % on the Navion's Cn_r (flown with JSBSim's second-order
-Adams-Bashforth rate integrator instead, the same fit gives -0.06 %).
+What limited the noise-free agreement (tests/test_truth_recovery.py has the numbers):
+JSBSim's default rectangular-Euler rate integrator (a half-step lag, now replaced by
+Adams-Bashforth 2 in sim/model.py) and, for the Navion, lateral moments written about
+the stability axes in its XML (``moment_axes="stability"``).
 """
 
 from __future__ import annotations
@@ -31,7 +28,7 @@ DURATION = 20.0
 
 
 def _fly(aircraft: str, altitude: float, speed: float, amplitude_deg: float = 2.0,
-         rudder: bool = True):
+         rudder: bool = True, axes: str = "body"):
     tr = trimming.trim(aircraft, altitude, speed)
     t = np.arange(0.0, DURATION + 0.5 / RATE, 1.0 / RATE)
     designs = [ThreeTwoOneOne(surface="de", start=1.0, base=0.4, amplitude=amplitude_deg * DEG),
@@ -41,12 +38,12 @@ def _fly(aircraft: str, altitude: float, speed: float, amplitude_deg: float = 2.
                                  amplitude=2 * amplitude_deg * DEG))
     record = flight.fly(aircraft, tr, total_signals(designs, t), duration_s=DURATION,
                         rate_hz=RATE)
-    return record, truth.derivatives(aircraft, tr, axes="body").values
+    return record, truth.derivatives(aircraft, tr, axes=axes).values
 
 
 @pytest.fixture(scope="module")
 def navion():
-    return _fly("navion", 0.0, 53.6448)
+    return _fly("navion", 0.0, 53.6448, axes="stability")
 
 
 @pytest.fixture(scope="module")
@@ -55,18 +52,13 @@ def twin_otter():
 
 
 def _navion_structure() -> dict[str, tuple[str, ...]]:
-    # Lift and drag in stability axes (the Navion's aerodynamics are linear there). The
-    # trim aileron that balances the propeller torque leaves a rolling moment at trim,
-    # which the body axes see as a yawing moment growing with alpha (truth Cn_alpha =
-    # 0.00137): Cl and Cn get an alpha term.
-    structure = n6.default_structure("stability", alphadot=True)
-    structure["Cl"] = ("alpha", *structure["Cl"])
-    structure["Cn"] = ("alpha", *structure["Cn"])
-    return structure
+    # Lift and drag in stability axes, and the rolling and yawing moments too: the Navion's
+    # XML writes them about the stability axes with stability-axis rates
+    return n6.default_structure("stability", alphadot=True)
 
 
 NAVION_OPTIONS = {"structure": _navion_structure(), "rotor_momentum": True,
-                  "engine_torque": True}
+                  "engine_torque": True, "moment_axes": "stability"}
 NAVION_WELL_EXCITED = ("CL_alpha", "CL_de", "CD_alpha", "CY_beta", "CY_dr", "Cl_beta", "Cl_p",
                        "Cl_r", "Cl_da", "Cm_alpha", "Cm_q", "Cm_de", "Cm_alphadot", "Cn_beta",
                        "Cn_p", "Cn_r", "Cn_dr")
@@ -137,7 +129,7 @@ def test_navion_noise_free_derivatives_within_two_percent(navion):
     assert est.fit["converged"], est.fit["reason"]
     assert est.unidentifiable == {}
     errors = {n: (est[n] - true[n]) / true[n] for n in NAVION_WELL_EXCITED}
-    # measured: largest |error| 1.8 % (Cn_r), all others below 1.6 %
+    # measured: largest |error| 0.89 % (Cn_r), all others below 0.4 %
     for name, error in errors.items():
         assert abs(error) < 0.02, f"{name}: {100 * error:.2f} %"
     # the propeller: JSBSim's gyroscopic moment and torque (measured from the moment
