@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 app = typer.Typer(
+    pretty_exceptions_enable=False,
     help="flightid: aircraft system identification testbed (JSBSim truth flights, "
     "flight-test inputs, identification scored against known derivatives).",
     no_args_is_help=True,
@@ -231,5 +232,18 @@ def compatibility_command(
     compatibility_cli(record, output, format)
 
 
+def main() -> None:
+    """The console entry point: bad input ends in one clear line and exit code 2."""
+    import sys
+
+    try:
+        app()
+    except (ValueError, KeyError, FileNotFoundError, NotADirectoryError, IsADirectoryError) as exc:
+        command = " ".join(a for a in sys.argv[1:2] if not a.startswith("-"))
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"flightid {command}: {message}".replace("  ", " "), file=sys.stderr)
+        sys.exit(2)
+
+
 if __name__ == "__main__":
-    app()
+    main()
