@@ -54,12 +54,14 @@ def _restrict(structure: dict[str, list[str]], options: Mapping[str, Any]) -> di
     return {c: structure[c] for c in wanted}
 
 
-def _options(options: Mapping[str, Any] | None, allowed: tuple[str, ...]) -> dict[str, Any]:
+def check_options(options: Mapping[str, Any] | None, allowed: tuple[str, ...],
+                  method: str) -> dict[str, Any]:
+    """A method's keyword options: a copy without 'coefficients', unknown keys refused."""
     options = dict(options or {})
     options.pop("coefficients", None)
     unknown = [k for k in options if k not in allowed]
     if unknown:
-        raise ValueError(f"unknown options {unknown}; this method takes {', '.join(allowed)}")
+        raise ValueError(f"unknown {method} options {unknown}; known: {', '.join(allowed)}")
     return options
 
 
@@ -70,7 +72,7 @@ def run_equation_error(
     from flightid.identification import equation_error
 
     structure = _restrict(parse_model(model), options or {})
-    kw = _options(options, ("bias", "reference", "colored"))
+    kw = check_options(options, ("bias", "reference", "colored"), "equation-error")
     return [equation_error.estimate(record, c, t, **kw) for c, t in structure.items()]
 
 
@@ -81,7 +83,8 @@ def run_stepwise(
     from flightid.identification import stepwise
 
     structure = _restrict(parse_model(model), options or {})
-    kw = _options(options, ("f_in", "f_out", "min_r2_gain", "reference", "colored", "order"))
+    kw = check_options(options, ("f_in", "f_out", "min_r2_gain", "reference", "colored",
+                                 "order"), "stepwise")
     order = kw.pop("order", 2)
     return [
         stepwise.estimate(record, c, stepwise.candidate_terms(t, order), **kw)

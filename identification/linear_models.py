@@ -458,6 +458,16 @@ MODELS: dict[str, Callable[..., LinearModel]] = {
 }
 
 
+def preset_for_record(preset: str, record: FlightRecord, derivatives: Sequence[str] | None,
+                      method: str) -> LinearModel:
+    """The named preset at the record's condition, with ``derivatives`` if given; the
+    error names the ``method`` that asked for it."""
+    if preset not in MODELS:
+        raise ValueError(f"{method} needs a model preset ({', '.join(MODELS)}), got {preset!r}")
+    structure = {"derivatives": tuple(derivatives)} if derivatives else {}
+    return model_for_record(preset, record, **structure)
+
+
 def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
     """Model ``kind`` ('lateral', 'short_period', 'longitudinal') at the record's condition."""
     if kind not in MODELS:

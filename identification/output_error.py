@@ -414,18 +414,12 @@ def run(record: FlightRecord, model: str = "lateral",
     """Output error with a preset model ('lateral', 'longitudinal', 'short_period') at the
     record's reference condition; ``options`` are keywords of ``estimate`` plus
     ``derivatives`` (the derivative names of the model structure)."""
-    from flightid.identification.linear_models import MODELS, model_for_record
+    from flightid.identification.dispatch import check_options
+    from flightid.identification.linear_models import preset_for_record
 
-    if model not in MODELS:
-        raise ValueError(f"output error needs a model preset ({', '.join(MODELS)}), "
-                         f"got {model!r}")
-    opts = dict(options or {})
-    opts.pop("coefficients", None)
-    unknown = [k for k in opts if k not in RUN_OPTIONS]
-    if unknown:
-        raise ValueError(f"unknown output-error options {unknown}; known: {', '.join(RUN_OPTIONS)}")
-    structure = {"derivatives": tuple(opts.pop("derivatives"))} if "derivatives" in opts else {}
-    return estimate(record, model_for_record(model, record, **structure), **opts)
+    opts = check_options(options, RUN_OPTIONS, "output-error")
+    linear = preset_for_record(model, record, opts.pop("derivatives", None), "output error")
+    return estimate(record, linear, **opts)
 
 
 def _x0_of(problem: Problem, values: Mapping[str, float]) -> np.ndarray:

@@ -76,7 +76,7 @@ def test_dispatch_models_and_methods():
     assert len(ests) == 1 and ests[0]["Cn_dr"] == pytest.approx(-0.13054, rel=0.01)
     with pytest.raises(ValueError, match="unknown method"):
         identify(rec, "magic")
-    with pytest.raises(ValueError, match="unknown options"):
+    with pytest.raises(ValueError, match="unknown equation-error options"):
         identify(rec, "ee", "lateral", {"f_in": 4})
 
 
