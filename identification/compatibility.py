@@ -57,7 +57,11 @@ import numpy as np
 from flightid.channels import CHANNELS
 from flightid.identification import identifiability as ident
 from flightid.identification.estimate import Estimate
-from flightid.identification.output_error import colored_residual_covariance
+from flightid.identification.output_error import (
+    MaximumLikelihoodFit,
+    colored_residual_covariance,
+    maximum_likelihood,
+)
 from flightid.record import FlightRecord
 
 METHOD = "compatibility"
@@ -524,112 +528,24 @@ def initial_states(record: FlightRecord, values: Mapping[str, float]) -> dict[st
 # ------------------------------------------------------------------ estimation
 
 
-@dataclass
-class _Fit:
-    names: list[str]
-    values: dict[str, float]
-    y: np.ndarray
-    sens: np.ndarray
-    residuals: np.ndarray
-    noise: np.ndarray  # (ny,) variances
-    information: np.ndarray
-    converged: bool
-    reason: str
-    iterations: int
-    cost_history: list[float]
-
-
-def _noise(residuals: np.ndarray, floor: np.ndarray) -> np.ndarray:
-    """Diagonal of R = 1/N sum v v^T (M&K eq. 6.26), kept above the rounding floor."""
-    return np.maximum(np.mean(residuals**2, axis=0), floor)
-
-
-def _cost(residuals: np.ndarray, floor: np.ndarray) -> float:
-    """ML cost with R concentrated out: N/2 ln det R (M&K eq. 6.22)."""
-    return 0.5 * residuals.shape[0] * float(np.sum(np.log(_noise(residuals, floor))))
-
-
 def _iterate(problem: Problem, names: list[str], values: dict[str, float],
-             max_iterations: int, step_tol: float, cost_tol: float) -> _Fit:
-    """Newton-Raphson on the ML cost with R concentrated out, Levenberg-Marquardt safeguard.
+             max_iterations: int, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
+    """Maximum likelihood with a diagonal R: the output-error optimiser
+    (``output_error.maximum_likelihood``: Newton-Raphson on N/2 ln det R with R concentrated
+    out, Levenberg-Marquardt safeguard; M&K eqs. 6.22-6.33) on the kinematic model.
 
-    R is re-estimated from the residuals at every iteration (M&K eq. 6.26). The Newton
-    matrix is the Gauss-Newton information M minus the term from the dependence of R on
-    the parameters (as in ``output_error._concentrated_hessian``, diagonal R), which
-    keeps convergence quadratic instead of the relaxation algorithm's linear creep. A step
-    is accepted only if it lowers N/2 ln det R; its sensitivities, computed in the same
-    batch as the trial outputs, serve the next iteration. Converged when no parameter
-    moved by more than ``step_tol`` of its Cramer-Rao bound or the cost changed by less
-    than ``cost_tol``.
+    Returns its fit with ``noise`` as the vector of output noise variances.
     """
     z = problem.z
-    n_samples = z.shape[0]
     floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
-    theta = np.array([values[n] for n in names], dtype=float)
     fixed = {k: v for k, v in values.items() if k not in names}
-
-    def evaluate(th: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        y, sens = _outputs_and_sensitivities(
-            problem, {**fixed, **dict(zip(names, th, strict=True))}, names)
-        return y, sens, _cost(z - y, floor)
-
-    y, sens, cost = evaluate(theta)
-    cost_history = [cost]
-    lam, iterations, last_step = 0.0, 0, np.inf
-    converged, reason = False, f"no convergence in {max_iterations} iterations"
-    while True:
-        v = z - y
-        noise = _noise(v, floor)
-        ws = sens / np.sqrt(noise)[None, :, None]
-        flat = ws.reshape(-1, len(names))
-        info = flat.T @ flat
-        if not names:
-            converged, reason = True, "no free parameters"
-            break
-        if last_step < step_tol:
-            converged, reason = True, f"parameter change below {step_tol:g} standard errors"
-            break
-        if len(cost_history) > 1 and abs(cost_history[-1] - cost_history[-2]) < cost_tol:
-            converged, reason = True, f"ML cost change below {cost_tol:g}"
-            break
-        if iterations >= max_iterations:
-            break
-        grad = flat.T @ (v / np.sqrt(noise)).reshape(-1)
-        # d(ln det R)/d theta part: c_ka = 2 sum_i s_ika v_ia (diagonal R)
-        c = 2.0 * np.einsum("iak,ia->ka", sens, v)
-        hess = info - np.einsum("ka,a,la->kl", c, 1.0 / noise**2, c) / (2 * n_samples)
-        scale = np.sqrt(np.diag(info))
-        scale = np.where(scale > 0, scale, 1.0)
-        info_n = info / np.outer(scale, scale)
-        hess_n = hess / np.outer(scale, scale)
-        try:
-            np.linalg.cholesky(hess_n)
-        except np.linalg.LinAlgError:
-            hess_n = info_n
-        grad_n = grad / scale
-        eye = np.eye(len(names))
-        accepted = False
-        for _ in range(14):
-            trial = theta + np.linalg.lstsq(hess_n + lam * eye, grad_n, rcond=None)[0] / scale
-            y1, sens1, cost1 = evaluate(trial)
-            if np.isfinite(cost1) and cost1 <= cost_history[-1]:
-                accepted = True
-                break
-            lam = max(10.0 * lam, 1e-3)
-        iterations += 1
-        if not accepted:
-            newton = np.linalg.lstsq(info_n, grad_n, rcond=None)[0]
-            converged = bool(np.max(np.abs(newton)) < step_tol)
-            reason = "no damped step lowers the cost: " + (
-                "at the minimum to within rounding" if converged else "stopped away from a minimum")
-            break
-        std = np.sqrt(np.abs(np.diag(np.linalg.pinv(info_n)))) / scale
-        last_step = float(np.max(np.abs(trial - theta) / std))
-        theta, y, sens = trial, y1, sens1
-        cost_history.append(cost1)
-        lam = lam / 10.0 if lam > 1e-6 else 0.0
-    return _Fit(list(names), dict(zip(names, theta, strict=True)), y, sens, v, noise, info,
-                converged, reason, iterations, cost_history)
+    fit = maximum_likelihood(
+        z, floor,
+        lambda vals: _outputs_and_sensitivities(problem, {**fixed, **vals}, names),
+        lambda vals: simulate(problem, {**fixed, **vals})[0],
+        list(names), values, max_iterations, False, step_tol, cost_tol)
+    fit.noise = np.diag(fit.noise).copy()
+    return fit
 
 
 # A scale factor k changes its channel by k * (peak-to-peak range): below these ranges that
@@ -659,7 +575,8 @@ def _unexcited(record: FlightRecord, names: Sequence[str]) -> dict[str, str]:
     return out
 
 
-def _unidentifiable(names: list[str], fit: _Fit, tolerance: float) -> dict[str, str]:
+def _unidentifiable(names: list[str], fit: MaximumLikelihoodFit,
+                    tolerance: float) -> dict[str, str]:
     values = np.array([fit.values[n] for n in names])
     found = ident.zero_sensitivity(names, fit.information, values)
     if found:
@@ -787,7 +704,7 @@ def white_noise_std(x: np.ndarray) -> float:
     return (robust if robust > 0 else float(np.std(d))) / math.sqrt(20.0)
 
 
-def _noise_covariance(problem: Problem, fit: _Fit, values: Mapping[str, float],
+def _noise_covariance(problem: Problem, fit: MaximumLikelihoodFit, values: Mapping[str, float],
                       runs: int = MONTE_CARLO_RUNS, seed: int = 0) -> tuple[np.ndarray, dict]:
     """Parameter covariance from the output noise and the input noise, with their levels.
 
@@ -831,7 +748,7 @@ def _noise_covariance(problem: Problem, fit: _Fit, values: Mapping[str, float],
     return cov_out + cov_in, levels
 
 
-def _result(problem: Problem, fit: _Fit, values: Mapping[str, float],
+def _result(problem: Problem, fit: MaximumLikelihoodFit, values: Mapping[str, float],
             unidentifiable: dict[str, str], uncertainty: str, notes: dict[str, str],
             fixed: Mapping[str, float]) -> Estimate:
     names = fit.names

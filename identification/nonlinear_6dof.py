@@ -633,7 +633,8 @@ def estimate(
     if check_identifiability:
         unidentifiable.update(_unexcited(problem, names, min_input_range))
 
-    def iterate(active: list[str], current: dict[str, float], iterations: int) -> oe._Fit:
+    def iterate(active: list[str], current: dict[str, float],
+                iterations: int) -> oe.MaximumLikelihoodFit:
         with np.errstate(over="ignore", invalid="ignore"):  # rejected diverging trial steps
             return oe.maximum_likelihood(
                 problem.z, problem.noise_floor,
@@ -689,7 +690,7 @@ def _unexcited(problem: Problem, names: Sequence[str], min_range: float) -> dict
     return out
 
 
-def _singular(names: list[str], fit: oe._Fit, tol: float) -> dict[str, str]:
+def _singular(names: list[str], fit: oe.MaximumLikelihoodFit, tol: float) -> dict[str, str]:
     values = np.array([fit.values[n] for n in names])
     found = ident.zero_sensitivity(names, fit.information, values)
     if found:

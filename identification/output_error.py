@@ -455,7 +455,10 @@ def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, floa
 
 
 @dataclass
-class _Fit:
+class MaximumLikelihoodFit:
+    """The state of a finished maximum-likelihood fit: values, outputs, sensitivities,
+    residuals, noise covariance R, information matrix and convergence history."""
+
     names: list[str]
     values: dict[str, float]
     y: np.ndarray
@@ -485,7 +488,7 @@ def _concentrated_cost(residuals: np.ndarray, full: bool, floor: np.ndarray) -> 
 
 
 def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
-             full: bool, step_tol: float, cost_tol: float) -> _Fit:
+             full: bool, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
     """``maximum_likelihood`` on a linear-model problem (outputs from ``_outputs``)."""
     return maximum_likelihood(
         problem.z, problem.noise_floor,
@@ -501,7 +504,7 @@ def maximum_likelihood(
     outputs: Callable[[dict[str, float]], np.ndarray],
     names: list[str], values: Mapping[str, float], max_iterations: int,
     full: bool, step_tol: float, cost_tol: float,
-) -> _Fit:
+) -> MaximumLikelihoodFit:
     """Newton-Raphson on the ML cost with R concentrated out, Levenberg-Marquardt safeguard.
 
     The model enters only through two functions of the parameter values {name: value}:
@@ -578,8 +581,8 @@ def maximum_likelihood(
         step_history.append(float(np.max(np.abs(trial - theta) / std)))
         theta = trial
         lam = lam / 10.0 if lam > 1e-6 else 0.0
-    return _Fit(names, dict(zip(names, theta, strict=True)), y, sens, v, noise, info,
-                converged, reason, iterations, cost_history, step_history)
+    return MaximumLikelihoodFit(names, dict(zip(names, theta, strict=True)), y, sens, v, noise,
+                                info, converged, reason, iterations, cost_history, step_history)
 
 
 def _concentrated_hessian(sens: np.ndarray, v: np.ndarray, weight: np.ndarray,
@@ -595,7 +598,7 @@ def _concentrated_hessian(sens: np.ndarray, v: np.ndarray, weight: np.ndarray,
     return info - np.einsum("kab,lba->kl", wc, wc) / (2 * v.shape[0])
 
 
-def _singular(names: list[str], fit: _Fit, tol: float) -> dict[str, str]:
+def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[str, str]:
     values = np.array([fit.values[n] for n in names])
     found = ident.zero_sensitivity(names, fit.information, values)
     if found:
@@ -604,8 +607,8 @@ def _singular(names: list[str], fit: _Fit, tol: float) -> dict[str, str]:
     return ident.collinear(names, fit.information, prefer_keep=biases, tolerance=tol)
 
 
-def _result(problem: Problem, fit: _Fit, unidentifiable: dict[str, str], colored: bool,
-            full: bool) -> Estimate:
+def _result(problem: Problem, fit: MaximumLikelihoodFit, unidentifiable: dict[str, str],
+            colored: bool, full: bool) -> Estimate:
     names = fit.names
     weight = np.linalg.inv(fit.noise)
     if names:
