@@ -1,0 +1,208 @@
+"""Card-noise truth recovery for the Twin Otter and the Telemaster (issue 5, second done-when).
+
+Each aircraft's identification card (``scenarios/library/<aircraft>-id.toml``) is flown
+in JSBSim on two fixed seeds, the measured record is processed as a flight-test engineer
+would, and output error (``demo.identify_card_flight``'s structure: short period with
+CL_q and Cm_alphadot at their a priori values, full lateral model, initial states
+estimated, colored-residual bounds, M&K 2016 eq. 6.54) is scored against the JSBSim truth
+``sim.truth.derivatives(..., axes="body")`` at the card's trim.
+
+Processing:
+- Twin Otter, research suite: accelerometers moved to the CG with the IMU position of the
+  installation (M&K 2016 eq. 10.9, gyros differentiated), then flight path reconstruction
+  (``compatibility.reconstruct``, vane positions known from the drawings, M&K ch. 10)
+  estimates the inertial biases and the vane flow amplifications and corrects the record.
+  The short-period window keeps 4 s after the input: a longer one lets the phugoid (speed,
+  thrust) into a model without them (Cm_alpha +2.5 %, 4.5 sigma with 8 s; +1.1 % with 4 s).
+- Telemaster, hobby suite: no attitude channels, so no reconstruction. The 100 Hz IMU is
+  low-passed zero-phase at 8 Hz (the engine lines alias to about 20 and 40 Hz, there is no
+  anti-alias filter) and the record is taken at the 25 Hz DAS sample instants, where the
+  vane, surface and airspeed samples are exact (no hold delay). Accelerometers are moved
+  to the CG as above; the boom vanes are corrected with the thesis's calibration (seed 000
+  App. 2: 1 m ahead of the CG, K = 0.0136) by ``compatibility.correct``. The lateral model
+  has no phi output (none measured); the pitch attitude of the reference condition comes
+  from the trimmed specific force, theta0 = atan2(ax, -az) (level flight).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.signal
+
+from flightid.identification import compatibility as compat
+from flightid.identification import linear_models as lm
+from flightid.identification import output_error
+from flightid.record import FlightRecord
+from flightid.scenarios import demo
+from flightid.scenarios.cards import fly_card, load_card
+from flightid.sim.model import load
+from flightid.sim.trim import trim
+from flightid.sim.truth import derivatives
+
+IMU = ("p", "q", "r", "ax", "ay", "az")
+DAS_RATE = 25.0  # Hz, seed 000 ch. 6
+IMU_CUTOFF = 8.0  # Hz: below the DAS Nyquist (12.5 Hz), above the aircraft modes (< 2 Hz)
+SETTLE = {"twinotter": 4.0, "telemaster": demo.SETTLE_S}  # s kept after the elevator input
+WELL_EXCITED = ("Cm_alpha", "Cm_de", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr")
+# relative tolerance for the well-excited derivatives: about 3 times the corrected bound
+# these flights give (research: 0.2-0.6 %, plus the 1-3 % structural error measured on the
+# noise-free truth record; hobby: 5-10 % bounds)
+RELATIVE = {"twinotter": 0.05, "telemaster": 0.35}
+# the Telemaster's body-axis Cn_beta is -0.0016 (its XML writes Cn in stability axes, at
+# 10 deg trim alpha the body value is nearly cancelled by Cl_beta sin alpha): a relative
+# tolerance is meaningless there, the 3-sigma test still applies
+NO_RELATIVE = {("telemaster", "Cn_beta")}
+
+
+def _mounting(card, name: str):
+    return next(m for m in card.sensors.mounting if m.name == name)
+
+
+def cg_accelerations(record: FlightRecord, x: float, y: float, z: float) -> FlightRecord:
+    """Accelerometers at (x, y, z) m from the CG (body axes) moved to the CG (m/s^2).
+
+    a_cg = a_sensor - omega_dot x r - omega x (omega x r) (M&K 2016 eq. 10.9), with the
+    angular accelerations differentiated from the measured rates.
+    """
+    t = record.time
+    p, q, r = record["p"], record["q"], record["r"]
+    pd, qd, rd = (np.gradient(record[c], t) for c in ("p", "q", "r"))
+    c1, c2, c3 = q * z - r * y, r * x - p * z, p * y - q * x  # omega x r
+    return record.with_channels(
+        ax=record["ax"] - (qd * z - rd * y) - (q * c3 - r * c2),
+        ay=record["ay"] - (rd * x - pd * z) - (r * c1 - p * c3),
+        az=record["az"] - (pd * y - qd * x) - (p * c2 - q * c1))
+
+
+def at_das_instants(record: FlightRecord) -> FlightRecord:
+    """The hobby record at the 25 Hz DAS sample instants, IMU low-passed zero-phase first."""
+    fs = record.meta.sample_rate
+    b, a = scipy.signal.butter(4, IMU_CUTOFF / (fs / 2))
+    step = int(round(fs / DAS_RATE))
+    channels = {c: (scipy.signal.filtfilt(b, a, x) if c in IMU else x)[::step]
+                for c, x in record.channels.items()}
+    meta = dataclasses.replace(record.meta, sample_rate=DAS_RATE)
+    return FlightRecord(record.time[::step], channels, meta)
+
+
+def process(card, measured: FlightRecord) -> FlightRecord:
+    """The measured record made ready for output error (see the module docstring)."""
+    arm, vanes = _mounting(card, "lever_arm"), _mounting(card, "vanes")
+    if card.sensors.name == "research":
+        record = cg_accelerations(measured, arm.x, arm.y, arm.z)
+        corrected, est = compat.reconstruct(
+            record, fixed={"vane_alpha_x": vanes.alpha_x, "vane_beta_x": vanes.beta_x})
+        assert est.fit["converged"], est.fit["reason"]
+        return corrected
+    record = cg_accelerations(at_das_instants(measured), arm.x, arm.y, arm.z)
+    return compat.correct(record, {"vane_alpha_x": vanes.alpha_x, "vane_beta_x": vanes.beta_x,
+                                   "upwash_alpha": vanes.upwash,
+                                   "sidewash_beta": vanes.sidewash})
+
+
+def _without_outputs(model: lm.LinearModel, drop: tuple[str, ...]) -> lm.LinearModel:
+    keep = [i for i, o in enumerate(model.outputs) if o not in drop]
+
+    def build(values):
+        A, B, C, D = model.build(values)
+        return A, B, C[keep], D[keep]
+
+    return dataclasses.replace(model, outputs=tuple(model.outputs[i] for i in keep),
+                               build=build)
+
+
+def identify(card, record: FlightRecord, truth: dict[str, float], settle: float):
+    """Short-period and lateral output error on the card's windows (as the demo does)."""
+    override = {}
+    if "theta" not in record:
+        pre = record.slice(0.0, min(m.start for m in card.maneuvers) - 0.1)
+        override["theta"] = float(np.arctan2(np.mean(pre["ax"]), -np.mean(pre["az"])))
+    t0, t1 = demo.maneuver_window(card, ("de",), card.duration)
+    t1 = min(t1, max(m.end for m in card.maneuvers if "de" in m.surfaces()) + settle)
+    lon = record.slice(t0, t1)
+    model = lm.short_period(lm.condition_from_record(lon, **override),
+                            derivatives=lm.SHORT_PERIOD_DERIVATIVES,
+                            start={n: truth[n] for n in demo.A_PRIORI})
+    free = [p for p in model.parameters if p not in demo.A_PRIORI]
+    sp = output_error.estimate(lon, model, free=free, start="equation_error",
+                               initial_state="estimate", colored=True)
+    t0, t1 = demo.maneuver_window(card, ("da", "dr"), card.duration)
+    lat = record.slice(t0, t1)
+    model = lm.lateral(lm.condition_from_record(lat, **override),
+                       derivatives=lm.LATERAL_DERIVATIVES)
+    if "phi" not in lat:
+        model = _without_outputs(model, ("phi",))
+    la = output_error.estimate(lat, model, start="equation_error", initial_state="estimate",
+                               colored=True)
+    return [sp, la]
+
+
+CASES = [("twinotter-id", 1), ("twinotter-id", 2), ("telemaster-id", 1), ("telemaster-id", 2)]
+
+
+@pytest.fixture(scope="module", params=CASES, ids=[f"{c}-seed{s}" for c, s in CASES])
+def flight(request):
+    name, seed = request.param
+    card = load_card(name)
+    measured, _ = fly_card(card, seed)
+    c = card.condition
+    model = load(card.aircraft)
+    trimmed = trim(model, c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
+    truth = derivatives(model, trimmed, axes="body").values
+    estimates = identify(card, process(card, measured), truth, SETTLE[card.aircraft])
+    rows = {n: (e[n], e.std_of(n), truth[n]) for e in estimates for n in e.names
+            if n in truth and n not in e.unidentifiable}
+    return card, seed, estimates, rows
+
+
+# Measured exceptions (seed, derivative): sigmas, with the cause where it is known.
+KNOWN = {
+    # Twin Otter propulsive yaw damping (tests/test_truth_recovery.py LIMIT): each
+    # propeller at y = +-2.78 m sees u -+ r y, the differential thrust is a yaw damping the
+    # aerodynamic truth lacks; -2.4 % / -2.8 %, -10 / -13 sigma of 0.2 % bounds.
+    ("twinotter-id", 1, "Cn_r"), ("twinotter-id", 2, "Cn_r"),
+    # Twin Otter lateral, structure not found (also on the noise-free truth record):
+    # CY_beta -0.7 %, CY_dr +1.8 %, CY_r +1.4 %, Cl_dr +4 %, Cn_dr -0.8 %: 3.4-6.9 sigma of
+    # research-grade bounds (0.1-1 %).
+    ("twinotter-id", 1, "CY_beta"), ("twinotter-id", 1, "CY_r"), ("twinotter-id", 1, "CY_da"),
+    ("twinotter-id", 1, "CY_dr"), ("twinotter-id", 1, "Cl_dr"), ("twinotter-id", 1, "Cn_dr"),
+    ("twinotter-id", 2, "CY_beta"), ("twinotter-id", 2, "CY_r"), ("twinotter-id", 2, "CY_dr"),
+    ("twinotter-id", 2, "Cl_dr"), ("twinotter-id", 2, "Cn_dr"),
+    # Telemaster seed 2: CL_de (from az through 3 m/s^2 of engine vibration) -5.9 sigma
+    ("telemaster-id", 2, "CL_de"), ("telemaster-id", 2, "Cl_beta"),
+}
+
+
+def test_fits_converge_and_estimate_the_main_derivatives(flight):
+    card, seed, estimates, rows = flight
+    assert [e.fit.get("converged") for e in estimates] == [True, True]
+    assert set(WELL_EXCITED) | {"Cm_q", "CL_alpha", "Cl_beta"} <= set(rows)
+
+
+def test_estimates_within_3_corrected_sigma_of_truth(flight):
+    # 3 colored-residual-corrected Cramer-Rao bounds (M&K 2016 eq. 6.54) hold 99.7 % of a
+    # correct estimator's errors; KNOWN lists the measured exceptions (own test below)
+    card, seed, _, rows = flight
+    bad = {n: f"{(v - t) / s:+.2f} sigma ({v:.4g} vs {t:.4g})" for n, (v, s, t) in rows.items()
+           if (card.name, seed, n) not in KNOWN and abs(v - t) >= 3 * s}
+    assert not bad, bad
+
+
+def test_known_exceptions_still_fail(flight):
+    # strict record of what is not solved: when a fix lands, this fails and KNOWN shrinks
+    card, seed, _, rows = flight
+    mine = [n for (c, s, n) in KNOWN if (c, s) == (card.name, seed)]
+    fixed = [n for n in mine if abs(rows[n][0] - rows[n][2]) < 3 * rows[n][1]]
+    assert not fixed, f"now within 3 sigma, remove from KNOWN: {fixed}"
+
+
+def test_well_excited_derivatives_within_relative_tolerance(flight):
+    card, seed, _, rows = flight
+    tol = RELATIVE[card.aircraft]
+    bad = {n: f"{100 * (rows[n][0] / rows[n][2] - 1):+.1f} %" for n in WELL_EXCITED
+           if (card.aircraft, n) not in NO_RELATIVE
+           and abs(rows[n][0] / rows[n][2] - 1) >= tol}
+    assert not bad, bad
