@@ -109,11 +109,14 @@ def truth_command(
     axes: Annotated[str, typer.Option(help="stability (literature form) or body")] = "stability",
     flaps: Annotated[float, typer.Option(help="flap deflection, deg")] = 0.0,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
+    propulsion: Annotated[bool, typer.Option(
+        help="total derivatives: aero + propulsive at trim engine state (what flight "
+             "data without a propulsion model identifies)")] = False,
 ) -> None:
     """Truth stability and control derivatives of the JSBSim model at level trim."""
     from flightid.sim.commands import truth_cli
 
-    truth_cli(aircraft, altitude, speed, axes, format, flaps)
+    truth_cli(aircraft, altitude, speed, axes, format, flaps, propulsion)
 
 
 # -- the recorder bridge (sim/bridge*.py, sim/recorder.py) -------------------------------

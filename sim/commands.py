@@ -57,14 +57,15 @@ def trim_cli(aircraft: str, altitude: float, speed: float, gamma_deg: float = 0.
 
 
 def truth_cli(aircraft: str, altitude: float, speed: float, axes: str = "stability",
-              fmt: str = "table", flaps_deg: float = 0.0) -> None:
-    """Print the truth derivatives at a straight-and-level trim (table or flat JSON)."""
+              fmt: str = "table", flaps_deg: float = 0.0, propulsion: bool = False) -> None:
+    """Print the truth derivatives at a straight-and-level trim (table or flat JSON);
+    ``propulsion``: total (aerodynamic + propulsive, engines at trim) derivatives."""
     from flightid.sim.truth import derivatives
 
     if axes not in ("body", "stability"):
         _fail(f"unknown axes {axes!r}; use body or stability")
     model, t = _trimmed(aircraft, altitude, speed, 0.0, 0.0, flaps_deg)
-    truth = derivatives(model, t, axes=axes)
+    truth = derivatives(model, t, axes=axes, propulsion=propulsion)
     if fmt == "json":
         print(json.dumps(truth.to_json_dict(), indent=1))
         return
@@ -73,7 +74,8 @@ def truth_cli(aircraft: str, altitude: float, speed: float, axes: str = "stabili
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title=f"{t.aircraft} truth derivatives, {axes} axes (literature form: "
+    kind = "total (aero + propulsive)" if propulsion else "aerodynamic"
+    table = Table(title=f"{t.aircraft} {kind} truth derivatives, {axes} axes (literature form: "
                         f"stability), {altitude:g} m, {speed:g} m/s, alpha "
                         f"{math.degrees(t.alpha):.2f} deg; per rad, rates per p b/2V, q c/2V")
     variables = ("0", "alpha", "beta", "p", "q", "r", "alphadot", "de", "da", "dr", "dt")

@@ -9,6 +9,24 @@ M_cg = M_rp + (r_rp - r_cg) x F, so the truth includes that transfer (a model wh
 AERORP is not at the CG has moment derivatives that differ from the numbers in its
 XML by the force derivatives times the lever arm / reference length).
 
+Aerodynamic or total. By default the truth differentiates the AERODYNAMIC forces and
+moments only (``forces/fb{x,y,z}-aero-lbs``, ``moments/{l,m,n}-aero-lbsft``): the numbers
+in the aircraft's XML and truth file. ``propulsion=True`` differentiates aerodynamic +
+propulsive ones (adding ``forces/fb{x,y,z}-prop-lbs``, ``moments/{l,m,n}-prop-lbsft``, i.e.
+JSBSim's total external forces and moments minus gravity and gear) with the engines held
+at their trim state: run_ic does not advance the engine and propeller rpm (dt = 0), while
+each propeller's inflow sees the perturbed state including omega x r at its location. A
+flight test identifies TOTAL derivatives (Jategaonkar; Morelli & Klein 2016
+ch. 3): without a propulsion model in the identification, the data cannot say which share
+is the propeller's. So compare an estimate from a model without (or with only a measured
+thrust along x) propulsion model with the total truth for the derivatives the engines
+change (e.g. a twin's Cn_r: each propeller at y sees u - r y, a differential thrust with
+N_r = sum y^2 dT/du, -3.3 % of the Twin Otter's Cn_r); compare with the aerodynamic truth
+when the identification model carries the propulsion terms itself, or to check a model
+against its XML. Frozen rpm is a bound: in flight the rpm follows the inflow and gives
+back part of the differential thrust at low frequency. The X-force derivatives of the
+total truth contain dT/du (thrust falls with speed), so in the total truth CD_0 ~ 0 at trim.
+
 Controls are perturbed through the pilot commands (the flight control system runs with
 the trim status on, so actuators and kinematics follow at once) and the derivative is
 taken with respect to the surface position read back (chain rule), in project signs.
@@ -62,20 +80,26 @@ _SHRINK = 0.6
 ZERO = 1e-10  # |derivative| below this is roundoff and reported as 0
 
 
-def coefficients(model: Model) -> dict[str, float]:
-    """Aerodynamic coefficients of the current JSBSim state: CX CY CZ Cl Cm Cn (body, CG), CL CD."""
+def coefficients(model: Model, propulsion: bool = False) -> dict[str, float]:
+    """Force and moment coefficients of the current JSBSim state: CX CY CZ Cl Cm Cn (body,
+    CG), CL CD; aerodynamic only, or aerodynamic + propulsive with ``propulsion``."""
     g = model.get
     qs = g("aero/qbar-psf") * g("metrics/Sw-sqft")
     b, c = g("metrics/bw-ft"), g("metrics/cbarw-ft")
-    cx = g("forces/fbx-aero-lbs") / qs
-    cy = g("forces/fby-aero-lbs") / qs
-    cz = g("forces/fbz-aero-lbs") / qs
+    sources = ("aero", "prop") if propulsion else ("aero",)
+
+    def total(prop: str) -> float:
+        return sum(g(prop.format(src)) for src in sources)
+
+    cx = total("forces/fbx-{}-lbs") / qs
+    cy = total("forces/fby-{}-lbs") / qs
+    cz = total("forces/fbz-{}-lbs") / qs
     a = g("aero/alpha-rad")
     return {
         "CX": cx, "CY": cy, "CZ": cz,
-        "Cl": g("moments/l-aero-lbsft") / (qs * b),
-        "Cm": g("moments/m-aero-lbsft") / (qs * c),
-        "Cn": g("moments/n-aero-lbsft") / (qs * b),
+        "Cl": total("moments/l-{}-lbsft") / (qs * b),
+        "Cm": total("moments/m-{}-lbsft") / (qs * c),
+        "Cn": total("moments/n-{}-lbsft") / (qs * b),
         "CL": cx * math.sin(a) - cz * math.cos(a),
         "CD": -cx * math.cos(a) - cz * math.sin(a),
     }
@@ -117,6 +141,7 @@ class Truth:
     cg_minus_aerorp_m: tuple[float, float, float] = (0.0, 0.0, 0.0)  # body axes x fwd, z down
     # trim-state quantities in SI: qbar (Pa), V (m/s), mass (kg), Ixx Iyy Izz Ixz (kg m^2)
     state: dict[str, float] = field(default_factory=dict)
+    propulsion: bool = False  # True: aerodynamic + propulsive (total) derivatives
 
     def __getitem__(self, name: str) -> float:
         if name in self.values:
@@ -130,6 +155,7 @@ class Truth:
         """Flat {name: value} plus 'trim', 'axes' and 'flags' (for the CLI's JSON)."""
         out: dict[str, Any] = dict(sorted(self.values.items()))
         out["axes"] = self.axes
+        out["propulsion"] = self.propulsion
         out["trim"] = {
             "alpha": self.trim.alpha, "theta": self.trim.theta, "elevator": self.trim.elevator,
             "aileron": self.trim.aileron, "rudder": self.trim.rudder,
@@ -146,9 +172,10 @@ class Truth:
 class _Evaluator:
     """Evaluates the aerodynamic coefficients at trim plus perturbations (run_ic, dt = 0)."""
 
-    def __init__(self, model: Model, trim: Any) -> None:
+    def __init__(self, model: Model, trim: Any, propulsion: bool = False) -> None:
         self.model = model
         self.trim = trim
+        self.propulsion = propulsion
         fdm = model.fdm
         from flightid.sim.trim import apply
 
@@ -187,7 +214,7 @@ class _Evaluator:
         finally:
             fdm.set_trim_status(False)
         m = self.model
-        coef = coefficients(m)
+        coef = coefficients(m, self.propulsion)
         V = fdm["velocities/vt-fps"]
         return np.array([
             coef["CX"], coef["CY"], coef["CZ"], coef["Cl"], coef["Cm"], coef["Cn"],
@@ -267,11 +294,13 @@ def _aero_uses_throttle(model: Model) -> bool:
 
 
 def derivatives(model: Model | str, trim: Any, axes: str = "body",
-                steps: dict[str, float] | None = None) -> Truth:
+                steps: dict[str, float] | None = None, propulsion: bool = False) -> Truth:
     """Truth derivatives (per rad, per unit nondimensional rate) at a trim point.
 
     ``axes`` is "body" (CX CY CZ Cl Cm Cn, body rates) or "stability" (CL CD CY Cl Cm Cn
-    and rates rotated by the trim alpha); CL and CD are given in both.
+    and rates rotated by the trim alpha); CL and CD are given in both. ``propulsion``
+    differentiates aerodynamic + propulsive forces and moments with the engines at their
+    trim state (the total derivatives a flight test sees); default: aerodynamic only.
     """
     if axes not in ("body", "stability"):
         raise ValueError(f"axes must be 'body' or 'stability', got {axes!r}")
@@ -281,7 +310,7 @@ def derivatives(model: Model | str, trim: Any, axes: str = "body",
     # a fresh copy: the result depends on (aircraft, trim) only, not on the model's history
     model = model.copy()
     steps = {**STEPS, **(steps or {})}
-    ev = _Evaluator(model, trim)
+    ev = _Evaluator(model, trim, propulsion)
     base = ev()
     c_adot = np.zeros(_NC)
     # per variable: (central, minus, plus, kink mask, step spread), 8-vectors
@@ -304,7 +333,9 @@ def derivatives(model: Model | str, trim: Any, axes: str = "body",
         dt = _engine_slope(ev, base, steps["dt"])
         found["dt"] = (dt, dt, dt, np.zeros(_NC, bool), np.zeros(_NC))
     ev()  # leave the model at the trim state
-    return _assemble(model, trim, axes, base, found)
+    truth = _assemble(model, trim, axes, base, found)
+    truth.propulsion = propulsion
+    return truth
 
 
 def _assemble(model: Model, trim: Any, axes: str, base: np.ndarray,

@@ -214,3 +214,105 @@ def test_truth_is_a_pure_function_of_aircraft_and_trim(dhc6):
     fly(model, t, {"de": np.full(101, 0.05)}, 1.0)  # whatever happened to the model before
     again = derivatives(model, t, axes="body")
     assert again.values == truth.values
+
+
+# -- total (aerodynamic + propulsive) derivatives -------------------------------------------
+
+def _thruster_y_m(model) -> list[float]:
+    """Lateral positions (m, right +) of the thrusters relative to the CG, from the XML."""
+    import xml.etree.ElementTree as ET
+
+    from flightid.units import FT, IN
+
+    cg_y = model.get("inertia/cg-y-in") * IN
+    out = []
+    for loc in ET.parse(model.xml_path).getroot().iter("thruster"):
+        el = loc.find("location")
+        scale = {"M": 1.0, "IN": IN, "FT": FT}
+        out.append(float(el.findtext("y")) * scale[el.get("unit", "IN")] - cg_y)
+    return out
+
+
+def _thrust_slope_n_per_m_s(model, t, engine: int) -> float:
+    """dT/du (N per m/s) of one engine at its trim rpm: forward speed +- 0.5 m/s, run_ic."""
+    from flightid.sim.trim import apply
+    from flightid.units import FT, LBF
+
+    thrust, du_span = [], 1.0
+    for du in (du_span / 2, -du_span / 2):
+        m = model.copy()
+        apply(m, t)
+        for prop, value in t.jsbsim.items():
+            m.fdm[prop] = value
+        m.fdm["ic/u-fps"] = m.fdm["velocities/u-fps"] + du / FT
+        m.fdm["ic/v-fps"] = m.fdm["velocities/v-fps"]
+        m.fdm["ic/w-fps"] = m.fdm["velocities/w-fps"]
+        m.fdm.set_trim_status(True)
+        m.fdm.run_ic()
+        m.fdm.set_trim_status(False)
+        thrust.append(m.fdm[f"propulsion/engine[{engine}]/thrust-lbs"] * LBF)
+    return (thrust[0] - thrust[1]) / du_span
+
+
+@pytest.fixture(scope="module")
+def twinotter_both():
+    model = load("twinotter")
+    t = trim(model, 1897.0, 61.733333)
+    return (model, t, derivatives(model, t, axes="body"),
+            derivatives(model, t, axes="body", propulsion=True))
+
+
+def test_twinotter_total_yaw_damping_is_aero_plus_differential_thrust(twinotter_both):
+    """Each propeller at y sees u - r y, so its thrust changes by -dT/du r y and its yaw
+    moment -y dT by y^2 dT/du r: N_r = sum(y^2 dT/du) < 0 since thrust falls with speed
+    (moment budget, thrust along body x). The total Cn_r must differ from the aerodynamic
+    one by that, nondimensionalised by qSb b/2V."""
+    model, t, aero, total = twinotter_both
+    assert not aero.propulsion and total.propulsion
+    ys = _thruster_y_m(model)
+    assert len(ys) == 2 and ys[0] == pytest.approx(-ys[1], rel=1e-6)
+    n_r = sum(y * y * _thrust_slope_n_per_m_s(model, t, i) for i, y in enumerate(ys))
+    st, ref = total.state, total.reference
+    dcn_r = n_r / (st["qbar"] * ref.area * ref.span * ref.span / (2 * st["V"]))
+    got = total.values["Cn_r"] - aero.values["Cn_r"]
+    assert n_r < -1000.0  # N m s/rad: a damping, of the size the flight records show
+    # JSBSim's propeller thrust depends on the axial inflow u - r y alone and is smooth in
+    # it: the budget (dT/du over +-0.5 m/s) and the truth (r steps of ~0.07 m/s at the
+    # propellers) differ only by the curvature of T(u), measured 1e-8 relative; 1 %
+    assert got == pytest.approx(dcn_r, rel=0.01)
+    assert got / aero.values["Cn_r"] > 0.02  # a few percent of Cn_r: why it matters
+
+
+def test_twinotter_total_keeps_the_aerodynamic_derivatives_thrust_cannot_change(twinotter_both):
+    """The propellers' thrust depends only on the inflow along their axis: roll rate,
+    sideslip and the controls do not change it, so those derivatives stay aerodynamic."""
+    _, _, aero, total = twinotter_both
+    for name in ("Cl_p", "Cn_beta", "Cl_da", "Cn_dr", "CY_beta", "Cm_de"):
+        assert total.values[name] == pytest.approx(aero.values[name], rel=1e-6, abs=1e-9), name
+
+
+def test_engine_rpm_is_frozen_during_a_truth_evaluation(twinotter_both):
+    """run_ic evaluates at dt = 0: the propeller rpm stays at trim whatever the state."""
+    from flightid.sim.truth import _Evaluator
+
+    model, t, _, _ = twinotter_both
+    ev = _Evaluator(model.copy(), t, propulsion=True)
+    fdm = ev.model.fdm
+    rpm = "propulsion/engine[{}]/propeller-rpm"
+    ev()
+    trim_rpm = [fdm[rpm.format(i)] for i in (0, 1)]
+    for state in ({"r": 0.02}, {"alpha": 0.05}, {"q": -0.02}, {"beta": 0.05}):
+        ev(**state)
+        assert [fdm[rpm.format(i)] for i in (0, 1)] == trim_rpm, state
+
+
+def test_navion_single_engine_on_the_centreline_total_equals_aero_yaw_damping():
+    """One propeller on the centreline: a yaw rate changes no propeller's inflow, so the
+    total rate derivatives equal the aerodynamic ones (0.1 %: the Navion's propeller
+    torque and gyroscopic moments do not depend on r or p at frozen rpm)."""
+    model = load("navion")
+    t = trim(model, 0.0, 53.6448)
+    aero = derivatives(model, t, axes="stability")
+    total = derivatives(model, t, axes="stability", propulsion=True)
+    for name in ("Cn_r", "Cl_r", "Cn_p", "Cl_p"):
+        assert total.values[name] == pytest.approx(aero.values[name], rel=1e-3), name
