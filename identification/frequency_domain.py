@@ -533,7 +533,29 @@ def run_fdoe(record: FlightRecord, model: str = "lateral",
 FR_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"), "short_period": ("alpha", "q", "az"),
               "longitudinal": ("V", "alpha", "q", "theta", "az")}
 FR_OPTIONS = ("frequencies", "windows", "coherence_min", "max_cost", "estimate",
-              "derivatives", "start")
+              "derivatives", "start", "whole_record", "trim_seconds")
+MAX_PAIR_COST = 100.0  # CIFER guideline per pair (Tischler & Remple sec. 11.5)
+TRIM_SECONDS = 2.0  # the record's first seconds at trim define the reference condition
+
+
+def reference_condition(records: Sequence[FlightRecord], trim_seconds: float = TRIM_SECONDS):
+    """Linearisation point of several maneuvers (FlightCondition, SI): channel means over
+    the first ``trim_seconds`` of each record (the trim before the input), averaged over
+    the records. A maneuver's own mean is not the trim: an open-loop roll sweep excites
+    the phugoid and moves the mean dynamic pressure 1 % (all derivatives scale with it);
+    ``trim_seconds`` <= 0 uses the whole records."""
+    import dataclasses
+
+    from flightid.identification.linear_models import condition_from_record
+
+    conds = []
+    for rec in records:
+        t0 = rec.time[0]
+        part = rec.slice(t0, t0 + trim_seconds) if trim_seconds > 0 else rec
+        conds.append(condition_from_record(part if len(part) >= 2 else rec))
+    fields = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
+    return dataclasses.replace(conds[0], **{
+        k: float(np.mean([getattr(c, k) for c in conds])) for k in fields})
 
 
 def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral",
@@ -541,20 +563,35 @@ def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral"
     """``flightid identify --method fr``: conditioned frequency responses of every model
     output to every excited input (composite windows), then the CIFER state-space fit.
 
-    With ``max_cost`` (100 is the guideline of Tischler & Remple sec. 11.5) the pairs
-    whose cost exceeds it after a first fit are dropped and the fit repeated; the pairs
-    kept and dropped are in ``fit['pairs']`` and ``fit['dropped_pairs']``. Start values
-    come from ``output_error`` on the same records unless ``start`` is given.
+    Pairs whose cost exceeds ``max_cost`` (``MAX_PAIR_COST`` = 100 is the guideline of
+    Tischler & Remple sec. 11.5; default None keeps all: on the Twin Otter doublets 8 of
+    10 pairs exceed it) after a first fit are dropped and the fit repeated; the pairs
+    kept and dropped are in ``fit['pairs']`` and ``fit['dropped_pairs']``.
+    A record with one excited input (a single-axis sweep) gets its responses from the
+    whole-record transform (``whole_record``, default True; the windows then give
+    coherence and random error only). The model is linearised at
+    ``reference_condition``: the first ``trim_seconds`` s of each record when given (the
+    trim before a simulated sweep), else the records' means. Start values come
+    from ``output_error`` on the same records unless ``start`` is given.
     """
     from flightid.identification.frequency_response import frequency_response_arrays
+    from flightid.identification.linear_models import MODELS
 
     opts = _run_options(options, FR_OPTIONS)
     records = [record] if isinstance(record, FlightRecord) else list(record)
-    lin = _linear_model(records[0], model, opts.pop("derivatives", None))
+    if not records:
+        raise ValueError("give at least one record")
+    if model not in MODELS:
+        raise ValueError(f"the fr method needs a linear model preset ({', '.join(MODELS)}), "
+                         f"got {model!r}")
+    derivs = opts.pop("derivatives", None)
+    cond = reference_condition(records, float(opts.get("trim_seconds", 0.0)))
+    lin = MODELS[model](cond, **({"derivatives": tuple(derivs)} if derivs else {}))
     lin = lin.with_start(**{p: 0.0 for p in lin.parameters if p.startswith("bias_")})
     windows = opts.get("windows")
     coh_min = float(opts.get("coherence_min", COHERENCE_MIN))
     max_cost = opts.get("max_cost")
+    whole = bool(opts.get("whole_record", True))
     responses = []
     for rec in records:
         _check_uniform(rec)
@@ -576,7 +613,8 @@ def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral"
                 continue
             resp = frequency_response_arrays({i: rec[i] for i in excited}, rec[out], rec.dt,
                                              output_name=out, windows=wins,
-                                             frequencies=freqs)
+                                             frequencies=freqs,
+                                             whole_record=whole and len(excited) == 1)
             responses.extend(r for r in resp.values() if r.valid(coh_min).sum() >= 3)
     if not responses:
         raise ValueError(f"no frequency response has 3 or more points with coherence >= "
@@ -596,7 +634,8 @@ def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral"
         est = fit_state_space(kept, lin, estimate=names, coherence_min=coh_min, start=start)
     est.method = "fr"
     est.fit.update(pairs=list(est.fit["cost_per_pair"]), dropped_pairs=dropped,
-                   windows=wins, responses=len(responses))
+                   windows=wins, responses=len(responses), whole_record=whole,
+                   condition=cond)
     return [est]
 
 
