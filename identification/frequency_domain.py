@@ -505,16 +505,6 @@ def run_fdee(record: FlightRecord, model: str = "lateral",
             for c, terms in structure.items()]
 
 
-def _linear_model(record: FlightRecord, model: str, derivatives=None) -> LinearModel:
-    from flightid.identification.linear_models import MODELS, model_for_record
-
-    if model not in MODELS:
-        raise ValueError(f"frequency-domain output error needs a linear model preset "
-                         f"({', '.join(MODELS)}), got {model!r}")
-    kw = {"derivatives": tuple(derivatives)} if derivatives else {}
-    return model_for_record(model, record, **kw)
-
-
 FDOE_OPTIONS = ("frequencies", "noise", "end_terms", "estimate", "derivatives", "start")
 
 
@@ -523,8 +513,12 @@ def run_fdoe(record: FlightRecord, model: str = "lateral",
     """``flightid identify --method fdoe``: frequency-domain output error with a linear
     model preset; default frequencies 0.1-1.5 Hz spaced 0.02 Hz as in Morelli & Klein
     example 7.1 (SIDPAC ``sidpac_text_examples``)."""
-    opts = _run_options(options, FDOE_OPTIONS)
-    lin = _linear_model(record, model, opts.pop("derivatives", None))
+    from flightid.identification.dispatch import check_options
+    from flightid.identification.linear_models import preset_for_record
+
+    opts = check_options(options, FDOE_OPTIONS, "frequency-domain output-error")
+    lin = preset_for_record(model, record, opts.pop("derivatives", None),
+                            "frequency-domain output error")
     opts.setdefault("frequencies", np.arange(0.1, 1.5 + 1e-9, 0.02))
     return [output_error(record, lin, **opts)]
 
@@ -574,10 +568,11 @@ def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral"
     trim before a simulated sweep), else the records' means. Start values come
     from ``output_error`` on the same records unless ``start`` is given.
     """
+    from flightid.identification.dispatch import check_options
     from flightid.identification.frequency_response import frequency_response_arrays
     from flightid.identification.linear_models import MODELS
 
-    opts = _run_options(options, FR_OPTIONS)
+    opts = check_options(options, FR_OPTIONS, "frequency-response fit")
     records = [record] if isinstance(record, FlightRecord) else list(record)
     if not records:
         raise ValueError("give at least one record")
@@ -651,12 +646,3 @@ def _fr_windows(duration: float, dt: float, n_inputs: int) -> tuple[float, ...]:
     longest = 2.0 * duration / (n_inputs + 2)
     wins = [longest, longest / 2, longest / 4]
     return tuple(w for w in wins if w >= 40 * dt) or (longest,)
-
-
-def _run_options(options: Mapping[str, object] | None, allowed: tuple[str, ...]) -> dict:
-    opts = dict(options or {})
-    opts.pop("coefficients", None)
-    unknown = [k for k in opts if k not in allowed]
-    if unknown:
-        raise ValueError(f"unknown options {unknown}; this method takes {', '.join(allowed)}")
-    return opts
