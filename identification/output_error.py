@@ -563,8 +563,11 @@ def maximum_likelihood(
         for _ in range(14):
             step_n = np.linalg.lstsq(hess_n + lam * eye, grad_n, rcond=None)[0]
             trial = theta + step_n / scale
-            cost1 = _concentrated_cost(z - outputs(dict(zip(names, trial, strict=True))),
-                                       full, floor)
+            # a trial step may make the model unstable: its outputs overflow, its cost is
+            # not finite and the step is rejected, so the overflow is expected here
+            with np.errstate(over="ignore", invalid="ignore"):
+                cost1 = _concentrated_cost(z - outputs(dict(zip(names, trial, strict=True))),
+                                           full, floor)
             if np.isfinite(cost1) and cost1 <= cost0:
                 accepted = True
                 break
