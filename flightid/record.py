@@ -110,6 +110,21 @@ class FlightRecord:
         """Mean sample interval (s)."""
         return float(np.mean(np.diff(self.time))) if len(self) > 1 else 0.0
 
+    def uniform_step(self, purpose: str, min_samples: int = 2, rtol: float = 1e-6) -> float:
+        """The sample interval (s) of a uniformly sampled record; raises naming ``purpose``
+        when the record is too short or its steps vary by more than ``rtol`` relative."""
+        if len(self) < min_samples:
+            raise ValueError(f"record has {len(self)} samples; {purpose} needs at least "
+                             f"{min_samples}")
+        steps = np.diff(self.time)
+        dt = float(np.mean(steps))
+        if np.max(np.abs(steps - dt)) > rtol * dt + 1e-9:
+            i = int(np.argmax(np.abs(steps - dt)))
+            raise ValueError(
+                f"record is not uniformly sampled (step {steps[i]:.6g} s at sample {i}, mean "
+                f"{dt:.6g} s); resample it before {purpose}")
+        return dt
+
     def unit(self, name: str) -> str:
         """SI unit of a channel of this record."""
         if name in self.meta.units:

@@ -450,16 +450,7 @@ def problem_from_record(record: FlightRecord, outputs: Sequence[str] | None = No
     if not outputs:
         raise ValueError("no outputs to fit")
     time = record.time
-    if time.size < MIN_SAMPLES:
-        raise ValueError(f"record has {time.size} samples; the reconstruction needs at least "
-                         f"{MIN_SAMPLES}")
-    steps = np.diff(time)
-    dt = float(np.mean(steps))
-    if np.max(np.abs(steps - dt)) > 1e-6 * dt + 1e-9:
-        i = int(np.argmax(np.abs(steps - dt)))
-        raise ValueError(
-            f"record is not uniformly sampled (step {steps[i]:.6g} s at sample {i}, mean "
-            f"{dt:.6g} s); resample it first")
+    dt = record.uniform_step("the reconstruction", min_samples=MIN_SAMPLES)
     for c in (*INPUTS, *outputs):
         finite = np.isfinite(record[c])
         if not finite.all():

@@ -83,15 +83,7 @@ def fourier_data(record: FlightRecord, channels: Sequence[str], frequencies: np.
 
 
 def _check_uniform(record: FlightRecord) -> None:
-    if len(record) < 8:
-        raise ValueError(f"record has {len(record)} samples; need at least 8")
-    steps = np.diff(record.time)
-    if not np.allclose(steps, steps[0], rtol=1e-3):
-        i = int(np.argmax(np.abs(steps - steps[0]) > 1e-3 * steps[0]))
-        raise ValueError(
-            f"record is not uniformly sampled (step {steps[i]:g} s at sample {i}, "
-            f"{steps[0]:g} s at the start); resample it first"
-        )
+    record.uniform_step("the Fourier transform", min_samples=8, rtol=1e-3)
 
 
 def _with_rates(record: FlightRecord, names: Sequence[str]) -> FlightRecord:

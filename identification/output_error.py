@@ -63,16 +63,7 @@ def problem_from_record(
             f"(inputs {', '.join(model.inputs)}; outputs {', '.join(model.outputs)})"
         )
     time = record.time
-    if time.size < 10:
-        raise ValueError(f"record has {time.size} samples; output error needs at least 10")
-    steps = np.diff(time)
-    dt = float(np.mean(steps))
-    if np.max(np.abs(steps - dt)) > 1e-6 * dt + 1e-9:
-        i = int(np.argmax(np.abs(steps - dt)))
-        raise ValueError(
-            f"record is not uniformly sampled (step {steps[i]:.6g} s at sample {i}, mean "
-            f"{dt:.6g} s); resample it before output error"
-        )
+    dt = record.uniform_step("output error", min_samples=10)
     u = np.column_stack([*(record[c] for c in model.inputs), np.ones(time.size)])
     z = np.column_stack([record[c] for c in model.outputs])
     bad = [c for c in (*model.inputs, *model.outputs) if not np.all(np.isfinite(record[c]))]
