@@ -52,7 +52,11 @@ from flightid.identification.frequency_response import (
     finite_fourier_transform,
 )
 from flightid.identification.linear_models import LinearModel
-from flightid.identification.transfer_function import COHERENCE_MIN, cifer_residuals
+from flightid.identification.transfer_function import (
+    COHERENCE_MIN,
+    central_jacobian,
+    cifer_residuals,
+)
 from flightid.record import FlightRecord
 from flightid.units import DEG, FT
 
@@ -267,7 +271,7 @@ def output_error(
         if change < 1e-3:
             break
     chol_inv = np.linalg.inv(np.linalg.cholesky(s_mat))
-    jac = _jacobian(lambda th: whitened(th, chol_inv), theta)
+    jac = central_jacobian(lambda th: whitened(th, chol_inv), theta)
     fisher = 2.0 * jac.T @ jac
     cov = np.linalg.inv(fisher)
     y = predict(theta)
@@ -304,19 +308,6 @@ def _transformed(record: FlightRecord, model: LinearModel, frequencies: np.ndarr
     z = np.column_stack([data[c] for c in model.outputs])
     ends = _endpoint_terms(record, model, omega) if end_terms else None
     return f, u, z, ends
-
-
-def _jacobian(fun, theta: np.ndarray) -> np.ndarray:
-    """Central-difference Jacobian (steps 1e-6 relative, 1e-8 absolute floor)."""
-    base = fun(theta)
-    jac = np.empty((base.size, theta.size))
-    for j in range(theta.size):
-        h = 1e-6 * max(abs(theta[j]), 1e-2)
-        up, dn = theta.copy(), theta.copy()
-        up[j] += h
-        dn[j] -= h
-        jac[:, j] = (fun(up) - fun(dn)) / (2 * h)
-    return jac
 
 
 # ----------------------------------------------------------------------------- CIFER state space
@@ -376,7 +367,7 @@ def fit_state_space(
                         ftol=1e-12, max_nfev=500 * (len(names) + 1))
     theta = sol.x
     r = residuals(theta)
-    jac = _jacobian(residuals, theta)
+    jac = central_jacobian(residuals, theta)
     fisher = jac.T @ jac
     dof = max(r.size - theta.size, 1)
     s2 = float(r @ r) / dof

@@ -47,6 +47,20 @@ def wrap_deg(angle: np.ndarray) -> np.ndarray:
     return -((-np.asarray(angle) + 180.0) % 360.0 - 180.0)
 
 
+def central_jacobian(fun, theta: np.ndarray, floor: float = 1e-2) -> np.ndarray:
+    """Central-difference Jacobian of ``fun`` at ``theta``: steps 1e-6 of each value, with
+    the value floored at ``floor`` (so a parameter near zero still gets a usable step)."""
+    base = fun(theta)
+    jac = np.empty((np.size(base), theta.size))
+    for j in range(theta.size):
+        h = 1e-6 * max(abs(theta[j]), floor)
+        up, dn = theta.copy(), theta.copy()
+        up[j] += h
+        dn[j] -= h
+        jac[:, j] = (fun(up) - fun(dn)) / (2 * h)
+    return jac
+
+
 def cifer_residuals(model: np.ndarray, data: np.ndarray, coherence: np.ndarray) -> np.ndarray:
     """Weighted residuals r with sum(r^2) = CIFER cost J of complex responses on n_w points:
     first the n_w magnitude terms (dB), then the n_w phase terms (deg, wrapped)."""
@@ -124,13 +138,7 @@ class TransferFunctionFit:
             return np.array(out)
 
         base = features(a)
-        jac = np.zeros((base.size, a.size))
-        for j in range(a.size):
-            h = 1e-6 * max(abs(a[j]), 1e-3)
-            up, dn = a.copy(), a.copy()
-            up[j] += h
-            dn[j] -= h
-            jac[:, j] = (features(up) - features(dn)) / (2 * h)
+        jac = central_jacobian(features, a, floor=1e-3)
         cov_f = jac @ cov_a @ jac.T
         std_f = np.sqrt(np.clip(np.diag(cov_f), 0.0, None))
         modes = []
