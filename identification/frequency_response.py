@@ -583,8 +583,12 @@ def frequency_response(
     return res[input]
 
 
+COHERENCE_PLOT_MIN = 0.6  # below it a response point is drawn faint (Tischler & Remple)
+
+
 def bode_figure(responses: Sequence[FrequencyResponse], title: str = ""):
-    """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz)."""
+    """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz);
+    points with coherence below 0.6 are drawn faint."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -595,9 +599,15 @@ def bode_figure(responses: Sequence[FrequencyResponse], title: str = ""):
     for r in responses:
         label = f"{r.output}/{r.input}"
         ok = np.isfinite(r.response)
-        axes[0].semilogx(r.frequency[ok], r.magnitude_db[ok], label=label)
-        axes[1].semilogx(r.frequency[ok], np.degrees(np.unwrap(np.angle(r.response[ok]))))
-        axes[2].semilogx(r.frequency, r.coherence)
+        f, mag = r.frequency[ok], r.magnitude_db[ok]
+        phase = np.degrees(np.unwrap(np.angle(r.response[ok])))
+        # the whole curve faint, the points with coherence >= 0.6 (usable, CIFER) solid
+        good = np.where(r.coherence[ok] >= COHERENCE_PLOT_MIN, 1.0, np.nan)
+        (line,) = axes[0].semilogx(f, mag, alpha=0.25)
+        axes[0].semilogx(f, mag * good, color=line.get_color(), label=label)
+        axes[1].semilogx(f, phase, color=line.get_color(), alpha=0.25)
+        axes[1].semilogx(f, phase * good, color=line.get_color())
+        axes[2].semilogx(r.frequency, r.coherence, color=line.get_color())
     axes[0].set_ylabel("magnitude (dB)")
     axes[1].set_ylabel("phase (deg)")
     axes[2].set_ylabel("coherence")
