@@ -63,6 +63,9 @@ _TABLE: tuple[tuple[str, str, str], ...] = (
     ("df", "rad", "flap deflection"),
     ("throttle", "-", "throttle position, 0 to 1"),
     ("thrust", "N", "total propulsive thrust along body x"),
+    ("L_prop", "N m", "rolling moment of the propulsion about the CG (engine model)"),
+    ("M_prop", "N m", "pitching moment of the propulsion about the CG (engine model)"),
+    ("N_prop", "N m", "yawing moment of the propulsion about the CG (engine model)"),
     ("rpm", "1/min", "engine or propeller rotation speed"),
     # mass properties
     ("mass", "kg", "aircraft mass"),

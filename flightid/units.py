@@ -15,3 +15,4 @@ G0 = 9.80665  # m/s^2 per g (standard gravity)
 KT = 1852.0 / 3600.0  # m/s per knot
 DEG = math.pi / 180.0  # rad per deg
 LBF_FT = LBF * FT  # N m per lbf ft
+EARTH_RADIUS_M = 6_378_137.0  # WGS84 equatorial radius (m): positions from latitude/longitude

@@ -62,6 +62,7 @@ from flightid.identification.output_error import (
     colored_residual_covariance,
     maximum_likelihood,
 )
+from flightid.identification.rigid_body import local_gravity
 from flightid.record import FlightRecord
 
 METHOD = "compatibility"
@@ -74,9 +75,8 @@ VANE_POSITIONS: tuple[str, ...] = tuple(
     f"vane_{angle}_{axis}" for angle in ("alpha", "beta") for axis in "xyz")
 WIND: tuple[str, ...] = ("wind_north", "wind_east", "wind_down")
 
-# WGS84 (NIMA TR8350.2, 3rd ed., eqs. 4-1 and 4-3): normal gravity and its height change
-_GE, _K, _E2 = 9.7803253359, 0.00193185265241, 0.00669437999013
-_A, _F, _M = 6378137.0, 1.0 / 298.257223563, 0.00344978650684
+# WGS84 ellipsoid (NIMA TR8350.2, 3rd ed.): semi-major axis, first eccentricity squared
+_A, _E2 = 6378137.0, 0.00669437999013
 DEFAULT_LATITUDE = math.radians(45.0)
 EARTH_RATE = 7.292115e-5  # rad/s, WGS84
 MIN_SAMPLES = 50
@@ -87,14 +87,6 @@ MAX_HELD = 0.95
 # maneuver (e.g. bias_ay and bias_r, b_ay = u b_r, without a heading output)
 MAX_CORRELATION = 0.99
 START_WINDOW_S = 0.5  # initial states from a line fit over this much of the record
-
-
-def normal_gravity(latitude: float, altitude: float) -> float:
-    """WGS84 normal (apparent, with the centrifugal part) gravity (m/s^2) at a geodetic
-    latitude (rad) and height (m): Somigliana's formula with the second-order free-air term."""
-    s2 = math.sin(latitude) ** 2
-    g0 = _GE * (1 + _K * s2) / math.sqrt(1 - _E2 * s2)
-    return g0 * (1 - 2 * altitude / _A * (1 + _F + _M - 2 * _F * s2) + 3 * altitude**2 / _A**2)
 
 
 # ------------------------------------------------------------------ parameters
@@ -469,7 +461,7 @@ def problem_from_record(record: FlightRecord, outputs: Sequence[str] | None = No
     if gravity is None:
         lat_g = DEFAULT_LATITUDE if known is None else known
         altitude = float(np.mean(record["h"])) if "h" in record else 0.0
-        gravity = normal_gravity(lat_g, altitude)
+        gravity = local_gravity(lat_g, altitude)
         notes["gravity"] = (f"WGS84 normal gravity {gravity:.5f} m/s^2 at latitude "
                             f"{math.degrees(lat_g):.2f} deg, {altitude:.0f} m"
                             + (" (latitude assumed; +-0.026 m/s^2 goes into bias_az)"

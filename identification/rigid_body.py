@@ -43,12 +43,12 @@ STATES: tuple[str, ...] = ("u", "v", "w", "p", "q", "r", "phi", "theta", "psi")
 SCALAR = SimpleNamespace(sin=math.sin, cos=math.cos, sqrt=math.sqrt, arctan=math.atan,
                          arcsin=math.asin)
 
-# WGS-84 normal gravity on the ellipsoid (Somigliana; NIMA TR8350.2, eq. 4-1), which
-# includes the centrifugal part of the earth's rotation, and the free-air gradient
+# WGS-84 normal gravity on the ellipsoid (Somigliana; NIMA TR8350.2, 3rd ed., eqs. 4-1 and
+# 4-3), which includes the centrifugal part of the earth's rotation, and its height change
 _G_EQUATOR = 9.7803253359  # m/s^2
 _SOMIGLIANA_K = 0.00193185265241
 _E2 = 0.00669437999013
-_FREE_AIR = 3.086e-6  # 1/s^2 (m/s^2 per m)
+_A, _F, _M = 6378137.0, 1.0 / 298.257223563, 0.00344978650684
 
 
 def local_gravity(latitude: float, altitude: float = 0.0) -> float:
@@ -56,11 +56,12 @@ def local_gravity(latitude: float, altitude: float = 0.0) -> float:
 
     The acceleration a plumb line feels (gravitation plus the centrifugal part of the
     earth's rotation), as in the flat-earth equations of a rotating-earth simulation:
-    9.780 m/s^2 at the equator, 9.832 m/s^2 at the poles.
+    9.780 m/s^2 at the equator, 9.832 m/s^2 at the poles; Somigliana's formula with the
+    second-order free-air term (TR8350.2 eq. 4-3).
     """
     s2 = math.sin(latitude) ** 2
-    return (_G_EQUATOR * (1 + _SOMIGLIANA_K * s2) / math.sqrt(1 - _E2 * s2)
-            - _FREE_AIR * altitude)
+    g0 = _G_EQUATOR * (1 + _SOMIGLIANA_K * s2) / math.sqrt(1 - _E2 * s2)
+    return g0 * (1 - 2 * altitude / _A * (1 + _F + _M - 2 * _F * s2) + 3 * altitude**2 / _A**2)
 
 
 @dataclass(frozen=True)

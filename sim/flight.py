@@ -58,10 +58,9 @@ from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sim.model import COMMANDS, SURFACES, Model, as_model, quiet, set_integrators
 from flightid.sim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.trim import Trim, apply
-from flightid.units import FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
+from flightid.units import EARTH_RADIUS_M, FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
 
 MIN_INTERNAL_HZ = 400.0
-EARTH_RADIUS_M = 6_378_137.0
 TURBULENCE_TYPES = {"none": 0, "standard": 1, "culp": 2, "milspec": 3, "tustin": 4}
 
 Control = np.ndarray | Callable[[float], float] | float
@@ -140,6 +139,7 @@ _RAW = (
     "inertia/ixz-slugs_ft2",
     "forces/fbx-aero-lbs", "forces/fby-aero-lbs", "forces/fbz-aero-lbs",
     "moments/l-aero-lbsft", "moments/m-aero-lbsft", "moments/n-aero-lbsft",
+    "moments/l-prop-lbsft", "moments/m-prop-lbsft", "moments/n-prop-lbsft",
     "atmosphere/total-wind-north-fps", "atmosphere/total-wind-east-fps",
     "atmosphere/total-wind-down-fps",
     "atmosphere/turb-north-fps", "atmosphere/turb-east-fps", "atmosphere/turb-down-fps",
@@ -670,6 +670,9 @@ def _channels(c: Mapping[str, Any], ref: Reference, lat0: float, lon0: float,
         "dr": c["fcs/rudder-pos-rad"] * SURFACES["dr"][1],
         "throttle": c["fcs/throttle-pos-norm"],
         "thrust": c["forces/fbx-prop-lbs"] * LBF,
+        "L_prop": c["moments/l-prop-lbsft"] * LBF * FT,
+        "M_prop": c["moments/m-prop-lbsft"] * LBF * FT,
+        "N_prop": c["moments/n-prop-lbsft"] * LBF * FT,
         "mass": mass_slug * SLUG,
         "Ixx": c["inertia/ixx-slugs_ft2"] * SLUG_FT2,
         "Iyy": c["inertia/iyy-slugs_ft2"] * SLUG_FT2,

@@ -38,7 +38,7 @@ from flightid.sim.effects import (
     parse_params,
 )
 from flightid.sim.vibration import AXES, EngineVibration
-from flightid.units import DEG, FT, G0
+from flightid.units import DEG, EARTH_RADIUS_M, FT, G0
 
 # -- mounting effects --------------------------------------------------------------
 
@@ -395,9 +395,11 @@ def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
 # -- built-in suites ---------------------------------------------------------------------
 
 # recorded exactly: mass properties (from the weight-and-balance sheet), the throttle
-# lever position and the engine-model thrust (the NASA Twin Otter record carries thrust
-# computed from an engine model the same way)
-_MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz", "throttle", "thrust")
+# lever position and the engine-model thrust and propulsive moments (the NASA Twin Otter
+# record carries thrust computed from an engine model the same way; per-engine thrust
+# times its arm gives the moments)
+_MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz", "throttle", "thrust", "L_prop", "M_prop",
+         "N_prop")
 S000 = "seed 000 (Telemaster thesis)"
 S003 = "seed 003 (Boomerang 60)"
 TOTTER = (
@@ -532,6 +534,11 @@ def research_suite() -> SensorSuite:
         f"Nyquist ({S000} 3.6, literature rule)",
     )
 
+    gps = [
+        Sample(rate=5.0, source="assumption: research GPS receiver, 5 Hz"),
+        WhiteNoise(sigma=2.5 / EARTH_RADIUS_M, source="assumption: 2.5 m position noise"),
+    ]
+
     def chan(sigma: float, q: float) -> list[Effect]:
         return [
             aa,
@@ -561,6 +568,10 @@ def research_suite() -> SensorSuite:
             "h": chan(0.41 * FT, 0.5 * FT),
             # the airspeed noise as dynamic pressure, rho V sigma_V at 54 m/s (same sensor)
             "qbar": chan(0.7, 0.01),
+            # GPS position: the model's local gravity needs the latitude (G0 instead of
+            # the local 9.80 m/s^2 at 1890 m biased the Twin Otter's roll derivatives 1 %)
+            "latitude": gps,
+            "longitude": gps,
         },
         mounting=[
             LeverArm(x=0.3, y=0.0, z=0.2, source="assumption: IMU near the CG of a Twin Otter"),

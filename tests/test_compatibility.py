@@ -4,7 +4,6 @@ known sensor errors, and on the real NASA Twin Otter record."""
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -172,15 +171,6 @@ def test_real_twin_otter_record():
     assert est.fit["R2_per_output"]["phi"] > 0.99
     assert est.fit["R2_per_output"]["beta"] > 0.99
     assert set(corrected.channels) >= set(record.channels)
-
-
-def test_normal_gravity():
-    # WGS84 values at sea level (NIMA TR8350.2 table 3.4): equator and pole
-    assert compat.normal_gravity(0.0, 0.0) == pytest.approx(9.7803253359, abs=1e-9)
-    assert compat.normal_gravity(math.pi / 2, 0.0) == pytest.approx(9.8321849378, abs=1e-8)
-    # free-air gradient about -3.09e-6 /s^2 per m
-    drop = compat.normal_gravity(0.7, 0.0) - compat.normal_gravity(0.7, 1000.0)
-    assert drop == pytest.approx(3.086e-3, rel=0.01)
 
 
 def test_white_noise_level_estimate():
