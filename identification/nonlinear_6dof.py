@@ -354,9 +354,7 @@ def problem_from_record(record: FlightRecord, model: SixDofModel,
     if np.any(inputs[:, 4] <= 0):
         i = int(np.argmax(inputs[:, 4] <= 0))
         raise ValueError(f"air density is not positive at sample {i} (t = {time[i]} s)")
-    mid = 0.5 * (inputs[:-1] + inputs[1:])
-    if controls == "cubic":
-        mid = _cubic_midpoints(inputs)
+    mid = _cubic_midpoints(inputs) if controls == "cubic" else 0.5 * (inputs[:-1] + inputs[1:])
     start, end = inputs[:-1], inputs[1:].copy()
     if controls == "zoh":
         mid[:, :3] = start[:, :3]

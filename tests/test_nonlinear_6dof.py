@@ -64,6 +64,13 @@ NAVION_WELL_EXCITED = ("CL_alpha", "CL_de", "CD_alpha", "CY_beta", "CY_dr", "Cl_
                        "Cn_p", "Cn_r", "Cn_dr")
 
 
+def _mean_inertia(record) -> rb.MassProperties:
+    """Unit mass, the record's mean inertias and its local gravity."""
+    inertia = (float(np.mean(record[c])) for c in ("Ixx", "Iyy", "Izz", "Ixz"))
+    g = rb.local_gravity(float(record["latitude"][0]), float(record["h"][0]))
+    return rb.MassProperties(1.0, *inertia, g=g)
+
+
 def test_equations_of_motion_reproduce_jsbsim_accelerations(twin_otter):
     """The rigid-body equations with JSBSim's own forces give JSBSim's accelerations.
 
@@ -77,9 +84,7 @@ def test_equations_of_motion_reproduce_jsbsim_accelerations(twin_otter):
     x = np.array([record[s][keep] for s in rb.STATES])
     qs = record["qbar"][keep] * ref.area
     mass = record["mass"][keep]
-    mp = rb.MassProperties(1.0, *(float(np.mean(record[c])) for c in ("Ixx", "Iyy", "Izz", "Ixz")),
-                           g=rb.local_gravity(float(record["latitude"][0]),
-                                              float(record["h"][0])))
+    mp = _mean_inertia(record)
     udot, vdot, wdot = rb.translational(
         x, (qs * record["CX"][keep] + record["thrust"][keep]) / mass,
         qs * record["CY"][keep] / mass, qs * record["CZ"][keep] / mass, mp.g)
@@ -212,7 +217,7 @@ def test_propulsive_moments_close_the_twin_otter_moment_budget(twin_otter):
     ref = record.meta.reference
     x = np.array([record[s] for s in rb.STATES])
     qs = record["qbar"] * ref.area
-    mp = rb.MassProperties(1.0, *(float(np.mean(record[c])) for c in ("Ixx", "Iyy", "Izz", "Ixz")))
+    mp = _mean_inertia(record)
     aero = (qs * ref.span * record["Cl"], qs * ref.chord * record["Cm"],
             qs * ref.span * record["Cn"])
     total = [a + record[c] for a, c in zip(aero, n6.PROPULSIVE_MOMENTS, strict=True)]
