@@ -201,12 +201,15 @@ def _alpha_limits(root: ET.Element) -> tuple[float, float] | None:
     return float(lo) * scale, float(hi) * scale
 
 
-# JSBSim integrates the body rates with rectangular Euler by default, a half-step lag
-# (1.25 ms at 400 Hz) that an exact 6-DOF model reads as extra damping: Navion Cm_alphadot
-# -1.24 % -> -0.05 %, CL_q -3.9 % -> +0.65 %, Cn_r -1.78 % -> -0.89 % with Adams-Bashforth 2
-# (JSBSim code 3; tests/test_truth_recovery.py). FGPropagate::InitModel restores JSBSim's
-# defaults, so every reset applies these again.
-INTEGRATORS = {"simulation/integrator/rate/rotational": 3}
+# JSBSim integrates the body rates and the attitude quaternion with rectangular Euler by
+# default: each lags half a step (1.25 ms at 400 Hz). The rate lag reads as extra damping
+# to an exact 6-DOF model (Navion Cm_alphadot -1.24 % -> -0.05 %, CL_q -3.9 % -> +0.65 %);
+# the attitude lag puts the Euler angles 1.25 ms behind the integral of the rates, which
+# biased the Twin Otter's Cl derivatives by -0.6 % on research-grade data. Adams-Bashforth 2
+# (JSBSim code 3) for both (tests/test_truth_recovery.py). FGPropagate::InitModel restores
+# JSBSim's defaults, so every reset applies these again.
+INTEGRATORS = {"simulation/integrator/rate/rotational": 3,
+               "simulation/integrator/position/rotational": 3}
 
 
 def set_integrators(fdm: jsbsim.FGFDMExec) -> None:

@@ -43,9 +43,11 @@ def test_lateral_derivatives_of_a_jsbsim_flight(navion_flight):
                  "Cn_beta", "Cn_r", "Cn_dr"):
         assert est[name] == pytest.approx(true[name], rel=0.03), name
     assert est["Cn_p"] == pytest.approx(true["Cn_p"], rel=0.06)
-    # CY_r is zero in the Navion's aerodynamics: the estimate is near zero on the scale of
-    # CY_beta (the side force from yaw rate is 0.4 % of that from sideslip at most)
-    assert abs(est["CY_r"]) < 0.01 * abs(true["CY_beta"])
+    # CY_r is zero in the Navion's aerodynamics: the side force the estimate puts on the yaw
+    # rate stays within the model error, 2 % of the side force from sideslip (measured 0.23 %)
+    rhat = record["r"] * record.meta.reference.span / (2.0 * record["V"])
+    from_yaw_rate = abs(est["CY_r"]) * np.max(np.abs(rhat))
+    assert from_yaw_rate < 0.02 * abs(true["CY_beta"]) * np.max(np.abs(record["beta"]))
 
 
 def test_rudder_terms_unidentifiable_on_an_aileron_only_jsbsim_flight():
