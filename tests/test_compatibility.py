@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 from flightid.identification import compatibility as compat
 from flightid.record import FlightRecord, read
 from flightid.scenarios.cli import app
+from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim import flight, sensors
 from flightid.sim import trim as trimming
 from flightid.sim.effects import Bias, Quantization, WhiteNoise
@@ -29,14 +30,6 @@ PHYSICAL = {"p": 0.05 * DEG, "q": 0.05 * DEG, "r": 0.05 * DEG, "ax": 0.005 * G0,
             "ay": 0.005 * G0, "az": 0.005 * G0, "alpha": 0.05 * DEG, "beta": 0.05 * DEG,
             "upwash_alpha": 0.01, "sidewash_beta": 0.01}
 CONDITIONS = {"navion": (1500.0, 55.0), "twinotter": (2000.0, 70.0)}
-
-
-def _multistep(t, start, widths, signs, amplitude):
-    u = np.zeros_like(t)
-    for width, sign in zip(widths, signs, strict=True):
-        u[(t >= start) & (t < start + width)] = sign * amplitude
-        start += width
-    return u
 
 
 def _suite(errors: bool, noise: bool) -> sensors.SensorSuite:
@@ -61,10 +54,12 @@ def truth_flight(request):
     trim = trimming.trim(aircraft, altitude, speed)
     rate, duration = 100.0, 40.0
     t = np.arange(0.0, duration + 0.5 / rate, 1.0 / rate)
-    controls = {"de": _multistep(t, 2, [1, 1], [-1, 1], 3 * DEG),
-                "da": _multistep(t, 8, [2, 2], [1, -1], 5 * DEG)
-                + _multistep(t, 20, [3, 3], [-1, 1], 5 * DEG),
-                "dr": _multistep(t, 30, [1, 1, 1], [1, -1, 1], 4 * DEG)}
+    controls = total_signals([
+        Multistep(surface="de", start=2.0, widths=(1, 1), signs=(-1, 1), amplitude=3 * DEG),
+        Multistep(surface="da", start=8.0, widths=(2, 2), signs=(1, -1), amplitude=5 * DEG),
+        Multistep(surface="da", start=20.0, widths=(3, 3), signs=(-1, 1), amplitude=5 * DEG),
+        Multistep(surface="dr", start=30.0, widths=(1, 1, 1), signs=(1, -1, 1),
+                  amplitude=4 * DEG)], t)
     truth = flight.fly(aircraft, trim, controls, duration_s=duration, rate_hz=rate)
     # a heading sensor outputs a continuous angle here: its anti-alias filter must not
     # smear the 0/360 deg wrap of JSBSim's psi

@@ -7,16 +7,15 @@ import pytest
 
 from flightid.identification import linear_models as lm
 from flightid.identification import output_error as oe
+from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim import flight, truth
 from flightid.sim import trim as trimming
 
-
-def _multistep(t, start, widths, signs, amplitude):
-    u = np.zeros_like(t)
-    for width, sign in zip(widths, signs, strict=True):
-        u[(t >= start) & (t < start + width)] = sign * amplitude
-        start += width
-    return u
+# aileron 3211 (1.5-1-0.5-0.5 s) and rudder 2-1-1 (1-0.5-0.5 s), 0.035 rad
+AILERON = Multistep(surface="da", start=1.0, widths=(1.5, 1.0, 0.5, 0.5), signs=(1, -1, 1, -1),
+                    amplitude=0.035)
+RUDDER = Multistep(surface="dr", start=8.0, widths=(1.0, 0.5, 0.5), signs=(1, -1, 1),
+                   amplitude=0.035)
 
 
 @pytest.fixture(scope="module")
@@ -24,8 +23,7 @@ def navion_flight():
     trim = trimming.trim("navion", 1500.0, 55.0)
     rate, duration = 50.0, 20.0
     t = np.arange(0.0, duration + 0.5 / rate, 1.0 / rate)
-    controls = {"da": _multistep(t, 1.0, [1.5, 1.0, 0.5, 0.5], [1, -1, 1, -1], 0.035),
-                "dr": _multistep(t, 8.0, [1.0, 0.5, 0.5], [1, -1, 1], 0.035)}
+    controls = total_signals([AILERON, RUDDER], t)
     record = flight.fly("navion", trim, controls, duration_s=duration, rate_hz=rate)
     return record, truth.derivatives("navion", trim, axes="body")
 
@@ -54,7 +52,7 @@ def test_rudder_terms_unidentifiable_on_an_aileron_only_jsbsim_flight():
     trim = trimming.trim("navion", 1500.0, 55.0)
     t = np.arange(0.0, 10.0 + 0.01, 0.02)
     record = flight.fly("navion", trim,
-                        {"da": _multistep(t, 1.0, [1.5, 1.0, 0.5, 0.5], [1, -1, 1, -1], 0.035)},
+                        total_signals([AILERON], t),
                         duration_s=10.0, rate_hz=50.0)
     est = oe.estimate(record, lm.lateral(lm.condition_from_record(record)))
     assert set(est.unidentifiable) == {"CY_dr", "Cl_dr", "Cn_dr"}
