@@ -62,6 +62,8 @@ class FlightCondition:
                 raise ValueError(
                     f"flight condition {name} must be positive and finite, got {value}"
                 )
+        if not np.isfinite(self.thrust):
+            raise ValueError(f"flight condition thrust must be finite (N), got {self.thrust}")
 
 
 _CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")

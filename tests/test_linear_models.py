@@ -114,6 +114,8 @@ def test_bad_names_and_conditions_are_reported():
         lm.lateral(COND).values(Cn_q=1.0)
     with pytest.raises(ValueError, match="mass must be positive"):
         lm.FlightCondition(**{**COND.__dict__, "mass": -1.0})
+    with pytest.raises(ValueError, match="thrust must be finite"):
+        lm.FlightCondition(**{**COND.__dict__, "thrust": float("nan")})
     t = np.arange(10) * 0.02
     rec = FlightRecord(t, {"V": 50 + 0 * t}, RecordMeta(reference=Reference(10.0, 5.0, 1.0)))
     with pytest.raises(ValueError, match="no channel 'qbar'.*qbar="):
