@@ -169,6 +169,7 @@ def identify(
 def run_cli(
     path: str, method: str, model: str, coefficients: list[str], truth: str | None, fmt: str,
     report: str | None = None, option_texts: list[str] | None = None,
+    multistep_inputs: list[str] | None = None,
 ) -> None:
     """The ``flightid identify`` command: read, identify, print a table or JSON, score."""
     import json
@@ -182,6 +183,10 @@ def run_cli(
     if fmt not in ("table", "json"):
         raise SystemExit(f"--format must be table or json, got {fmt!r}")
     record = read(path)
+    if multistep_inputs:
+        from flightid.identification.input_denoising import denoise_channels
+
+        record = denoise_channels(record, multistep_inputs)
     options = parse_options(option_texts or [])
     if coefficients:
         options["coefficients"] = coefficients

@@ -57,11 +57,15 @@ def identify(
     option: Annotated[list[str] | None, typer.Option(
         help="method option KEY=VALUE (repeatable), e.g. colored=true, "
              "initial_state=estimate")] = None,
+    multistep_input: Annotated[list[str] | None, typer.Option(
+        help="input channel flown as a multistep (doublet, 3211, pulse) whose measurement "
+             "is noisy: made piecewise constant before identification (repeatable)")] = None,
 ) -> None:
     """Identify stability and control derivatives from a flight record."""
     from flightid.identification.dispatch import run_cli
 
-    run_cli(record, method, model, coefficient or [], truth, format, report, option or [])
+    run_cli(record, method, model, coefficient or [], truth, format, report, option or [],
+            multistep_input or [])
 
 
 @app.command("frequency-response")

@@ -48,3 +48,13 @@ def test_identify_twin_otter_report(tmp_path):
     assert "Cn_beta" in out.stdout
     assert report.read_text().count("<table>") >= 3
 
+
+
+def test_identify_with_multistep_inputs_and_a_missing_one(tmp_path):
+    out = _run("identify", str(TWIN_OTTER), "--method", "ee", "--model", "lateral",
+               "--multistep-input", "da", "--multistep-input", "dr", "--format", "json")
+    assert "Cn_dr" in json.loads(out.stdout)["estimates"]
+    bad = subprocess.run([*CLI, "identify", str(TWIN_OTTER), "--multistep-input", "dz"],
+                         capture_output=True, text=True, timeout=300)
+    assert bad.returncode != 0
+    assert "multistep input(s) dz not in the record" in bad.stderr
