@@ -219,7 +219,7 @@ def flight(request):
 #   CL_0 0.93 the 0.2 m/s speed change of the 3 deg doublet is 2.7 % of the lift:
 #   noise-free, CL_de -39 %, CL_alpha +7 %, Cm_q, Cm_de +6 %. The full longitudinal model
 #   (speed, thrust, body-axis az) with CL_0 at the weight balance and the drag terms a
-#   priori does not help on the noisy record: CL_de z mean +4.2, sd 4.8 (20 seeds). Its
+#   priori does not help on the noisy record: CL_de z sd 4.6, Cm_q 1.6 (10 seeds). Its
 #   noise-free errors grow from 100 Hz (Cm_alpha +2.1 %, Cm_de +1.4 %) to the 25 Hz DAS
 #   (+3.7 %, +4.7 %, Cm_q +2.9 %), and the vane noise alone (0.7 deg; every other noise
 #   off) turns them into CL_de +440 %, Cm_q +41 %, Cm_de +22 %: with alpha down-weighted
