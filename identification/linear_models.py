@@ -382,6 +382,7 @@ def longitudinal(
     derivatives: Sequence[str] = LONGITUDINAL_DEFAULT,
     start: Mapping[str, float] | None = None,
     biases: Sequence[str] = LONGITUDINAL_BIASES,
+    thrust_input: bool = False,
 ) -> LinearModel:
     """Full longitudinal model: states V (m/s), alpha (rad), q (rad/s), theta (rad); input de.
 
@@ -399,11 +400,16 @@ def longitudinal(
       az       = -qbar S/m (CL cos(alpha) + CD sin(alpha)) perturbed: the lift terms times
                  cos(alpha0), the drag terms times sin(alpha0), and the rotation of the
                  trim force (CD_0 cos(alpha0) - CL_0 sin(alpha0)) alpha
-    plus biases, gamma0 = theta0 - alpha0. The thrust change with speed is not modelled
-    (it is absorbed in CD_0 as an effective speed damping). CL_0 starts at the weight
-    balance m g cos(gamma0) / (qbar S). Without the thrust and az terms a slow, high-lift
-    aircraft is misread: the Telemaster at 15 m/s (CL_0 0.93, T0/(qbar S) 0.13, noise-free
-    JSBSim card at 100 Hz, V alpha q az fitted) gave CL_alpha +3.45 %, with them +0.49 %.
+    plus biases, gamma0 = theta0 - alpha0. The thrust change with speed is absorbed in
+    CD_0 as an effective speed damping, unless ``thrust_input``: then the record's
+    ``thrust`` channel (N, along body x) is a second input, dT cos(alpha0)/m in Vdot and
+    -dT sin(alpha0)/(m V) in alphadot (its constant part goes into the biases). CL_0 and
+    CD_0 start at the trim force balance, (m g cos(gamma0) - T0 sin(alpha0)) / (qbar S) and
+    (T0 cos(alpha0) - m g sin(gamma0)) / (qbar S) (Telemaster card: 0.9349 and 0.12917
+    against the JSBSim truth 0.9324 and 0.12916). Without the thrust and az terms a slow,
+    high-lift aircraft is misread: the Telemaster at 15 m/s (CL_0 0.93, T0/(qbar S) 0.13,
+    noise-free JSBSim card at 100 Hz, V alpha q az fitted) gave CL_alpha +3.45 %, with them
+    +0.49 %.
     """
     _check_names(derivatives, LONGITUDINAL_DERIVATIVES, "longitudinal")
     _check_names(biases, LONGITUDINAL_BIASES, "longitudinal")
@@ -412,8 +418,12 @@ def longitudinal(
     start_values = {p: 0.0 for p in parameters}
     start_values.update(_typical_start(derivatives, LONGITUDINAL_TYPICAL))
     gamma0 = c.theta - c.alpha
+    # trim force balance in stability axes, thrust along body x
+    weight, qs = c.mass * c.g, c.qbar * c.area
     if "CL_0" in parameters:
-        start_values["CL_0"] = c.mass * c.g * np.cos(gamma0) / (c.qbar * c.area)
+        start_values["CL_0"] = (weight * np.cos(gamma0) - c.thrust * np.sin(c.alpha)) / qs
+    if "CD_0" in parameters:
+        start_values["CD_0"] = (c.thrust * np.cos(c.alpha) - weight * np.sin(gamma0)) / qs
     if start:
         start_values.update(_checked(start, parameters, "longitudinal"))
     k_f = c.qbar * c.area / c.mass
@@ -423,6 +433,7 @@ def longitudinal(
     gc, gs = c.g * np.cos(gamma0), c.g * np.sin(gamma0)
     ca, sa = np.cos(c.alpha), np.sin(c.alpha)
     thrust = c.thrust / c.mass  # m/s^2
+    inputs = ("de", "thrust") if thrust_input else ("de",)
 
     def build(v: Mapping[str, complex]) -> Matrices:
         def d(n: str) -> complex:
@@ -435,29 +446,32 @@ def longitudinal(
             [2 * d("CL_0") / c.V, d("CL_alpha"), d("CL_q") * rate, 0.0], dtype=dtype
         )
         A = np.zeros((4, 4), dtype=dtype)
-        B = np.zeros((4, 2), dtype=dtype)
+        B = np.zeros((4, len(inputs) + 1), dtype=dtype)
         A[0] = -k_f * drag_x + np.array([0.0, gc - thrust * sa, 0.0, -gc])
-        B[0] = [-k_f * d("CD_de"), d("bias_Vdot")]
+        B[0, [0, -1]] = [-k_f * d("CD_de"), d("bias_Vdot")]
         A[1] = -k_f / c.V * lift_x + np.array(
             [0.0, (gs - thrust * ca) / c.V, 1.0, -gs / c.V])
-        B[1] = [-k_f / c.V * d("CL_de"), d("bias_alphadot")]
+        B[1, [0, -1]] = [-k_f / c.V * d("CL_de"), d("bias_alphadot")]
+        if thrust_input:
+            B[:2, 1] = [ca / c.mass, -sa / (c.mass * c.V)]
         mad = d("Cm_alphadot") * rate
         A[2] = k_m * (np.array([0.0, d("Cm_alpha"), d("Cm_q") * rate, 0.0]) + mad * A[1])
-        B[2] = [k_m * (d("Cm_de") + mad * B[1, 0]), d("bias_qdot") + k_m * mad * B[1, 1]]
+        B[2] = k_m * mad * B[1]
+        B[2, [0, -1]] += [k_m * d("Cm_de"), d("bias_qdot")]
         A[3] = [0.0, 0.0, 1.0, 0.0]
-        B[3] = [0.0, d("bias_thetadot")]
+        B[3, -1] = d("bias_thetadot")
         C = np.zeros((5, 4), dtype=dtype)
-        D = np.zeros((5, 2), dtype=dtype)
+        D = np.zeros((5, len(inputs) + 1), dtype=dtype)
         C[:4] = np.eye(4)
         rotation = np.array([0.0, d("CD_0") * ca - d("CL_0") * sa, 0.0, 0.0], dtype=dtype)
         C[4] = -k_f * (lift_x * ca + drag_x * sa + rotation)
-        D[4] = [-k_f * (d("CL_de") * ca + d("CD_de") * sa), d("bias_az")]
+        D[4, [0, -1]] = [-k_f * (d("CL_de") * ca + d("CD_de") * sa), d("bias_az")]
         return A, B, C, D
 
     return LinearModel(
         name="longitudinal",
         states=("V", "alpha", "q", "theta"),
-        inputs=("de",),
+        inputs=inputs,
         outputs=("V", "alpha", "q", "theta", "az"),
         parameters=parameters,
         start=start_values,

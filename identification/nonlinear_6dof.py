@@ -631,7 +631,8 @@ def estimate(
 
     model: default ``model_from_record(record)`` (body axes, no alphadot, no rotor).
     free: parameters to estimate (default all); the others stay at their start values.
-    start: "equation_error" (default), a mapping of start values, or None (model's).
+    start: "equation_error" (default: the free parameters' start from equation error, the
+    fixed ones keep the model's), a mapping of start values, or None (model's).
     initial_state: 'measured' (first sample) or 'estimate' (x0_<state> parameters, SI).
     controls: 'cubic' (default) or 'linear' interpolation between samples, or 'zoh' (held).
     Values are nondimensional derivatives, h_engine in N m s; standard errors are
@@ -643,6 +644,8 @@ def estimate(
         if start != "equation_error":
             raise ValueError(f"start must be a mapping, 'equation_error' or None, got {start!r}")
         start = start_from_equation_error(record, model)
+        if free is not None:  # a parameter held fixed keeps its a priori value
+            start = {n: v for n, v in start.items() if n in free}
     if start:
         unknown = [k for k in start if k not in model.parameters]
         if unknown:

@@ -308,10 +308,11 @@ def estimate(
 
     free: parameters to estimate (default all); the others stay at their start values.
     start: start (a priori) values overriding the model's, or "equation_error" to take
-    them from ``start_from_equation_error``. initial_state: 'measured' (x0
-    from the first sample of the state channels), 'estimate' (x0_<state> parameters, SI
-    units) or 'zero'. Values are nondimensional derivatives and SI-unit biases; standard
-    errors are Cramer-Rao bounds (corrected for colored residuals when ``colored``).
+    the free parameters' from ``start_from_equation_error`` (the fixed ones keep theirs).
+    initial_state: 'measured' (x0 from the first sample of the state channels),
+    'estimate' (x0_<state> parameters, SI units) or 'zero'. Values are nondimensional
+    derivatives and SI-unit biases; standard errors are Cramer-Rao bounds (corrected for
+    colored residuals when ``colored``).
     Converged when the last step changed no parameter by more than ``step_tolerance``
     of its standard error, or the ML cost N/2 ln det R by less than ``cost_tolerance``.
     """
@@ -319,6 +320,8 @@ def estimate(
         if start != "equation_error":
             raise ValueError(f"start must be a mapping or 'equation_error', got {start!r}")
         start = start_from_equation_error(record, model)
+        if free is not None:  # a parameter held fixed keeps its a priori value
+            start = {n: v for n, v in start.items() if n in free}
     if start:
         model = model.with_start(**start)
     problem = problem_from_record(record, model, initial_state, hold)

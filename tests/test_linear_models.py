@@ -123,3 +123,35 @@ def test_bad_names_and_conditions_are_reported():
     cond = lm.condition_from_record(rec, qbar=1500.0, alpha=0.0, theta=0.0, mass=1000.0,
                                     Ixx=1.0, Iyy=1.0, Izz=1.0, Ixz=0.0)
     assert cond.V == 50.0 and cond.span == 5.0
+
+
+def test_longitudinal_trim_balance_and_thrust_input():
+    # Telemaster-like: 15 m/s, alpha 4.8 deg, thrust 14.8 N, climbing 2 deg
+    c = lm.FlightCondition(V=15.0, qbar=137.5, alpha=0.084, theta=0.119, mass=11.0,
+                           Ixx=1.0, Iyy=1.2, Izz=2.0, Ixz=0.0, area=0.83, span=2.26,
+                           chord=0.35, thrust=14.8)
+    weight, qs, gamma = c.mass * c.g, c.qbar * c.area, c.theta - c.alpha
+    plain = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DERIVATIVES)
+    # lift and drag balance weight and thrust in stability axes (thrust along body x)
+    assert plain.start["CL_0"] == pytest.approx(
+        (weight * np.cos(gamma) - c.thrust * np.sin(c.alpha)) / qs)
+    assert plain.start["CD_0"] == pytest.approx(
+        (c.thrust * np.cos(c.alpha) - weight * np.sin(gamma)) / qs)
+    values = {**plain.start, "Cm_alphadot": -4.0, "CL_de": 0.36, "Cm_de": -0.94,
+              "bias_qdot": 0.01}
+    powered = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DERIVATIVES, thrust_input=True)
+    assert powered.inputs == ("de", "thrust")
+    A0, B0, C0, D0 = plain.build(values)
+    A, B, C, D = powered.build(values)
+    # the elevator and bias columns are those of the model without the thrust input
+    np.testing.assert_allclose(A, A0)
+    np.testing.assert_allclose(B[:, [0, 2]], B0)
+    np.testing.assert_allclose(D[:, [0, 2]], D0)
+    # a thrust change dT (N) accelerates along body x: dT cos(alpha)/m in Vdot,
+    # -dT sin(alpha)/(m V) in alphadot, the latter's Cm_alphadot moment in qdot
+    mad = -4.0 * c.chord / (2 * c.V)
+    k_m = c.qbar * c.area * c.chord / c.Iyy
+    alphadot = -np.sin(c.alpha) / (c.mass * c.V)
+    np.testing.assert_allclose(
+        B[:, 1], [np.cos(c.alpha) / c.mass, alphadot, k_m * mad * alphadot, 0.0])
+    assert np.all(D[:, 1] == 0.0)  # body-x force: no az

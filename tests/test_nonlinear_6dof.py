@@ -260,3 +260,18 @@ def test_bad_inputs_are_named(navion):
         n6.model_from_record(record, {"CL": ("alpha",)}, force_axes="body")
     with pytest.raises(ValueError, match="6dof or 6dof_stability"):
         n6.run(record, "6dof_wind")
+
+
+def test_equation_error_start_keeps_the_fixed_parameters(navion):
+    # a parameter left out of ``free`` is held at its a priori value; the equation-error
+    # start once overwrote it (on the Telemaster card that held CL_q at a noisy regression
+    # value and scattered CL_de 4.6 bounds)
+    record, true = navion
+    a_priori = 1.5 * true["Cm_alphadot"]
+    model = n6.model_from_record(record, _navion_structure(), rotor_momentum=True,
+                                 engine_torque=True, moment_axes="stability",
+                                 start={"Cm_alphadot": a_priori})
+    free = [p for p in model.parameters if p != "Cm_alphadot"]
+    est = n6.estimate(record, model, free=free, start="equation_error", max_iterations=1)
+    assert est.fit["fixed"]["Cm_alphadot"] == a_priori
+    assert "Cm_alphadot" not in est.names
