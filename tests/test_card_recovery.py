@@ -192,7 +192,7 @@ def flight(request):
         estimates = identify(card, record, truth, demo.SETTLE_S)
     rows = {n: (e[n], e.std_of(n), truth[n]) for e in estimates for n in e.names
             if n in truth and not n.endswith("_0") and n not in e.unidentifiable}
-    return card, seed, estimates, rows
+    return card, seed, estimates, rows, truth
 
 
 # Measured exceptions (seed, derivative): sigmas, with the cause where it is known.
@@ -245,7 +245,7 @@ KNOWN = {("telemaster-id", 1, "Cl_dr")}
 
 
 def test_fits_converge_and_estimate_the_main_derivatives(flight):
-    card, seed, estimates, rows = flight
+    card, seed, estimates, rows, _ = flight
     assert all(e.fit.get("converged") for e in estimates)
     lift = "CZ_alpha" if card.sensors.name == "research" else "CL_alpha"  # 6-DOF: body axes
     assert set(WELL_EXCITED) | {"Cm_q", lift, "Cl_beta"} <= set(rows)
@@ -254,7 +254,7 @@ def test_fits_converge_and_estimate_the_main_derivatives(flight):
 def test_estimates_within_3_corrected_sigma_of_truth(flight):
     # 3 colored-residual-corrected Cramer-Rao bounds (M&K 2016 eq. 6.54) hold 99.7 % of a
     # correct estimator's errors; KNOWN lists the measured exceptions (own test below)
-    card, seed, _, rows = flight
+    card, seed, _, rows, _ = flight
     bad = {n: f"{(v - t) / s:+.2f} sigma ({v:.4g} vs {t:.4g})" for n, (v, s, t) in rows.items()
            if (card.name, seed, n) not in KNOWN and abs(v - t) >= 3 * s}
     assert not bad, bad
@@ -263,27 +263,23 @@ def test_estimates_within_3_corrected_sigma_of_truth(flight):
 def test_a_priori_derivatives_stay_at_their_values(flight):
     # CL_q and Cm_alphadot are not estimated on the hobby card: they keep the a priori
     # values through the equation-error start (which once overwrote them, see KNOWN)
-    card, _, estimates, _ = flight
+    card, _, estimates, _, truth = flight
     if card.sensors.name == "research":
         pytest.skip("the 6-DOF fit estimates every derivative")
     fixed = estimates[0].fit["fixed"]
-    c = card.condition
-    model = load(card.aircraft)
-    trimmed = trim(model, c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
-    truth = derivatives(model, trimmed, axes="body").values
     assert {n: fixed[n] for n in demo.A_PRIORI} == {n: truth[n] for n in demo.A_PRIORI}
 
 
 def test_known_exceptions_still_fail(flight):
     # strict record of what is not solved: when a fix lands, this fails and KNOWN shrinks
-    card, seed, _, rows = flight
+    card, seed, _, rows, _ = flight
     mine = [n for (c, s, n) in KNOWN if (c, s) == (card.name, seed)]
     fixed = [n for n in mine if abs(rows[n][0] - rows[n][2]) < 3 * rows[n][1]]
     assert not fixed, f"now within 3 sigma, remove from KNOWN: {fixed}"
 
 
 def test_well_excited_derivatives_within_relative_tolerance(flight):
-    card, seed, _, rows = flight
+    card, seed, _, rows, _ = flight
     tol = RELATIVE[card.aircraft]
     bad = {n: f"{100 * (rows[n][0] / rows[n][2] - 1):+.1f} %" for n in WELL_EXCITED
            if (card.aircraft, n) not in NO_RELATIVE
