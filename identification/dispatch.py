@@ -183,11 +183,13 @@ def run_cli(
     if fmt not in ("table", "json"):
         raise SystemExit(f"--format must be table or json, got {fmt!r}")
     record = read(path)
-    if multistep_inputs:
+    options = parse_options(option_texts or [])
+    if multistep_inputs and method == "oe":  # levels and edges estimated with the derivatives
+        options["multistep_inputs"] = list(multistep_inputs)
+    elif multistep_inputs:  # regression takes the denoised samples
         from flightid.identification.input_denoising import denoise_channels
 
         record = denoise_channels(record, multistep_inputs)
-    options = parse_options(option_texts or [])
     if coefficients:
         options["coefficients"] = coefficients
     estimates = identify(record, method, model, options)

@@ -95,14 +95,21 @@ def piecewise_constant(y: np.ndarray, sigma: float | None = None,
     remaining run is the mean of ``y`` over it.
     """
     sigma = white_noise_std(np.asarray(y, dtype=float)) if sigma is None else float(sigma)
+    parts = runs(y, sigma, weight, significance)
+    return np.concatenate([np.full(r.size, r.mean()) for r in parts])
+
+
+def runs(y: np.ndarray, sigma: float, weight: float = DEFAULT_WEIGHT,
+         significance: float = STEP_SIGNIFICANCE) -> list[np.ndarray]:
+    """The constant runs of ``piecewise_constant``: consecutive pieces of ``y``, one per
+    plateau (a single piece when there is no significant step)."""
     lam = weight * sigma
     y = _checked(y, lam)
     if y.size < 3 or lam == 0:
-        return y.copy()
+        return [y.copy()]
     z = _dual(y, lam)
     steps = np.flatnonzero(np.abs(z) >= lam * (1 - 1e-12)) + 1
-    runs = _merged(np.split(y, steps), sigma, significance)
-    return np.concatenate([np.full(r.size, r.mean()) for r in runs])
+    return _merged(np.split(y, steps), sigma, significance)
 
 
 def _merged(runs: list[np.ndarray], sigma: float, significance: float) -> list[np.ndarray]:

@@ -221,6 +221,11 @@ class Problem:
     noise_floor: np.ndarray
     controls: str
 
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The measured outputs, in the columns of ``z``."""
+        return tuple(self.model.outputs)
+
 
 def model_from_record(
     record: FlightRecord,

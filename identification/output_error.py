@@ -19,7 +19,8 @@ Cramer-Rao bounds are sqrt(diag M^-1) with M = sum_i S_i^T R^-1 S_i (M&K eq. 6.5
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -28,6 +29,9 @@ from flightid.identification import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel, matrix_sensitivities
 from flightid.record import FlightRecord
+
+if TYPE_CHECKING:
+    from flightid.identification.multistep_input import Multistep
 
 METHOD = "oe"
 HOLDS = ("foh", "zoh")
@@ -48,14 +52,29 @@ class Problem:
     fixed: dict[str, float]  # every model parameter not estimated, at its value
     x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
     noise_floor: np.ndarray  # smallest admitted noise variance per output
+    # multistep inputs estimated as levels and edges (multistep_input): channel -> start
+    multistep: dict[str, Multistep] = field(default_factory=dict)
 
+    @property
+    def input_names(self) -> list[str]:
+        """Names of the estimated-input parameters (levels and edges), all channels."""
+        return [n for c, ms in self.multistep.items() for n in ms.parameter_names(c)]
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The model's outputs, then the measured multistep inputs."""
+        return (*self.model.outputs, *self.multistep)
 
 
 def problem_from_record(
     record: FlightRecord, model: LinearModel, initial_state: str = "measured",
-    hold: str = "foh",
+    hold: str = "foh", multistep_inputs: Sequence[str] = (),
 ) -> Problem:
-    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling)."""
+    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling).
+
+    ``multistep_inputs``: input channels estimated as levels and edge times (see
+    ``multistep_input``); their measurements join the outputs.
+    """
     missing = [c for c in (*model.inputs, *model.outputs) if c not in record]
     if missing:
         raise ValueError(
@@ -82,9 +101,20 @@ def problem_from_record(
     x0_names = tuple(f"x0_{s}" for s in model.states) if initial_state == "estimate" else ()
     if hold not in HOLDS:
         raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
+    not_inputs = [c for c in multistep_inputs if c not in model.inputs]
+    if not_inputs:
+        raise ValueError(f"multistep input(s) {', '.join(not_inputs)} not input(s) of the "
+                         f"{model.name} model ({', '.join(model.inputs)})")
+    from flightid.identification.multistep_input import from_measurement  # (import cycle)
+
+    multistep = {c: from_measurement(time, record[c], hold=hold) for c in multistep_inputs}
+    for c, ms in multistep.items():
+        u[:, model.inputs.index(c)] = ms.samples(time, hold)
+    z = np.column_stack([z, *(record[c] for c in multistep)])
     # variance floor: rounding level of each output (1e-10 of its range, squared)
     floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
-    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor)
+    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor,
+                   multistep)
 
 
 # ------------------------------------------------------------------ simulation
@@ -197,8 +227,40 @@ def _simulate(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
 def _outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
     A, B, C, D = problem.model.build({**problem.model.start, **problem.fixed,
                                       **_model_values(problem, values)})
-    return _simulate(A, B, C, D, problem.dt, problem.u, problem.w, _x0_of(problem, values),
-                     problem.hold)
+    u, w = _inputs(problem, values)
+    y = _simulate(A, B, C, D, problem.dt, u, w, _x0_of(problem, values), problem.hold)
+    return np.column_stack([y, u[:, _multistep_columns(problem)]])
+
+
+def _multistep_columns(problem: Problem) -> list[int]:
+    return [problem.model.inputs.index(c) for c in problem.multistep]
+
+
+def _inputs(problem: Problem, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Inputs u (N, m + 1) and the held inputs w at ``values`` (multistep levels and edges)."""
+    if not problem.multistep:
+        return problem.u, problem.w
+    u = problem.u.copy()
+    current = {**problem.fixed, **values}
+    for c, ms in problem.multistep.items():
+        u[:, problem.model.inputs.index(c)] = (
+            ms.with_parameters(c, current).samples(problem.time, problem.hold))
+    return u, hold_inputs(u, problem.hold)
+
+
+def _input_sensitivities(problem: Problem, values: Mapping[str, float],
+                         names: Sequence[str]) -> np.ndarray:
+    """du/dtheta (N, m + 1, len(names)) for the named multistep levels and edges."""
+    du = np.zeros((problem.u.shape[0], problem.u.shape[1], len(names)))
+    current = {**problem.fixed, **values}
+    for c, ms in problem.multistep.items():
+        own = ms.parameter_names(c)
+        cols = [(k, own.index(n)) for k, n in enumerate(names) if n in own]
+        if cols:
+            d = ms.with_parameters(c, current).sensitivities(problem.time, problem.hold)
+            k, j = (list(x) for x in zip(*cols, strict=True))
+            du[:, problem.model.inputs.index(c), k] = d[:, j]
+    return du
 
 
 def _stacked_product(mats: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -213,30 +275,44 @@ def _outputs_and_sensitivities(
     problem: Problem, values: Mapping[str, float], names: Sequence[str]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Outputs (N, ny) and their sensitivities (N, ny, len(names)) to the named parameters."""
-    model_names = [n for n in names if n not in problem.x0_names]
+    input_names = [n for n in names if n in problem.input_names]
+    model_names = [n for n in names if n not in problem.x0_names and n not in input_names]
     (A, B, C, D), (dA, dB, dC, dD) = matrix_sensitivities(
         problem.model, {**problem.fixed, **_model_values(problem, values)}, model_names
     )
     phi, gam, dphi, dgam = discretize(A, B, problem.dt, dA, dB, problem.hold)
-    u, w = problem.u, problem.w
+    u, w = _inputs(problem, values)
     x = propagate(phi, w @ gam.T, _x0_of(problem, values))
     n = A.shape[0]
     columns = {name: k for k, name in enumerate(model_names)}
     x0_cols = [n_ for n_ in names if n_ in problem.x0_names]
-    # forcing of the sensitivity equations: dPhi_k x_i + dGamma_k w_i, shape (N, n, np)
+    # forcing of the sensitivity equations: dPhi_k x_i + dGamma_k w_i, shape (N, n, np);
+    # an input parameter forces them through Gamma dw/dtheta, an initial state not at all
     forcing = _stacked_product(dphi, x) + _stacked_product(dgam, w)
-    start = np.zeros((n, len(model_names) + len(x0_cols)))
-    if x0_cols:
-        forcing = np.concatenate([forcing, np.zeros((len(u), n, len(x0_cols)))], axis=2)
-        for j, name in enumerate(x0_cols):
-            columns[name] = len(model_names) + j
-            start[problem.x0_names.index(name), len(model_names) + j] = 1.0
+    du = _input_sensitivities(problem, values, input_names)
+    dw = np.stack([hold_inputs(du[:, :, k], problem.hold) for k in range(len(input_names))],
+                  axis=2) if input_names else np.zeros((len(u), w.shape[1], 0))
+    nm = len(model_names)
+    forcing = np.concatenate([forcing, np.einsum("ab,ibk->iak", gam, dw),
+                              np.zeros((len(u), n, len(x0_cols)))], axis=2)
+    start = np.zeros((n, forcing.shape[2]))
+    for j, name in enumerate(input_names):
+        columns[name] = nm + j
+    for j, name in enumerate(x0_cols):
+        columns[name] = nm + len(input_names) + j
+        start[problem.x0_names.index(name), nm + len(input_names) + j] = 1.0
     xs = propagate(phi, forcing, start)
     y = x @ C.T + u @ D.T
     sens = np.matmul(C, xs)
     if model_names:
-        nm = len(model_names)
         sens[:, :, :nm] += _stacked_product(dC, x) + _stacked_product(dD, u)
+    sens[:, :, nm:nm + len(input_names)] += np.einsum("ab,ibk->iak", D, du)
+    # the measured multistep inputs are outputs too: u, sensitive to its levels and edges
+    ms_cols = _multistep_columns(problem)
+    ms_sens = np.zeros((len(u), len(ms_cols), sens.shape[2]))
+    ms_sens[:, :, nm:nm + len(input_names)] = du[:, ms_cols, :]
+    y = np.column_stack([y, u[:, ms_cols]])
+    sens = np.concatenate([sens, ms_sens], axis=1)
     order = [columns[name] for name in names]
     return y, sens[:, :, order]
 
@@ -297,6 +373,7 @@ def estimate(
     hold: str = "foh",
     full_noise_covariance: bool = False,
     colored: bool = False,
+    multistep_inputs: Sequence[str] = (),
     max_iterations: int = 50,
     step_tolerance: float = 1e-3,
     cost_tolerance: float = 1e-7,
@@ -313,6 +390,11 @@ def estimate(
     'estimate' (x0_<state> parameters, SI units) or 'zero'. Values are nondimensional
     derivatives and SI-unit biases; standard errors are Cramer-Rao bounds (corrected for
     colored residuals when ``colored``).
+    multistep_inputs: input channels flown as multisteps (doublet, 3211, pulse) whose
+    levels and edge times are estimated with the derivatives (``multistep_input``:
+    parameters level_<channel>_<k> in the input unit and edge_<channel>_<k> in s); their
+    measurements join the outputs, so the surface noise and the timing of a step between
+    two samples enter the bounds instead of biasing the derivatives.
     Converged when the last step changed no parameter by more than ``step_tolerance``
     of its standard error, or the ML cost N/2 ln det R by less than ``cost_tolerance``.
     """
@@ -324,7 +406,7 @@ def estimate(
             start = {n: v for n, v in start.items() if n in free}
     if start:
         model = model.with_start(**start)
-    problem = problem_from_record(record, model, initial_state, hold)
+    problem = problem_from_record(record, model, initial_state, hold, multistep_inputs)
     names = list(model.parameters if free is None else free)
     unknown = [n for n in names if n not in model.parameters]
     if unknown:
@@ -332,8 +414,11 @@ def estimate(
             f"{', '.join(unknown)} not parameter(s) of the {model.name} model "
             f"({', '.join(model.parameters)})"
         )
-    names += list(problem.x0_names)
+    names += [*problem.input_names, *problem.x0_names]
+    input_start = {n: v for c, ms in problem.multistep.items()
+                   for n, v in ms.parameters(c).items()}
     values = {n: model.start[n] for n in names if n in model.start}
+    values.update(input_start)
     values.update({n: problem.x0[j] for j, n in enumerate(problem.x0_names)})
     problem.fixed = {n: v for n, v in model.start.items() if n not in names}
 
@@ -343,7 +428,7 @@ def estimate(
     x0_start = dict(zip(problem.x0_names, problem.x0, strict=False))
     for _ in range(len(names) + 1):
         active = [n for n in names if n not in unidentifiable]
-        problem.fixed = {n: v for n, v in {**model.start, **x0_start}.items()
+        problem.fixed = {n: v for n, v in {**model.start, **input_start, **x0_start}.items()
                          if n not in active}
         current = {n: values[n] for n in active}
         if check_identifiability:
@@ -399,8 +484,8 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
 
 
 RUN_OPTIONS = ("free", "start", "initial_state", "hold", "full_noise_covariance", "colored",
-               "max_iterations", "step_tolerance", "cost_tolerance", "check_identifiability",
-               "min_input_range", "singular_eigenvalue", "derivatives")
+               "multistep_inputs", "max_iterations", "step_tolerance", "cost_tolerance",
+               "check_identifiability", "min_input_range", "singular_eigenvalue", "derivatives")
 
 
 def run(record: FlightRecord, model: str = "lateral",
@@ -424,7 +509,8 @@ def _x0_of(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
 
 
 def _model_values(problem: Problem, values: Mapping[str, float]) -> dict[str, float]:
-    return {k: v for k, v in values.items() if k not in problem.x0_names}
+    nuisance = {*problem.x0_names, *problem.input_names}
+    return {k: v for k, v in values.items() if k not in nuisance}
 
 
 def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, float],
@@ -620,12 +706,12 @@ def _result(problem: Problem, fit: MaximumLikelihoodFit, unidentifiable: dict[st
     outputs = {
         name: {"measured": problem.z[:, j], "model": fit.y[:, j],
                "residual": fit.residuals[:, j]}
-        for j, name in enumerate(problem.model.outputs)
+        for j, name in enumerate(problem.output_names)
     }
     fixed = {n: float(v) for n, v in problem.fixed.items()}
     spread = np.sum((problem.z - problem.z.mean(axis=0)) ** 2, axis=0)
     r2 = {o: float(1 - np.sum(fit.residuals[:, j] ** 2) / spread[j]) if spread[j] > 0
-          else float("nan") for j, o in enumerate(problem.model.outputs)}
+          else float("nan") for j, o in enumerate(problem.output_names)}
     fit_stats = {
         "model": problem.model.name,
         "converged": fit.converged,
@@ -635,7 +721,7 @@ def _result(problem: Problem, fit: MaximumLikelihoodFit, unidentifiable: dict[st
         "step_history": list(fit.step_history),
         "cost": fit.cost_history[-1],
         "noise_std": {o: float(np.sqrt(fit.noise[j, j]))
-                      for j, o in enumerate(problem.model.outputs)},
+                      for j, o in enumerate(problem.output_names)},
         "noise_covariance": fit.noise,
         "R2_per_output": r2,
         "R2": float(np.nanmean(list(r2.values()))),

@@ -59,7 +59,9 @@ def identify(
              "initial_state=estimate")] = None,
     multistep_input: Annotated[list[str] | None, typer.Option(
         help="input channel flown as a multistep (doublet, 3211, pulse) whose measurement "
-             "is noisy: made piecewise constant before identification (repeatable)")] = None,
+             "is noisy: --method oe estimates its levels and sub-sample edge times with the "
+             "derivatives, the other methods take it made piecewise constant (repeatable)")
+    ] = None,
 ) -> None:
     """Identify stability and control derivatives from a flight record."""
     from flightid.identification.dispatch import run_cli

@@ -31,11 +31,14 @@ Processing:
   to the CG as above; the boom vanes are corrected with the thesis's calibration (seed 000
   App. 2: 1 m ahead of the CG, K = 0.0136) by ``compatibility.correct``. The lateral model
   has no phi output (none measured); the pitch attitude of the reference condition comes
-  from the trimmed specific force, theta0 = atan2(ax, -az) (level flight). The aileron and
-  rudder and elevator potentiometers (0.2/0.3 deg noise, 0.25 deg steps, on a 2 deg pulse,
-  a 1.5 deg and a 3 deg doublet) are made piecewise constant by
-  ``input_denoising.piecewise_constant``: output error takes its inputs as exact, and the
-  raw noise shrank Cl_beta, Cl_p, Cl_da by 13 % and doubled the Cm_alpha scatter.
+  from the trimmed specific force, theta0 = atan2(ax, -az) (level flight). The surface
+  potentiometers (0.2/0.3 deg noise, 0.25 deg steps, on a 2 deg aileron pulse, a 1.5 deg
+  rudder and a 3 deg elevator doublet) are errors in the variables (output error takes
+  its inputs as exact: the raw noise shrank Cl_beta, Cl_p, Cl_da by 13 % and doubled the
+  Cm_alpha scatter): the aileron and rudder are estimated as multisteps, levels and
+  sub-sample edge times with the derivatives (``output_error.estimate(...,
+  multistep_inputs=...)``), the elevator is made piecewise constant
+  (``input_denoising.piecewise_constant``); see KNOWN for why each.
 """
 
 from __future__ import annotations
@@ -60,9 +63,10 @@ from flightid.sim.truth import derivatives
 IMU = ("p", "q", "r", "ax", "ay", "az")
 DAS_RATE = 25.0  # Hz, seed 000 ch. 6
 IMU_CUTOFF = 8.0  # Hz: below the DAS Nyquist (12.5 Hz), above the aircraft modes (< 2 Hz)
-# hobby suite: the servo-pot surfaces, made piecewise constant (errors in variables, see
-# KNOWN)
-MULTISTEP_SURFACES = ("de", "da", "dr")
+# hobby suite, servo-pot surfaces (errors in variables, see KNOWN): the elevator made
+# piecewise constant, the aileron and rudder estimated as multisteps by output error
+DENOISED_SURFACES = ("de",)
+MULTISTEP_INPUTS = ("da", "dr")
 WELL_EXCITED = ("Cm_alpha", "Cm_de", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr")
 # relative tolerance for the well-excited derivatives: research, 6-DOF: 1 %, 3 times the
 # largest corrected bound among them (Cl_p 0.21 %) rounded up, measured worst 0.32 %
@@ -115,7 +119,7 @@ def process(card, measured: FlightRecord) -> FlightRecord:
         assert est.fit["converged"], est.fit["reason"]
         return corrected
     record = cg_accelerations(at_das_instants(measured), arm.x, arm.y, arm.z)
-    record = input_denoising.denoise_channels(record, MULTISTEP_SURFACES)
+    record = input_denoising.denoise_channels(record, DENOISED_SURFACES)
     return compat.correct(record, {"vane_alpha_x": vanes.alpha_x, "vane_beta_x": vanes.beta_x,
                                    "upwash_alpha": vanes.upwash,
                                    "sidewash_beta": vanes.sidewash})
@@ -163,7 +167,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     if "phi" not in lat:
         model = _without_outputs(model, ("phi",))
     la = output_error.estimate(lat, model, start="equation_error", initial_state="estimate",
-                               colored=True)
+                               colored=True, multistep_inputs=MULTISTEP_INPUTS)
     return [lo, la]
 
 
@@ -206,42 +210,40 @@ def flight(request):
 #   +0.03 % through the same filter (sim/sensors.py research_suite).
 # What is left: the corrected bounds are 0.6-1.0 of the Monte Carlo scatter (Cl_p 0.92,
 # Cn_r 0.62, Cm_alpha 0.66, Cl_r 0.44), and CZ_q +1.3 % (+-0.4 %, bound 1.0 %).
-# Telemaster (hobby suite, linear models): one exception on the two seeds, seed 1 Cl_dr
-# +3.07 sigma. Over seeds 1-20 (same truth flight), 7 have a derivative beyond 3 sigma:
-# lateral seeds 1, 14, 17, 19 (below), longitudinal seeds 10 (CD_alpha +3.7), 18
-# (Cm_alpha -4.2), 19 (Cm_de -3.4). Measured by taking effects out of the suite and by
-# changing the processing (10-20 noise seeds each):
-# - lateral, solved in the mean: the white noise on the measured surfaces (servo pots
-#   0.2-0.3 deg, seed 000 Table 8-6, on a 2 deg aileron pulse and a 1.5 deg rudder
-#   doublet) is an error in the variables; output error takes its inputs as exact and the
-#   noise shrank Cl_beta, Cl_p, Cl_da by -12.7/-13.5/-12.5 % (+1.5 to +1.6 sigma on
-#   average, seed 2 Cl_beta +3.9). With the surfaces made piecewise constant
-#   (MULTISTEP_SURFACES, input_denoising): +6.4/+5.9/+8.0 % (-0.9/-0.8/-1.3 sigma on
-#   average, 20 seeds), the level of noise-free surfaces (+1.9/+3.5/+6.3 %). What is
-#   left is timing: the roll derivatives move by about 2.5 % per ms of input shift (a
-#   20 ms shift of the 25 Hz surfaces gave +55 %), and the lateral bounds are about 20 %
-#   small (z sd 0.95-1.35): 4 of the 20 seeds have one lateral derivative beyond 3 sigma
-#   (seed 1 Cl_dr +3.07, a weak derivative: 0.0130 against 0.0028). Tried and not kept:
-#   filter error with process noise on p, r (Cl -35 %); filter error with the surface
-#   noise as known process noise through B (Cl -24 %: conditioned on the measured input
-#   the input noise is not independent of it, the classical errors-in-variables trap);
-#   linear smoothers (5 Hz zero-phase filter halves the bias, a Wiener smoother took the
-#   steps with the noise, Cl_da +15 %).
-# - longitudinal: 16 of the 20 seeds missed while an equation-error start overwrote the
-#   a priori CL_q and Cm_alphadot (fixed since): they were then
-#   held at noisy regression values (the 19 Pa dynamic-pressure noise), and CL_de
-#   scattered 4.6 sigma (171 %). With the a priori kept (output_error.estimate), 20 seeds:
-#   the short period has CL_de -39 % (z mean -1.6, the speed it holds), the full
-#   longitudinal model CL_alpha, CL_de, Cm_q z mean +0.1/+0.6/-0.6, sd 0.7-0.9; with the
-#   raw elevator pot Cm_alpha scattered 5.5 % (bound 3.4 %, seeds 2, 6, 8, 11, 18 beyond
-#   3 sigma), denoised 2.8 % (bound 2.3 %). What is left is the 25 Hz sampling: noise-free
-#   the model reads Cm_alpha +2.1/+1.7/+3.8 %, Cm_de +1.5/+1.7/+4.6 % at 100/50/25 Hz (the
-#   data are exact: equation error on the same flight gives Cm_alpha -1.1780 for -1.178),
-#   and on the card Cm_alpha, Cm_de sit at z mean -1.1, -1.4; CD_alpha, seen only through
-#   the 0.8 m/s airspeed noise, at +1.3 (bound 59 %).
+# Telemaster (hobby suite, linear models): no exception on the two seeds. Over seeds 1-20
+# (same truth flight), 3 have a derivative beyond 3 sigma, all longitudinal: 10
+# (CD_alpha +3.7), 18 (Cm_alpha -4.2), 19 (Cm_de -3.4). Measured by taking effects out of
+# the suite and by changing the processing (10-20 noise seeds each):
+# - lateral, solved: the measured surfaces are errors in the variables. Output error
+#   takes its inputs as exact; the servo-pot noise (0.2-0.3 deg, seed 000 Table 8-6, on
+#   a 2 deg aileron pulse and a 1.5 deg rudder doublet) shrank Cl_beta, Cl_p, Cl_da by
+#   13 %; made piecewise constant (input_denoising) they read +6.4/+5.9/+8.0 %, and the
+#   25 Hz sampling was left: the roll derivatives move by about 1.4 % per ms of input
+#   timing, and a step between two 40 ms samples lands on the grid (noise-free, the
+#   exact 25 Hz surface samples interpolated read Cl_da +9.6 %; at 100 Hz +1.7 %). With
+#   the aileron and rudder estimated as multisteps (MULTISTEP_INPUTS, multistep_input:
+#   levels and sub-sample edge times with the derivatives, the surfaces as outputs), 20
+#   seeds: lateral z sd 0.84-1.35 (was 0.95-1.35), z mean -0.9 to +0.3, no lateral
+#   derivative beyond 3 sigma (was 4 seeds: 1 Cl_dr +3.07, 14 Cn_da +3.1, 17 Cl_beta
+#   -3.4, 19 Cn_dr -4.0); the bounds grew with the timing they now carry (Cl_da 5.7 ->
+#   7.8 %). Tried and not kept: filter error with process noise on p, r (Cl -35 %);
+#   filter error with the surface noise as known process noise through B (Cl -24 %, the
+#   errors-in-variables trap: conditioned on the measured input its noise is not
+#   independent of it); linear smoothers (Cl_da +15 %); the surface samples near the
+#   edges left out of the multistep fit (the edges then wander: Cl_beta z sd 5.6); a
+#   ramp of fixed width for how the pot samples a transition (10 ms: 1 seed of 20 beyond
+#   3 sigma; 6 and 12 ms: 9 and 3 seeds, the fit stops at different sample crossings).
+# - longitudinal: with the a priori CL_q and Cm_alphadot kept through the equation-error
+#   start (once overwritten by noisy regression values: CL_de 171 % scatter), 20 seeds:
+#   CL_alpha, CL_de, Cm_q z mean +0.1/+0.6/-0.6, sd 0.7-0.9; Cm_alpha, Cm_de z mean
+#   -1.1/-1.4, sd 1.3/1.2; CD_alpha, seen only through the 0.8 m/s airspeed noise,
+#   +1.3 (bound 59 %). The elevator as a multistep did not help: Cm_alpha z sd 1.6, 4
+#   seeds beyond 3 sigma (1, 2, 11, 18), the elevator exact (truth): z sd 1.4, so the
+#   Cm_alpha scatter is not the elevator's. Noise-free the model reads Cm_alpha
+#   +2.2/+4.3 % at 100/25 Hz (equation error on the same flight: -1.1780 for -1.178).
 # Not causes (10 seeds each): the engine vibration (aliases at 19.8 and 39.7 Hz, 1400
 # times down after the 8 Hz filter), the gyro random walk, the sensor biases.
-KNOWN = {("telemaster-id", 1, "Cl_dr")}
+KNOWN: set[tuple[str, int, str]] = set()
 
 
 def test_fits_converge_and_estimate_the_main_derivatives(flight):
