@@ -275,7 +275,8 @@ def _outputs_and_sensitivities(
     problem: Problem, values: Mapping[str, float], names: Sequence[str]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Outputs (N, ny) and their sensitivities (N, ny, len(names)) to the named parameters."""
-    input_names = [n for n in names if n in problem.input_names]
+    estimated_inputs = set(problem.input_names)
+    input_names = [n for n in names if n in estimated_inputs]
     model_names = [n for n in names if n not in problem.x0_names and n not in input_names]
     (A, B, C, D), (dA, dB, dC, dD) = matrix_sensitivities(
         problem.model, {**problem.fixed, **_model_values(problem, values)}, model_names
