@@ -68,11 +68,10 @@ class Multistep:
         return Multistep(tuple(v[:len(self.levels)]), tuple(v[len(self.levels):]))
 
     def _arguments(self, time: np.ndarray, hold: str) -> tuple[np.ndarray, float]:
-        if hold not in HOLD_OFFSET:
-            raise ValueError(f"hold must be one of {', '.join(HOLD_OFFSET)}, got {hold!r}")
+        c = _hold_offset(hold)
         time = np.asarray(time, dtype=float)
         dt = float(np.mean(np.diff(time)))
-        return (time[:, None] - np.asarray(self.edges)[None, :]) / dt + HOLD_OFFSET[hold], dt
+        return (time[:, None] - np.asarray(self.edges)[None, :]) / dt + c, dt
 
     def samples(self, time: np.ndarray, hold: str = "foh") -> np.ndarray:
         """Sample values (input unit) at the uniform ``time`` (s) for the model's hold."""
@@ -108,8 +107,7 @@ def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None
     if time.shape != y.shape or time.ndim != 1:
         raise ValueError(f"time and measurement must be 1-D of one length, got {time.shape} "
                          f"and {y.shape}")
-    if hold not in HOLD_OFFSET:
-        raise ValueError(f"hold must be one of {', '.join(HOLD_OFFSET)}, got {hold!r}")
+    c = _hold_offset(hold)
     sigma = white_noise_std(y) if sigma is None else float(sigma)
     # a noise-free (simulated) surface: the floor keeps its steps
     sigma = max(sigma, 1e-6 * float(np.ptp(y)))
@@ -118,7 +116,6 @@ def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None
     levels = [float((p[1 if k else 0:p.size - 1 if k < len(parts) - 1 else None]
                      if p.size >= 4 else p).mean()) for k, p in enumerate(parts)]
     dt = float(np.mean(np.diff(time)))
-    c = HOLD_OFFSET[hold]
     edges = []
     first = 0
     for k, part in enumerate(parts[:-1]):
@@ -130,6 +127,13 @@ def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None
         edge = time[hi] + c * dt - dt * area
         edges.append(float(np.clip(edge, time[lo] + c * dt, time[hi] + (c - 1) * dt)))
     return Multistep(tuple(levels), tuple(edges))
+
+
+def _hold_offset(hold: str) -> float:
+    """c of the module docstring for the model's input hold."""
+    if hold not in HOLD_OFFSET:
+        raise ValueError(f"hold must be one of {', '.join(HOLD_OFFSET)}, got {hold!r}")
+    return HOLD_OFFSET[hold]
 
 
 def _transitions_joined(parts: list[np.ndarray]) -> list[np.ndarray]:
