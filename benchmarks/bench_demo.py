@@ -23,7 +23,7 @@ def main(runs: int = 3) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(runs):
             t = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "flightid.scenarios.cli", "demo", "--report",
+            subprocess.run([sys.executable, "-m", "flightid.cli.app", "demo", "--report",
                             str(Path(tmp) / "demo.html")], check=True, capture_output=True)
             times.append(time.perf_counter() - t)
     text = (f"flightid demo (navion-demo card, output error, HTML report), {date.today()}\n"

@@ -83,9 +83,9 @@ def calm_reference(trim) -> dict[str, float]:
 
 def run_one(case: str, seed: int, trim) -> dict:
     """Fly one turbulent flight and fit it by output error and filter error."""
-    from flightid.identification import filter_error as fe
     from flightid.identification import linear_models as lm
-    from flightid.identification import output_error as oe
+    from flightid.identification.methods import filter_error as fe
+    from flightid.identification.methods import output_error as oe
     from flightid.record import FlightRecord
     from flightid.sim import disturbances as dist
     from flightid.sim.model import as_model

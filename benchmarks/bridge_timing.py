@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from flightid.record import FlightRecord
-from flightid.sim.bridge import BridgeConfig, serve_record
-from flightid.sim.bridge_frames import read_tlog
-from flightid.sim.bridge_link import LinkFaults, UdpLink
-from flightid.sim.bridge_messages import message_time
-from flightid.sim.recorder import convert_tlog, record_bridged, record_stream
+from flightid.sim.bridge.air import BridgeConfig, serve_record
+from flightid.sim.bridge.frames import read_tlog
+from flightid.sim.bridge.link import LinkFaults, UdpLink
+from flightid.sim.bridge.messages import message_time
+from flightid.sim.bridge.recorder import convert_tlog, record_bridged, record_stream
 
 OUT = Path(__file__).parent / "results" / "bridge_timing.json"
 

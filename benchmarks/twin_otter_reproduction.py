@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-from flightid.identification import equation_error, frequency_domain, output_error
 from flightid.identification import linear_models as lm
+from flightid.identification.methods import equation_error, frequency_output_error, output_error
 from flightid.record import read
 
 HERE = Path(__file__).resolve().parent
@@ -65,7 +65,7 @@ def estimates(record):
     out["oe"] = ({n: (est[n], est.std_of(n)) for n in est.names if n in PUBLISHED["oe"]},
                  time.perf_counter() - t)
     t = time.perf_counter()
-    (est,) = frequency_domain.run_fdoe(record, "lateral", {})
+    est = frequency_output_error.run(record, "lateral")
     out["fdoe"] = ({n: (est[n], est.std_of(n)) for n in est.names if n in PUBLISHED["fdoe"]},
                    time.perf_counter() - t)
     return out

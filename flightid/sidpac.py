@@ -33,8 +33,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy.io
 
-from flightid.record import FlightRecord, RecordMeta, Reference
+from flightid.flight_record import FlightRecord, RecordMeta, Reference
 from flightid.units import DEG, FT, G0, IN, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
 
 # (1-based fdata column, flightid channel name, factor to SI)
@@ -123,8 +124,6 @@ AIRCRAFT_NAMES = {"twin otter": "NASA Twin Otter (DHC-6)"}
 
 def read_mat(path: str | Path) -> FlightRecord:
     """Read a SIDPAC .mat flight-data file into a FlightRecord in SI units (m, s, rad, N, kg)."""
-    import scipy.io
-
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")

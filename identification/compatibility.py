@@ -1,9 +1,10 @@
 """Data compatibility by flight path reconstruction: sensor biases, scale factors, time
 shifts and air-data (vane, pitot) calibration from the kinematics alone.
 
-Morelli & Klein (2016) ch. 10 and Jategaonkar (2015) ch. 10; seed 001 (DSTO FPR, vane
-calibration alpha_m = K_alpha (alpha - x_alpha q / V) + b). The measured specific forces and
-body rates drive the rigid-body kinematic equations (flat, non-rotating Earth, M&K eqs.
+Morelli & Klein (2016) ch. 10 and Jategaonkar (2015) ch. 10; Cooper, Drobik & Martin,
+ARL Flight Mechanics Report 187 (1990; flight path reconstruction, vane calibration
+alpha_m = K_alpha (alpha - x_alpha q / V) + b). The measured specific forces and body
+rates drive the rigid-body kinematic equations (flat, non-rotating Earth, M&K eqs.
 10.4-10.6, with the apparent gravity of the WGS84 normal field):
 
     udot = r v - q w - g sin(theta) + ax
@@ -56,12 +57,9 @@ import numpy as np
 
 from flightid.channels import CHANNELS
 from flightid.identification import identifiability as ident
+from flightid.identification.engine.bounds import colored_residual_covariance
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
 from flightid.identification.estimate import Estimate
-from flightid.identification.output_error import (
-    MaximumLikelihoodFit,
-    colored_residual_covariance,
-    maximum_likelihood,
-)
 from flightid.identification.rigid_body import local_gravity
 from flightid.record import FlightRecord
 
@@ -136,6 +134,31 @@ def _catalogue() -> dict[str, Parameter]:
 
 
 PARAMETERS: dict[str, Parameter] = _catalogue()
+
+
+def _catalogue_effects() -> dict[str, tuple[str, str]]:
+    """Parameter -> (entry, parameter) of the effect catalogue (``flightid effects``)."""
+    out: dict[str, tuple[str, str]] = {}
+    for name in PARAMETERS:
+        kind, _, rest = name.partition("_")
+        if kind == "bias":
+            out[name] = ("bias", "value")  # bias_<c>: the bias on channel c
+        elif kind == "scale":
+            out[name] = ("scale", "factor")  # scale_<c> = factor - 1
+        elif kind == "delay":
+            out[name] = ("delay", "tau")
+        elif kind == "vane":
+            out[name] = ("vanes", rest)  # vane_alpha_x -> vanes.alpha_x
+        elif kind == "wind":
+            out[name] = ("wind", rest)
+    out["upwash_alpha"] = ("vanes", "upwash")
+    out["sidewash_beta"] = ("vanes", "sidewash")
+    return out
+
+
+# which injectable effect each sensor parameter estimates: name -> (catalogue entry, its
+# parameter); the initial states x0_<state> are not effects
+CATALOGUE_EFFECTS: dict[str, tuple[str, str]] = _catalogue_effects()
 
 
 def default_free(record: FlightRecord, outputs: Sequence[str] | None = None) -> list[str]:
@@ -532,8 +555,8 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float],
 
 
 # A scale factor k changes its channel by k * (peak-to-peak range): below these ranges that
-# is under the calibration accuracy of flight-test sensors (seed 001 Table 1: vanes
-# +-0.5 deg, rate gyros 0.5-3 deg/s, accelerometers 0.05 g, airspeed 10 kt) for any
+# is under the calibration accuracy of flight-test sensors (Cooper, Drobik & Martin 1990,
+# Table 1: vanes +-0.5 deg, rate gyros 0.5-3 deg/s, accelerometers 0.05 g, airspeed 10 kt) for any
 # plausible k (< 25 %), so k cannot be told from the bias and the model error.
 MIN_SCALE_RANGE = {"rad": math.radians(2.0), "rad/s": math.radians(10.0), "m/s^2": 0.2 * 9.80665,
                    "m/s": 20.0 * 0.514444}
@@ -767,6 +790,8 @@ def _result(problem: Problem, fit: MaximumLikelihoodFit, values: Mapping[str, fl
         "notes": dict(notes),
         "fixed": {n: float(v) for n, v in fixed.items()},
         "units": {n: PARAMETERS[n].unit for n in names},
+        "effects": {n: "{}.{}".format(*CATALOGUE_EFFECTS[n]) for n in names
+                    if n in CATALOGUE_EFFECTS},
         "high_correlations": ident.high_correlations(names, cov, 0.9),
     }
     return Estimate(METHOD, list(names), np.array([fit.values[n] for n in names]), std, cov,
@@ -872,48 +897,3 @@ def _correct_vanes(record: FlightRecord, P: Mapping[str, float],
         alpha = alpha + (av - a_model)
         beta = beta + (bv - b_model)
     return {"alpha": alpha, "beta": beta}
-
-
-# ------------------------------------------------------------------ command line
-
-
-def run_cli(path: str, output: str | None, fmt: str) -> None:
-    """The ``flightid compatibility`` command: reconstruct, print the estimates, write."""
-    import json
-
-    from flightid.record import read
-
-    if fmt not in ("table", "json"):
-        raise SystemExit(f"--format must be table or json, got {fmt!r}")
-    record = read(path)
-    corrected, est = reconstruct(record)
-    if output:
-        corrected.write(output)
-    if fmt == "json":
-        d = est.as_dict()
-        d["fit"].pop("cost_history", None)
-        d["units"] = est.fit["units"]
-        print(json.dumps(d, indent=2, default=str))
-        return
-    from rich.console import Console
-    from rich.table import Table
-
-    console = Console()
-    noise = ", ".join(f"{o} {s:.3g}" for o, s in est.fit["noise_std"].items())
-    table = Table(title=f"flight path reconstruction: {record.meta.aircraft or path}  "
-                  f"({'converged' if est.fit['converged'] else 'NOT converged'}, "
-                  f"std: {est.fit['std_kind']})")
-    for col in ("parameter", "value", "std", "unit", "value (deg, g)"):
-        table.add_column(col, justify="left" if col in ("parameter", "unit") else "right")
-    for name, value, std in zip(est.names, est.values, est.std, strict=True):
-        unit = PARAMETERS[name].unit
-        factor = {"rad": 180 / math.pi, "rad/s": 180 / math.pi, "m/s^2": 1 / 9.80665}.get(unit)
-        alt = f"{value * factor:.4g} +- {std * factor:.2g}" if factor else ""
-        table.add_row(name, f"{value:.6g}", f"{std:.3g}", unit, alt)
-    for name, reason in est.unidentifiable.items():
-        table.add_row(name, "unidentifiable", "", "", reason, style="yellow")
-    console.print(table)
-    console.print(f"residual std: {noise}")
-    console.print(f"{est.fit['notes'].get('gravity', '')}; {est.fit['reason']}")
-    if output:
-        console.print(f"corrected record written to {output}")

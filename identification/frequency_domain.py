@@ -45,7 +45,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.signal import StateSpace, lsim
 
+from flightid.identification.coefficients import channel_values, nondimensional_rates
 from flightid.identification.estimate import Estimate
 from flightid.identification.frequency_response import (
     FrequencyResponse,
@@ -94,8 +96,6 @@ def _with_rates(record: FlightRecord, names: Sequence[str]) -> FlightRecord:
     missing = [n for n in names if n in ("phat", "qhat", "rhat") and n not in record]
     if not missing:
         return record
-    from flightid.identification.coefficients import nondimensional_rates
-
     rates = nondimensional_rates(record)
     return record.with_channels(**{n: rates[n] for n in missing})
 
@@ -124,6 +124,8 @@ def equation_error(
             f"{', '.join(REGRESSOR_VARIABLES)}"
         )
     record = _with_rates(record, regressors)
+    if coefficient not in record:  # computed from the rigid-body equations
+        record = record.with_channels(**{coefficient: channel_values(record, coefficient)})
     f = default_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
     data = fourier_data(record, [coefficient, *regressors], f)
     z = data[coefficient]
@@ -146,8 +148,10 @@ def equation_error(
         std=np.sqrt(np.diag(cov)),
         covariance=cov,
         fit={"R2": fit_z, "residual_variance": s2, "frequencies_hz": f,
-             "std_kind": "frequency-domain least squares, residual variance",
+             "std_kind": "cramer-rao",
              "coefficient": coefficient},
+        outputs={coefficient: {"frequency": f, "measured": z, "model": x @ theta,
+                               "residual": v}},
     )
 
 
@@ -285,13 +289,16 @@ def output_error(
         "outputs": list(model.outputs),
         "fit_error_percent": {o: float(100 * np.linalg.norm(v[:, i]) / np.linalg.norm(z[:, i]))
                               for i, o in enumerate(model.outputs)},
-        "std_kind": "Cramer-Rao bound, frequency-domain output error",
+        "std_kind": "cramer-rao",
         "relaxations": len(history),
         "model": model.name,
         "fixed": {p: float(values[p]) for p in model.parameters if p not in names},
     }
+    freq = f if z.shape[0] == f.size else np.resize(f, z.shape[0])
+    outputs = {o: {"frequency": freq, "measured": z[:, i], "model": y[:, i],
+                   "residual": v[:, i]} for i, o in enumerate(model.outputs)}
     return Estimate(method="fdoe", names=names, values=theta,
-                    std=np.sqrt(np.diag(cov)), covariance=cov, fit=fit)
+                    std=np.sqrt(np.diag(cov)), covariance=cov, fit=fit, outputs=outputs)
 
 
 def _transformed(record: FlightRecord, model: LinearModel, frequencies: np.ndarray | None,
@@ -380,6 +387,11 @@ def fit_state_space(
         seg = r[start_idx : start_idx + n]
         per_pair[f"{p.output}/{p.input}"] = float(seg @ seg)
         start_idx += n
+    final = {**values, **dict(zip(names, theta, strict=True))}
+    outputs = {f"{p.output}/{p.input}": {
+        "frequency": p.frequency, "measured": p.response, "coherence": p.coherence,
+        "model": model_response(model, final, p.output, p.input, p.frequency)}
+        for p in pairs}
     return Estimate(
         method="cifer_state_space",
         names=names,
@@ -390,8 +402,9 @@ def fit_state_space(
              "insensitivity": insens,
              "cr_percent": 100 * std / np.maximum(np.abs(theta), 1e-300),
              "insensitivity_percent": 100 * insens / np.maximum(np.abs(theta), 1e-300),
-             "std_kind": "Cramer-Rao bound of the CIFER cost, scaled by residual variance",
+             "std_kind": "cramer-rao",
              "model": model.name},
+        outputs=outputs,
     )
 
 
@@ -425,8 +438,6 @@ def verify_time_domain(
     'biases'}; J_rms in the units deg, deg/s, ft/s, ft/s^2 (<= 1-2 is good,
     Tischler & Remple), TIC = ||z - y|| / (||z|| + ||y||) (< 0.25-0.3 is good).
     """
-    from scipy.signal import StateSpace, lsim
-
     vals = dict(model.start)
     if isinstance(values, Estimate):
         vals.update(dict(zip(values.names, values.values, strict=True)))
@@ -471,161 +482,3 @@ def verify_time_domain(
            for i, o in enumerate(outs)}
     return {"J_rms": j_rms, "tic": tic, "time": record.time, "measured": z, "model": y,
             "outputs": outs, "biases": coef}
-
-
-# ----------------------------------------------------------------------------- dispatch
-def run_fdee(record: FlightRecord, model: str = "lateral",
-             options: Mapping[str, object] | None = None) -> list[Estimate]:
-    """``flightid identify --method fdee``: frequency-domain equation error for every
-    coefficient of a dispatch model ('lateral', 'longitudinal' or 'Cn=beta+rhat; ...');
-    options: coefficients, frequencies (Hz)."""
-    from flightid.identification.dispatch import _restrict, parse_model
-
-    opts = dict(options or {})
-    structure = _restrict(parse_model(model), opts)
-    freqs = opts.get("frequencies")
-    return [equation_error(record, c, terms, frequencies=freqs)
-            for c, terms in structure.items()]
-
-
-FDOE_OPTIONS = ("frequencies", "noise", "end_terms", "estimate", "derivatives", "start")
-
-
-def run_fdoe(record: FlightRecord, model: str = "lateral",
-             options: Mapping[str, object] | None = None) -> list[Estimate]:
-    """``flightid identify --method fdoe``: frequency-domain output error with a linear
-    model preset; default frequencies 0.1-1.5 Hz spaced 0.02 Hz as in Morelli & Klein
-    example 7.1 (SIDPAC ``sidpac_text_examples``)."""
-    from flightid.identification.dispatch import check_options
-    from flightid.identification.linear_models import preset_for_record
-
-    opts = check_options(options, FDOE_OPTIONS, "frequency-domain output-error")
-    lin = preset_for_record(model, record, opts.pop("derivatives", None),
-                            "frequency-domain output error")
-    opts.setdefault("frequencies", np.arange(0.1, 1.5 + 1e-9, 0.02))
-    return [output_error(record, lin, **opts)]
-
-
-# outputs whose responses the CIFER fit uses, per linear model preset
-FR_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"), "short_period": ("alpha", "q", "az"),
-              "longitudinal": ("V", "alpha", "q", "theta", "az")}
-FR_OPTIONS = ("frequencies", "windows", "coherence_min", "max_cost", "estimate",
-              "derivatives", "start", "whole_record", "trim_seconds")
-MAX_PAIR_COST = 100.0  # CIFER guideline per pair (Tischler & Remple sec. 11.5)
-TRIM_SECONDS = 2.0  # the record's first seconds at trim define the reference condition
-
-
-def reference_condition(records: Sequence[FlightRecord], trim_seconds: float = TRIM_SECONDS):
-    """Linearisation point of several maneuvers (FlightCondition, SI): channel means over
-    the first ``trim_seconds`` of each record (the trim before the input), averaged over
-    the records. A maneuver's own mean is not the trim: an open-loop roll sweep excites
-    the phugoid and moves the mean dynamic pressure 1 % (all derivatives scale with it);
-    ``trim_seconds`` <= 0 uses the whole records."""
-    import dataclasses
-
-    from flightid.identification.linear_models import condition_from_record
-
-    conds = []
-    for rec in records:
-        t0 = rec.time[0]
-        part = rec.slice(t0, t0 + trim_seconds) if trim_seconds > 0 else rec
-        conds.append(condition_from_record(part if len(part) >= 2 else rec))
-    fields = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
-    return dataclasses.replace(conds[0], **{
-        k: float(np.mean([getattr(c, k) for c in conds])) for k in fields})
-
-
-def run_fr(record: FlightRecord | Sequence[FlightRecord], model: str = "lateral",
-           options: Mapping[str, object] | None = None) -> list[Estimate]:
-    """``flightid identify --method fr``: conditioned frequency responses of every model
-    output to every excited input (composite windows), then the CIFER state-space fit.
-
-    Pairs whose cost exceeds ``max_cost`` (``MAX_PAIR_COST`` = 100 is the guideline of
-    Tischler & Remple sec. 11.5; default None keeps all: on the Twin Otter doublets 8 of
-    10 pairs exceed it) after a first fit are dropped and the fit repeated; the pairs
-    kept and dropped are in ``fit['pairs']`` and ``fit['dropped_pairs']``.
-    A record with one excited input (a single-axis sweep) gets its responses from the
-    whole-record transform (``whole_record``, default True; the windows then give
-    coherence and random error only). The model is linearised at
-    ``reference_condition``: the first ``trim_seconds`` s of each record when given (the
-    trim before a simulated sweep), else the records' means. Start values come
-    from ``output_error`` on the same records unless ``start`` is given.
-    """
-    from flightid.identification.dispatch import check_options
-    from flightid.identification.frequency_response import frequency_response_arrays
-    from flightid.identification.linear_models import MODELS
-
-    opts = check_options(options, FR_OPTIONS, "frequency-response fit")
-    records = [record] if isinstance(record, FlightRecord) else list(record)
-    if not records:
-        raise ValueError("give at least one record")
-    if model not in MODELS:
-        raise ValueError(f"the fr method needs a linear model preset ({', '.join(MODELS)}), "
-                         f"got {model!r}")
-    derivs = opts.pop("derivatives", None)
-    cond = reference_condition(records, float(opts.get("trim_seconds", 0.0)))
-    lin = MODELS[model](cond, **({"derivatives": tuple(derivs)} if derivs else {}))
-    lin = lin.with_start(**{p: 0.0 for p in lin.parameters if p.startswith("bias_")})
-    windows = opts.get("windows")
-    coh_min = float(opts.get("coherence_min", COHERENCE_MIN))
-    max_cost = opts.get("max_cost")
-    whole = bool(opts.get("whole_record", True))
-    responses = []
-    for rec in records:
-        _check_uniform(rec)
-        # an input is excited when its spread is at least a tenth of the largest one
-        # (sensor noise on a surface held at trim is not an excitation)
-        spread = {i: float(np.std(rec[i])) for i in lin.inputs if i in rec}
-        top = max(spread.values(), default=0.0)
-        excited = [i for i, s in spread.items() if top > 0 and s >= 0.1 * top]
-        if not excited:
-            raise ValueError(f"no input of model {lin.name} ({', '.join(lin.inputs)}) "
-                             "varies in the record")
-        duration = rec.time[-1] - rec.time[0]
-        wins = tuple(windows) if windows else _fr_windows(duration, rec.dt, len(excited))
-        freqs = opts.get("frequencies")
-        if freqs is None:
-            freqs = np.geomspace(max(2.0 / max(wins), 0.1), min(2.0, 0.2 / rec.dt), 60)
-        for out in FR_OUTPUTS.get(model, lin.outputs):
-            if out not in rec:
-                continue
-            resp = frequency_response_arrays({i: rec[i] for i in excited}, rec[out], rec.dt,
-                                             output_name=out, windows=wins,
-                                             frequencies=freqs,
-                                             whole_record=whole and len(excited) == 1)
-            responses.extend(r for r in resp.values() if r.valid(coh_min).sum() >= 3)
-    if not responses:
-        raise ValueError(f"no frequency response has 3 or more points with coherence >= "
-                         f"{coh_min}")
-    names = opts.get("estimate")
-    start = opts.get("start")
-    if start is None:
-        # the CIFER cost has local minima far from the answer: start from the
-        # frequency-domain output error of the same maneuvers
-        first = output_error(records, lin, estimate=names)
-        start = dict(zip(first.names, first.values, strict=True))
-    est = fit_state_space(responses, lin, estimate=names, coherence_min=coh_min, start=start)
-    costs = est.fit["cost_per_pair"]
-    dropped = [] if max_cost is None else [k for k, c in costs.items() if c > max_cost]
-    if dropped and len(dropped) < len(costs):
-        kept = [r for r in responses if f"{r.output}/{r.input}" not in dropped]
-        est = fit_state_space(kept, lin, estimate=names, coherence_min=coh_min, start=start)
-    est.method = "fr"
-    est.fit.update(pairs=list(est.fit["cost_per_pair"]), dropped_pairs=dropped,
-                   windows=wins, responses=len(responses), whole_record=whole,
-                   condition=cond)
-    return [est]
-
-
-def _fr_windows(duration: float, dt: float, n_inputs: int) -> tuple[float, ...]:
-    """Composite windows (s): the longest that still gives n_inputs + 1 half-overlapped
-    segments (T 2/(q + 2): 2/3 of the record for one input), half and a quarter of it,
-    none under 40 samples.
-
-    Long windows matter: the Hann window widens a lightly damped resonance, and the
-    short windows alone would overstate the Dutch-roll damping (Cn_r 20 % too large on
-    the Navion yaw sweep with 40/20/10 s windows, 8 % with 64/32/16 s).
-    """
-    longest = 2.0 * duration / (n_inputs + 2)
-    wins = [longest, longest / 2, longest / 4]
-    return tuple(w for w in wins if w >= 40 * dt) or (longest,)

@@ -1,7 +1,7 @@
 """Frequency responses from flight data: spectra, coherence, composite windows, conditioning.
 
 Nonparametric frequency-response identification as in CIFER (Tischler & Remple 2012,
-ch. 7-9; seed 004 ch. 5): each channel is cut into overlapped windowed segments
+ch. 7-9; Catterall 2003 ch. 5): each channel is cut into overlapped windowed segments
 (Hann or Hamming), each segment is Fourier transformed at the chosen frequencies (chirp
 z-transform on a uniform grid, a direct transform otherwise), the auto and cross spectra
 are averaged, and
@@ -32,7 +32,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
+from scipy.signal import czt
+from scipy.signal.windows import tukey
 
 TAPERS = ("hann", "hamming", "rectangular")
 
@@ -121,8 +125,6 @@ def discrete_fourier(x: np.ndarray, dt: float, frequencies: np.ndarray) -> np.nd
     x = np.asarray(x)
     f = np.atleast_1d(np.asarray(frequencies, dtype=float))
     if _is_uniform(f):
-        from scipy.signal import czt
-
         step = f[1] - f[0]
         w = np.exp(-2j * np.pi * step * dt)
         a = np.exp(2j * np.pi * f[0] * dt)
@@ -504,8 +506,6 @@ def _tukey(n: int, fraction: float) -> np.ndarray:
     """Tukey taper: flat, with raised-cosine ends over ``fraction`` of the n samples."""
     if not 0.0 <= fraction <= 1.0:
         raise ValueError(f"taper fraction must be in [0, 1], got {fraction}")
-    from scipy.signal.windows import tukey
-
     return tukey(n, fraction)
 
 
@@ -589,11 +589,7 @@ COHERENCE_PLOT_MIN = 0.6  # below it a response point is drawn faint (Tischler &
 def bode_figure(responses: Sequence[FrequencyResponse], title: str = ""):
     """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz);
     points with coherence below 0.6 are drawn faint."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(3, 1, figsize=(7.5, 8), sharex=True,
                              gridspec_kw={"height_ratios": [2, 2, 1]})
     for r in responses:
@@ -623,44 +619,12 @@ def bode_figure(responses: Sequence[FrequencyResponse], title: str = ""):
     return fig
 
 
-def run_cli(record_path: str, input: str, output: str, other_inputs: Sequence[str],
-            windows: Sequence[float], f_min: float | None, f_max: float | None,
-            plot: str | None) -> None:
-    """The ``flightid frequency-response`` command: table to stdout, optional Bode PNG."""
-    from flightid.record import read
-
-    rec = read(record_path)
-    wins = tuple(windows) if windows else default_windows(rec.time[-1] - rec.time[0], rec.dt)
-    freqs = None
-    if f_min is not None or f_max is not None:
-        lo = f_min if f_min is not None else 2.0 / max(wins)
-        hi = f_max if f_max is not None else 0.2 / rec.dt
-        freqs = np.geomspace(lo, hi, 100)
-    r = frequency_response(rec, input, output, other_inputs=other_inputs, windows=wins,
-                           frequencies=freqs)
-    unit = f"{rec.unit(output)} per {rec.unit(input)}"
-    print(f"# {output}/{input} ({unit}), windows {', '.join(f'{w:g}' for w in wins)} s"
-          + (f", conditioned on {', '.join(r.conditioned_on)}" if r.conditioned_on else ""))
-    print(f"{'f_Hz':>9} {'mag_dB':>9} {'phase_deg':>10} {'coherence':>9} {'rand_err':>9}")
-    for f, m, p, c, e in zip(r.frequency, r.magnitude_db, r.phase_deg, r.coherence,
-                             r.random_error, strict=True):
-        print(f"{f:9.4f} {m:9.3f} {p:10.2f} {c:9.3f} {e:9.4f}")
-    if plot:
-        fig = bode_figure([r], title=f"{rec.meta.aircraft or record_path}: {output}/{input}")
-        fig.savefig(plot, dpi=110)
-        print(f"# Bode plot written to {plot}")
-
-
 def bode_overlay_figure(measured: Sequence[FrequencyResponse], model: Sequence[np.ndarray],
                         coherence_min: float = 0.6, title: str = ""):
     """Matplotlib figure: measured responses (points where coherence >= coherence_min)
     with the identified model's responses (lines, complex arrays on the same frequencies)
     overlaid: magnitude (dB), phase (deg), coherence against frequency (Hz)."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     if len(measured) != len(model):
         raise ValueError(f"{len(measured)} measured responses but {len(model)} model ones")
     fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True,

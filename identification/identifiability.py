@@ -12,6 +12,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from flightid.record import FlightRecord
+
 # An input that moves less than this (rad) carries no excitation: it is below the
 # resolution of control-position sensors (about 0.1 deg) and far below any test input.
 MIN_INPUT_RANGE = 1e-3
@@ -112,6 +114,23 @@ def collinear(
     return out
 
 
+def unidentifiable(
+    names: Sequence[str], information: np.ndarray, values: np.ndarray,
+    prefer_keep: Sequence[str] = (), tolerance: float = SINGULAR_EIGENVALUE,
+) -> dict[str, str]:
+    """Parameters a fit's information matrix cannot determine: {name: reason}.
+
+    The zero-sensitivity test first (``values`` at the fit, parameter units); when no
+    parameter fails it, the collinearity test on the normalised information matrix
+    (``collinear`` with ``prefer_keep`` and ``tolerance``). Used by every
+    maximum-likelihood method to decide what to fix before refitting.
+    """
+    found = zero_sensitivity(names, information, values)
+    if found:
+        return found
+    return collinear(names, information, prefer_keep=prefer_keep, tolerance=tolerance)
+
+
 def correlation(covariance: np.ndarray) -> np.ndarray:
     """Correlation matrix of a parameter covariance."""
     s = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
@@ -130,3 +149,29 @@ def high_correlations(
             if abs(corr[i, j]) > threshold:
                 pairs.append((names[i], names[j], float(corr[i, j])))
     return sorted(pairs, key=lambda p: -abs(p[2]))
+
+
+# an input counts as excited when its spread exceeds this many times the spread of its
+# sample-to-sample noise (white noise gives about 1; a maneuver sampled at 10 Hz or more
+# gives 10 and above)
+MIN_SIGNAL_TO_NOISE = 3.0
+
+
+def input_excitation(record: FlightRecord, inputs: Sequence[str]) -> dict[str, str]:
+    """{input: why it is not excited} for the record's ``inputs`` that are constant (peak to
+    peak below MIN_INPUT_RANGE in their SI unit) or noise only (standard deviation below
+    MIN_SIGNAL_TO_NOISE times that of the sample-to-sample differences / sqrt 2)."""
+    out = {}
+    for name in inputs:
+        x = np.asarray(record[name], dtype=float)
+        spread = float(np.ptp(x)) if x.size else 0.0
+        if spread < MIN_INPUT_RANGE:
+            out[name] = f"{name} is constant (peak to peak {spread:.2g} {record.unit(name)})"
+            continue
+        noise = float(np.std(np.diff(x))) / np.sqrt(2.0)
+        ratio = float(np.std(x)) / noise if noise > 0 else np.inf
+        if ratio < MIN_SIGNAL_TO_NOISE:
+            out[name] = (f"{name} is noise only (standard deviation {ratio:.1f} times its "
+                         f"sample-to-sample noise; a maneuver gives {MIN_SIGNAL_TO_NOISE:g} "
+                         "and more)")
+    return out

@@ -1,11 +1,12 @@
 """A measured multistep input as parameters: plateau levels and sub-sample edge times.
 
 A doublet, 2-1-1, 3211 or pulse reaches the surface through the servo in a few
-milliseconds; a 25 Hz recorder (the hobby suite, seed 000 ch. 6) sees each step as one
-or two samples. The record alone puts the step on the 40 ms grid, and the roll and pitch
-derivatives of a light aircraft move by 1-1.5 % per ms of input timing (Telemaster card,
-noise-free: linear interpolation of the exact 25 Hz surface samples reads Cl_da +9.6 %,
-Cm_alpha +4.4 %; +1.7 %, +2.2 % at 100 Hz). Here the input is a sum of steps,
+milliseconds; a 25 Hz recorder (the hobby suite, after Sofyan, RMIT thesis, c. 1997,
+ch. 6) sees each step as one or two samples. The record alone puts the step on the 40 ms
+grid, and the roll and pitch derivatives of a light aircraft move by 1-1.5 % per ms of
+input timing (Telemaster card, noise-free: linear interpolation of the exact 25 Hz
+surface samples reads Cl_da +9.6 %, Cm_alpha +4.4 %; +1.7 %, +2.2 % at 100 Hz). Here the
+input is a sum of steps,
 
     u(t) = a_0 + sum_k (a_{k+1} - a_k) H(t - t_k),
 

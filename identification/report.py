@@ -13,35 +13,27 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
+from flightid.channels import CHANNELS
 from flightid.identification.estimate import Estimate
-
-METHOD_NAMES = {
-    "ee": "equation error", "swr": "stepwise regression", "oe": "output error",
-    "fem": "filter error", "fdee": "frequency-domain equation error",
-    "fdoe": "frequency-domain output error", "fr": "frequency-response fit",
-}
+from flightid.identification.methods import registry
 
 
-def _png(fig) -> str:
+def _png(fig: Figure) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode()
 
 
-def time_history_figure(estimate: Estimate, title: str = ""):
-    """Measured vs model outputs and residuals on a shared time axis."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def time_history_figure(estimate: Estimate, title: str = "") -> Figure:
+    """Measured vs model outputs and residuals on a shared time axis (frequency-domain
+    estimates: magnitudes against frequency in Hz)."""
     names = list(estimate.outputs)
-    fig, axes = plt.subplots(len(names), 2, figsize=(11, 1.9 * len(names) + 0.6), sharex=True,
-                             squeeze=False)
+    if any("frequency" in estimate.outputs[n] for n in names):
+        return frequency_figure(estimate, title)
+    fig = Figure(figsize=(11, 1.9 * len(names) + 0.6))
+    axes = fig.subplots(len(names), 2, sharex=True, squeeze=False)
     t = estimate.time if estimate.time is not None else np.arange(
         len(next(iter(estimate.outputs.values()))["measured"]))
     for row, name in enumerate(names):
@@ -64,17 +56,36 @@ def time_history_figure(estimate: Estimate, title: str = ""):
     return fig
 
 
-def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None):
+def frequency_figure(estimate: Estimate, title: str = "") -> Figure:
+    """Measured and model magnitudes of each fitted transform or response against
+    frequency (Hz), log axes."""
+    names = list(estimate.outputs)
+    fig = Figure(figsize=(11, 1.9 * len(names) + 0.6))
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, name in zip(axes, names, strict=True):
+        out = estimate.outputs[name]
+        order = np.argsort(out["frequency"])
+        f = np.asarray(out["frequency"])[order]
+        ax.loglog(f, np.abs(np.asarray(out["measured"]))[order], color="0.3", lw=1.0,
+                  label="measured")
+        ax.loglog(f, np.abs(np.asarray(out["model"]))[order], color="tab:red", lw=1.0,
+                  ls="--", label="model")
+        ax.set_ylabel(f"|{name}|")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].set_title(title or f"{estimate.method} {estimate.fit.get('model', '')}: "
+                               "measured and model, magnitude")
+    axes[-1].set_xlabel("frequency (Hz)")
+    fig.tight_layout()
+    return fig
+
+
+def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None) -> Figure:
     """Each derivative against truth: estimate/|truth| with 2-sigma bars, and error/std."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     names = [n for n in estimate.names if n.startswith("C")]
     scored = [n for n in names if truth and n in truth]
-    fig, axes = plt.subplots(1, 2 if scored else 1, figsize=(11, 0.32 * len(names) + 1.2),
-                             sharey=True, squeeze=False)
+    fig = Figure(figsize=(11, 0.32 * len(names) + 1.2))
+    axes = fig.subplots(1, 2 if scored else 1, sharey=True, squeeze=False)
     ax = axes[0, 0]
     for i, n in enumerate(names):
         v, s = estimate[n], estimate.std_of(n)
@@ -103,9 +114,12 @@ def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None):
     return fig
 
 
-def _unit(name: str) -> str:
-    from flightid.channels import CHANNELS
+def _method_name(method_id: str) -> str:
+    known = registry.methods()
+    return known[method_id].name if method_id in known else method_id
 
+
+def _unit(name: str) -> str:
     return CHANNELS[name].unit if name in CHANNELS else "-"
 
 
@@ -146,7 +160,7 @@ def write_html(
     parts += [f"<p>{html.escape(n)}</p>" for n in notes]
     for est in estimates:
         model = est.fit.get("model") or est.fit.get("coefficient") or ""
-        parts.append(f"<h2>{html.escape(METHOD_NAMES.get(est.method, est.method))}"
+        parts.append(f"<h2>{html.escape(_method_name(est.method))}"
                      f"{': ' + html.escape(str(model)) if model else ''}</h2>")
         rows = []
         for n, v, s in zip(est.names, est.values, est.std, strict=True):

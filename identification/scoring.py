@@ -1,4 +1,4 @@
-"""Score estimates against truth: a row per derivative, a one-line verdict, table and JSON.
+"""Score estimates against truth: a row per derivative, a one-line verdict, JSON.
 
 error = estimate - truth; error/std says how many standard errors (Cramer-Rao bounds,
 corrected for colored residuals where the method did so) the estimate is off. An
@@ -16,7 +16,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from flightid.derivatives import is_derivative
 from flightid.identification.estimate import Estimate
+from flightid.record import FlightRecord
 
 STATUS_ESTIMATED = "estimated"
 STATUS_UNIDENTIFIABLE = "unidentifiable"
@@ -55,60 +57,73 @@ class Score:
             "rows": [{k: _finite(v) for k, v in asdict(r).items()} for r in self.rows],
         }
 
+    def __str__(self) -> str:
+        """A plain-text table: derivative, truth, estimate, std, error/std; the verdict."""
+        lines = [f"{'derivative':<14}{'truth':>11}{'estimate':>11}{'std':>10}{'err/std':>9}"]
+        for r in self.rows:
+            if r.status == STATUS_ESTIMATED:
+                lines.append(f"{r.name:<14}{r.truth:>11.4g}{r.estimate:>11.4g}{r.std:>10.3g}"
+                             f"{r.sigmas:>+9.2f}")
+            else:
+                lines.append(f"{r.name:<14}{r.truth:>11.4g}  {r.status}")
+        return "\n".join([*lines, self.verdict])
+
     def to_json(self, indent: int = 2) -> str:
         """The dict form as JSON text."""
         return json.dumps(self.as_dict(), indent=indent)
 
-    def table(self):  # -> rich.table.Table
-        """A rich Table of the rows with the verdict as caption."""
-        from rich.table import Table
 
-        table = Table(title=f"{self.method} vs truth" if self.method else "estimate vs truth",
-                      caption=self.verdict)
-        for col in ("derivative", "truth", "estimate", "std", "error", "error/std"):
-            table.add_column(col, justify="left" if col == "derivative" else "right")
-        for r in self.rows:
-            if r.status == STATUS_ESTIMATED:
-                style = "" if abs(r.sigmas) <= self.n_sigma else "red"
-                table.add_row(r.name, f"{r.truth:.5g}", f"{r.estimate:.5g}", f"{r.std:.3g}",
-                              f"{r.error:+.3g}", f"{r.sigmas:+.2f}", style=style)
-            else:
-                label = r.status + (f": {r.reason}" if r.reason else "")
-                table.add_row(r.name, f"{r.truth:.5g}", label, "", "", "", style="yellow")
-        return table
+SCOPES = ("estimated", "all")
+# coefficients at the record's reference condition: they depend on how the reference is
+# defined (mean, initial, trim), so they are reported but not scored
+REFERENCE_SUFFIX = "_0"
 
-    def print(self, console=None) -> None:
-        """Print the table with rich (to the given console or stdout)."""
-        from rich.console import Console
 
-        (console or Console()).print(self.table())
+def record_truth(record: FlightRecord) -> dict[str, float]:
+    """The exact derivatives a simulated record carries (``meta.extra['truth']``), in the
+    body axes of the identification models (CL and CD as in both axes); empty for a record
+    that carries none (real flight data)."""
+    table = record.meta.extra.get("truth") or {}
+    return {k: float(v) for k, v in (table.get("body") or {}).items()}
 
 
 def score(
     estimate: Estimate | Iterable[Estimate],
-    truth: Mapping[str, float],
+    truth: Mapping[str, float] | FlightRecord,
     n_sigma: float = 3.0,
+    scope: str = "estimated",
 ) -> Score:
-    """Compare one or several estimates with truth values {derivative name: value}."""
+    """Compare one or several estimates with truth values {derivative name: value} (or the
+    truth a simulated record carries).
+
+    scope 'estimated' (default): a row per derivative the estimate estimated or found
+    unidentifiable; 'all': a row per truth value, "not estimated" where no estimate has it.
+    Coefficients at the reference condition (``C*_0``) are not scored.
+    """
+    if scope not in SCOPES:
+        raise ValueError(f"scope must be one of {', '.join(SCOPES)}, got {scope!r}")
     estimates = [estimate] if isinstance(estimate, Estimate) else list(estimate)
     if not estimates:
         raise ValueError("no estimate to score")
-    rows = []
-    for name, true_value in truth.items():
-        rows.append(_row(name, float(true_value), estimates))
+    if isinstance(truth, FlightRecord):
+        truth = record_truth(truth)
+    covered = {n for e in estimates for n in (*e.names, *e.unidentifiable)}
+    rows = [_row(name, float(value), estimates) for name, value in truth.items()
+            if (scope == "all" or name in covered) and not name.endswith(REFERENCE_SUFFIX)]
     method = ", ".join(sorted({e.method for e in estimates}))
     return Score(rows, n_sigma, verdict(rows, n_sigma), method)
 
 
 def verdict(rows: list[ScoreRow], n_sigma: float = 3.0) -> str:
-    """One line: '18 of 18 within 3 sigma; worst Cn_p at 2.1 sigma' (+ unidentifiable)."""
+    """One line: '13 estimated, 13 within 3 sigma, worst Cn_dr at 1.9 sigma' (then the
+    unidentifiable and not-estimated ones by name)."""
     done = [r for r in rows if r.status == STATUS_ESTIMATED]
     parts = []
     if done:
         inside = sum(abs(r.sigmas) <= n_sigma for r in done)
         worst = max(done, key=lambda r: abs(r.sigmas))
-        parts.append(f"{inside} of {len(done)} within {n_sigma:g} sigma; worst {worst.name} "
-                     f"at {abs(worst.sigmas):.1f} sigma")
+        parts.append(f"{len(done)} estimated, {inside} within {n_sigma:g} sigma, worst "
+                     f"{worst.name} at {abs(worst.sigmas):.1f} sigma")
     else:
         parts.append("nothing estimated")
     for status in (STATUS_UNIDENTIFIABLE, STATUS_NOT_ESTIMATED):
@@ -133,8 +148,6 @@ def load_truth(path: str | Path) -> dict[str, float]:
         data = data["truth"]
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object of derivative values")
-    from flightid.derivatives import is_derivative
-
     out = {}
     for name, value in data.items():
         if not is_derivative(name):

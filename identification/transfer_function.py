@@ -2,8 +2,8 @@
 
 A SISO model  T(s) = (b_m s^m + ... + b_0) / (s^n + a_{n-1} s^{n-1} + ... + a_0) e^{-tau s}
 (a low-order equivalent system with an equivalent time delay, Tischler & Remple ch. 11;
-seed 004 sec. 5.3) is fitted to a measured response over the frequencies where the
-coherence is at least 0.6, minimising the CIFER cost (seed 004; Tischler & Remple
+Catterall 2003 sec. 5.3) is fitted to a measured response over the frequencies where the
+coherence is at least 0.6, minimising the CIFER cost (Catterall 2003; Tischler & Remple
 eq. 11.8)
 
     J = 20/n_w sum_w W_gamma [ W_g (|T_c| - |T|)^2 + W_p (angle T_c - angle T)^2 ],

@@ -20,8 +20,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from flightid.identification.equation_error import predict as ee_predict
 from flightid.identification.estimate import Estimate
+from flightid.identification.methods.equation_error import channel_values
+from flightid.identification.methods.equation_error import predict as ee_predict
 from flightid.record import FlightRecord
 
 
@@ -123,8 +124,6 @@ def predict_record(est: Estimate, record: FlightRecord, refit_bias: bool = True)
     SIDPAC prediction cases: a new maneuver starts from its own trim, which a
     perturbation model's bias does not know.
     """
-    from flightid.identification.equation_error import channel_values
-
     coefficient = est.fit["coefficient"]
     measured = channel_values(record, coefficient)
     predicted = ee_predict(est, record)

@@ -5,7 +5,7 @@ degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a co
 
     name = "navion-demo"        # optional, default: the file name
     description = "one line"    # shown by `flightid simulate --list`
-    source = "seed 004 ..."     # where the flight test comes from
+    source = "Catterall (2003)" # where the flight test comes from
     aircraft = "navion"         # a project aircraft or one shipped with JSBSim
     duration = 50.0             # s of flight after trim
     rate = 100.0                # Hz of the truth record (JSBSim runs at >= 400 Hz)
@@ -27,12 +27,21 @@ degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a co
     suite = "research"          # built-in suite (hobby, research, ideal) to start from
     output_rate = 50.0          # other keys as flightid.sim.sensors.suite_from_dict
     drop = ["rpm"]              # channels or mounting effects to remove from the suite
+    mounting = [{effect = "lever_arm", x = 0.3}]  # lever_arm, vanes, engine_vibration
     [sensors.channels]          # per-channel overrides replace that channel's chain
     q = [{effect = "sample", rate = 50.0}, {effect = "noise", sigma_deg = 0.1}]
 
-    [[disturbance]]             # kinds of flightid.sim.disturbances.DISTURBANCES
-    kind = "turbulence"         # turbulence, wind, gust, engine_vibration
+    [[disturbance]]             # wind, gust, turbulence, engine_vibration
+    kind = "turbulence"
     intensity = "light"
+
+Every ``effect`` and ``kind`` above names one entry of the effect catalogue
+(``flightid.sim.effects.catalogue.CATALOGUE``; ``flightid effects`` lists it, with each
+effect's parameters, units and defaults; docs/effects.md): sensor effects in a channel's
+chain, mounting and vibration effects in ``mounting``, disturbances and vibration in
+``[[disturbance]]``. An unknown name, or one given in the wrong place, is an error that
+names the file, line and field and lists the names valid there. ``Card.effects`` maps
+each such field to its catalogue entry.
 
 ``load_card(path) -> Card`` validates everything and raises ``CardError`` naming the file,
 the line and the field. ``fly_card(card, seed) -> (measured, truth)`` is a pure function
@@ -55,15 +64,33 @@ from typing import Any
 
 import numpy as np
 
+from flightid.derivatives import is_derivative
 from flightid.record import FlightRecord
+from flightid.scenarios.flight_meta import maneuver_list, truth_table
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.scenarios.toml_locate import line_index, line_of
+from flightid.sim.condition import FlightCondition
+from flightid.sim.disturbances import (
+    Gust,
+    atmosphere_for,
+    disturbance_from_dict,
+    fly_disturbed,
+    vibration_of,
+    wind_schedule,
+)
+from flightid.sim.effects.catalogue import CATALOGUE, SECTIONS
+from flightid.sim.effects.vibration import EngineVibration
+from flightid.sim.flight import DepartureError
+from flightid.sim.model import available, load
+from flightid.sim.sensors import measure, suite_from_dict
+from flightid.sim.trim import trim
 from flightid.units import DEG
 
 LIBRARY = Path(__file__).resolve().parent / "library"
 TOP_FIELDS = ("name", "description", "source", "aircraft", "duration", "rate", "seed",
-              "condition", "maneuver", "sensors", "disturbance")
+              "condition", "maneuver", "sensors", "disturbance", "a_priori")
+A_PRIORI_FIELDS = ("value", "std", "source")
 CONDITION_FIELDS = ("altitude", "speed", "gamma", "bank", "flaps")
 NO_SENSORS = "none"
 
@@ -81,15 +108,9 @@ class CardError(ValueError):
         self.message = message
 
 
-@dataclass(frozen=True)
-class Condition:
-    """Trimmed start: altitude (m), true airspeed (m/s), gamma, bank, flaps (rad)."""
-
-    altitude_m: float
-    speed_m_s: float
-    gamma_rad: float = 0.0
-    bank_rad: float = 0.0
-    flaps_rad: float = 0.0
+# a card's [condition] table (altitude, speed, gamma, bank, flaps in card units) is read
+# into the one flight-condition type of flightid.sim.condition
+Condition = FlightCondition
 
 
 @dataclass
@@ -98,7 +119,7 @@ class Card:
 
     name: str
     aircraft: str
-    condition: Condition
+    condition: FlightCondition
     duration: float
     rate: float
     seed: int
@@ -109,6 +130,11 @@ class Card:
     source: str = ""
     path: str = ""
     data: dict[str, Any] = field(default_factory=dict)
+    # parameters an identification holds fixed: {name: {"value", "std", "source"}}
+    a_priori: dict[str, dict[str, Any]] = field(default_factory=dict)
+    # each card field that injects an effect -> its catalogue entry, e.g.
+    # {"sensors.channels.q[1]": "noise", "disturbance[0]": "turbulence"}
+    effects: dict[str, str] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The card as written (a JSON-able dict), for record metadata."""
@@ -216,7 +242,7 @@ def _angle(chk: _Checker, d: dict, name: str, where: str) -> float:
     return chk.number(d, name, f"{where}.{name}", default=0.0)
 
 
-def _condition(chk: _Checker, d: Any) -> Condition:
+def _condition(chk: _Checker, d: Any) -> FlightCondition:
     if not isinstance(d, dict):
         raise chk.fail("condition", "must be a table ([condition])")
     for key in d:
@@ -229,7 +255,7 @@ def _condition(chk: _Checker, d: Any) -> Condition:
     speed = chk.number(d, "speed", "condition.speed", positive=True)
     if altitude < 0:
         raise chk.fail("condition.altitude", f"must be >= 0 m, got {altitude}")
-    return Condition(altitude, speed, _angle(chk, d, "gamma", "condition"),
+    return FlightCondition(altitude, speed, _angle(chk, d, "gamma", "condition"),
                      _angle(chk, d, "bank", "condition"), _angle(chk, d, "flaps", "condition"))
 
 
@@ -259,8 +285,6 @@ def _maneuvers(chk: _Checker, items: Any, duration: float) -> tuple[InputDesign,
 
 
 def _sensors(chk: _Checker, d: Any) -> Any:
-    from flightid.sim.sensors import suite_from_dict
-
     if d == NO_SENSORS:
         return None
     if isinstance(d, str):
@@ -277,7 +301,9 @@ def _sensors(chk: _Checker, d: Any) -> Any:
     try:
         suite = suite_from_dict(body)
     except ValueError as exc:
+        # the suite's fields are the card's sensors.<field> (its base is sensors.suite)
         msg = str(exc).replace("field 'base'", "field 'suite'")
+        msg = re.sub(r"field '(?!sensors\.)", "field 'sensors.", msg)
         raise chk.wrap(ValueError(msg), "sensors") from None
     drop = d.get("drop", [])
     if not isinstance(drop, list) or not all(isinstance(x, str) for x in drop):
@@ -295,8 +321,6 @@ def _sensors(chk: _Checker, d: Any) -> Any:
 
 
 def _disturbances(chk: _Checker, items: Any, duration: float) -> tuple[Any, ...]:
-    from flightid.sim.disturbances import Gust, disturbance_from_dict, vibration_of
-
     if not isinstance(items, list):
         raise chk.fail("disturbance", "must be an array of tables ([[disturbance]])")
     out = []
@@ -317,10 +341,51 @@ def _disturbances(chk: _Checker, items: Any, duration: float) -> tuple[Any, ...]
     return tuple(out)
 
 
+def _effect_entries(data: dict[str, Any]) -> dict[str, str]:
+    """Card field -> catalogue entry of every effect table of a validated card."""
+    out: dict[str, str] = {}
+    sensors = data.get("sensors")
+    tables: list[tuple[str, str, Any]] = []
+    if isinstance(sensors, dict):
+        for ch, chain in (sensors.get("channels") or {}).items():
+            tables += [("channel", f"sensors.channels.{ch}[{i}]", e) for i, e in enumerate(chain)]
+        tables += [("mounting", f"sensors.mounting[{i}]", m)
+                   for i, m in enumerate(sensors.get("mounting", []))]
+    tables += [("disturbance", f"disturbance[{i}]", d)
+               for i, d in enumerate(data.get("disturbance", []))]
+    for section, where, table in tables:
+        out[where] = CATALOGUE.lookup(table[SECTIONS[section].key], section, where).name
+    return out
+
+
+def _a_priori(chk: _Checker, table: Any) -> dict[str, dict[str, Any]]:
+    """[a_priori.<derivative>] tables: value (per rad), std (>= 0), source (required)."""
+    if not isinstance(table, dict):
+        raise chk.fail("a_priori", "must be a table of [a_priori.<derivative>] tables")
+    out = {}
+    for name, entry in table.items():
+        where = f"a_priori.{name}"
+        if not is_derivative(name):
+            raise chk.fail(where, f"{name!r} is not a derivative name (e.g. Cm_alphadot)")
+        if not isinstance(entry, dict):
+            raise chk.fail(where, "must be a table with value, std and source")
+        for key in entry:
+            if key not in A_PRIORI_FIELDS:
+                raise chk.fail(f"{where}.{key}", f"unknown field; allowed: "
+                               f"{', '.join(A_PRIORI_FIELDS)}")
+        value = chk.number(entry, "value", f"{where}.value")
+        std = chk.number(entry, "std", f"{where}.std", default=0.0)
+        if std < 0:
+            raise chk.fail(f"{where}.std", f"must be >= 0, got {std!r}")
+        source = entry.get("source")
+        if not isinstance(source, str) or not source.strip():
+            raise chk.fail(f"{where}.source", "is required: where the value comes from")
+        out[name] = {"value": value, "std": std, "source": source}
+    return out
+
+
 def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None = None) -> Card:
     """Validate a parsed card; ``text`` (the TOML source) lets errors name the line."""
-    from flightid.sim.model import available
-
     chk = _Checker(path, text)
     for key in data:
         if key not in TOP_FIELDS:
@@ -348,8 +413,6 @@ def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None 
     maneuvers = _maneuvers(chk, data.get("maneuver", []), duration)
     sensors = _sensors(chk, data["sensors"]) if "sensors" in data else None
     disturbances = _disturbances(chk, data.get("disturbance", []), duration)
-    from flightid.sim.disturbances import vibration_of
-
     if vibration_of(disturbances) is not None and sensors is None:
         raise chk.fail("disturbance", "engine_vibration acts on the sensors; give a [sensors] "
                        "table")
@@ -358,7 +421,8 @@ def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None 
                 duration=duration, rate=rate, seed=seed, maneuvers=maneuvers,
                 sensors=sensors, disturbances=disturbances,
                 description=data.get("description", ""), source=data.get("source", ""),
-                path=str(path), data=data)
+                path=str(path), data=data, a_priori=_a_priori(chk, data.get("a_priori", {})),
+                effects=_effect_entries(data))
 
 
 def load_card(path: str | Path) -> Card:
@@ -406,21 +470,10 @@ def fly_card(card: Card, seed: int | None = None,
     (``meta.scenario['card']``) and the seed (``meta.scenario['seed']``). Raises
     TrimError or DepartureError (with ``.record``) from the flight core.
     """
-    from flightid.sim.disturbances import (
-        atmosphere_for,
-        fly_disturbed,
-        vibration_of,
-        wind_schedule,
-    )
-    from flightid.sim.flight import DepartureError
-    from flightid.sim.model import load
-    from flightid.sim.sensors import measure
-    from flightid.sim.trim import trim
-
     seed = card.seed if seed is None else int(seed)
     c = card.condition
     model = load(card.aircraft)
-    trimmed = trim(model, c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
+    trimmed = trim(model, c)
     n = int(round(card.duration * card.rate)) + 1
     t = np.arange(n) / card.rate
     designs = _flown_designs(card, seed)
@@ -438,17 +491,19 @@ def fly_card(card: Card, seed: int | None = None,
                              exc.record) from None
     truth.meta.extra["inputs"] = [d.to_dict() for d in designs]
     truth.meta.extra["disturbances"] = [d.to_dict() for d in card.disturbances]
+    truth.meta.extra["maneuvers"] = maneuver_list(designs)
+    truth.meta.extra["truth"] = truth_table(model, trimmed)
+    if card.a_priori:
+        truth.meta.extra["a_priori"] = {k: dict(v) for k, v in card.a_priori.items()}
     if card.sensors is None:
         return truth, truth
     suite = card.sensors
     vib = vibration_of(card.disturbances)
     if vib is not None:
-        from flightid.sim.vibration import EngineVibration
-
         suite = dataclasses.replace(suite, mounting=[
             m for m in suite.mounting if not isinstance(m, EngineVibration)] + [vib])
     return measure(truth, suite, sub_seed(seed, "sensors")), truth
 
 
-__all__ = ["Card", "CardError", "Condition", "card_from_dict", "find_card", "fly_card",
-           "library_cards", "load_card", "sub_seed"]
+__all__ = ["Card", "CardError", "Condition", "FlightCondition", "card_from_dict", "find_card",
+           "fly_card", "library_cards", "load_card", "sub_seed"]

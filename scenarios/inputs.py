@@ -4,7 +4,7 @@ Every design is a dataclass with a ``kind`` and SI parameters, returning surface
 (rad, throttle fraction) on a given time vector (s). The registry ``INPUT_KINDS`` and
 ``input_from_dict`` build them from flight-card tables such as
 ``{kind = "3211", surface = "de", start = 10, base = 0.5, amplitude_deg = 3}``.
-Multisines are in ``multisine``, the hand-flown maneuvers of the seeds in ``maneuvers``.
+Multisines are in ``multisine``, the hand-flown maneuvers in ``maneuvers``.
 ``spectrum``, ``energy`` and ``scale_to_energy`` compare designs at equal energy
 (Morelli & Klein 2016, ch. 9).
 """
@@ -139,7 +139,10 @@ class Doublet(_Pattern):
 
 @dataclass(kw_only=True)
 class TwoOne(_Pattern):
-    """2-1 doublet: +1 for 2 base, -1 for 1 base (the Twin Otter input of seed 002)."""
+    """2-1 doublet: +1 for 2 base, -1 for 1 base.
+
+    The Twin Otter input of Batterson & O'Mara (NASA TM-4099, 1989).
+    """
 
     kind: ClassVar[str] = "21"
     WIDTHS: ClassVar[tuple[float, ...]] = (2.0, 1.0)

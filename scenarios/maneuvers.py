@@ -1,4 +1,4 @@
-"""Hand-flown maneuvers of the seeds, as an RC pilot flies them (seed 003, Boomerang 60).
+"""Hand-flown maneuvers as an RC pilot flies them (Monash Boomerang 60 paper, c. 2008).
 
 Each maneuver is a plan of knots shared by all the surfaces it moves: nominal phase
 durations (s) and the surface increment at every knot (rad, throttle fraction), joined by
@@ -6,8 +6,8 @@ ramps. The pilot is imperfect, reproducibly from ``seed``: each phase duration s
 ``timing_sigma`` (s), each held level by ``amplitude_sigma`` (relative), and small
 corrections of rms ``tremor`` (rad) with bandwidth ``tremor_bandwidth`` (Hz) ride on the
 active part. ``lead`` and ``trail`` are trimmed segments (zero increment) before and after:
-seed 003 asks for trimmed level flight before and after each maneuver for a duration the
-OCR lost ("BL0 s"; digests/003_boomerang.md 2.1); 5 s is our default.
+the Boomerang 60 paper asks for trimmed level flight before and after each maneuver (after
+Jategaonkar 2006), for a duration that is not legible in the source; 5 s is our default.
 
 Signs follow flightid.channels: pulling up is trailing edge up, de < 0; a left roll is
 da > 0 (Cl_da < 0); left rudder (nose left) is dr > 0.
@@ -116,17 +116,18 @@ class PilotManeuver(InputDesign):
 
 @dataclass(kw_only=True)
 class PullUpPushOver(PilotManeuver):
-    """Pull-up then push-over for the short period (seed 003, section 5, Fig. 11).
+    """Pull-up then push-over for the short period (Boomerang 60 paper, Fig. 11).
 
     "An elevator deflection of -10 degrees is immediately applied and released over a
-    period of 4 seconds"; then the opposite input starts the dive. ``amplitude`` is the
-    pull magnitude (rad, applied as de < 0); the push is ``push_ratio`` of it (assumption).
+    period of 4 seconds" (section 5); then the opposite input starts the dive. ``amplitude``
+    is the pull magnitude (rad, applied as de < 0); the push is ``push_ratio`` of it
+    (assumption).
     """
 
     kind: ClassVar[str] = "pullup_pushover"
     amplitude: float = dataclasses.field(default=10 * DEG, metadata={"unit": "rad"})
     onset: float = 0.3  # s, "immediately applied": assumption
-    release: float = 4.0  # s, seed 003
+    release: float = 4.0  # s, Boomerang 60 paper
     pause: float = 1.0  # s, assumption
     push_ratio: float = 0.6  # assumption
     push_release: float = 3.0  # s, assumption
@@ -146,13 +147,13 @@ class PullUpPushOver(PilotManeuver):
 
 @dataclass(kw_only=True)
 class ThrottleCut(PilotManeuver):
-    """Throttle to idle with an elevator ramp to hold altitude, for the phugoid (seed 003).
+    """Throttle to idle with an elevator ramp to hold altitude, for the phugoid.
 
     "At circa 5 seconds, the throttle is reduced to idle and the elevator gradually
-    increased to 20 degrees [from a 5 degree trim] to maintain constant altitude" (seed
-    003, Fig. 14). ``drop`` is the throttle decrement (fraction; set it to the trim
-    throttle for a cut to idle), ``elevator`` the nose-up increment magnitude (rad,
-    applied as de < 0), then both are restored over ``recover`` s.
+    increased to 20 degrees [from a 5 degree trim] to maintain constant altitude" (Monash
+    Boomerang 60 paper, c. 2008, Fig. 14). ``drop`` is the throttle decrement (fraction; set
+    it to the trim throttle for a cut to idle), ``elevator`` the nose-up increment magnitude
+    (rad, applied as de < 0), then both are restored over ``recover`` s.
     """
 
     kind: ClassVar[str] = "throttle_cut"
@@ -226,7 +227,7 @@ class BankToBank(PilotManeuver):
 
 @dataclass(kw_only=True)
 class FigureEight(BankToBank):
-    """Figure of eight for the lateral modes (seed 003, Fig. 10, 18A/B).
+    """Figure of eight for the lateral modes (Boomerang 60 paper, Figs 10, 18A/B).
 
     "A left turn was initiated until a half circle was completed. Then the aircraft
     rolled in the opposite direction": banks held ``turn_time`` s (a half circle;

@@ -1,17 +1,23 @@
 """The scenario runner behind ``flightid simulate``: fly a card, write records, plot them.
 
-``simulate(card, output, truth_path, plot_path, seed)`` flies a card file or library card
-(``flightid.scenarios.cards``) with a rich progress bar, writes the measured record (and
-the truth), and ``plot_record`` draws inputs and responses on a shared time axis.
+``simulate(card, output, truth_path, plot_path, seed, progress)`` flies a card file or
+library card (``flightid.scenarios.cards``), reporting its progress to an optional
+callback, writes the measured record (and the truth), and ``plot_record`` draws inputs
+and responses on a shared time axis. Printing, progress bars and exit codes are the
+command line's (``flightid.cli.simulate``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
+import matplotlib
 import numpy as np
+from matplotlib.figure import Figure
 
 from flightid.record import FlightRecord
+from flightid.scenarios.cards import Card, describe, fly_card, library_cards, load_card
 from flightid.units import DEG
 
 # (channel, label, scale to the plotted unit) per panel: inputs first, then responses
@@ -29,19 +35,15 @@ _PANELS: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = (
 
 def list_cards() -> list[tuple[str, str]]:
     """(name, one-line description) of every library card."""
-    from flightid.scenarios.cards import describe, library_cards
-
     return [(name, describe(path)) for name, path in library_cards().items()]
 
 
 def plot_record(measured: FlightRecord, path: str | Path, truth: FlightRecord | None = None,
                 title: str = "") -> Path:
-    """PNG of inputs and responses (measured as lines, truth dashed) on one time axis (s)."""
-    import matplotlib
+    """PNG of inputs and responses (measured as lines, truth dashed) on one time axis (s).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    Drawn on a bare matplotlib ``Figure`` (no pyplot, no backend chosen: the caller's
+    matplotlib state is left alone)."""
     def has(name: str) -> bool:
         return name in measured or (truth is not None and name in truth)
 
@@ -56,9 +58,9 @@ def plot_record(measured: FlightRecord, path: str | Path, truth: FlightRecord | 
                                                                 for v in values):
             continue  # a constant throttle or calm air says nothing
         panels.append((label, present))
-    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(10, 1.9 * len(panels)),
-                             squeeze=False)
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig = Figure(figsize=(10, 1.9 * len(panels)))
+    axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)
+    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, (label, chans) in zip(axes[:, 0], panels, strict=True):
         for i, (c, k) in enumerate(chans):
             color = colors[i % len(colors)]
@@ -76,44 +78,33 @@ def plot_record(measured: FlightRecord, path: str | Path, truth: FlightRecord | 
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
-def fly_with_progress(card, seed: int | None = None, show: bool = True
+def fly_with_progress(card: Card, seed: int | None = None, show: bool = True,
+                      progress: Callable[[float, float], None] | None = None
                       ) -> tuple[FlightRecord, FlightRecord]:
-    """``fly_card`` with a progress bar (simulated seconds, elapsed time, ETA) when ``show``."""
-    from rich.progress import (
-        BarColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    from flightid.scenarios.cards import fly_card
-
-    if not show:
+    """``fly_card`` reporting its progress: ``progress(flown_s, total_s)`` (simulated
+    seconds) is called about once per simulated second. The library draws nothing; the
+    command line passes a callback that draws a bar (``flightid.cli.progress``).
+    ``show=False`` turns the callback off (kept for the callers that passed ``show``)."""
+    if progress is None or not show:
         return fly_card(card, seed)
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                  TextColumn("{task.completed:.0f}/{task.total:.0f} s flown"),
-                  TimeElapsedColumn(), TimeRemainingColumn(), transient=True) as bar:
-        task = bar.add_task(f"flying {card.name}", total=card.duration)
 
-        def progress(k: int, n: int) -> None:
-            bar.update(task, completed=k / card.rate)
+    def steps(k: int, n: int) -> None:
+        progress(k / card.rate, card.duration)
 
-        return fly_card(card, seed, progress=progress)
+    return fly_card(card, seed, progress=steps)
 
 
-def simulate(card: str, output: str | Path, truth_path: str | Path | None = None,
+def simulate(card: str | Card, output: str | Path, truth_path: str | Path | None = None,
              plot_path: str | Path | None = None, seed: int | None = None,
-             show_progress: bool = True) -> tuple[FlightRecord, FlightRecord]:
-    """Fly ``card`` (path or library name) and write the measured record to ``output``."""
-    from flightid.scenarios.cards import load_card
-
-    c = load_card(card)
-    measured, truth = fly_with_progress(c, seed, show=show_progress)
+             progress: Callable[[float, float], None] | None = None
+             ) -> tuple[FlightRecord, FlightRecord]:
+    """Fly ``card`` (a loaded card, a path or a library name) and write the measured record
+    to ``output``; ``progress(flown_s, total_s)`` as in :func:`fly_with_progress`."""
+    c = card if isinstance(card, Card) else load_card(card)
+    measured, truth = fly_with_progress(c, seed, progress=progress)
     measured.write(output)
     if truth_path is not None:
         truth.write(truth_path)
@@ -122,33 +113,3 @@ def simulate(card: str, output: str | Path, truth_path: str | Path | None = None
         plot_record(measured, plot_path, truth if measured is not truth else None,
                     title=f"{c.name} ({c.aircraft}), seed {used}")
     return measured, truth
-
-
-def run_cli(card: str | None, output: str | None, truth: str | None, plot: str | None,
-            seed: int | None, list_only: bool) -> None:
-    """Command-line wrapper: clear messages and exit codes instead of tracebacks."""
-    import typer
-
-    from flightid.scenarios.cards import CardError
-    from flightid.sim.flight import DepartureError
-    from flightid.sim.trim import TrimError
-
-    if list_only:
-        for name, text in list_cards():
-            typer.echo(f"{name:32s} {text}")
-        return
-    if card is None or output is None:
-        raise typer.BadParameter("give a CARD and -o/--output (or --list)")
-    try:
-        measured, _ = simulate(card, output, truth, plot, seed)
-    except (CardError, TrimError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
-    except DepartureError as exc:
-        typer.echo(f"error: the flight departed: {exc}", err=True)
-        raise typer.Exit(3) from None
-    typer.echo(f"wrote {output}: {len(measured)} samples, {measured.time[-1]:.2f} s, "
-               f"{len(measured.channels)} channels at {measured.meta.sample_rate:g} Hz")
-    for extra in (truth, plot):
-        if extra:
-            typer.echo(f"wrote {extra}")

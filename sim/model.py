@@ -24,7 +24,7 @@ import jsbsim
 
 from flightid import aircraft as project_aircraft
 from flightid.record import Reference
-from flightid.units import DEG, FT
+from flightid.units import DEG, FT, SLUG, SLUG_FT2
 
 PACKAGE_ROOT = Path(jsbsim.get_default_root_dir())
 PACKAGE_AIRCRAFT = PACKAGE_ROOT / "aircraft"
@@ -117,14 +117,10 @@ class Model:
 
     def mass_kg(self) -> float:
         """Current aircraft mass (kg)."""
-        from flightid.units import SLUG
-
         return self.get("inertia/mass-slugs") * SLUG
 
     def mass_properties(self) -> dict[str, float]:
         """Mass (kg) and inertias (kg m^2, Ixz positive as in Etkin) as loaded."""
-        from flightid.units import SLUG_FT2
-
         m = self.copy()
         m.fdm.run_ic()  # JSBSim balances mass (with fuel) on initialisation
         return {

@@ -1,9 +1,11 @@
 """Sensor suites: from a truth FlightRecord (fast internal rate) to the measured record.
 
-A ``SensorSuite`` maps each measured channel to an ordered list of effects
-(``flightid.sim.effects``), plus mounting effects that act on the whole record before the
-per-channel chains: ``LeverArm`` (IMU away from the CG), ``Vanes`` (alpha/beta vanes on a
-boom, with upwash/sidewash) and ``EngineVibration`` (``flightid.sim.vibration``).
+A ``SensorSuite`` maps each measured channel to an ordered list of effects (catalogue
+``sensor`` entries, ``flightid.sim.effects.sensor``), plus mounting effects that act on the
+whole record before the per-channel chains: ``LeverArm`` (IMU away from the CG), ``Vanes``
+(alpha/beta vanes on a boom, with upwash/sidewash) (``flightid.sim.effects.mounting``) and
+``EngineVibration`` (``flightid.sim.effects.vibration``). Effect names in suite tables are
+resolved through the effect catalogue (``flightid.sim.effects.catalogue.CATALOGUE``).
 ``measure(truth, suite, seed)`` runs them and resamples every channel to one output rate.
 Built-in suites ``hobby`` and ``research`` carry the source of each value in its
 ``source`` field; ``suite_from_dict`` builds a suite from a card table.
@@ -17,128 +19,30 @@ from __future__ import annotations
 import dataclasses
 import zlib
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from flightid.channels import CHANNELS
 from flightid.record import FlightRecord
-from flightid.sim.effects import (
+from flightid.sim.effects.base import Effect
+from flightid.sim.effects.catalogue import CATALOGUE, ActsOn, effect_from_dict
+from flightid.sim.effects.mounting import LeverArm, Vanes
+from flightid.sim.effects.sensor import (
     Bias,
     Delay,
-    Effect,
-    NamedEffect,
     Quantization,
     RandomWalk,
     Sample,
     Saturation,
     SecondOrder,
     WhiteNoise,
-    effect_from_dict,
-    parse_params,
 )
-from flightid.sim.vibration import AXES, EngineVibration
+from flightid.sim.effects.vibration import AXES, EngineVibration
 from flightid.units import DEG, EARTH_RADIUS_M, FT, G0
 
-# -- mounting effects --------------------------------------------------------------
-
-
-@dataclass(kw_only=True)
-class MountingEffect(NamedEffect):
-    """Base of the effects that act on several channels of the record at once."""
-
-    requires: ClassVar[tuple[str, ...]] = ()
-
-    def apply_record(
-        self, t: np.ndarray, channels: dict[str, np.ndarray], rng: np.random.Generator
-    ) -> dict[str, np.ndarray]:
-        """The channels this effect changes, computed from ``channels`` on times ``t`` (s)."""
-        raise NotImplementedError
-
-    def check(self, channels: dict[str, np.ndarray]) -> None:
-        """Raise naming the missing channels this effect needs."""
-        missing = [c for c in self.requires if c not in channels]
-        if missing:
-            raise ValueError(
-                f"{self.name} needs truth channels {', '.join(missing)}, which the record lacks"
-            )
-
-
-def _rate_derivative(t: np.ndarray, channels: dict[str, np.ndarray], name: str, of: str):
-    if name in channels:
-        return channels[name]
-    return np.gradient(channels[of], t)  # numerical derivative when the truth lacks it
-
-
-@dataclass(kw_only=True)
-class LeverArm(MountingEffect):
-    """Accelerometers at (x, y, z) m from the CG, body axes (x fwd, y right, z down).
-
-    a_sensor = a_cg + omega_dot x r + omega x (omega x r) (Morelli & Klein 2016, eq.
-    10.9; seed 001 FDP CG transfer). Needs p, q, r; pdot, qdot, rdot are differentiated
-    from the rates if the truth lacks them. Gyros are unaffected.
-    """
-
-    name: ClassVar[str] = "lever_arm"
-    requires: ClassVar[tuple[str, ...]] = ("ax", "ay", "az", "p", "q", "r")
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-
-    def apply_record(self, t, channels, rng):
-        self.check(channels)
-        p, q, r = channels["p"], channels["q"], channels["r"]
-        pd = _rate_derivative(t, channels, "pdot", "p")
-        qd = _rate_derivative(t, channels, "qdot", "q")
-        rd = _rate_derivative(t, channels, "rdot", "r")
-        x, y, z = self.x, self.y, self.z
-        c1, c2, c3 = q * z - r * y, r * x - p * z, p * y - q * x  # omega x r
-        return {
-            "ax": channels["ax"] + (qd * z - rd * y) + (q * c3 - r * c2),
-            "ay": channels["ay"] + (rd * x - pd * z) + (r * c1 - p * c3),
-            "az": channels["az"] + (pd * y - qd * x) + (p * c2 - q * c1),
-        }
-
-
-@dataclass(kw_only=True)
-class Vanes(MountingEffect):
-    """Alpha and beta vanes at body positions (m) with upwash and sidewash factors.
-
-    The local air velocity at a vane is V_cg + omega x r_vane, so to first order
-    alpha_v = alpha - x_a q / V + y_a p / V and beta_v = beta + x_b r / V - z_b p / V
-    (seed 001 App. I/J: alpha_m = K_a (alpha - x_a q / V), beta_m = K_b (beta - z_b p / V
-    + x_b r / V); Morelli & Klein 2016, 10.2). Computed exactly from the local velocity,
-    then scaled by (1 + upwash) and (1 + sidewash): the flow-amplification K of seed 001.
-    """
-
-    name: ClassVar[str] = "vanes"
-    requires: ClassVar[tuple[str, ...]] = ("V", "alpha", "beta", "p", "q", "r")
-    alpha_x: float = 0.0
-    alpha_y: float = 0.0
-    alpha_z: float = 0.0
-    beta_x: float = 0.0
-    beta_y: float = 0.0
-    beta_z: float = 0.0
-    upwash: float = 0.0
-    sidewash: float = 0.0
-
-    def apply_record(self, t, channels, rng):
-        self.check(channels)
-        V, a, b = channels["V"], channels["alpha"], channels["beta"]
-        p, q, r = channels["p"], channels["q"], channels["r"]
-        u, v, w = V * np.cos(a) * np.cos(b), V * np.sin(b), V * np.sin(a) * np.cos(b)
-
-        def local(x: float, y: float, z: float) -> tuple[np.ndarray, ...]:
-            return u + q * z - r * y, v + r * x - p * z, w + p * y - q * x
-
-        ua, _, wa = local(self.alpha_x, self.alpha_y, self.alpha_z)
-        ub, vb, wb = local(self.beta_x, self.beta_y, self.beta_z)
-        alpha_v = np.arctan2(wa, ua)
-        beta_v = np.arcsin(np.clip(vb / np.sqrt(ub**2 + vb**2 + wb**2), -1.0, 1.0))
-        return {"alpha": (1 + self.upwash) * alpha_v, "beta": (1 + self.sidewash) * beta_v}
-
-
-MOUNTING: dict[str, type] = {c.name: c for c in (LeverArm, Vanes, EngineVibration)}
+# the mounting list's effects: mounting (lever arm, vanes) and vibration, from the catalogue
+MOUNTING: dict[str, type] = CATALOGUE.classes(ActsOn.MOUNTING, ActsOn.VIBRATION)
 
 
 # -- the suite ---------------------------------------------------------------------
@@ -173,7 +77,7 @@ class SensorSuite:
         """The rate (Hz) at which ``channel`` is sampled, None if it is not."""
         for e in self.channels[channel]:
             if isinstance(e, Sample):
-                return e.rate
+                return None if np.isinf(e.rate) else e.rate  # inf: continuous, not sampled
         return None
 
     def to_dict(self) -> dict[str, Any]:
@@ -321,20 +225,11 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
 
 
 def mounting_from_dict(d: dict[str, Any], context: str = "") -> Any:
-    """Build a mounting effect (lever_arm, vanes, engine_vibration) from a table."""
-    pre = f"{context}." if context else ""
-    if not isinstance(d, dict) or "effect" not in d:
-        raise ValueError(f"field {pre + 'effect'!r} is missing; one of {', '.join(MOUNTING)}")
-    if d["effect"] not in MOUNTING:
-        raise ValueError(
-            f"field {pre + 'effect'!r}: unknown mounting effect {d['effect']!r}; "
-            f"known: {', '.join(MOUNTING)}"
-        )
-    cls = MOUNTING[d["effect"]]
-    try:
-        return cls(**parse_params(cls, d, context))
-    except ValueError as exc:
-        raise ValueError(f"{context}: {exc}") from None
+    """Build a mounting effect (lever_arm, vanes, engine_vibration) from a table.
+
+    The name is resolved through the effect catalogue (``SECTIONS['mounting']``).
+    """
+    return CATALOGUE.from_dict(d, "mounting", context)
 
 
 def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
@@ -401,8 +296,8 @@ def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
 # channels through them instead (research_suite).
 _PROPULSION = ("thrust", "L_prop", "M_prop", "N_prop")
 _MASS = ("mass", "Ixx", "Iyy", "Izz", "Ixz", "throttle", *_PROPULSION)
-S000 = "seed 000 (Telemaster thesis)"
-S003 = "seed 003 (Boomerang 60)"
+SOFYAN = "Sofyan, RMIT thesis (c. 1997)"
+MONASH = "Monash Boomerang 60 paper (c. 2008)"
 TOTTER = (
     "estimated from the NASA Twin Otter record totter_f1_017 (50 Hz): std of the residual "
     "from an 11-point cubic Savitzky-Golay fit; an upper bound, the fit leaves some signal"
@@ -411,15 +306,23 @@ TOTTER_Q = "smallest step of the Twin Otter record totter_f1_017"
 
 
 def hobby_suite() -> SensorSuite:
-    """Hobby MEMS IMU and potentiometer vanes, Telemaster / Boomerang class (seeds 000, 003)."""
+    """Hobby MEMS IMU and potentiometer vanes, Telemaster / Boomerang class (Sofyan; Monash)."""
     imu = Sample(
         rate=100.0,
-        source=f"{S003}: O-Navi Phoenix IMU, 100 Hz binary on RS-232; "
-        "no anti-alias filter in either seed",
+        source=f"{MONASH}: O-Navi Phoenix IMU, 100 Hz binary on RS-232; "
+        "neither publication mentions an anti-alias filter",
     )
-    das = Sample(rate=25.0, source=f"{S000} 6: 8-bit DAS at 25 Hz, no anti-alias filter")
-    gyro_range = Saturation(limit=600 * DEG, source=f"{S003}: gyros 600 deg/s (OCR-unsure)")
-    acc_range = Saturation(limit=10 * G0, source=f"{S003}: accelerometers +-10 g (OCR '#0g')")
+    das = Sample(rate=25.0, source=f"{SOFYAN} ch. 6: 8-bit DAS at 25 Hz, no anti-alias filter")
+    gyro_range = Saturation(
+        limit=600 * DEG,
+        source=f"{MONASH}: gyros 600 deg/s; "
+        "the paper does not say whether +-600 or a 600 deg/s span; +-600 assumed",
+    )
+    acc_range = Saturation(
+        limit=10 * G0,
+        source=f"{MONASH}: accelerometers +-10 g; "
+        "first digit not legible in the source; 10 assumed",
+    )
 
     def gyro() -> list[Effect]:
         return [
@@ -427,11 +330,11 @@ def hobby_suite() -> SensorSuite:
             RandomWalk(
                 sigma=0.02 * DEG,
                 source=f"assumption, order of MEMS rate random walk; "
-                f"{S003} measured gyro drift but its values are lost",
+                f"{MONASH} measured gyro drift but its values are lost",
             ),
             gyro_range,
             imu,
-            WhiteNoise(sigma=1.2 * DEG, source=f"{S000} Table 8-6: rate noise 1.2 deg/s"),
+            WhiteNoise(sigma=1.2 * DEG, source=f"{SOFYAN} Table 8-6: rate noise 1.2 deg/s"),
             Quantization(
                 resolution=1200 * DEG / 2**16, source="assumption: 16-bit over 1200 deg/s"
             ),
@@ -443,30 +346,35 @@ def hobby_suite() -> SensorSuite:
             acc_range,
             imu,
             WhiteNoise(
-                sigma=0.02 * G0, source=f"{S000} Table 2-1: accelerometer resolution 0.02 g"
+                sigma=0.02 * G0, source=f"{SOFYAN} Table 2-1: accelerometer resolution 0.02 g"
             ),
             Quantization(resolution=20 * G0 / 2**16, source="assumption: 16-bit over 20 g"),
         ]
 
     def vane() -> list[Effect]:
         return [
-            SecondOrder(wn=108.0, zeta=0.19, source=f"{S000} App. 2: vane 108 rad/s, damping 0.19"),
+            SecondOrder(
+                wn=108.0, zeta=0.19, source=f"{SOFYAN} App. 2: vane 108 rad/s, damping 0.19"
+            ),
             das,
-            WhiteNoise(sigma=0.7 * DEG, source=f"{S000} Table 8-6: alpha, beta noise 0.7 deg"),
-            Quantization(resolution=0.4 * DEG, source=f"{S000} Fig. 6-3: vane resolution 0.4 deg"),
+            WhiteNoise(sigma=0.7 * DEG, source=f"{SOFYAN} Table 8-6: alpha, beta noise 0.7 deg"),
+            Quantization(
+                resolution=0.4 * DEG, source=f"{SOFYAN} Fig. 6-3: vane resolution 0.4 deg"
+            ),
         ]
 
     def surface(sigma_deg: float) -> list[Effect]:
         return [
             das,
-            WhiteNoise(sigma=sigma_deg * DEG, source=f"{S000} Table 8-6: {sigma_deg} deg"),
-            Quantization(resolution=0.25 * DEG, source=f"{S000} Fig. 6-3: servo pot 0.25 deg"),
+            WhiteNoise(sigma=sigma_deg * DEG, source=f"{SOFYAN} Table 8-6: {sigma_deg} deg"),
+            Quantization(resolution=0.25 * DEG, source=f"{SOFYAN} Fig. 6-3: servo pot 0.25 deg"),
         ]
 
     return SensorSuite(
         name="hobby",
-        description="hobby MEMS IMU at 100 Hz without anti-alias filter (seed 003) and an "
-        "8-bit 25 Hz DAS with potentiometer vanes and servo pots (seed 000)",
+        description="hobby MEMS IMU at 100 Hz without anti-alias filter (Monash Boomerang 60 "
+        "paper, c. 2008) and an 8-bit 25 Hz DAS with potentiometer vanes and servo pots "
+        "(Sofyan, RMIT thesis, c. 1997)",
         channels={
             "p": gyro(),
             "q": gyro(),
@@ -480,31 +388,34 @@ def hobby_suite() -> SensorSuite:
             "da": surface(0.2),
             "dr": surface(0.3),
             "V": [
-                Delay(tau=0.003, source=f"{S000} App. 2: pitot tubing delay 3 ms per metre, 1 m"),
+                Delay(tau=0.003, source=f"{SOFYAN} App. 2: pitot tubing delay 3 ms per metre, 1 m"),
                 das,
-                WhiteNoise(sigma=0.8, source=f"{S000} 6: airspeed accuracy +-0.8 m/s"),
+                WhiteNoise(sigma=0.8, source=f"{SOFYAN} ch. 6: airspeed accuracy +-0.8 m/s"),
             ],
             "qbar": [
                 das,
-                WhiteNoise(sigma=19.0, source="the airspeed sensor's noise as dynamic pressure: "
-                           "rho V sigma_V at 20 m/s (assumption, same sensor as V)"),
+                WhiteNoise(
+                    sigma=19.0,
+                    source="the airspeed sensor's noise as dynamic pressure: "
+                    "rho V sigma_V at 20 m/s (assumption, same sensor as V)",
+                ),
             ],
-            "rpm": [das, Quantization(resolution=100.0, source=f"{S000} Fig. 6-3: 100 rpm")],
+            "rpm": [das, Quantization(resolution=100.0, source=f"{SOFYAN} Fig. 6-3: 100 rpm")],
         },
         mounting=[
             LeverArm(
                 x=0.05,
                 y=0.0,
                 z=0.08,
-                source=f"assumption: {S000} says the IMU is "
-                f"'not located exactly on the CG'; {S003} box under the fuselage",
+                source=f"assumption: {SOFYAN} says the IMU is "
+                f"'not located exactly on the CG'; {MONASH} box under the fuselage",
             ),
             Vanes(
                 alpha_x=1.0,
                 beta_x=1.0,
                 upwash=0.0136,
                 sidewash=0.0136,
-                source=f"{S000} App. 2: vanes 1 m ahead of the CG, boom K = 0.0136",
+                source=f"{SOFYAN} App. 2: vanes 1 m ahead of the CG, boom K = 0.0136",
             ),
             EngineVibration(
                 ax=2.0,
@@ -516,8 +427,8 @@ def hobby_suite() -> SensorSuite:
                 harmonics=2.0,
                 blades=2.0,
                 blade_amplitude=0.5,
-                source=f"assumption for amplitudes; {S000} 3.5: vibration buried the rate "
-                f"gyros unless at idle; {S003}: 16,000 rpm glow engine",
+                source=f"assumption for amplitudes; {SOFYAN} Figs 7-1, 7-2: vibration buried the "
+                f"rate gyros unless at idle; {MONASH}: 16,000 rpm glow engine",
             ),
         ],
         output_rate=100.0,
@@ -532,7 +443,7 @@ def research_suite() -> SensorSuite:
         antialias=10.0,
         order=4.0,
         source="50 Hz as the NASA Twin Otter record; 4-pole Butterworth at 40 % of "
-        f"Nyquist ({S000} 3.6, literature rule)",
+        f"Nyquist (literature rule quoted in {SOFYAN} ch. 2)",
     )
 
     gps = [
@@ -586,8 +497,8 @@ def research_suite() -> SensorSuite:
                 beta_x=4.5,
                 upwash=0.06,
                 sidewash=0.10,
-                source="seed 001: nose-boom vanes, K_alpha 1.06, K_beta 1.06-1.20; FPR "
-                "default vane position 4.5 m",
+                source="Cooper, Drobik & Martin (ARL Flight Mechanics Report 187, 1990): "
+                "nose-boom vanes, K_alpha 1.06, K_beta 1.06-1.20; FPR default vane position 4.5 m",
             ),
         ],
         output_rate=50.0,

@@ -19,6 +19,8 @@ from typing import Any
 
 import jsbsim
 
+from flightid.sim.coefficients import coefficients
+from flightid.sim.condition import FlightCondition
 from flightid.sim.model import COMMANDS, Model, as_model, quiet
 from flightid.units import DEG, FT, LBF
 
@@ -55,6 +57,12 @@ class Trim:
     terrain_m: float
     residuals: dict[str, float] = field(default_factory=dict)  # udot.. (m/s^2), pdot.. (rad/s^2)
     jsbsim: dict[str, float] = field(default_factory=dict, repr=False)  # properties to restore
+
+    @property
+    def flight_condition(self) -> FlightCondition:
+        """The condition this trim was made at."""
+        return FlightCondition(self.altitude_m, self.speed_m_s, self.gamma_rad,
+                               self.bank_rad, self.flaps_rad)
 
     @property
     def condition(self) -> dict[str, Any]:
@@ -154,8 +162,6 @@ def _set_condition(model: Model, altitude_m: float, speed_m_s: float, gamma: flo
 
 def _lift_coefficient(model: Model) -> float:
     """CL (stability axes) of the current evaluated state."""
-    from flightid.sim.truth import coefficients
-
     return coefficients(model)["CL"]
 
 
@@ -228,8 +234,6 @@ def _power_check(model: Model, altitude_m: float, speed_m_s: float, gamma: float
             break
     fdm.get_propulsion().get_steady_state()
     fdm.run_ic()
-    from flightid.sim.truth import coefficients
-
     drag = coefficients(model)["CD"] * fdm["aero/qbar-psf"] * fdm["metrics/Sw-sqft"]
     thrust = fdm["forces/fbx-prop-lbs"]
     excess = thrust * math.cos(alpha) - drag - weight * math.sin(gamma)
@@ -280,13 +284,21 @@ def _saturation(model: Model) -> str | None:
     return None
 
 
-def trim(model: Model | str, altitude_m: float, speed_m_s: float, gamma_rad: float = 0.0,
-         bank_rad: float = 0.0, flaps_rad: float = 0.0) -> Trim:
-    """Trim at altitude (m above sea level), true airspeed (m/s), flight-path angle and bank (rad).
+def trim(model: Model | str, altitude_m: float | FlightCondition,
+         speed_m_s: float | None = None, gamma_rad: float = 0.0, bank_rad: float = 0.0,
+         flaps_rad: float = 0.0) -> Trim:
+    """Trim at altitude (m above sea level), true airspeed (m/s), flight-path angle and bank
+    (rad), or at a ``FlightCondition`` given in place of the altitude (a card's condition).
 
     Raises TrimError naming the cause: bad input, below stall, not enough power, a
     saturated control, or JSBSim's trim failing to converge.
     """
+    if isinstance(altitude_m, FlightCondition):
+        c = altitude_m
+        altitude_m, speed_m_s, gamma_rad, bank_rad, flaps_rad = (
+            c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
+    if speed_m_s is None:
+        raise TrimError("trim needs a speed (m/s) or a FlightCondition")
     model = as_model(model)
     _check_inputs(model, altitude_m, speed_m_s, gamma_rad, bank_rad)
     fdm = model.fdm

@@ -57,12 +57,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import jsbsim
 import numpy as np
 
 from flightid import aircraft as project_aircraft
 from flightid.derivatives import is_derivative
 from flightid.record import Reference
+from flightid.sim.coefficients import coefficients
 from flightid.sim.model import COMMANDS, Model, as_model
+from flightid.sim.trim import Trim, apply
+from flightid.sim.trim import trim as do_trim
 from flightid.units import FT, PSF, SLUG, SLUG_FT2
 
 BODY = ("X", "Y", "Z", "l", "m", "n", "L", "D")
@@ -78,31 +82,6 @@ KINK_ABS = 1e-4
 KINK_REL = 0.01
 _SHRINK = 0.6
 ZERO = 1e-10  # |derivative| below this is roundoff and reported as 0
-
-
-def coefficients(model: Model, propulsion: bool = False) -> dict[str, float]:
-    """Force and moment coefficients of the current JSBSim state: CX CY CZ Cl Cm Cn (body,
-    CG), CL CD; aerodynamic only, or aerodynamic + propulsive with ``propulsion``."""
-    g = model.get
-    qs = g("aero/qbar-psf") * g("metrics/Sw-sqft")
-    b, c = g("metrics/bw-ft"), g("metrics/cbarw-ft")
-    sources = ("aero", "prop") if propulsion else ("aero",)
-
-    def total(prop: str) -> float:
-        return sum(g(prop.format(src)) for src in sources)
-
-    cx = total("forces/fbx-{}-lbs") / qs
-    cy = total("forces/fby-{}-lbs") / qs
-    cz = total("forces/fbz-{}-lbs") / qs
-    a = g("aero/alpha-rad")
-    return {
-        "CX": cx, "CY": cy, "CZ": cz,
-        "Cl": total("moments/l-{}-lbsft") / (qs * b),
-        "Cm": total("moments/m-{}-lbsft") / (qs * c),
-        "Cn": total("moments/n-{}-lbsft") / (qs * b),
-        "CL": cx * math.sin(a) - cz * math.cos(a),
-        "CD": -cx * math.cos(a) - cz * math.sin(a),
-    }
 
 
 @dataclass(frozen=True)
@@ -133,7 +112,7 @@ class Truth:
 
     aircraft: str
     axes: str
-    trim: Any  # flightid.sim.trim.Trim
+    trim: Trim
     reference: Reference
     values: dict[str, float]
     flags: dict[str, Kink] = field(default_factory=dict)
@@ -150,6 +129,15 @@ class Truth:
             k = self.flags[name]
             raise KeyError(f"{name} has a kink at trim: slopes {k.minus:.4g} / {k.plus:.4g}")
         raise KeyError(f"no truth derivative {name!r}; have {', '.join(sorted(self.values))}")
+
+    def __str__(self) -> str:
+        """The nonzero derivatives, one per line, then the kinks."""
+        head = (f"{self.aircraft} at {self.trim.altitude_m:g} m, {self.trim.speed_m_s:g} m/s, "
+                f"{self.axes} axes{' (aero + propulsion)' if self.propulsion else ''}")
+        lines = [f"  {n:<14}{v:>11.5g}" for n, v in sorted(self.values.items()) if v != 0.0]
+        kinks = [f"  {n:<14}kink: {k.minus:.4g} / {k.plus:.4g}"
+                 for n, k in sorted(self.flags.items())]
+        return "\n".join([head, *lines, *kinks])
 
     def to_json_dict(self) -> dict[str, Any]:
         """Flat {name: value} plus 'trim', 'axes' and 'flags' (for the CLI's JSON)."""
@@ -172,13 +160,11 @@ class Truth:
 class _Evaluator:
     """Evaluates the aerodynamic coefficients at trim plus perturbations (run_ic, dt = 0)."""
 
-    def __init__(self, model: Model, trim: Any, propulsion: bool = False) -> None:
+    def __init__(self, model: Model, trim: Trim, propulsion: bool = False) -> None:
         self.model = model
         self.trim = trim
         self.propulsion = propulsion
         fdm = model.fdm
-        from flightid.sim.trim import apply
-
         apply(model, trim)
         self.V = fdm["velocities/vt-fps"]
         self.b = fdm["metrics/bw-ft"]
@@ -293,7 +279,7 @@ def _aero_uses_throttle(model: Model) -> bool:
     return "throttle" in aero or "thrust" in aero
 
 
-def derivatives(model: Model | str, trim: Any, axes: str = "body",
+def derivatives(model: Model | str, trim: Trim, axes: str = "body",
                 steps: dict[str, float] | None = None, propulsion: bool = False) -> Truth:
     """Truth derivatives (per rad, per unit nondimensional rate) at a trim point.
 
@@ -338,7 +324,7 @@ def derivatives(model: Model | str, trim: Any, axes: str = "body",
     return truth
 
 
-def _assemble(model: Model, trim: Any, axes: str, base: np.ndarray,
+def _assemble(model: Model, trim: Trim, axes: str, base: np.ndarray,
               found: dict[str, tuple[np.ndarray, ...]]) -> Truth:
     ca, sa = math.cos(trim.alpha), math.sin(trim.alpha)
 
@@ -399,12 +385,8 @@ def _assemble(model: Model, trim: Any, axes: str, base: np.ndarray,
 
 # -- JSBSim's own linearization --------------------------------------------------------
 
-def linearization(model: Model | str, trim: Any) -> StateSpace:
+def linearization(model: Model | str, trim: Trim) -> StateSpace:
     """JSBSim's FGLinearization (A, B) at the trim point, in JSBSim's state units."""
-    import jsbsim
-
-    from flightid.sim.trim import apply
-
     model = as_model(model).copy()
     apply(model, trim)
     lin = jsbsim.FGLinearization(model.fdm)
@@ -480,8 +462,6 @@ def compare_to_file(name: str, rel_tol: float = 0.02,
     A derivative passes when |truth - file| <= max(rel_tol |file|, abs_tol); an empty list
     means the model reproduces its truth file.
     """
-    from flightid.sim.trim import trim as do_trim
-
     data = truth_file(name)
     cond = data["condition"]
     model = as_model(name)

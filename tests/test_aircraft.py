@@ -102,7 +102,7 @@ def test_iced_tail_needs_more_up_elevator():
 
 
 def test_navion_truth_reproduces_teper_dimensional_derivatives():
-    """Seed 004 Tables 6-1 and 6-4, column 'Ref 16' (Teper), from the truth file.
+    """Catterall (2003) Tables 6-1 and 6-4, column 'Ref 16' (Teper), from the truth file.
 
     Dimensional derivatives as in Nelson (1998) Tables 3.x and 4.x."""
     data = truth_file("navion")
@@ -226,14 +226,14 @@ def _w_zeta(e: complex) -> tuple[float, float]:
 
 
 def test_telemaster_short_period_matches_thesis():
-    # thesis Tables 8-1 / 10-1 (AAA prediction): 6.83 rad/s, damping 0.51
+    # Sofyan thesis Tables 8-1 / 10-1 (AAA prediction): 6.83 rad/s, damping 0.51
     w, z = _w_zeta(_jsbsim_modes("telemaster")["short_period"])
     assert w == pytest.approx(6.83, rel=0.10)
     assert z == pytest.approx(0.51, rel=0.10)
 
 
 def test_navion_modes_match_teper_comparison_model():
-    # seed 004 Tables 6-3 and 6-6 (model from Teper's derivatives)
+    # Catterall (2003) Tables 6-3 and 6-6 (model from Teper's derivatives)
     modes = _jsbsim_modes("navion")
     assert _w_zeta(modes["short_period"]) == pytest.approx((3.455, 0.718), rel=0.10)
     assert _w_zeta(modes["phugoid"]) == pytest.approx((0.223, 0.108), rel=0.10)

@@ -15,18 +15,18 @@ import numpy as np
 import pytest
 
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.bridge import BridgeConfig, serve_record
-from flightid.sim.bridge_frames import read_tlog
-from flightid.sim.bridge_link import LinkFaults, UdpLink, parse_hostport
-from flightid.sim.bridge_messages import ServoMap, resolution
-from flightid.sim.bridge_schedule import (
+from flightid.sim.bridge.air import BridgeConfig, serve_record
+from flightid.sim.bridge.frames import read_tlog
+from flightid.sim.bridge.link import LinkFaults, UdpLink, parse_hostport
+from flightid.sim.bridge.messages import ServoMap, resolution
+from flightid.sim.bridge.recorder import convert_tlog, decode_tlog, record_bridged
+from flightid.sim.bridge.schedule import (
     MessageRate,
     StreamSpec,
     boomerang,
     plan_schedule,
     single_stream,
 )
-from flightid.sim.recorder import convert_tlog, decode_tlog, record_bridged
 from flightid.units import DEG
 
 BIN = Path(sys.executable).parent
@@ -338,7 +338,7 @@ def test_uart_model_latency_jitter_and_overflow():
     """The transmitter's timing model: 10 bits per byte, latency + Gaussian jitter, FIFO."""
     import os
 
-    from flightid.sim.bridge_link import FdLink, Transmitter
+    from flightid.sim.bridge.link import FdLink, Transmitter
 
     sink = FdLink(os.open(os.devnull, os.O_WRONLY))
     baud, n, size = 57600, 4000, 40

@@ -13,8 +13,8 @@ import sys
 import numpy as np
 import pytest
 
-from flightid.sim.bridge import BridgeConfig, FlightCoreAdapter, serve_simulation
-from flightid.sim.bridge_link import open_pty_pair
+from flightid.sim.bridge.air import BridgeConfig, FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.link import open_pty_pair
 from flightid.sim.flight import Simulation, fly
 from flightid.sim.trim import trim
 from flightid.units import DEG

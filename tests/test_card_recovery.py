@@ -28,7 +28,7 @@ Processing:
   low-passed zero-phase at 8 Hz (the engine lines alias to about 20 and 40 Hz, there is no
   anti-alias filter) and the record is taken at the 25 Hz DAS sample instants, where the
   vane, surface and airspeed samples are exact (no hold delay). Accelerometers are moved
-  to the CG as above; the boom vanes are corrected with the thesis's calibration (seed 000
+  to the CG as above; the boom vanes are corrected with the thesis's calibration (Sofyan,
   App. 2: 1 m ahead of the CG, K = 0.0136) by ``compatibility.correct``. The lateral model
   has no phi output (none measured); the pitch attitude of the reference condition comes
   from the trimmed specific force, theta0 = atan2(ax, -az) (level flight). The surface
@@ -50,18 +50,18 @@ import pytest
 import scipy.signal
 
 from flightid.identification import compatibility as compat
-from flightid.identification import input_denoising, output_error
+from flightid.identification import input_denoising, windows
 from flightid.identification import linear_models as lm
-from flightid.identification import nonlinear_6dof as n6
+from flightid.identification.methods import nonlinear_6dof as n6
+from flightid.identification.methods import output_error
 from flightid.record import FlightRecord
-from flightid.scenarios import demo
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.model import load
 from flightid.sim.trim import trim
 from flightid.sim.truth import derivatives
 
 IMU = ("p", "q", "r", "ax", "ay", "az")
-DAS_RATE = 25.0  # Hz, seed 000 ch. 6
+DAS_RATE = 25.0  # Hz, Sofyan (RMIT thesis, c. 1997) ch. 6
 IMU_CUTOFF = 8.0  # Hz: below the DAS Nyquist (12.5 Hz), above the aircraft modes (< 2 Hz)
 # hobby suite, servo-pot surfaces (errors in variables, see KNOWN): the elevator made
 # piecewise constant, the aileron and rudder estimated as multisteps by output error
@@ -141,6 +141,8 @@ def _without_outputs(model: lm.LinearModel, drop: tuple[str, ...]) -> lm.LinearM
 LONGITUDINAL = ("CL_0", "CL_alpha", "CL_q", "CL_de", "CD_0", "CD_alpha",
                 "Cm_alpha", "Cm_q", "Cm_de", "Cm_alphadot")
 TRIM_BALANCE = ("CL_0", "CD_0")
+# held at their truth values: this test isolates the noise of the hobby sensors
+A_PRIORI = ("CL_q", "Cm_alphadot")
 
 
 def identify(card, record: FlightRecord, truth: dict[str, float], settle: float):
@@ -149,18 +151,18 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     if "theta" not in record:
         pre = record.slice(0.0, min(m.start for m in card.maneuvers) - 0.1)
         override["theta"] = float(np.arctan2(np.mean(pre["ax"]), -np.mean(pre["az"])))
-    t0, t1 = demo.maneuver_window(card, ("de",), card.duration)
+    t0, t1 = windows.window(record, ("de",))
     t1 = min(t1, max(m.end for m in card.maneuvers if "de" in m.surfaces()) + settle)
     lon = record.slice(t0, t1)
     model = lm.longitudinal(lm.condition_from_record(lon, **override), derivatives=LONGITUDINAL,
-                            start={n: truth[n] for n in demo.A_PRIORI},
+                            start={n: truth[n] for n in A_PRIORI},
                             thrust_input="thrust" in lon)
     if "theta" not in lon:
         model = _without_outputs(model, ("theta",))
-    free = [p for p in model.parameters if p not in (*demo.A_PRIORI, *TRIM_BALANCE)]
+    free = [p for p in model.parameters if p not in (*A_PRIORI, *TRIM_BALANCE)]
     lo = output_error.estimate(lon, model, free=free, start="equation_error",
                                initial_state="estimate", colored=True)
-    t0, t1 = demo.maneuver_window(card, ("da", "dr"), card.duration)
+    t0, t1 = windows.window(record, ("da", "dr"))
     lat = record.slice(t0, t1)
     model = lm.lateral(lm.condition_from_record(lat, **override),
                        derivatives=lm.LATERAL_DERIVATIVES)
@@ -193,7 +195,7 @@ def flight(request):
     if card.sensors.name == "research":
         estimates = identify_6dof(record)
     else:
-        estimates = identify(card, record, truth, demo.SETTLE_S)
+        estimates = identify(card, record, truth, windows.SETTLE_S)
     rows = {n: (e[n], e.std_of(n), truth[n]) for e in estimates for n in e.names
             if n in truth and not n.endswith("_0") and n not in e.unidentifiable}
     return card, seed, estimates, rows, truth
@@ -215,7 +217,7 @@ def flight(request):
 # (CD_alpha +3.7), 18 (Cm_alpha -4.2), 19 (Cm_de -3.4). Measured by taking effects out of
 # the suite and by changing the processing (10-20 noise seeds each):
 # - lateral, solved: the measured surfaces are errors in the variables. Output error
-#   takes its inputs as exact; the servo-pot noise (0.2-0.3 deg, seed 000 Table 8-6, on
+#   takes its inputs as exact; the servo-pot noise (0.2-0.3 deg, Sofyan Table 8-6, on
 #   a 2 deg aileron pulse and a 1.5 deg rudder doublet) shrank Cl_beta, Cl_p, Cl_da by
 #   13 %; made piecewise constant (input_denoising) they read +6.4/+5.9/+8.0 %, and the
 #   25 Hz sampling was left: the roll derivatives move by about 1.4 % per ms of input
@@ -269,7 +271,7 @@ def test_a_priori_derivatives_stay_at_their_values(flight):
     if card.sensors.name == "research":
         pytest.skip("the 6-DOF fit estimates every derivative")
     fixed = estimates[0].fit["fixed"]
-    assert {n: fixed[n] for n in demo.A_PRIORI} == {n: truth[n] for n in demo.A_PRIORI}
+    assert {n: fixed[n] for n in A_PRIORI} == {n: truth[n] for n in A_PRIORI}
 
 
 def test_known_exceptions_still_fail(flight):

@@ -7,7 +7,7 @@ import sys
 import pytest
 from conftest import TWIN_OTTER
 
-CLI = [sys.executable, "-m", "flightid.scenarios.cli"]
+CLI = [sys.executable, "-m", "flightid.cli.app"]
 
 
 def _run(*args: str) -> subprocess.CompletedProcess:
@@ -46,7 +46,9 @@ def test_identify_twin_otter_report(tmp_path):
     out = _run("identify", str(TWIN_OTTER), "--method", "ee", "--model", "lateral",
                "--report", str(report))
     assert "Cn_beta" in out.stdout
-    assert report.read_text().count("<table>") >= 3
+    html = report.read_text()
+    # one estimate (CY, Cl, Cn merged): its table, the fit of each coefficient plotted
+    assert html.count("<table>") >= 1 and html.count("<img") >= 2
 
 
 
@@ -57,4 +59,4 @@ def test_identify_with_multistep_inputs_and_a_missing_one(tmp_path):
     bad = subprocess.run([*CLI, "identify", str(TWIN_OTTER), "--multistep-input", "dz"],
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode != 0
-    assert "multistep input(s) dz not in the record" in bad.stderr
+    assert "multistep input(s) dz not" in bad.stderr

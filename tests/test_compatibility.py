@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from flightid.cli.app import app
 from flightid.identification import compatibility as compat
 from flightid.record import FlightRecord, read
-from flightid.scenarios.cli import app
 from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim import flight, sensors
 from flightid.sim import trim as trimming
@@ -19,12 +19,13 @@ from flightid.sim.effects import Bias, Quantization, WhiteNoise
 from flightid.units import DEG, G0
 
 TWIN_OTTER = "/work/shared/data/twin_otter/totter_f1_017_data.mat"
-# injected sensor errors (SI): of the order seed 001 Table 1 allows for each sensor
+# injected sensor errors (SI): of the order that Table 1 of Cooper, Drobik & Martin (ARL
+# Flight Mechanics Report 187, 1990) allows for each sensor
 BIASES = {"p": 0.3 * DEG, "q": -0.2 * DEG, "r": 0.25 * DEG, "ax": 0.05, "ay": -0.04,
           "az": 0.08, "alpha": 0.5 * DEG, "beta": -0.4 * DEG}
-UPWASH, SIDEWASH, VANE_X = 0.06, 0.08, 4.5  # seed 001: K_alpha 1.06, K_beta 1.06-1.20
-# what "recovered" means physically: a tenth of the calibration accuracy of seed 001
-# Table 1 for the rates (0.5 deg/s) and the vanes (0.5 deg), 0.5 mg for accelerometers
+UPWASH, SIDEWASH, VANE_X = 0.06, 0.08, 4.5  # ARL FM Report 187: K_alpha 1.06, K_beta 1.06-1.20
+# what "recovered" means physically: a tenth of the calibration accuracy of the ARL
+# report's Table 1 for the rates (0.5 deg/s) and the vanes (0.5 deg), 0.5 mg for accelerometers
 # (a tenth of the 0.05 g accuracy), and 1 % on the flow amplification K
 PHYSICAL = {"p": 0.05 * DEG, "q": 0.05 * DEG, "r": 0.05 * DEG, "ax": 0.005 * G0,
             "ay": 0.005 * G0, "az": 0.005 * G0, "alpha": 0.05 * DEG, "beta": 0.05 * DEG,
@@ -149,7 +150,7 @@ def test_real_twin_otter_record():
     # without heading, a yaw-gyro bias and a lateral-accelerometer bias are one and the
     # same (b_ay = u b_r): one of them is reported unidentifiable
     assert "bias_r" in est.unidentifiable or "bias_ay" in est.unidentifiable
-    # sanity: a calibrated research installation (seed 001 Table 1 accuracies: 0.05 g,
+    # sanity: a calibrated research installation (ARL report Table 1 accuracies: 0.05 g,
     # 0.5-3 deg/s rates, 0.5 deg vanes; 10 kt airspeed); we allow twice the vane figure
     # for boom alignment
     for c in ("ax", "ay", "az"):

@@ -13,7 +13,7 @@ from flightid.scenarios import demo
 def test_demo_scores_every_derivative_within_3_corrected_sigma(tmp_path, seed):
     # Light turbulence makes the residuals colored; the bounds are corrected for it
     # (Morelli & Klein eq. 6.54), so 3 of them hold 99.7 % of a correct estimator's errors.
-    result = demo.run(seed=seed, report=tmp_path / "demo.html", show=False)
+    result = demo.run(seed=seed, report=tmp_path / "demo.html")
     assert [e.fit.get("converged") for e in result.estimates] == [True, True]
     for scored in result.scores:
         for row in scored.rows:
@@ -29,7 +29,7 @@ def test_demo_scores_every_derivative_within_3_corrected_sigma(tmp_path, seed):
 
 def test_demo_command_writes_a_report_with_its_plots(tmp_path):
     report = tmp_path / "report.html"
-    out = subprocess.run([sys.executable, "-m", "flightid.scenarios.cli", "demo", "--report",
+    out = subprocess.run([sys.executable, "-m", "flightid.cli.app", "demo", "--report",
                           str(report)], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "within 3 sigma" in out.stdout
@@ -42,7 +42,7 @@ def test_demo_names_a_bad_card(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('aircraft = "navion"\nduration = 10\n[condition]\naltitude = 0\nspeed = 53\n'
                    'colour = "red"\n')
-    out = subprocess.run([sys.executable, "-m", "flightid.scenarios.cli", "demo", "--card",
+    out = subprocess.run([sys.executable, "-m", "flightid.cli.app", "demo", "--card",
                           str(bad)], capture_output=True, text=True, timeout=120)
     assert out.returncode == 2
     assert "bad.toml:6:" in out.stderr and "condition.colour" in out.stderr

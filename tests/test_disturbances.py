@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from flightid.sim import disturbances as dist
+from flightid.sim.effects.vibration import EngineVibration
 from flightid.sim.model import load
 from flightid.sim.trim import trim
-from flightid.sim.vibration import EngineVibration
 from flightid.units import DEG, FT, KT
 
 
@@ -117,3 +117,13 @@ def test_disturbances_build_from_tables_and_name_bad_fields():
         dist.disturbance_from_dict({"kind": "turbulence", "intensity": "stormy"}, "d[2]")
     with pytest.raises(ValueError, match="'rise'.*> 0"):
         dist.Gust(start=1.0, rise=0.0)
+    # a turbulence table must size it; a sigma of 0 with a scale length is calm air
+    with pytest.raises(ValueError, match="'d\\[3\\].intensity'.*give an intensity"):
+        dist.disturbance_from_dict({"kind": "turbulence", "scale_length": 100.0}, "d[3]")
+    calm = dist.disturbance_from_dict({"kind": "turbulence", "sigma": 0.0,
+                                       "scale_length": 100.0})
+    assert not np.any(calm.velocities(50, 10.0, 50.0, 300.0, np.random.default_rng(0)))
+    # kinds resolve through the effect catalogue: one of another place says where it goes
+    with pytest.raises(ValueError, match="'d\\[4\\].kind'.*sensor effect.*sensors.channels"):
+        dist.disturbance_from_dict({"kind": "noise"}, "d[4]")
+    assert set(dist.DISTURBANCES) == {"wind", "gust", "turbulence", "engine_vibration"}

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from flightid.identification import coefficients as coef
-from flightid.identification import equation_error as ee
 from flightid.identification import validation as va
+from flightid.identification.estimate import StdKind
+from flightid.identification.methods import equation_error as ee
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sidpac import read_mat
 
@@ -40,7 +41,7 @@ def test_twin_otter_reproduces_published_equation_error(totter, coefficient):
     # the book corrects CY and Cl bounds for colored residuals and leaves Cn uncorrected
     colored = coefficient != "Cn"
     est = ee.estimate(totter, coefficient, REGRESSORS[coefficient], colored=colored)
-    assert est.fit["std_kind"] == ("corrected" if colored else "OLS")
+    assert est.std_kind == (StdKind.CRAMER_RAO_COLORED if colored else StdKind.CRAMER_RAO)
     assert not est.unidentifiable
     for name, (value, std) in PUBLISHED[coefficient].items():
         assert est[name] == pytest.approx(value, rel=0.01), name

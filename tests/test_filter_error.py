@@ -22,9 +22,10 @@ from test_output_error import (
     multistep,
 )
 
-from flightid.identification import filter_error as fe
 from flightid.identification import linear_models as lm
-from flightid.identification import output_error as oe
+from flightid.identification.identify import identify
+from flightid.identification.methods import filter_error as fe
+from flightid.identification.methods import output_error as oe
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 PROCESS_NOISE = {"beta": 0.01, "p": 0.03, "r": 0.01}
@@ -223,16 +224,14 @@ def test_twin_otter_values_lie_between_the_published_methods(twin_otter):
     assert all(fem[f"F_{s}"] > 10 * fem.std_of(f"F_{s}") for s in ("beta", "p", "r"))
 
 
-def test_twin_otter_through_the_method_dispatch(twin_otter):
-    from flightid.identification.dispatch import identify
-
+def test_twin_otter_through_the_method_registry(twin_otter):
     # options as the command line gives them: --option process_noise=beta,r
-    (est,) = identify(twin_otter, "fem", "lateral", {"process_noise": "beta,r"})
+    est = identify(twin_otter, "fem", "lateral", process_noise="beta,r")
     assert est.method == "fem" and est.fit["model"] == "lateral"
     assert est.fit["process_noise_states"] == ["beta", "r"]
     assert "F_p" not in est.names and est.fit["converged"]
-    with pytest.raises(ValueError, match="unknown filter-error options"):
-        identify(twin_otter, "fem", "lateral", {"proces_noise": ["p"]})
+    with pytest.raises(ValueError, match="unknown option.*proces_noise.*method fem"):
+        identify(twin_otter, "fem", "lateral", proces_noise=["p"])
 
 
 # ------------------------------------------------------------------ bad input

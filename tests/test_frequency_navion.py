@@ -1,5 +1,5 @@
-"""Frequency-domain identification of the Navion from the library's sweep cards (seed 004,
-Table 4-1) and the fdee/fdoe/fr methods through the command line on the Twin Otter."""
+"""Frequency-domain identification of the Navion from the library's sweep cards (Catterall
+2003, Table 4-1) and the fdee/fdoe/fr methods through the command line on the Twin Otter."""
 
 from __future__ import annotations
 
@@ -11,14 +11,15 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from flightid.cli.app import app
 from flightid.identification import frequency_domain as fd
 from flightid.identification import linear_models as lm
 from flightid.identification.frequency_response import (
     bode_overlay_figure,
     frequency_response_arrays,
 )
+from flightid.identification.methods import frequency_response_fit as frf
 from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed
-from flightid.scenarios.cli import app
 from flightid.sim import trim as trimming
 from flightid.sim import truth
 from flightid.sim.sensors import measure, research_suite
@@ -47,8 +48,8 @@ NAMES = [n for n in lm.LATERAL_EXAMPLE_6_1 if n != "CY_r"]  # CY_r is 0 in the N
 @pytest.mark.parametrize("seed", [11, 13, 15])
 def test_navion_sweeps_cifer_fit_against_truth(seed, tmp_path):
     records, true = navion_sweeps(seed)
-    (est,) = fd.run_fr(records, "lateral", {"estimate": NAMES, "trim_seconds": 2.0,
-                                            "max_cost": fd.MAX_PAIR_COST})
+    est = frf.fit(records, "lateral", frf.Options(estimate=NAMES, trim_seconds=2.0,
+                                                  max_cost=frf.MAX_PAIR_COST))
     dev = {n: (est[n] - true[n]) / est.std_of(n) for n in NAMES}
     # done-when of issue 6: every derivative within 3 standard errors of the truth (CIFER
     # Cramer-Rao bounds scaled by the fit's residual variance, so model error counts).
@@ -61,7 +62,7 @@ def test_navion_sweeps_cifer_fit_against_truth(seed, tmp_path):
     # the CIFER guideline holds for every pair kept; a pair over 100 (ay/da: the side
     # force of a roll sweep is tiny) is dropped, never more than that one
     costs = est.fit["cost_per_pair"]
-    assert all(c <= fd.MAX_PAIR_COST for c in costs.values()), costs
+    assert all(c <= frf.MAX_PAIR_COST for c in costs.values()), costs
     assert set(est.fit["dropped_pairs"]) <= {"ay/da"}, est.fit["dropped_pairs"]
     assert len(costs) >= 9
     if seed != 11:

@@ -216,7 +216,7 @@ def test_pullup_pushover_follows_seed_003():
         }
     )
     de = d.signal(t) if hasattr(d, "signal") else d.signals(t)["de"]
-    assert de.min() == pytest.approx(-10 * DEG, abs=1e-9)  # -10 deg pull (seed 003)
+    assert de.min() == pytest.approx(-10 * DEG, abs=1e-9)  # -10 deg pull (Boomerang 60 paper)
     i = np.argmin(de)
     back = np.argmax(de[i:] >= -1e-12) + i
     assert t[back] - t[i] == pytest.approx(4.0, abs=0.011)  # released over 4 s

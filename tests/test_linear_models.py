@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flightid.identification import linear_models as lm
-from flightid.identification.output_error import simulate
+from flightid.identification.methods.output_error import simulate
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 

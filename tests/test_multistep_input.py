@@ -4,9 +4,10 @@ The output-error cases fly the Navion lateral model (Teper 1969 via Nelson 1998,
 parameter set of ``test_output_error``) at 1 kHz with an aileron and a rudder doublet
 whose command steps fall between the 25 Hz samples, through a servo that slews across
 one sample interval (the transition that the parameterisation assumes for the sensor), and
-record the surfaces with 0.2 deg of noise: the hobby recorder of seed 000. A faster servo
-breaks that assumption: through a 10 ms first-order lag instead, seeds 1-8 put the edges
-+4 ms late on average (+1.5 sigma) and Cl_beta, Cl_p +4 % (+1 sigma).
+record the surfaces with 0.2 deg of noise: the hobby recorder of the Telemaster (Sofyan,
+RMIT thesis, c. 1997). A faster servo breaks that assumption: through a 10 ms first-order
+lag instead, seeds 1-8 put the edges +4 ms late on average (+1.5 sigma) and Cl_beta, Cl_p
++4 % (+1 sigma).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from test_output_error import LATERAL_TRUTH, NAVION
 
 from flightid.identification import linear_models as lm
 from flightid.identification import multistep_input as ms
-from flightid.identification import output_error as oe
+from flightid.identification.methods import output_error as oe
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 DEG = np.pi / 180
@@ -168,7 +169,7 @@ def test_identify_cli_estimates_the_multisteps_by_output_error(tmp_path):
     record, truth = _flight(1)
     path = record.write(tmp_path / "navion_doublets.parquet")
     out = subprocess.run(
-        [sys.executable, "-m", "flightid.scenarios.cli", "identify", str(path), "--method", "oe",
+        [sys.executable, "-m", "flightid.cli.app", "identify", str(path), "--method", "oe",
          "--model", "lateral", "--multistep-input", "da", "--multistep-input", "dr",
          "--option", "colored=true", "--format", "json"],
         capture_output=True, text=True, timeout=300)

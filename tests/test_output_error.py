@@ -15,8 +15,10 @@ import numpy as np
 import pytest
 
 from flightid.identification import linear_models as lm
-from flightid.identification import output_error as oe
-from flightid.identification.output_error import simulate
+from flightid.identification.estimate import StdKind
+from flightid.identification.identify import identify
+from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.output_error import simulate
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 
@@ -157,16 +159,15 @@ def test_twin_otter_reproduces_published_output_error(twin_otter):
         assert 0.85 < est.std_of(name) / std < 1.2, (name, est.std_of(name), std)
 
 
-def test_twin_otter_through_the_method_dispatch(twin_otter):
-    from flightid.identification.dispatch import identify
-
-    (est,) = identify(twin_otter, "oe", "lateral", {"colored": False})
+def test_twin_otter_through_the_method_registry(twin_otter):
+    est = identify(twin_otter, "oe", "lateral", colored=False, initial_state="measured",
+                   start=None)
     assert est.method == "oe" and est.fit["model"] == "lateral"
     value, std = PUBLISHED_OE["Cn_r"]
     assert abs(est["Cn_r"] - value) < 2 * std
     assert est.fit["R2"] > 0.9  # the published fit is close (M&K fig. 6.4)
-    with pytest.raises(ValueError, match="unknown output-error options"):
-        identify(twin_otter, "oe", "lateral", {"colour": True})
+    with pytest.raises(ValueError, match="unknown option.*colour.*method oe"):
+        identify(twin_otter, "oe", "lateral", colour=True)
 
 
 def test_twin_otter_zero_order_hold_is_what_breaks_the_match(twin_otter):
@@ -187,7 +188,7 @@ def test_twin_otter_colored_residual_bounds_are_larger(twin_otter):
     # corrected bounds are larger, here by factors of 3 to 9 (median about 6)
     assert np.all(ratio > 1.0)
     assert 1.5 < np.median(ratio) < 8.0
-    assert "colored" in colored.fit["std_kind"]
+    assert colored.std_kind == StdKind.CRAMER_RAO_COLORED
 
 
 # ------------------------------------------------------------------ synthetic truth

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flightid.identification import linear_models as lm
-from flightid.identification import output_error as oe
+from flightid.identification.methods import output_error as oe
 from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim import flight, truth
 from flightid.sim import trim as trimming

@@ -1,4 +1,4 @@
-"""Scoring against truth, the identify dispatch and the `flightid identify` command."""
+"""Scoring against truth, the identify front door and the `flightid identify` command."""
 
 from __future__ import annotations
 
@@ -9,10 +9,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from flightid.identification.dispatch import METHODS, identify, parse_model
-from flightid.identification.estimate import Estimate
+from flightid.cli.app import app
+from flightid.cli.tables import print_score
+from flightid.identification.estimate import Estimate, StdKind
+from flightid.identification.identify import identify
+from flightid.identification.methods.registry import methods
+from flightid.identification.model_structure import regression
 from flightid.identification.scoring import load_truth, score
-from flightid.scenarios.cli import app
 
 TWIN_OTTER = (
     Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
@@ -29,24 +32,28 @@ def _estimate() -> Estimate:
 
 
 def test_rows_verdict_and_unidentifiable():
-    s = score(_estimate(), {"Cm_alpha": -1.3, "Cm_q": -34.0, "Cm_de": -1.7, "CL_alpha": 5.7})
+    truth = {"Cm_alpha": -1.3, "Cm_q": -34.0, "Cm_de": -1.7, "CL_alpha": 5.7, "Cm_0": 0.0}
+    s = score(_estimate(), truth, scope="all")
     rows = {r.name: r for r in s.rows}
     assert rows["Cm_alpha"].error == pytest.approx(0.1)
     assert rows["Cm_alpha"].sigmas == pytest.approx(2.0)
     assert rows["Cm_q"].sigmas == pytest.approx(2.0)
     assert rows["Cm_de"].status == "unidentifiable" and rows["Cm_de"].estimate is None
     assert rows["CL_alpha"].status == "not estimated"
-    assert s.verdict == ("2 of 2 within 3 sigma; worst Cm_alpha at 2.0 sigma; "
+    assert "Cm_0" not in rows  # a coefficient at the reference condition is not scored
+    assert s.verdict == ("2 estimated, 2 within 3 sigma, worst Cm_alpha at 2.0 sigma; "
                          "1 unidentifiable (Cm_de); 1 not estimated (CL_alpha)")
     d = json.loads(s.to_json())
     assert d["rows"][2]["estimate"] is None and "constant" in d["rows"][2]["reason"]
+    # by default only what the estimate covers: estimated and unidentifiable
+    assert [r.name for r in score(_estimate(), truth).rows] == ["Cm_alpha", "Cm_q", "Cm_de"]
 
 
 def test_table_prints_unidentifiable_as_text():
     from rich.console import Console
 
     console = Console(record=True, width=160)
-    score(_estimate(), {"Cm_alpha": -1.3, "Cm_de": -1.7}).print(console)
+    print_score(score(_estimate(), {"Cm_alpha": -1.3, "Cm_de": -1.7}), console)
     text = console.export_text()
     assert "unidentifiable: de is constant" in text and "-1.7" in text
 
@@ -64,20 +71,20 @@ def test_load_truth_forms_and_errors(tmp_path):
         load_truth(bad)
 
 
-def test_dispatch_models_and_methods():
-    assert set(METHODS) >= {"ee", "swr"}
-    assert parse_model("Cn=beta+rhat; CY=beta")["Cn"] == ["beta", "rhat"]
+def test_models_and_methods():
+    assert set(methods()) >= {"ee", "swr"}
+    assert regression("Cn=beta+rhat; CY=beta")["Cn"] == ["beta", "rhat"]
     with pytest.raises(ValueError, match="unknown model"):
-        parse_model("sideways")
+        regression("sideways")
     from flightid.sidpac import read_mat
 
     rec = read_mat(TWIN_OTTER)
-    ests = identify(rec, "ee", "lateral", {"coefficients": ["Cn"], "colored": False})
-    assert len(ests) == 1 and ests[0]["Cn_dr"] == pytest.approx(-0.13054, rel=0.01)
+    est = identify(rec, "ee", "lateral", coefficients=["Cn"], colored=False)
+    assert est.names[0].startswith("Cn_") and est["Cn_dr"] == pytest.approx(-0.13054, rel=0.01)
     with pytest.raises(ValueError, match="unknown method"):
         identify(rec, "magic")
-    with pytest.raises(ValueError, match="unknown equation-error options"):
-        identify(rec, "ee", "lateral", {"f_in": 4})
+    with pytest.raises(ValueError, match="unknown option.*f_in.*valid: coefficients"):
+        identify(rec, "ee", "lateral", f_in=4)
 
 
 def test_cli_identify_json_and_score(tmp_path):
@@ -89,7 +96,7 @@ def test_cli_identify_json_and_score(tmp_path):
     assert result.exit_code == 0, result.output
     out = json.loads(result.output)
     assert out["estimates"]["Cn_beta"]["value"] == pytest.approx(0.08544, rel=0.01)
-    assert out["fit"]["Cn"]["std_kind"] == "corrected"
+    assert out["std_kind"] == StdKind.CRAMER_RAO_COLORED == "cramer-rao-colored"
     # equation error vs output error on real data: Cn_p and Cn_da differ by more than
     # 3 corrected bounds (the README's point about methods disagreeing on real data)
     rows = {r["name"]: r for r in out["score"]["rows"]}

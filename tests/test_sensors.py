@@ -11,7 +11,8 @@ from scipy.signal import butter, sosfiltfilt
 
 from flightid.record import FlightRecord, RecordMeta
 from flightid.record import read as read_record
-from flightid.sim.effects import EFFECTS, Lag, SecondOrder, effect_from_dict
+from flightid.sim.effects import CATALOGUE, EFFECTS, Lag, SecondOrder, effect_from_dict
+from flightid.sim.effects.vibration import EngineVibration
 from flightid.sim.sensors import (
     LeverArm,
     SensorSuite,
@@ -20,7 +21,6 @@ from flightid.sim.sensors import (
     measure,
     suite_from_dict,
 )
-from flightid.sim.vibration import EngineVibration
 from flightid.units import G0
 
 
@@ -184,7 +184,7 @@ def test_vanes_kinematic_and_upwash(long_truth):
         tr.time, tr.channels, None
     )
     V, q, p, r = tr["V"], tr["q"], tr["p"], tr["r"]
-    lin_a = 1.06 * (tr["alpha"] - 1.0 * q / V)  # seed 001: K_a (alpha - x_a q / V)
+    lin_a = 1.06 * (tr["alpha"] - 1.0 * q / V)  # ARL FM Report 187: K_a (alpha - x_a q / V)
     lin_b = 1.10 * (tr["beta"] + 1.0 * r / V + 0.3 * p / V)  # K_b (beta - z_b p/V + x_b r/V)
     # exact local-flow angles differ from the linear form by second-order terms
     assert np.abs(out["alpha"] - lin_a).max() < 2e-3
@@ -293,6 +293,21 @@ def test_every_effect_round_trips_through_its_dict():
     s = builtin_suite("hobby")
     again = suite_from_dict(s.to_dict())
     assert again.to_dict() == s.to_dict()
+    # mounting and vibration effects too, through the catalogue's card section
+    for m in builtin_suite("hobby").mounting:
+        assert CATALOGUE.from_dict(m.to_dict(), "mounting") == m
+
+
+def test_effects_at_their_neutral_infinity_leave_the_signal_alone():
+    t = np.arange(200) / 100.0
+    x = np.sin(2 * np.pi * 1.3 * t)
+    rng = np.random.default_rng(0)
+    for d in ({"effect": "saturate", "limit": np.inf}, {"effect": "lowpass", "cutoff": np.inf},
+              {"effect": "second_order", "wn": np.inf}, {"effect": "sample", "rate": np.inf}):
+        np.testing.assert_array_equal(effect_from_dict(d).apply(t, x, rng), x)
+    # a continuous sampler is not a sampled channel: no zero-order hold at the output
+    suite = one("q", {"effect": "sample", "rate": np.inf})
+    assert suite.sample_rate("q") is None
 
 
 @pytest.mark.parametrize(
@@ -312,6 +327,12 @@ def test_every_effect_round_trips_through_its_dict():
         ({"base": "spacecraft"}, "'base'"),
         ({"outputrate": 10}, "'outputrate'"),
         ({"channels": {"q": [{"effect": "sample", "rate": 0}]}}, "'rate'"),
+        # names resolve through the catalogue: a sample rate is in Hz, not in the channel unit
+        ({"channels": {"q": [{"effect": "sample", "rate_deg": 5}]}}, "channels.q[0].rate_deg"),
+        ({"channels": {"q": [{"effect": "bias", "value": np.inf}]}}, "channels.q[0].value"),
+        ({"channels": {"q": [{"effect": "wind"}]}}, "channels.q[0].effect"),
+        ({"mounting": [{"effect": "noise"}]}, "mounting[0].effect"),
+        ({"mounting": [{"effect": "vanes", "upwash": -2.0}]}, "mounting[0].upwash"),
     ],
 )
 def test_bad_suite_dicts_name_the_field(d, field):

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from typer.testing import CliRunner
 
+from flightid.cli.app import app
 from flightid.record import read
-from flightid.scenarios.cli import app
 from flightid.scenarios.simulate import plot_record, simulate
 
 runner = CliRunner()
@@ -30,7 +30,7 @@ def test_simulate_writes_measured_truth_and_plot(tmp_path):
     assert measured.meta.sample_rate == 100.0  # the hobby suite's output rate
     assert exact.time[-1] == 8.0 and "turb_w" in exact
     # the measured pitch rate follows the truth within the hobby gyro errors: 0.5 deg/s
-    # bias, 1.2 deg/s noise (seed 000 Table 8-6; 3 sigma 3.6) and the engine vibration
+    # bias, 1.2 deg/s noise (Sofyan Table 8-6; 3 sigma 3.6) and the engine vibration
     # (2 deg/s at the rotation frequency, 1 deg/s at its harmonic and blade passing: 4)
     q_truth = np.interp(measured.time, exact.time, exact["q"])
     assert np.max(np.abs(measured["q"] - q_truth)) < np.radians(0.5 + 3.6 + 4.0)
@@ -47,8 +47,8 @@ def test_simulate_reports_a_bad_card_with_its_line(tmp_path):
 
 
 def test_same_seed_same_file_through_the_runner(tmp_path):
-    a = simulate("twinotter-lateral-0alpha", tmp_path / "a.csv", seed=9, show_progress=False)[0]
-    b = simulate("twinotter-lateral-0alpha", tmp_path / "b.csv", seed=9, show_progress=False)[0]
+    a = simulate("twinotter-lateral-0alpha", tmp_path / "a.csv", seed=9)[0]
+    b = simulate("twinotter-lateral-0alpha", tmp_path / "b.csv", seed=9)[0]
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     plot_record(a, tmp_path / "p.png", title="x")
     assert np.array_equal(a["p"], b["p"])

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flightid.identification import stepwise as sw
+from flightid.identification.methods import stepwise as sw
 from flightid.record import FlightRecord, RecordMeta
 from flightid.sidpac import read_mat
 
@@ -69,7 +69,7 @@ def test_twin_otter_cn_selects_published_regressors_but_the_insignificant_one(to
     assert set(est.fit["regressors"]) == {"beta", "phat", "rhat", "dr"}
     for name, value in {"Cn_beta": 0.0854, "Cn_r": -0.1976, "Cn_dr": -0.1305}.items():
         assert est[name] == pytest.approx(value, rel=0.03), name
-    from flightid.identification import equation_error as ee
+    from flightid.identification.methods import equation_error as ee
 
     full = ee.estimate(totter, "Cn", ["beta", "phat", "rhat", "da", "dr"])
     assert abs(full["Cn_da"]) / full.std_of("Cn_da") < 2.0

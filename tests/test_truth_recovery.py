@@ -51,7 +51,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.identification import nonlinear_6dof as n6
+from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
 from flightid.sim import flight, truth
 from flightid.sim import trim as trimming

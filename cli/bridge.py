@@ -1,0 +1,234 @@
+"""``flightid bridge serve|record|fly`` and ``flightid convert``: the recorder bridge
+(``flightid.sim.bridge``) on the command line.
+
+Each command parses its options into library calls and prints a readable report;
+errors are raised as ``typer.BadParameter`` / ``typer.Exit`` with a specific message.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flightid.record import FlightRecord, read
+from flightid.scenarios import cards
+from flightid.sim.bridge.air import (
+    BridgeConfig,
+    FlightCoreAdapter,
+    serve_record,
+    serve_simulation,
+)
+from flightid.sim.bridge.link import (
+    Link,
+    LinkFaults,
+    SerialLink,
+    UdpLink,
+    open_pty_pair,
+    parse_hostport,
+)
+from flightid.sim.bridge.recorder import convert_tlog, record_stream
+from flightid.sim.bridge.schedule import PROFILES
+from flightid.sim.flight import Simulation
+from flightid.sim.trim import trim
+
+RECORD_SUFFIXES = (".parquet", ".csv", ".mat")
+_AIRCRAFT_HELP = "project aircraft, jsbsim aircraft or XML path"
+_SERIAL_HELP = "serial device (or 'pty' to create a pseudo-terminal; serve/fly only)"
+_UDP_HELP = "loopback HOST:PORT (the recorder listens there)"
+
+app = typer.Typer(
+    help="MAVLink/serial recorder bridge: stream flights, record tlogs, fly in the loop.",
+    no_args_is_help=True,
+)
+
+
+def _config(baud: int | None, faults: str, seed: int, realtime: bool, profile: str) -> BridgeConfig:
+    if profile not in PROFILES:
+        raise typer.BadParameter(f"unknown profile {profile!r}; use {', '.join(PROFILES)}")
+    try:
+        parsed = LinkFaults.parse(faults)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--faults") from None
+    return BridgeConfig(streams=PROFILES[profile](), baud=baud, faults=parsed, seed=seed,
+                        realtime=realtime)
+
+
+def _air_link(serial: str | None, udp: str | None, baud: int, start_delay: float):
+    """Open the air side's link; returns (link, closer)."""
+    if (serial is None) == (udp is None):
+        raise typer.BadParameter("give exactly one of --serial PORT or --udp HOST:PORT")
+    if udp is not None:
+        try:
+            link = UdpLink(parse_hostport(udp), listen=False)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--udp") from None
+        return link, link.close
+    if serial == "pty":
+        pty = open_pty_pair()
+        typer.echo(f"pseudo-terminal ready: record with  flightid bridge record --serial "
+                   f"{pty.slave_path} -o flight.tlog")
+        if start_delay > 0:
+            typer.echo(f"starting in {start_delay:g} s")
+            time.sleep(start_delay)
+        return pty.master_link(), pty.close
+    try:
+        link = SerialLink(serial, baud)
+    except OSError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--serial") from None
+    return link, link.close
+
+
+def _load_source(path: str):
+    """A flight record from a record file, or the measured record of a flight card
+    (a .toml file or a library card name, flown with the card's own seed)."""
+    p = Path(path)
+    if p.suffix.lower() in RECORD_SUFFIXES:
+        if not p.exists():
+            raise typer.BadParameter(f"{path}: no such file", param_hint="CARD_OR_RECORD")
+        return read(p)
+    try:
+        card = cards.load_card(cards.find_card(path))
+    except cards.CardError as exc:
+        raise typer.BadParameter(
+            f"{exc} (expected a record {', '.join(RECORD_SUFFIXES)} or a flight card)",
+            param_hint="CARD_OR_RECORD") from None
+    typer.echo(f"flying card {card.name} ({card.aircraft}, {card.duration:g} s)")
+    measured, _truth = cards.fly_card(card)
+    return measured
+
+
+@app.command("serve")
+def serve(
+    source: Annotated[str, typer.Argument(metavar="CARD_OR_RECORD",
+                                          help="flight record (.parquet/.csv/.mat) or card")],
+    serial: Annotated[str | None, typer.Option(help=_SERIAL_HELP)] = None,
+    udp: Annotated[str | None, typer.Option(help=_UDP_HELP)] = None,
+    baud: Annotated[int, typer.Option(help="link rate in bits/s (0 = unlimited)")] = 57600,
+    realtime: Annotated[bool, typer.Option(help="pace the stream on the wall clock")] = False,
+    faults: Annotated[str, typer.Option(
+        help="e.g. corrupt=0.001,drop=0.05,latency=0.02,jitter=0.01 (corrupt per byte)")] = "",
+    seed: Annotated[int, typer.Option(help="seed of the fault generator")] = 0,
+    profile: Annotated[str, typer.Option(help="recorders: single or boomerang")] = "single",
+    start_delay: Annotated[float, typer.Option(help="s to wait after creating a pty")] = 3.0,
+    report: Annotated[str | None, typer.Option(help="write the air-side report (JSON)")] = None,
+) -> None:
+    """Stream a flight as MAVLink 2 over a serial port, a pty or loopback UDP."""
+    record = _load_source(source)
+    config = _config(baud if baud > 0 else None, faults, seed, realtime, profile)
+    link, close = _air_link(serial, udp, baud, start_delay)
+    try:
+        rep = serve_record(record, link, config, keep_fates=False)
+    finally:
+        close()
+    typer.echo(rep.summary())
+    if report:
+        Path(report).write_text(json.dumps(rep.as_dict(), indent=2, default=str))
+
+
+def _ground_link(serial: str | None, udp: str | None, baud: int) -> Link:
+    if (serial is None) == (udp is None):
+        raise typer.BadParameter("give exactly one of --serial PORT or --udp HOST:PORT")
+    try:
+        if udp is not None:
+            return UdpLink(parse_hostport(udp), listen=True)
+        return SerialLink(serial, baud)
+    except (OSError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from None
+
+
+@app.command("record")
+def record(
+    output: Annotated[str, typer.Option("-o", "--output", help="the .tlog to write")],
+    serial: Annotated[str | None, typer.Option(help="serial device to read")] = None,
+    udp: Annotated[str | None, typer.Option(help=_UDP_HELP)] = None,
+    baud: Annotated[int, typer.Option(help="serial rate in bits/s")] = 57600,
+    duration: Annotated[float | None, typer.Option(help="stop after this many s")] = None,
+    idle_timeout: Annotated[float, typer.Option(help="stop after this many s without data")] = 10.0,
+) -> None:
+    """Record a MAVLink stream into a .tlog (every intact packet; report in <tlog>.json)."""
+    link = _ground_link(serial, udp, baud)
+    typer.echo(f"recording {link.name} to {output}")
+    try:
+        rep = record_stream(link, output, duration=duration, idle_timeout=idle_timeout)
+    except KeyboardInterrupt:
+        typer.echo("interrupted")
+        raise typer.Exit(1) from None
+    finally:
+        link.close()
+    typer.echo(rep.summary())
+
+
+def convert_command(
+    tlog: Annotated[str, typer.Argument(help="MAVLink .tlog")],
+    output: Annotated[str, typer.Argument(help="flight record to write (.parquet or .csv)")],
+    align: Annotated[str, typer.Option(help="auto, timesync, xcorr or none")] = "auto",
+    reference: Annotated[str | None, typer.Option(help="clock source 'sysid/compid'")] = None,
+    rate: Annotated[float | None, typer.Option(help="output rate, Hz")] = None,
+    aircraft: Annotated[str, typer.Option(
+        help="aircraft: adds its mass properties and geometry (MAVLink has none)")] = "",
+) -> None:
+    """Convert a MAVLink .tlog to a flight record (SI channels, aligned, uniform time)."""
+    if Path(output).suffix.lower() not in (".parquet", ".csv"):
+        raise typer.BadParameter(f"{output}: write .parquet or .csv", param_hint="OUTPUT")
+    try:
+        rec = convert_tlog(tlog, align=align, reference=reference, rate=rate, aircraft=aircraft)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="TLOG") from None
+    rec.write(output)
+    b = rec.meta.extra["bridge"]
+    typer.echo(f"{output}: {len(rec)} samples at {rec.meta.sample_rate:g} Hz, "
+               f"channels {', '.join(sorted(rec.channels))}")
+    for src, loss in b["losses"].items():
+        typer.echo(f"  source {src}: {loss['received']} packets, {loss['lost']} lost "
+                   f"({100 * loss['loss_rate']:.2f} %)")
+    for src, m in b["alignment"].items():
+        if m["method"] != "reference":
+            typer.echo(f"  clock {src}: offset {m['offset_s']:+.4f} s, drift "
+                       f"{m['drift_ppm']:+.1f} ppm ({m['method']}, {m['via']})")
+    for note in b["read_notes"]:
+        typer.echo(f"  note: {note}")
+
+
+@app.command("fly")
+def fly(
+    aircraft: Annotated[str, typer.Argument(help=_AIRCRAFT_HELP)],
+    altitude: Annotated[float, typer.Option(help="trim altitude above sea level, m")],
+    speed: Annotated[float, typer.Option(help="trim true airspeed, m/s")],
+    serial: Annotated[str | None, typer.Option(help=_SERIAL_HELP)] = None,
+    udp: Annotated[str | None, typer.Option(help=_UDP_HELP)] = None,
+    baud: Annotated[int, typer.Option(help="link rate in bits/s (0 = unlimited)")] = 0,
+    rate: Annotated[float, typer.Option(help="simulation/telemetry rate, Hz")] = 50.0,
+    duration: Annotated[float, typer.Option(help="flight time, s")] = 30.0,
+    lockstep: Annotated[bool, typer.Option(help="one step per control message")] = True,
+    timeout: Annotated[float, typer.Option(help="s to wait for the ground station")] = 30.0,
+    profile: Annotated[str, typer.Option(help="recorders: single or boomerang")] = "single",
+    output: Annotated[str | None, typer.Option(help="write the flown record here")] = None,
+) -> None:
+    """Fly the JSBSim aircraft with controls received over the link (HIL_ACTUATOR_CONTROLS,
+    SET_ACTUATOR_CONTROL_TARGET, MANUAL_CONTROL or RC_CHANNELS_OVERRIDE)."""
+    tr = trim(aircraft, altitude, speed)
+    sim = FlightCoreAdapter(Simulation(aircraft, rate_hz=rate), tr)
+    held = {"de": tr.elevator, "da": tr.aileron, "dr": tr.rudder, "throttle": tr.throttle}
+    initial = sim.reset(held)
+    config = _config(baud if baud > 0 else None, "", 0, not lockstep, profile)
+    link, close = _air_link(serial, udp, baud, 0.0)
+    typer.echo(f"trimmed {aircraft} at {altitude:g} m, {speed:g} m/s: de {tr.elevator:+.5f}, "
+               f"da {tr.aileron:+.5f}, dr {tr.rudder:+.5f} rad, throttle {tr.throttle:.4f}; "
+               "waiting for a ground station HEARTBEAT")
+    try:
+        rep, history = serve_simulation(sim, initial, link, config,
+                                        steps=int(round(duration * rate)), lockstep=lockstep,
+                                        timeout=timeout, controls=held)
+    finally:
+        close()
+    typer.echo(rep.summary())
+    typer.echo(f"{rep.controls_received} control messages received")
+    if output:
+        names = sorted(set.intersection(*(set(h) for h in history)))
+        t = [k / rate for k in range(len(history))]
+        FlightRecord(t, {n: [h[n] for h in history] for n in names},
+                     sim.sim.meta({"bridge": "in the loop"})).write(output)

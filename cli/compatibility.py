@@ -1,0 +1,60 @@
+"""``flightid compatibility``: flight path reconstruction printed as a table or JSON, the
+corrected record optionally written (printing only; the work is
+``flightid.identification.compatibility``)."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from flightid.identification.compatibility import PARAMETERS, reconstruct
+from flightid.record import read
+
+# display factors to deg, deg/s and g
+_DISPLAY = {"rad": 180 / math.pi, "rad/s": 180 / math.pi, "m/s^2": 1 / 9.80665}
+
+
+def compatibility_command(
+    record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
+    output: Annotated[str | None, typer.Option("-o", "--output",
+                                               help="write the corrected record here")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+) -> None:
+    """Data compatibility: flight path reconstruction of sensor biases, scale factors and
+    vane calibration; optionally write the corrected record."""
+    if format not in ("table", "json"):
+        raise SystemExit(f"--format must be table or json, got {format!r}")
+    rec = read(record)
+    corrected, est = reconstruct(rec)
+    if output:
+        corrected.write(output)
+    if format == "json":
+        d = est.as_dict()
+        d["fit"].pop("cost_history", None)
+        d["units"] = est.fit["units"]
+        print(json.dumps(d, indent=2, default=str))
+        return
+    console = Console()
+    noise = ", ".join(f"{o} {s:.3g}" for o, s in est.fit["noise_std"].items())
+    table = Table(title=f"flight path reconstruction: {rec.meta.aircraft or record}  "
+                  f"({'converged' if est.fit['converged'] else 'NOT converged'}, "
+                  f"std: {est.std_kind.value})")
+    for col in ("parameter", "value", "std", "unit", "value (deg, g)"):
+        table.add_column(col, justify="left" if col in ("parameter", "unit") else "right")
+    for name, value, std in zip(est.names, est.values, est.std, strict=True):
+        unit = PARAMETERS[name].unit
+        factor = _DISPLAY.get(unit)
+        alt = f"{value * factor:.4g} +- {std * factor:.2g}" if factor else ""
+        table.add_row(name, f"{value:.6g}", f"{std:.3g}", unit, alt)
+    for name, reason in est.unidentifiable.items():
+        table.add_row(name, "unidentifiable", "", "", reason, style="yellow")
+    console.print(table)
+    console.print(f"residual std: {noise}")
+    console.print(f"{est.fit['notes'].get('gravity', '')}; {est.fit['reason']}")
+    if output:
+        console.print(f"corrected record written to {output}")

@@ -1,0 +1,54 @@
+"""``flightid frequency-response``: a frequency response with coherence and random error
+printed as a table, optionally a Bode/coherence PNG (printing only; the work is
+``flightid.identification.frequency_response``)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from flightid.identification.frequency_response import (
+    bode_figure,
+    default_windows,
+    frequency_response,
+)
+from flightid.record import read
+
+
+def frequency_response_command(
+    record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
+    input: Annotated[str, typer.Option("--input", help="input channel, e.g. de")],
+    output: Annotated[str, typer.Option("--output", help="output channel, e.g. q")],
+    condition_on: Annotated[
+        list[str] | None, typer.Option(help="other input to condition on (repeatable)")
+    ] = None,
+    window: Annotated[
+        list[float] | None, typer.Option(help="window length in s (repeatable; composite)")
+    ] = None,
+    f_min: Annotated[float | None, typer.Option(help="lowest frequency, Hz")] = None,
+    f_max: Annotated[float | None, typer.Option(help="highest frequency, Hz")] = None,
+    plot: Annotated[str | None, typer.Option(help="write a Bode/coherence PNG here")] = None,
+) -> None:
+    """Frequency response output/input with coherence and random error (CIFER style)."""
+    rec = read(record)
+    wins = tuple(window) if window else default_windows(rec.time[-1] - rec.time[0], rec.dt)
+    freqs = None
+    if f_min is not None or f_max is not None:
+        lo = f_min if f_min is not None else 2.0 / max(wins)
+        hi = f_max if f_max is not None else 0.2 / rec.dt
+        freqs = np.geomspace(lo, hi, 100)
+    r = frequency_response(rec, input, output, other_inputs=condition_on or [], windows=wins,
+                           frequencies=freqs)
+    unit = f"{rec.unit(output)} per {rec.unit(input)}"
+    print(f"# {output}/{input} ({unit}), windows {', '.join(f'{w:g}' for w in wins)} s"
+          + (f", conditioned on {', '.join(r.conditioned_on)}" if r.conditioned_on else ""))
+    print(f"{'f_Hz':>9} {'mag_dB':>9} {'phase_deg':>10} {'coherence':>9} {'rand_err':>9}")
+    for f, m, p, c, e in zip(r.frequency, r.magnitude_db, r.phase_deg, r.coherence,
+                             r.random_error, strict=True):
+        print(f"{f:9.4f} {m:9.3f} {p:10.2f} {c:9.3f} {e:9.4f}")
+    if plot:
+        fig = bode_figure([r], title=f"{rec.meta.aircraft or record}: {output}/{input}")
+        fig.savefig(plot, dpi=110)
+        print(f"# Bode plot written to {plot}")

@@ -1,0 +1,100 @@
+"""``flightid identify``: read a record, identify, print the estimate and its score."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from flightid.cli.tables import estimate_table, print_score
+from flightid.identification.identify import identify
+from flightid.identification.input_denoising import denoise_channels
+from flightid.identification.report import write_html
+from flightid.identification.scoring import load_truth, record_truth, score
+from flightid.record import read
+
+
+def parse_options(texts: list[str]) -> dict[str, str]:
+    """{key: text} from 'key=value' texts (the method's option types convert the texts)."""
+    out: dict[str, str] = {}
+    for text in texts:
+        key, sep, value = text.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"option {text!r}: expected KEY=VALUE")
+        out[key.strip()] = value
+    return out
+
+
+def parse_window(text: str) -> str | tuple[float, float]:
+    """'auto', 'none' or 'START,END' (s)."""
+    if text in ("auto", "none"):
+        return text
+    start, sep, end = text.partition(",")
+    try:
+        return float(start), float(end)
+    except ValueError:
+        raise ValueError(f"--window must be auto, none or START,END in s, got {text!r}") \
+            from None
+
+
+def identify_command(
+    record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
+    method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
+    model: Annotated[str, typer.Option(
+        help="lat[eral], lon[gitudinal], short_period, 6dof, all, or 'Cn=beta+phat+rhat; ...' "
+             "(regression methods)")] = "lateral",
+    coefficient: Annotated[list[str] | None, typer.Option(
+        help="regression methods: only this coefficient (repeatable)")] = None,
+    truth: Annotated[str | None, typer.Option(
+        help="JSON of true derivative values (default: the truth a simulated record "
+             "carries)")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+    report: Annotated[str | None, typer.Option(help="write an HTML report here")] = None,
+    option: Annotated[list[str] | None, typer.Option(
+        help="method option KEY=VALUE (repeatable; flightid methods lists them)")] = None,
+    window: Annotated[str, typer.Option(
+        help="auto (the maneuvers on the model's inputs, when the record lists them), none, "
+             "or START,END in s")] = "auto",
+    all_rows: Annotated[bool, typer.Option(
+        "--all", help="score every truth derivative, also those not estimated")] = False,
+    multistep_input: Annotated[list[str] | None, typer.Option(
+        help="input flown as a multistep whose measurement is noisy: --method oe estimates "
+             "its levels and edge times, the other methods take it made piecewise "
+             "constant (repeatable)")] = None,
+) -> None:
+    """Identify stability and control derivatives from a flight record and score them."""
+    if format not in ("table", "json"):
+        raise ValueError(f"--format must be table or json, got {format!r}")
+    span = parse_window(window)
+    options: dict[str, Any] = parse_options(option or [])
+    data = read(record)
+    if multistep_input and method == "oe":
+        options["multistep_inputs"] = list(multistep_input)
+    elif multistep_input:
+        data = denoise_channels(data, multistep_input)
+    if coefficient:
+        options["coefficients"] = list(coefficient)
+    est = identify(data, method, model, window=span, **options)
+    truth_values = load_truth(truth) if truth else record_truth(data)
+    scored = score(est, truth_values, scope="all" if all_rows else "estimated") \
+        if truth_values else None
+    if report:
+        write_html(report, f"flightid identify {record} --method {method} --model {model}",
+                   [est], truth_values or None, notes=[scored.verdict] if scored else [])
+    if format == "json":
+        out = est.as_dict()
+        out["fit"] = {k: v for k, v in out["fit"].items()
+                      if not isinstance(v, list) or len(v) < 1000}
+        if scored is not None:
+            out["score"] = scored.as_dict()
+        print(json.dumps(out, indent=2, default=str))
+        return
+    console = Console()
+    console.print(estimate_table(est))
+    for part in (est.fit.get("coefficients") or {}).values():
+        for step in part.get("steps", []):
+            console.print(f"  {step['action']:>6} {step['term']}: {step['why']}")
+    if scored is not None:
+        print_score(scored, console)

@@ -1,0 +1,68 @@
+"""A priori values: parameters held fixed at values from a stated source.
+
+A short maneuver cannot separate some derivatives (CL_q from CL_alpha, Cm_alphadot from
+Cm_q: Morelli & Klein 2016 sec. 6.3); a flight-test engineer holds them at a priori
+values from wind-tunnel data, a handbook method or an earlier flight, and says so. A
+record carries them in ``meta.extra['a_priori']`` as {name: {"value", "std", "source"}}
+(a flight card's ``[a_priori]`` table puts them there); the identification methods that
+fit a linear model hold every a priori parameter of the model at its value. They never
+come from the truth being scored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from flightid.identification import linear_models as lm
+from flightid.record import FlightRecord
+
+META_KEY = "a_priori"
+
+
+def from_record(record: FlightRecord) -> dict[str, float]:
+    """{parameter: value} of the record's a priori table (empty when it has none)."""
+    table = record.meta.extra.get(META_KEY) or {}
+    return {name: float(entry["value"] if isinstance(entry, Mapping) else entry)
+            for name, entry in table.items()}
+
+
+def sources(record: FlightRecord) -> dict[str, str]:
+    """{parameter: source} of the record's a priori table."""
+    table = record.meta.extra.get(META_KEY) or {}
+    return {name: str(entry.get("source", "")) for name, entry in table.items()
+            if isinstance(entry, Mapping)}
+
+
+def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] | None,
+                 a_priori: Mapping[str, float] | None, method: str
+                 ) -> tuple[lm.LinearModel, list[str], dict[str, float]]:
+    """(model, free parameters, held values): the preset at the record's condition with
+    its ``derivatives`` (default: the preset's) plus every a priori parameter the preset
+    has, held at its value. ``a_priori`` None takes the record's table."""
+    held_all = from_record(record) if a_priori is None else dict(a_priori)
+    full = _preset_derivatives(preset)
+    held = {n: float(v) for n, v in held_all.items() if n in full}
+    base = lm.preset_for_record(preset, record, derivatives, method)
+    names = [p for p in base.parameters if p not in lm_biases(base)]
+    names += [n for n in held if n not in names]
+    model = lm.preset_for_record(preset, record, [n for n in full if n in names], method)
+    model = model.with_start(**held) if held else model
+    free = [p for p in model.parameters if p not in held]
+    return model, free, held
+
+
+def lm_biases(model: lm.LinearModel) -> list[str]:
+    """The bias parameters of a linear model (``bias_<equation>``)."""
+    return [p for p in model.parameters if p.startswith("bias_")]
+
+
+def _preset_derivatives(preset: str) -> tuple[str, ...]:
+    return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
+            "longitudinal": lm.LONGITUDINAL_DERIVATIVES}.get(preset, ())
+
+
+def describe(record: FlightRecord, held: Mapping[str, float]) -> dict[str, Any]:
+    """{parameter: {"value", "source"}} of what a fit held, for ``Estimate.fit``."""
+    src = sources(record)
+    return {n: {"value": float(v), "source": src.get(n, "given")} for n, v in held.items()}

@@ -1,0 +1,65 @@
+"""Refit without the parameters the flight cannot determine.
+
+A parameter with no effect on the outputs, or one that moves them only in combination
+with others, makes the information matrix singular: the Newton steps are then undefined
+and the Cramer-Rao bounds infinite. Such a parameter is fixed at its a priori value and
+the others are refitted (Morelli & Klein 2016, sec. 6.3; Jategaonkar 2015, sec. 4.17).
+``refit_without_unidentifiable`` is that loop for every method; the method supplies how
+to fit and how to find the unidentifiable parameters (usually
+``identifiability.unidentifiable`` on the fit's information matrix).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Protocol, TypeVar
+
+
+class Fit(Protocol):
+    """What the loop needs of a fit: the values of its active parameters."""
+
+    @property
+    def values(self) -> Mapping[str, float]: ...
+
+
+F = TypeVar("F", bound=Fit)
+
+
+def refit_without_unidentifiable(
+    names: Sequence[str],
+    start: Mapping[str, float],
+    fit: Callable[[list[str], dict[str, float]], F],
+    unidentifiable: Callable[[list[str], F], Mapping[str, str]],
+    *,
+    probe: Callable[[list[str], dict[str, float]], F] | None = None,
+    known: Mapping[str, str] | None = None,
+) -> tuple[F, dict[str, str]]:
+    """Fit, find the unidentifiable parameters, fix them, refit: (last fit, {name: reason}).
+
+    names: the parameters to estimate; start: the value of each (a priori, parameter
+    units), with any other parameter the fit may read. ``fit(active, values)`` fits the
+    ``active`` parameters starting from ``values`` (every parameter's current value: the
+    fixed ones at their a priori values, unless an earlier pass moved them);
+    ``unidentifiable(active, fit)`` returns {name: reason} of those the fit cannot
+    determine (empty to accept it). ``probe(active, values)``, when given, is evaluated
+    first at the start values of each pass (an iteration-free fit), so that the
+    iteration never meets a singular information matrix. ``known`` are parameters already
+    found unidentifiable (unexcited inputs): never active, and returned with the others.
+    After a pass that finds some, the values of the rest become the start of the next.
+    """
+    found_all = dict(known or {})
+    values = dict(start)
+    for _ in range(len(names) + 1):
+        active = [n for n in names if n not in found_all]
+        if probe is not None:
+            found = unidentifiable(active, probe(active, dict(values)))
+            if found:
+                found_all.update(found)
+                continue
+        result = fit(active, dict(values))
+        found = unidentifiable(active, result)
+        if not found:
+            break
+        found_all.update(found)
+        values.update(result.values)
+    return result, found_all

@@ -1,0 +1,74 @@
+"""The ``Estimate`` of an output-error maximum-likelihood fit.
+
+Values in the parameters' units (nondimensional derivatives, SI biases and initial
+states), standard errors from ``bounds`` (Cramer-Rao, M&K eq. 6.50, or corrected for
+colored residuals, M&K eq. 6.54; ``Estimate.std_kind`` says which), fit statistics
+(cost N/2 ln det R, noise standard deviations per output, R^2) and the measured and
+modelled time histories.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from flightid.identification import identifiability as ident
+from flightid.identification.engine.bounds import output_error_covariance, standard_errors
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
+from flightid.identification.estimate import Estimate
+
+
+def estimate_from_fit(
+    fit: MaximumLikelihoodFit, *, method: str, model: str, time: np.ndarray,
+    measured: np.ndarray, output_names: Sequence[str], fixed: Mapping[str, float],
+    unidentifiable: Mapping[str, str], colored: bool, full_noise_covariance: bool,
+) -> Estimate:
+    """The estimate of a finished fit.
+
+    method: the method id; model: the model's name; time (N,) in s; measured (N, ny) the
+    outputs z in SI units, named ``output_names``; fixed: the parameters held at their
+    values; unidentifiable: {name: reason}; colored: correct the bounds for colored
+    residuals; full_noise_covariance: whether R had off-diagonal terms (reported).
+    """
+    names = fit.names
+    cov, std_kind = output_error_covariance(fit.information, fit.sens, fit.residuals,
+                                            fit.noise, colored)
+    std = standard_errors(cov)
+    outputs = {
+        name: {"measured": measured[:, j], "model": fit.y[:, j],
+               "residual": fit.residuals[:, j]}
+        for j, name in enumerate(output_names)
+    }
+    spread = np.sum((measured - measured.mean(axis=0)) ** 2, axis=0)
+    r2 = {o: float(1 - np.sum(fit.residuals[:, j] ** 2) / spread[j]) if spread[j] > 0
+          else float("nan") for j, o in enumerate(output_names)}
+    fit_stats = {
+        "model": model,
+        "converged": fit.converged,
+        "reason": fit.reason,
+        "iterations": fit.iterations,
+        "cost_history": list(fit.cost_history),
+        "step_history": list(fit.step_history),
+        "cost": fit.cost_history[-1],
+        "noise_std": {o: float(np.sqrt(fit.noise[j, j])) for j, o in enumerate(output_names)},
+        "noise_covariance": fit.noise,
+        "R2_per_output": r2,
+        "R2": float(np.nanmean(list(r2.values()))),
+        "fixed": {n: float(v) for n, v in fixed.items()},
+        "samples": int(measured.shape[0]),
+        "high_correlations": ident.high_correlations(names, cov, 0.9) if names else [],
+        "full_noise_covariance": full_noise_covariance,
+    }
+    return Estimate(
+        method=method,
+        names=list(names),
+        values=np.array([fit.values[n] for n in names]),
+        std=std,
+        covariance=cov,
+        fit=fit_stats,
+        unidentifiable=dict(unidentifiable),
+        outputs=outputs,
+        time=time.copy(),
+        std_kind=std_kind,
+    )

@@ -1,0 +1,84 @@
+"""``identify(record, method, model, **options)``: the one door to every method.
+
+Resolves the method (``methods.registry``), the model (``model_structure``: presets,
+``lat``/``lon``), and the options (the method's dataclass, unknown keys refused); cuts a
+simulated record to the maneuvers on the model's inputs (``windows``); checks that the
+record has the channels the method needs; and returns the method's one Estimate with
+the window in ``fit['window']``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from flightid.identification import identifiability as ident
+from flightid.identification import model_structure, windows
+from flightid.identification.estimate import Estimate
+from flightid.identification.methods import registry
+from flightid.record import FlightRecord
+
+WINDOWS = ("auto", "none")
+CONTROLS = ("de", "da", "dr")
+# the surfaces whose maneuvers a model is fitted to
+_MODEL_INPUTS = {"lateral": ("da", "dr"), "short_period": ("de",),
+                 "longitudinal": ("de", "throttle")}
+
+
+def model_inputs(model: str) -> tuple[str, ...]:
+    """The control inputs of a model preset, or of a structure's variables; () for models
+    of all axes (6dof, all)."""
+    name = model_structure.canonical(model)
+    if name in _MODEL_INPUTS:
+        return _MODEL_INPUTS[name]
+    if "=" in name:
+        variables = {v for terms in model_structure.regression(name).values() for v in terms}
+        return tuple(s for s in ("de", "da", "dr", "throttle") if s in variables)
+    return ()
+
+
+def identify(record: FlightRecord, method: str = "oe", model: str | None = None, *,
+             window: str | Sequence[float] = "auto", **options: Any) -> Estimate:
+    """Estimate ``model``'s derivatives from ``record`` by ``method`` (an id of
+    ``flightid methods``); ``options`` are the method's (see its Options dataclass).
+
+    window: 'auto' (default) fits a record that lists its maneuvers on the window of the
+    maneuvers on the model's inputs; 'none' uses the whole record; (start, end) in s.
+    """
+    spec = registry.get(method)
+    model = model_structure.canonical(model or spec.default_model)
+    opts = spec.make_options(options)
+    record, span = _windowed(record, model, window)
+    missing = [c for c in spec.channels(model) if c not in record]
+    if missing:
+        raise ValueError(
+            f"record lacks channel(s) {', '.join(missing)} needed by method {spec.id} with "
+            f"model {model}; it has {', '.join(sorted(record.channels))}")
+    inputs = [c for c in (model_inputs(model) or CONTROLS) if c in record]
+    quiet = ident.input_excitation(record, inputs)
+    if inputs and len(quiet) == len(inputs):
+        where = f" in the window {span[0]:g}-{span[1]:g} s" if span else ""
+        raise ValueError(
+            f"the record cannot determine model {model}: no input is excited{where} "
+            f"({'; '.join(quiet.values())}); fly a maneuver on {', '.join(inputs)}")
+    estimate = spec.run(record, model, opts)
+    estimate.fit.setdefault("model", model)
+    if span is not None:
+        estimate.fit["window"] = [float(span[0]), float(span[1])]
+    return estimate
+
+
+def _windowed(record: FlightRecord, model: str, window: str | Sequence[float]
+              ) -> tuple[FlightRecord, tuple[float, float] | None]:
+    if isinstance(window, str):
+        if window not in WINDOWS:
+            raise ValueError(f"window must be one of {', '.join(WINDOWS)} or (start, end) "
+                             f"in s, got {window!r}")
+        if window == "none":
+            return record, None
+        inputs = model_inputs(model)
+        return windows.select(record, inputs) if inputs else (record, None)
+    start, end = (float(x) for x in window)
+    if not start < end:
+        raise ValueError(f"window start {start} s must be before its end {end} s")
+    return record.slice(start, end), (start, end)

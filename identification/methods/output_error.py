@@ -1,0 +1,576 @@
+"""Output-error (maximum likelihood) estimation for linear models, with Cramer-Rao bounds.
+
+Morelli & Klein (2016) ch. 6 and Jategaonkar (2015) ch. 4: minimise
+    J(theta) = 1/2 sum_i v_i^T R^-1 v_i,   v_i = z_i - y_i(theta)
+by Gauss-Newton (modified Newton-Raphson) with Levenberg-Marquardt damping, the
+measurement-noise covariance R re-estimated from the residuals at every iteration
+(relaxation algorithm, M&K eq. 6.27). Output sensitivities come from the exact derivative
+of the zero-order-hold discretisation: for each parameter the augmented system
+[[A, 0], [A_k, A]], [[B], [B_k]] is discretised with one matrix exponential (batched),
+and the state and all sensitivities are propagated together.
+
+The optimiser, the bounds and the refit loop are those of the shared engine
+(``identification.engine``): ``gauss_newton.maximum_likelihood`` on the outputs and
+sensitivities of this module; Cramer-Rao bounds sqrt(diag M^-1) with
+M = sum_i S_i^T R^-1 S_i (M&K eq. 6.50), or with ``colored=True`` corrected for colored
+residuals (M&K eq. 6.54, SIDPAC ``m_colores``, ``bounds``). Parameters the flight cannot
+determine (``identifiability``) are fixed at their a priori values and the rest refitted
+(``refit.refit_without_unidentifiable``); they are listed with the reason in
+``Estimate.unidentifiable``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from flightid.derivatives import is_derivative, split
+from flightid.identification import a_priori, model_structure
+from flightid.identification import identifiability as ident
+from flightid.identification.coefficients import THRUST_COEFFICIENTS
+from flightid.identification.engine.bounds import (
+    colored_residual_covariance as colored_residual_covariance,  # public here too
+)
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine.refit import refit_without_unidentifiable
+from flightid.identification.engine.results import estimate_from_fit
+from flightid.identification.estimate import Estimate
+from flightid.identification.linear_models import LinearModel, matrix_sensitivities
+from flightid.identification.methods import equation_error
+from flightid.identification.methods.protocol import Method, option
+from flightid.identification.multistep_input import Multistep, from_measurement
+from flightid.record import FlightRecord
+
+ID = "oe"
+HOLDS = ("foh", "zoh")
+
+
+@dataclass
+class Problem:
+    """The data and model of one output-error fit, arranged for fast evaluation."""
+
+    model: LinearModel
+    time: np.ndarray
+    dt: float
+    u: np.ndarray  # (N, m + 1): inputs and the constant 1
+    w: np.ndarray  # per-step input of the discrete model (see hold_inputs)
+    hold: str  # 'foh' or 'zoh'
+    z: np.ndarray  # (N, ny): measured outputs
+    x0: np.ndarray  # (n,) initial state when it is not estimated
+    fixed: dict[str, float]  # every model parameter not estimated, at its value
+    x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
+    noise_floor: np.ndarray  # smallest admitted noise variance per output
+    # multistep inputs estimated as levels and edges (multistep_input): channel -> start
+    multistep: dict[str, Multistep] = field(default_factory=dict)
+
+    @property
+    def input_names(self) -> list[str]:
+        """Names of the estimated-input parameters (levels and edges), all channels."""
+        return [n for c, ms in self.multistep.items() for n in ms.parameter_names(c)]
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The model's outputs, then the measured multistep inputs."""
+        return (*self.model.outputs, *self.multistep)
+
+
+def problem_from_record(
+    record: FlightRecord, model: LinearModel, initial_state: str = "measured",
+    hold: str = "foh", multistep_inputs: Sequence[str] = (),
+) -> Problem:
+    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling).
+
+    ``multistep_inputs``: input channels estimated as levels and edge times (see
+    ``multistep_input``); their measurements join the outputs.
+    """
+    missing = [c for c in (*model.inputs, *model.outputs) if c not in record]
+    if missing:
+        raise ValueError(
+            f"record lacks channel(s) {', '.join(missing)} needed by the {model.name} model "
+            f"(inputs {', '.join(model.inputs)}; outputs {', '.join(model.outputs)})"
+        )
+    time = record.time
+    dt = record.uniform_step("output error", min_samples=10)
+    u = np.column_stack([*(record[c] for c in model.inputs), np.ones(time.size)])
+    z = np.column_stack([record[c] for c in model.outputs])
+    bad = [c for c in (*model.inputs, *model.outputs) if not np.all(np.isfinite(record[c]))]
+    if bad:
+        raise ValueError(f"channel(s) {', '.join(bad)} contain NaN or inf values")
+    if initial_state not in ("measured", "estimate", "zero"):
+        raise ValueError(
+            f"initial_state must be 'measured', 'estimate' or 'zero', got {initial_state!r}"
+        )
+    x0 = np.zeros(len(model.states))
+    if initial_state == "measured":
+        for j, state in enumerate(model.states):
+            channel = model.state_channels.get(state, state)
+            if channel in record:
+                x0[j] = record[channel][0]
+    x0_names = tuple(f"x0_{s}" for s in model.states) if initial_state == "estimate" else ()
+    if hold not in HOLDS:
+        raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
+    not_inputs = [c for c in multistep_inputs if c not in model.inputs]
+    if not_inputs:
+        raise ValueError(f"multistep input(s) {', '.join(not_inputs)} not input(s) of the "
+                         f"{model.name} model ({', '.join(model.inputs)})")
+    multistep = {c: from_measurement(time, record[c], hold=hold) for c in multistep_inputs}
+    for c, ms in multistep.items():
+        u[:, model.inputs.index(c)] = ms.samples(time, hold)
+    z = np.column_stack([z, *(record[c] for c in multistep)])
+    # variance floor: rounding level of each output (1e-10 of its range, squared)
+    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
+    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor,
+                   multistep)
+
+
+# ------------------------------------------------------------------ simulation
+
+
+def discretize(
+    A: np.ndarray, B: np.ndarray, dt: float, dA: np.ndarray, dB: np.ndarray,
+    hold: str = "foh",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Phi, Gamma and their parameter derivatives dPhi, dGamma (stacked on axis 0).
+
+    x_{i+1} = Phi x_i + Gamma w_i with w_i = u_i ('zoh', input held over the sample) or
+    w_i = [u_i; u_{i+1}] ('foh', input interpolated linearly between samples). One batched
+    matrix exponential per parameter k of the block matrix (Van Loan 1978)
+        [[A, 0, B, 0], [A_k, A, B_k, 0], [0, 0, 0, I/dt], [0, 0, 0, 0]] dt
+    (without the last block row and column for 'zoh'); its blocks are Phi, dPhi/dk and
+    the input matrices with their derivatives. The sensitivities are thus the exact
+    derivatives of the discrete model that is simulated.
+    """
+    if hold not in HOLDS:
+        raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
+    n, m = B.shape
+    npar = dA.shape[0]
+    foh = hold == "foh"
+    batch = max(npar, 1)
+    size = 2 * n + (2 * m if foh else m)
+    big = np.zeros((batch, size, size))
+    big[:, :n, :n] = A * dt
+    big[:, n:2 * n, n:2 * n] = A * dt
+    big[:, :n, 2 * n:2 * n + m] = B * dt
+    if npar:
+        big[:, n:2 * n, :n] = dA * dt
+        big[:, n:2 * n, 2 * n:2 * n + m] = dB * dt
+    if foh:
+        big[:, 2 * n:2 * n + m, 2 * n + m:] = np.eye(m)
+    e = scipy.linalg.expm(big)
+    phi = e[0, :n, :n]
+    dphi = e[:npar, n:2 * n, :n]
+    if not foh:
+        return phi, e[0, :n, 2 * n:], dphi, e[:npar, n:2 * n, 2 * n:]
+    # x_{i+1} = Phi x_i + G0 u_i + G1 (u_{i+1} - u_i)
+    g0, g1 = e[:, :, 2 * n:2 * n + m], e[:, :, 2 * n + m:]
+    gam = np.concatenate([g0 - g1, g1], axis=2)
+    return phi, gam[0, :n], dphi, gam[:npar, n:2 * n]
+
+
+def hold_inputs(u: np.ndarray, hold: str) -> np.ndarray:
+    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh')."""
+    if hold == "zoh":
+        return u
+    return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
+
+
+def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """x_{i+1} = phi x_i + forcing_i from x0; forcing (N, n[, k]) -> states of the same shape.
+
+    Blocked recursion so that Python loops run about 2 sqrt(N) times instead of N: within
+    blocks of L samples the zero-state responses of all blocks are advanced together, the
+    block-start states are chained with phi^L, and phi^j x_block is added back.
+    """
+    squeeze = forcing.ndim == 2
+    f = forcing[:, :, None] if squeeze else forcing
+    x0 = np.asarray(x0, dtype=float).reshape(f.shape[1], f.shape[2])
+    n_samples, n, k = f.shape
+    size = max(1, int(np.ceil(np.sqrt(n_samples))))
+    blocks = -(-n_samples // size)
+    padded = np.zeros((blocks * size, n, k))
+    padded[:n_samples] = f
+    fb = padded.reshape(blocks, size, n, k)
+    local = np.empty((blocks, size, n, k))
+    state = np.zeros((blocks, n, k))
+    for j in range(size):
+        local[:, j] = state
+        state = phi @ state + fb[:, j]
+    powers = np.empty((size + 1, n, n))
+    powers[0] = np.eye(n)
+    for j in range(size):
+        powers[j + 1] = phi @ powers[j]
+    starts = np.empty((blocks, n, k))
+    starts[0] = x0
+    for b in range(blocks - 1):
+        starts[b + 1] = powers[size] @ starts[b] + state[b]
+    out = (np.matmul(powers[None, :size], starts[:, None]) + local).reshape(-1, n, k)
+    out = out[:n_samples]
+    return out[:, :, 0] if squeeze else out
+
+
+def simulate(model: LinearModel, values: Mapping[str, float], time: np.ndarray,
+             inputs: np.ndarray, x0: np.ndarray | None = None, hold: str = "foh") -> np.ndarray:
+    """Outputs (N, ny) of ``model`` at ``values`` for inputs (N, m) sampled at ``time`` (s).
+
+    Inputs in the model's order and SI units; x0 the initial state (default zero).
+    """
+    time = np.asarray(time, dtype=float)
+    u = np.column_stack([np.asarray(inputs, dtype=float).reshape(len(time), -1),
+                         np.ones(len(time))])
+    A, B, C, D = model.matrices(values)
+    x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, dtype=float)
+    return _simulate(A, B, C, D, float(np.mean(np.diff(time))), u, hold_inputs(u, hold), x0,
+                     hold)
+
+
+def _simulate(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
+    phi, gam, _, _ = discretize(A, B, dt, np.zeros((0, *A.shape)), np.zeros((0, *B.shape)),
+                                hold)
+    x = propagate(phi, w @ gam.T, x0)
+    return x @ C.T + u @ D.T
+
+
+def _outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
+    A, B, C, D = problem.model.build({**problem.model.start, **problem.fixed,
+                                      **_model_values(problem, values)})
+    u, w = _inputs(problem, values)
+    y = _simulate(A, B, C, D, problem.dt, u, w, _x0_of(problem, values), problem.hold)
+    return np.column_stack([y, u[:, _multistep_columns(problem)]])
+
+
+def _multistep_columns(problem: Problem) -> list[int]:
+    return [problem.model.inputs.index(c) for c in problem.multistep]
+
+
+def _inputs(problem: Problem, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Inputs u (N, m + 1) and the held inputs w at ``values`` (multistep levels and edges)."""
+    if not problem.multistep:
+        return problem.u, problem.w
+    u = problem.u.copy()
+    current = {**problem.fixed, **values}
+    for c, ms in problem.multistep.items():
+        u[:, problem.model.inputs.index(c)] = (
+            ms.with_parameters(c, current).samples(problem.time, problem.hold))
+    return u, hold_inputs(u, problem.hold)
+
+
+def _input_sensitivities(problem: Problem, values: Mapping[str, float],
+                         names: Sequence[str]) -> np.ndarray:
+    """du/dtheta (N, m + 1, len(names)) for the named multistep levels and edges."""
+    du = np.zeros((problem.u.shape[0], problem.u.shape[1], len(names)))
+    current = {**problem.fixed, **values}
+    for c, ms in problem.multistep.items():
+        own = ms.parameter_names(c)
+        cols = [(k, own.index(n)) for k, n in enumerate(names) if n in own]
+        if cols:
+            d = ms.with_parameters(c, current).sensitivities(problem.time, problem.hold)
+            k, j = (list(x) for x in zip(*cols, strict=True))
+            du[:, problem.model.inputs.index(c), k] = d[:, j]
+    return du
+
+
+def stacked_product(mats: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """out[i, a, k] = sum_b mats[k, a, b] x[i, b], as one matrix product."""
+    k, a, b = mats.shape
+    if k == 0:
+        return np.zeros((x.shape[0], a, 0))
+    return (x @ mats.reshape(k * a, b).T).reshape(x.shape[0], k, a).transpose(0, 2, 1)
+
+
+def _outputs_and_sensitivities(
+    problem: Problem, values: Mapping[str, float], names: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs (N, ny) and their sensitivities (N, ny, len(names)) to the named parameters."""
+    estimated_inputs = set(problem.input_names)
+    input_names = [n for n in names if n in estimated_inputs]
+    model_names = [n for n in names if n not in problem.x0_names and n not in input_names]
+    (A, B, C, D), (dA, dB, dC, dD) = matrix_sensitivities(
+        problem.model, {**problem.fixed, **_model_values(problem, values)}, model_names
+    )
+    phi, gam, dphi, dgam = discretize(A, B, problem.dt, dA, dB, problem.hold)
+    u, w = _inputs(problem, values)
+    x = propagate(phi, w @ gam.T, _x0_of(problem, values))
+    n = A.shape[0]
+    columns = {name: k for k, name in enumerate(model_names)}
+    x0_cols = [n_ for n_ in names if n_ in problem.x0_names]
+    # forcing of the sensitivity equations: dPhi_k x_i + dGamma_k w_i, shape (N, n, np);
+    # an input parameter forces them through Gamma dw/dtheta, an initial state not at all
+    forcing = stacked_product(dphi, x) + stacked_product(dgam, w)
+    du = _input_sensitivities(problem, values, input_names)
+    dw = np.stack([hold_inputs(du[:, :, k], problem.hold) for k in range(len(input_names))],
+                  axis=2) if input_names else np.zeros((len(u), w.shape[1], 0))
+    nm = len(model_names)
+    forcing = np.concatenate([forcing, np.einsum("ab,ibk->iak", gam, dw),
+                              np.zeros((len(u), n, len(x0_cols)))], axis=2)
+    start = np.zeros((n, forcing.shape[2]))
+    for j, name in enumerate(input_names):
+        columns[name] = nm + j
+    for j, name in enumerate(x0_cols):
+        columns[name] = nm + len(input_names) + j
+        start[problem.x0_names.index(name), nm + len(input_names) + j] = 1.0
+    xs = propagate(phi, forcing, start)
+    y = x @ C.T + u @ D.T
+    sens = np.matmul(C, xs)
+    if model_names:
+        sens[:, :, :nm] += stacked_product(dC, x) + stacked_product(dD, u)
+    sens[:, :, nm:nm + len(input_names)] += np.einsum("ab,ibk->iak", D, du)
+    # the measured multistep inputs are outputs too: u, sensitive to its levels and edges
+    ms_cols = _multistep_columns(problem)
+    ms_sens = np.zeros((len(u), len(ms_cols), sens.shape[2]))
+    ms_sens[:, :, nm:nm + len(input_names)] = du[:, ms_cols, :]
+    y = np.column_stack([y, u[:, ms_cols]])
+    sens = np.concatenate([sens, ms_sens], axis=1)
+    order = [columns[name] for name in names]
+    return y, sens[:, :, order]
+
+
+# ------------------------------------------------------------------ estimation
+
+
+def estimate(
+    record: FlightRecord,
+    model: LinearModel,
+    *,
+    free: Sequence[str] | None = None,
+    start: Mapping[str, float] | str | None = None,
+    initial_state: str = "measured",
+    hold: str = "foh",
+    full_noise_covariance: bool = False,
+    colored: bool = False,
+    multistep_inputs: Sequence[str] = (),
+    max_iterations: int = 50,
+    step_tolerance: float = 1e-3,
+    cost_tolerance: float = 1e-7,
+    check_identifiability: bool = True,
+    min_input_range: float = ident.MIN_INPUT_RANGE,
+    singular_eigenvalue: float = ident.SINGULAR_EIGENVALUE,
+) -> Estimate:
+    """Output-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
+
+    free: parameters to estimate (default all); the others stay at their start values.
+    start: start (a priori) values overriding the model's, or "equation_error" to take
+    the free parameters' from ``start_from_equation_error`` (the fixed ones keep theirs).
+    initial_state: 'measured' (x0 from the first sample of the state channels),
+    'estimate' (x0_<state> parameters, SI units) or 'zero'. Values are nondimensional
+    derivatives and SI-unit biases; standard errors are Cramer-Rao bounds (corrected for
+    colored residuals when ``colored``).
+    multistep_inputs: input channels flown as multisteps (doublet, 3211, pulse) whose
+    levels and edge times are estimated with the derivatives (``multistep_input``:
+    parameters level_<channel>_<k> in the input unit and edge_<channel>_<k> in s); their
+    measurements join the outputs, so the surface noise and the timing of a step between
+    two samples enter the bounds instead of biasing the derivatives.
+    Converged when the last step changed no parameter by more than ``step_tolerance``
+    of its standard error, or the ML cost N/2 ln det R by less than ``cost_tolerance``.
+    """
+    if isinstance(start, str):
+        if start != "equation_error":
+            raise ValueError(f"start must be a mapping or 'equation_error', got {start!r}")
+        start = start_from_equation_error(record, model)
+        if free is not None:  # a parameter held fixed keeps its a priori value
+            start = {n: v for n, v in start.items() if n in free}
+    if start:
+        model = model.with_start(**start)
+    problem = problem_from_record(record, model, initial_state, hold, multistep_inputs)
+    names = list(model.parameters if free is None else free)
+    unknown = [n for n in names if n not in model.parameters]
+    if unknown:
+        raise ValueError(
+            f"{', '.join(unknown)} not parameter(s) of the {model.name} model "
+            f"({', '.join(model.parameters)})"
+        )
+    names += [*problem.input_names, *problem.x0_names]
+    input_start = {n: v for c, ms in problem.multistep.items()
+                   for n, v in ms.parameters(c).items()}
+    values = {n: model.start[n] for n in names if n in model.start}
+    values.update(input_start)
+    values.update({n: problem.x0[j] for j, n in enumerate(problem.x0_names)})
+    problem.fixed = {n: v for n, v in model.start.items() if n not in names}
+
+    unexcited = (_unexcited(problem, names, values, min_input_range)
+                 if check_identifiability else {})
+    a_priori_values = {**model.start, **input_start,
+                       **dict(zip(problem.x0_names, problem.x0, strict=False))}
+
+    def fit(active: list[str], current: dict[str, float],
+            iterations: int = max_iterations) -> MaximumLikelihoodFit:
+        problem.fixed = {n: v for n, v in a_priori_values.items() if n not in active}
+        return _iterate(problem, active, current, iterations, full_noise_covariance,
+                        step_tolerance, cost_tolerance)
+
+    def probe(active: list[str], current: dict[str, float]) -> MaximumLikelihoodFit:
+        # at the start values first, so that the iteration never meets a singular M
+        return fit(active, current, 0)
+
+    def singular(active: list[str], fitted: MaximumLikelihoodFit) -> dict[str, str]:
+        return _singular(active, fitted, singular_eigenvalue) if check_identifiability else {}
+
+    final, unidentifiable = refit_without_unidentifiable(
+        names, values, fit, singular, probe=probe if check_identifiability else None,
+        known=unexcited)
+    return estimate_from_fit(
+        final, method=ID, model=problem.model.name, time=problem.time, measured=problem.z,
+        output_names=problem.output_names, fixed=problem.fixed,
+        unidentifiable=unidentifiable, colored=colored,
+        full_noise_covariance=full_noise_covariance)
+
+
+_EE_TERMS = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
+             "de": "de", "da": "da", "dr": "dr"}
+
+
+def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[str, float]:
+    """Start values for ``model``'s derivatives from equation error on the same record.
+
+    As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
+    (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
+    regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
+    a thrust channel), keep the model's start values.
+    """
+    groups: dict[str, list[str]] = {}
+    for name in model.parameters:
+        if is_derivative(name):
+            coef, var = split(name)
+            if var in _EE_TERMS:
+                groups.setdefault(f"C{coef}", []).append(var)
+    out: dict[str, float] = {}
+    for coefficient, variables in groups.items():
+        if (coefficient in THRUST_COEFFICIENTS and coefficient not in record
+                and "thrust" not in record):
+            continue  # no thrust channel: the x force cannot be made aerodynamic
+        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables])
+        for var in variables:
+            name = f"{coefficient}_{var}"
+            if name in fit.names and name not in fit.unidentifiable:
+                out[name] = fit[name]
+    return out
+
+
+# ----------------------------------------------------------------------------- protocol
+@dataclass(frozen=True)
+class Options:
+    """Options of ``--method oe`` (defaults: the settings validated on simulated cards)."""
+
+    derivatives: list[str] | None = option(
+        None, "derivatives of the model structure (default: the preset's)")
+    free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
+    a_priori: dict[str, float] | None = option(
+        None, "parameters held at these values (default: the record's a priori table)")
+    start: dict[str, float] | str | None = option(
+        "equation_error", "start values, or 'equation_error' for the free parameters")
+    initial_state: str = option("estimate", "'estimate' (x0 parameters), 'measured' or 'zero'")
+    hold: str = option("foh", "inputs between samples: 'foh' (linear) or 'zoh' (held)")
+    colored: bool = option(True, "Cramer-Rao bounds corrected for colored residuals "
+                                 "(Morelli & Klein 2016 eq. 6.54)")
+    full_noise_covariance: bool = option(False, "estimate the full output-noise covariance")
+    multistep_inputs: list[str] = option(
+        [], "inputs flown as multisteps whose levels and edge times are estimated")
+    max_iterations: int = option(50, "Gauss-Newton iteration limit")
+    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
+    cost_tolerance: float = option(1e-7, "or when the cost changes less than this (relative)")
+    check_identifiability: bool = option(True, "report parameters the data cannot determine "
+                                               "instead of estimating them")
+    min_input_range: float = option(ident.MIN_INPUT_RANGE,
+                                    "an input spanning less than this (rad) is not excited")
+    singular_eigenvalue: float = option(ident.SINGULAR_EIGENVALUE,
+                                        "relative eigenvalue of M below which it is singular")
+
+
+def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
+        ) -> Estimate:
+    """Output error with a linear-model preset ('lateral', 'longitudinal', 'short_period')
+    at the record's reference condition, a priori parameters held."""
+    options = options or Options()
+    linear, free, held = a_priori.linear_model(
+        model_structure.linear(model), record, options.derivatives, options.a_priori,
+        "output error")
+    if options.free is not None:
+        free = list(options.free)
+    start, start_note = options.start, ""
+    if start == "equation_error":
+        try:  # the free parameters' start values; the held ones keep theirs
+            start = {n: v for n, v in start_from_equation_error(record, linear).items()
+                     if n in free}
+        except (KeyError, ValueError) as exc:  # e.g. no accelerometers for the coefficients
+            start, start_note = None, f"typical values (no equation-error start: {exc})"
+    est = estimate(
+        record, linear, free=free, start=start, initial_state=options.initial_state,
+        hold=options.hold, full_noise_covariance=options.full_noise_covariance,
+        colored=options.colored, multistep_inputs=options.multistep_inputs,
+        max_iterations=options.max_iterations, step_tolerance=options.step_tolerance,
+        cost_tolerance=options.cost_tolerance,
+        check_identifiability=options.check_identifiability,
+        min_input_range=options.min_input_range,
+        singular_eigenvalue=options.singular_eigenvalue)
+    est.method = ID
+    est.fit["a_priori"] = a_priori.describe(record, held)
+    est.fit["start"] = start_note or ("equation error" if options.start == "equation_error"
+                                      else "given")
+    return est
+
+
+METHOD = Method(
+    id=ID, name="output error",
+    summary="maximum likelihood on a linear perturbation model (Gauss-Newton, exact "
+            "sensitivities, Cramer-Rao bounds)",
+    reference="Morelli & Klein, Aircraft System Identification: Theory and Practice, "
+              "2nd ed., 2016, ch. 6; Jategaonkar, Flight Vehicle System Identification, "
+              "2nd ed., 2015, ch. 4",
+    options=Options, models=model_structure.LINEAR, default_model="lateral",
+    channels=model_structure.linear_channels, run=run, contract_model="lateral",
+)
+
+
+def _x0_of(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
+    if not problem.x0_names:
+        return problem.x0
+    return np.array([values.get(n, problem.fixed.get(n, problem.x0[j]))
+                     for j, n in enumerate(problem.x0_names)])
+
+
+def _model_values(problem: Problem, values: Mapping[str, float]) -> dict[str, float]:
+    nuisance = {*problem.x0_names, *problem.input_names}
+    return {k: v for k, v in values.items() if k not in nuisance}
+
+
+def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, float],
+               min_range: float) -> dict[str, str]:
+    model = problem.model
+    flat = ident.unexcited_inputs(model.inputs, problem.u[:, :-1], min_range)
+    if not flat:
+        return {}
+    params = [n for n in names if n in model.parameters]
+    _, (dA, dB, dC, dD) = matrix_sensitivities(model, {**model.start, **values}, params)
+    only = ident.input_only_parameters(params, dA, dB, dC, dD)
+    out = {}
+    for name, col in only.items():
+        if col < len(model.inputs) and model.inputs[col] in flat:
+            inp = model.inputs[col]
+            out[name] = (
+                f"input {inp} is not excited (peak-to-peak {flat[inp]:.3g} rad < "
+                f"{min_range:g}): {name} multiplies only {inp}, so it cannot be separated "
+                "from the bias terms"
+            )
+    return out
+
+
+def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
+             full: bool, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
+    """``maximum_likelihood`` on a linear-model problem (outputs from ``_outputs``)."""
+    return maximum_likelihood(
+        problem.z, problem.noise_floor,
+        lambda current: _outputs_and_sensitivities(problem, current, names),
+        lambda trial: _outputs(problem, trial),
+        names, values, max_iterations, full, step_tol, cost_tol,
+    )
+
+
+def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[str, str]:
+    """Unidentifiable parameters of a fit; biases and initial states kept in preference."""
+    values = np.array([fit.values[n] for n in names])
+    keep = [n for n in names if n.startswith("bias_") or n.startswith("x0_")]
+    return ident.unidentifiable(names, fit.information, values, prefer_keep=keep,
+                                tolerance=tol)
+

@@ -1,0 +1,37 @@
+"""What a simulated record carries about its own flight: maneuvers, truth, a priori values.
+
+``flightid identify`` reads these from the record's metadata, so a simulated record is
+windowed by its maneuvers and scored against its own truth without a separate file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from flightid.scenarios.input_design import InputDesign
+from flightid.sim.model import Model
+from flightid.sim.trim import Trim
+from flightid.sim.truth import derivatives
+
+
+def maneuver_list(designs: Sequence[InputDesign]) -> list[dict[str, Any]]:
+    """[{"kind", "surfaces", "start", "end"}] (s) of the flown input designs."""
+    return [{"kind": d.kind, "surfaces": list(d.surfaces()), "start": float(d.start),
+             "end": float(d.end)} for d in designs]
+
+
+def truth_table(model: Model, trimmed: Trim) -> dict[str, Any]:
+    """The exact derivatives at the trim, {"trim", "body": {...}, "stability": {...},
+    "kinks", "source"}: aerodynamic derivatives of the JSBSim model (per rad, rates
+    nondimensional)."""
+    body = derivatives(model, trimmed, axes="body")
+    stability = derivatives(model, trimmed, axes="stability")
+    return {
+        "trim": trimmed.condition,
+        "body": dict(sorted(body.values.items())),
+        "stability": dict(sorted(stability.values.items())),
+        "kinks": sorted(set(body.flags) | set(stability.flags)),
+        "source": f"JSBSim {model.name}: central differences of its aerodynamic coefficients "
+                  f"at the trim ({trimmed.altitude_m:g} m, {trimmed.speed_m_s:g} m/s)",
+    }

@@ -1,0 +1,15 @@
+"""The MAVLink/serial recorder bridge: a simulated flight carried the way an onboard
+recorder would carry it (as on the Monash Boomerang 60 UAV, c. 2008), and the ground side
+that records and converts it.
+
+Air side: ``air`` (stream a FlightRecord or fly a simulation in the loop), ``schedule``
+(recorder streams and the link budget), ``messages`` (MAVLink 2 encoding of canonical
+channels and its inverse), ``link`` (serial, pty and UDP links and their faults).
+Ground side: ``frames`` (resynchronising frame scanner, .tlog files), ``recorder``
+(record a stream, convert a tlog to a FlightRecord), ``align`` (clock alignment of
+separately clocked recorders).
+
+The package imports nothing itself: import the module that holds what you need, e.g.
+``from flightid.sim.bridge.air import serve_record``. The command line for it lives in
+``flightid.cli.bridge``.
+"""
