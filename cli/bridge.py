@@ -14,6 +14,7 @@ from typing import Annotated
 
 import typer
 
+from flightid.files import write_text
 from flightid.record import FlightRecord, read
 from flightid.scenarios import cards
 from flightid.sim.bridge.air import (
@@ -126,7 +127,7 @@ def serve(
         close()
     typer.echo(rep.summary())
     if report:
-        Path(report).write_text(json.dumps(rep.as_dict(), indent=2, default=str))
+        write_text(report, json.dumps(rep.as_dict(), indent=2, default=str))
 
 
 def _ground_link(serial: str | None, udp: str | None, baud: int) -> Link:

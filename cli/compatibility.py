@@ -28,7 +28,7 @@ def compatibility_command(
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""
     if format not in ("table", "json"):
-        raise SystemExit(f"--format must be table or json, got {format!r}")
+        raise ValueError(f"--format must be table or json, got {format!r}")
     rec = read(record)
     corrected, est = reconstruct(rec)
     if output:

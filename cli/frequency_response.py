@@ -9,6 +9,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from flightid.files import atomic_path
 from flightid.identification.frequency_response import (
     bode_figure,
     default_windows,
@@ -50,5 +51,6 @@ def frequency_response_command(
         print(f"{f:9.4f} {m:9.3f} {p:10.2f} {c:9.3f} {e:9.4f}")
     if plot:
         fig = bode_figure([r], title=f"{rec.meta.aircraft or record}: {output}/{input}")
-        fig.savefig(plot, dpi=110)
+        with atomic_path(plot) as tmp:
+            fig.savefig(tmp, dpi=110)
         print(f"# Bode plot written to {plot}")

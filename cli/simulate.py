@@ -1,5 +1,5 @@
-"""``flightid simulate``: fly a flight card and write its records (printing and exit codes
-only; the work is ``flightid.scenarios.simulate``)."""
+"""``flightid simulate``: fly a flight card and write its records (printing only; the work
+is ``flightid.scenarios.simulate``, the exit codes are the policy of ``flightid.cli.app``)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,8 @@ from typing import Annotated
 import typer
 
 from flightid.cli.progress import flight_progress
-from flightid.scenarios.cards import CardError, load_card
+from flightid.scenarios.cards import load_card
 from flightid.scenarios.simulate import list_cards, simulate
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError
 
 
 def simulate_command(
@@ -30,16 +28,10 @@ def simulate_command(
         return
     if card is None or output is None:
         raise typer.BadParameter("give a CARD and -o/--output (or --list)")
-    try:
-        loaded = load_card(card)
-        with flight_progress(f"flying {loaded.name}", loaded.duration) as progress:
-            measured, _ = simulate(loaded, output, truth, plot, seed, progress=progress)
-    except (CardError, TrimError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
-    except DepartureError as exc:
-        typer.echo(f"error: the flight departed: {exc}", err=True)
-        raise typer.Exit(3) from None
+    # errors (CardError: exit 2; TrimError, DepartureError: exit 3) are the app's policy
+    loaded = load_card(card)
+    with flight_progress(f"flying {loaded.name}", loaded.duration) as progress:
+        measured, _ = simulate(loaded, output, truth, plot, seed, progress=progress)
     typer.echo(f"wrote {output}: {len(measured)} samples, {measured.time[-1]:.2f} s, "
                f"{len(measured.channels)} channels at {measured.meta.sample_rate:g} Hz")
     for extra in (truth, plot):

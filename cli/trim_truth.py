@@ -12,17 +12,17 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from flightid.sim.model import Model, UnknownAircraftError, load
-from flightid.sim.trim import Trim, TrimError, trim
+from flightid.sim.model import Model, load
+from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
 
 _AIRCRAFT_HELP = "project aircraft, jsbsim aircraft or XML path"
 _FORMATS = ("table", "json")
 
 
-def _fail(message: str) -> typer.Exit:
-    typer.echo(f"error: {message}", err=True)
-    return typer.Exit(2)
+def _fail(message: str) -> ValueError:
+    """Bad input: the app's error policy prints it as one line and exits 2."""
+    return ValueError(message)
 
 
 def _check_format(fmt: str) -> None:
@@ -32,12 +32,11 @@ def _check_format(fmt: str) -> None:
 
 def _trimmed(aircraft: str, altitude: float, speed: float, gamma_deg: float,
              bank_deg: float, flaps_deg: float) -> tuple[Model, Trim]:
-    try:
-        model = load(aircraft)
-        return model, trim(model, altitude, speed, math.radians(gamma_deg),
-                           math.radians(bank_deg), math.radians(flaps_deg))
-    except (UnknownAircraftError, TrimError) as exc:
-        raise _fail(str(exc)) from None
+    # UnknownAircraftError (a ValueError): exit 2; TrimError: exit 3, or 2 when its input
+    # checks failed (the app's error policy)
+    model = load(aircraft)
+    return model, trim(model, altitude, speed, math.radians(gamma_deg),
+                       math.radians(bank_deg), math.radians(flaps_deg))
 
 
 def trim_command(

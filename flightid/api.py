@@ -19,12 +19,13 @@ from flightid.identification.methods import registry
 from flightid.identification.methods.protocol import Method
 from flightid.identification.scoring import Score, record_truth, score
 from flightid.record import FlightRecord
+from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import Card, fly_card, load_card
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import Truth, derivatives
 
-__all__ = ["Flight", "fly", "identify", "methods", "score", "truth"]
+__all__ = ["Flight", "fly", "identify", "methods", "montecarlo", "score", "truth"]
 
 
 @dataclass

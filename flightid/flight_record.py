@@ -25,6 +25,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from flightid.channels import CHANNELS
+from flightid.files import atomic_path
 
 FORMAT_VERSION = 1
 _CSV_MARK = "# flightid-record "
@@ -171,9 +172,10 @@ class FlightRecord:
             table = table.replace_schema_metadata(
                 {**(table.schema.metadata or {}), b"flightid": self.meta.to_json().encode()}
             )
-            pq.write_table(table, path)
+            with atomic_path(path) as tmp:
+                pq.write_table(table, tmp)
         elif suffix == ".csv":
-            with open(path, "w", encoding="utf-8", newline="") as fh:
+            with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
                 fh.write(_CSV_MARK + self.meta.to_json() + "\n")
                 # %.17g round-trips every float64 exactly
                 self.to_frame().to_csv(fh, index=False, float_format="%.17g")

@@ -32,9 +32,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
-import matplotlib
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 from scipy.signal import czt
 from scipy.signal.windows import tukey
 
@@ -586,12 +585,12 @@ def frequency_response(
 COHERENCE_PLOT_MIN = 0.6  # below it a response point is drawn faint (Tischler & Remple)
 
 
-def bode_figure(responses: Sequence[FrequencyResponse], title: str = ""):
+def bode_figure(responses: Sequence[FrequencyResponse], title: str = "") -> Figure:
     """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz);
     points with coherence below 0.6 are drawn faint."""
-    matplotlib.use("Agg")
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 8), sharex=True,
-                             gridspec_kw={"height_ratios": [2, 2, 1]})
+    fig = Figure(figsize=(7.5, 8))
+    axes = fig.subplots(3, 1, sharex=True,
+                        gridspec_kw={"height_ratios": [2, 2, 1]})
     for r in responses:
         label = f"{r.output}/{r.input}"
         ok = np.isfinite(r.response)
@@ -624,11 +623,11 @@ def bode_overlay_figure(measured: Sequence[FrequencyResponse], model: Sequence[n
     """Matplotlib figure: measured responses (points where coherence >= coherence_min)
     with the identified model's responses (lines, complex arrays on the same frequencies)
     overlaid: magnitude (dB), phase (deg), coherence against frequency (Hz)."""
-    matplotlib.use("Agg")
     if len(measured) != len(model):
         raise ValueError(f"{len(measured)} measured responses but {len(model)} model ones")
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True,
-                             gridspec_kw={"height_ratios": [2, 2, 1]})
+    fig = Figure(figsize=(8, 9))
+    axes = fig.subplots(3, 1, sharex=True,
+                        gridspec_kw={"height_ratios": [2, 2, 1]})
     for k, (r, h) in enumerate(zip(measured, model, strict=True)):
         colour = f"C{k % 10}"
         ok = r.valid(coherence_min)

@@ -151,16 +151,19 @@ def high_correlations(
     return sorted(pairs, key=lambda p: -abs(p[2]))
 
 
-# an input counts as excited when its spread exceeds this many times the spread of its
-# sample-to-sample noise (white noise gives about 1; a maneuver sampled at 10 Hz or more
-# gives 10 and above)
-MIN_SIGNAL_TO_NOISE = 3.0
+# an input counts as excited when the peak-to-peak range of its 0.2 s moving average
+# exceeds this many times the noise of that average (white noise reaches about 7 on a
+# minute of data at 50 Hz; a doublet of 10 noise standard deviations reaches 60)
+MIN_SIGNAL_TO_NOISE = 15.0
+EXCITATION_AVERAGE_S = 0.2
 
 
 def input_excitation(record: FlightRecord, inputs: Sequence[str]) -> dict[str, str]:
     """{input: why it is not excited} for the record's ``inputs`` that are constant (peak to
-    peak below MIN_INPUT_RANGE in their SI unit) or noise only (standard deviation below
-    MIN_SIGNAL_TO_NOISE times that of the sample-to-sample differences / sqrt 2)."""
+    peak below MIN_INPUT_RANGE in their SI unit) or noise only: the range of the input
+    averaged over EXCITATION_AVERAGE_S below MIN_SIGNAL_TO_NOISE times the noise of that
+    average (noise from the median absolute sample-to-sample difference, which steps do
+    not inflate)."""
     out = {}
     for name in inputs:
         x = np.asarray(record[name], dtype=float)
@@ -168,10 +171,14 @@ def input_excitation(record: FlightRecord, inputs: Sequence[str]) -> dict[str, s
         if spread < MIN_INPUT_RANGE:
             out[name] = f"{name} is constant (peak to peak {spread:.2g} {record.unit(name)})"
             continue
-        noise = float(np.std(np.diff(x))) / np.sqrt(2.0)
-        ratio = float(np.std(x)) / noise if noise > 0 else np.inf
+        k = max(3, int(round(EXCITATION_AVERAGE_S / record.dt))) if record.dt > 0 else 3
+        k = min(k, x.size)
+        d = np.diff(x)
+        noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / np.sqrt(2.0)
+        averaged = np.convolve(x, np.ones(k) / k, mode="valid")
+        ratio = float(np.ptp(averaged)) / (noise / np.sqrt(k)) if noise > 0 else np.inf
         if ratio < MIN_SIGNAL_TO_NOISE:
-            out[name] = (f"{name} is noise only (standard deviation {ratio:.1f} times its "
-                         f"sample-to-sample noise; a maneuver gives {MIN_SIGNAL_TO_NOISE:g} "
-                         "and more)")
+            out[name] = (f"{name} is noise only (its {EXCITATION_AVERAGE_S:g} s average spans "
+                         f"{ratio:.1f} times its noise; a maneuver spans "
+                         f"{MIN_SIGNAL_TO_NOISE:g} and more)")
     return out

@@ -32,7 +32,7 @@ Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 @dataclass(frozen=True)
-class FlightCondition:
+class ReferenceCondition:
     """Reference condition and mass properties of a perturbation model (SI units, rad).
 
     V true airspeed (m/s), qbar dynamic pressure (Pa), alpha and theta trim angle of attack
@@ -69,10 +69,10 @@ class FlightCondition:
 _CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
 
 
-def condition_from_record(record: FlightRecord, **override: float) -> FlightCondition:
+def condition_from_record(record: FlightRecord, **override: float) -> ReferenceCondition:
     """Reference condition of a record: channel means (SI) and meta.reference geometry.
 
-    Any field of FlightCondition can be given as a keyword to override the record (needed
+    Any field of ReferenceCondition can be given as a keyword to override the record (needed
     when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
     """
     values: dict[str, float] = {}
@@ -95,7 +95,7 @@ def condition_from_record(record: FlightRecord, **override: float) -> FlightCond
     if "thrust" in record:
         values["thrust"] = float(np.mean(record["thrust"]))
     values.update(override)
-    return FlightCondition(**values)
+    return ReferenceCondition(**values)
 
 
 @dataclass
@@ -115,7 +115,7 @@ class LinearModel:
     parameters: tuple[str, ...]
     start: dict[str, float]
     build: Callable[[Mapping[str, complex]], Matrices]
-    condition: FlightCondition | None = None
+    condition: ReferenceCondition | None = None
     description: str = ""
     state_channels: dict[str, str] = field(default_factory=dict)
 
@@ -194,7 +194,7 @@ LATERAL_BIASES: tuple[str, ...] = (
 
 
 def lateral(
-    condition: FlightCondition,
+    condition: ReferenceCondition,
     derivatives: Sequence[str] = LATERAL_EXAMPLE_6_1,
     start: Mapping[str, float] | None = None,
     biases: Sequence[str] = LATERAL_BIASES,
@@ -310,7 +310,7 @@ LONGITUDINAL_TYPICAL: dict[str, float] = {
 
 
 def short_period(
-    condition: FlightCondition,
+    condition: ReferenceCondition,
     derivatives: Sequence[str] = SHORT_PERIOD_DEFAULT,
     start: Mapping[str, float] | None = None,
     biases: Sequence[str] = SHORT_PERIOD_BIASES,
@@ -378,7 +378,7 @@ def short_period(
 
 
 def longitudinal(
-    condition: FlightCondition,
+    condition: ReferenceCondition,
     derivatives: Sequence[str] = LONGITUDINAL_DEFAULT,
     start: Mapping[str, float] | None = None,
     biases: Sequence[str] = LONGITUDINAL_BIASES,

@@ -39,7 +39,7 @@ HOLD_OFFSET = {"foh": 0.5, "zoh": 1.0}
 
 
 @dataclass(frozen=True)
-class Multistep:
+class MultistepParameters:
     """A piecewise-constant input: ``levels`` (input unit, one more than the edges) and
     ``edges`` (s, increasing)."""
 
@@ -61,12 +61,12 @@ class Multistep:
         return dict(zip(self.parameter_names(channel), (*self.levels, *self.edges),
                         strict=True))
 
-    def with_parameters(self, channel: str, values: dict[str, float]) -> Multistep:
+    def with_parameters(self, channel: str, values: dict[str, float]) -> MultistepParameters:
         """This multistep with the levels and edges found in ``values`` replaced."""
         own = self.parameters(channel)
         own.update({n: float(values[n]) for n in own if n in values})
         v = list(own.values())
-        return Multistep(tuple(v[:len(self.levels)]), tuple(v[len(self.levels):]))
+        return MultistepParameters(tuple(v[:len(self.levels)]), tuple(v[len(self.levels):]))
 
     def _arguments(self, time: np.ndarray, hold: str) -> tuple[np.ndarray, float]:
         c = _hold_offset(hold)
@@ -95,7 +95,7 @@ class Multistep:
 
 def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None,
                      hold: str = "foh", weight: float = DEFAULT_WEIGHT,
-                     significance: float = STEP_SIGNIFICANCE) -> Multistep:
+                     significance: float = STEP_SIGNIFICANCE) -> MultistepParameters:
     """Levels and edges of a measured multistep (``y`` in its unit at the uniform ``time``, s).
 
     The steps and plateau levels are those of ``input_denoising.piecewise_constant``
@@ -127,7 +127,7 @@ def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None
         area = float(np.sum(y[lo:hi + 1] - a) / (b - a))
         edge = time[hi] + c * dt - dt * area
         edges.append(float(np.clip(edge, time[lo] + c * dt, time[hi] + (c - 1) * dt)))
-    return Multistep(tuple(levels), tuple(edges))
+    return MultistepParameters(tuple(levels), tuple(edges))
 
 
 def _hold_offset(hold: str) -> float:

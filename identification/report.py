@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.channels import CHANNELS
+from flightid.files import write_text
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import registry
 
@@ -190,5 +191,4 @@ def write_html(
                      f"src='data:image/png;base64,{data}'>")
     parts.append("</body></html>")
     path = Path(path)
-    path.write_text("\n".join(parts), encoding="utf-8")
-    return path
+    return write_text(path, "\n".join(parts), encoding="utf-8")

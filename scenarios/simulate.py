@@ -16,6 +16,7 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.files import atomic_path
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, describe, fly_card, library_cards, load_card
 from flightid.units import DEG
@@ -77,7 +78,8 @@ def plot_record(measured: FlightRecord, path: str | Path, truth: FlightRecord | 
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     return path
 
 

@@ -14,7 +14,7 @@ from flightid.identification.frequency_domain import (
     verify_time_domain,
 )
 from flightid.identification.frequency_response import frequency_response_arrays
-from flightid.identification.linear_models import FlightCondition, lateral, model_for_record
+from flightid.identification.linear_models import ReferenceCondition, lateral, model_for_record
 from flightid.record import FlightRecord, read
 
 TWIN_OTTER = Path("/work/shared/data/twin_otter/totter_f1_017_data.mat")
@@ -30,7 +30,7 @@ PUBLISHED_7_1 = {
 TRUTH = {"CY_beta": -0.86, "CY_r": 0.9, "CY_dr": 0.35, "Cl_beta": -0.12, "Cl_p": -0.59,
          "Cl_r": 0.18, "Cl_da": -0.23, "Cl_dr": 0.03, "Cn_beta": 0.086, "Cn_p": -0.065,
          "Cn_r": -0.19, "Cn_da": -0.004, "Cn_dr": -0.137}
-CONDITION = FlightCondition(V=72.2, qbar=2697.0, alpha=0.004, theta=0.029, mass=4952.0,
+CONDITION = ReferenceCondition(V=72.2, qbar=2697.0, alpha=0.004, theta=0.029, mass=4952.0,
                             Ixx=28339.0, Iyy=32887.0, Izz=52149.0, Ixz=1528.0,
                             area=39.25, span=19.81, chord=1.98)
 NOISE = {"beta": 0.001, "p": 0.002, "r": 0.001, "phi": 0.002, "ay": 0.05}  # SI, 1 sigma

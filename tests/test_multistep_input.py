@@ -33,7 +33,7 @@ def test_samples_hold_the_area_of_each_step_at_its_edge(hold):
     for _ in range(20):
         edges = tuple(np.sort(rng.uniform(0.5, 3.5, 3)))
         levels = tuple(rng.normal(size=4))
-        u = ms.Multistep(levels, edges).samples(t, hold)
+        u = ms.MultistepParameters(levels, edges).samples(t, hold)
         held = np.trapezoid(u, t) if hold == "foh" else np.sum(u[:-1]) * dt
         bounds = (t[0], *edges, t[-1])
         ideal = sum(a * (b1 - b0) for a, b0, b1 in zip(levels, bounds[:-1], bounds[1:],
@@ -43,7 +43,7 @@ def test_samples_hold_the_area_of_each_step_at_its_edge(hold):
 
 def test_sensitivities_are_the_derivatives_of_the_samples():
     t = np.arange(0, 2, 0.04)
-    step = ms.Multistep((0.1, 0.5, -0.3, 0.0), (0.513, 1.021, 1.537))
+    step = ms.MultistepParameters((0.1, 0.5, -0.3, 0.0), (0.513, 1.021, 1.537))
     d = step.sensitivities(t)
     values = step.parameters("da")
     for j, name in enumerate(step.parameter_names("da")):
@@ -56,13 +56,13 @@ def test_sensitivities_are_the_derivatives_of_the_samples():
 def test_a_step_exactly_on_the_grid_still_moves_one_sample():
     # one-sided derivative: an edge on a sample instant keeps a nonzero sensitivity
     t = np.arange(0, 1, 0.04)
-    d = ms.Multistep((0.0, 1.0), (0.5 - 0.02,)).sensitivities(t)  # arg exactly 1 at 0.48
+    d = ms.MultistepParameters((0.0, 1.0), (0.5 - 0.02,)).sensitivities(t)  # arg exactly 1 at 0.48
     assert np.count_nonzero(d[:, -1]) == 1
 
 
 def test_a_multistep_has_one_level_more_than_edges():
     with pytest.raises(ValueError, match="one level more than edges"):
-        ms.Multistep((0.0, 1.0), (0.5, 1.0))
+        ms.MultistepParameters((0.0, 1.0), (0.5, 1.0))
 
 
 def _servo(t: np.ndarray, commands: list[tuple[float, float]], slew: float) -> np.ndarray:

@@ -26,12 +26,12 @@ TWIN_OTTER_FILE = (
     Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 )
 
-TWIN_OTTER = lm.FlightCondition(
+TWIN_OTTER = lm.ReferenceCondition(
     V=237.02 * FT, qbar=2696.6, alpha=0.0040, theta=0.0286, mass=339.30 * SLUG,
     Ixx=20902 * SLUG_FT2, Iyy=24256 * SLUG_FT2, Izz=38463 * SLUG_FT2, Ixz=1127 * SLUG_FT2,
     area=422.48 * FT**2, span=64.99 * FT, chord=6.496 * FT,
 )
-NAVION = lm.FlightCondition(
+NAVION = lm.ReferenceCondition(
     V=176.0 * FT, qbar=0.5 * 1.225 * (176.0 * FT) ** 2, alpha=0.0, theta=0.0,
     mass=2750.0 / 32.174 * SLUG, Ixx=1048 * SLUG_FT2, Iyy=3000 * SLUG_FT2,
     Izz=3530 * SLUG_FT2, Ixz=0.0, area=184.0 * FT**2, span=33.4 * FT, chord=5.7 * FT,

@@ -31,7 +31,7 @@ TRIM_SECONDS = 2.0  # the record's first seconds at trim define the reference co
 
 
 def reference_condition(records: Sequence[FlightRecord], trim_seconds: float = TRIM_SECONDS):
-    """Linearisation point of several maneuvers (FlightCondition, SI): channel means over
+    """Linearisation point of several maneuvers (ReferenceCondition, SI): channel means over
     the first ``trim_seconds`` of each record (the trim before the input), averaged over
     the records. A maneuver's own mean is not the trim: an open-loop roll sweep excites
     the phugoid and moves the mean dynamic pressure 1 % (all derivatives scale with it);

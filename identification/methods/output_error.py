@@ -41,7 +41,7 @@ from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel, matrix_sensitivities
 from flightid.identification.methods import equation_error
 from flightid.identification.methods.protocol import Method, option
-from flightid.identification.multistep_input import Multistep, from_measurement
+from flightid.identification.multistep_input import MultistepParameters, from_measurement
 from flightid.record import FlightRecord
 
 ID = "oe"
@@ -64,7 +64,7 @@ class Problem:
     x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
     noise_floor: np.ndarray  # smallest admitted noise variance per output
     # multistep inputs estimated as levels and edges (multistep_input): channel -> start
-    multistep: dict[str, Multistep] = field(default_factory=dict)
+    multistep: dict[str, MultistepParameters] = field(default_factory=dict)
 
     @property
     def input_names(self) -> list[str]:

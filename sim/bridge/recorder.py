@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flightid.files import atomic_path, write_text
 from flightid.record import FlightRecord, RecordMeta
 from flightid.sim.bridge.air import BridgeConfig, serve_record
 from flightid.sim.bridge.align import ClockMap, timesync_map, xcorr_map
@@ -133,10 +134,28 @@ def record_stream(
 ) -> RecordingReport:
     """Record intact packets from ``link`` into a .tlog until ``duration`` s have passed,
     the stream ends, nothing arrives for ``idle_timeout`` s (``first_timeout`` s before
-    the first byte), or ``stop`` is set and nothing is pending. Writes ``<tlog>.json``."""
+    the first byte), or ``stop`` is set and nothing is pending. Writes ``<tlog>.json``.
+
+    The tlog is written to a temporary file beside ``tlog_path`` and moved there when the
+    recording ends (also when it is interrupted: the packets recorded so far are kept); an
+    error leaves no partial tlog and an existing file untouched."""
     tlog_path = Path(tlog_path)
+    with atomic_path(tlog_path) as tmp:
+        report = _record_into(link, tlog_path, tmp, duration, idle_timeout, first_timeout,
+                              on_frame, stop)
+    if isinstance(report, KeyboardInterrupt):
+        raise report
+    write_text(str(tlog_path) + ".json", json.dumps(report.as_dict(), indent=2))
+    return report
+
+
+def _record_into(link: Link, tlog_path: Path, tmp: Path, duration: float | None,
+                 idle_timeout: float, first_timeout: float, on_frame,
+                 stop: threading.Event | None) -> RecordingReport | KeyboardInterrupt:
+    """The recording loop of :func:`record_stream`, writing into ``tmp``; an interrupt is
+    returned (not raised) so that the packets recorded so far are kept."""
     scanner = FrameScanner()
-    writer = TlogWriter(tlog_path)
+    writer = TlogWriter(tmp)
     packets: list[tuple[Source, int, float | None]] = []
     start = time.monotonic()
     last_data = None
@@ -176,14 +195,14 @@ def record_stream(
                 ended = f"idle for {idle_timeout} s"
                 break
         keep(scanner.flush())
+    except KeyboardInterrupt as exc:
+        return exc
     finally:
         writer.close()
-    report = RecordingReport(
+    return RecordingReport(
         str(tlog_path), time.monotonic() - start, scanner.stats.as_dict(),
         _loss_dict(sequence_losses(packets)), ended,
     )
-    Path(str(tlog_path) + ".json").write_text(json.dumps(report.as_dict(), indent=2))
-    return report
 
 
 # -- tlog -> FlightRecord ------------------------------------------------------------------

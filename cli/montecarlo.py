@@ -1,0 +1,116 @@
+"""``flightid montecarlo`` and ``flightid montecarlo-report``: run, continue or extend a
+Monte Carlo accuracy study (``flightid.scenarios.montecarlo``) with a progress bar, and
+rebuild its HTML report from the stored rows."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    ProgressColumn,
+    Task,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+
+from flightid.cli.identify import parse_options
+from flightid.scenarios import montecarlo
+from flightid.scenarios.montecarlo.summary import Summary
+
+
+class RateColumn(ProgressColumn):
+    """Realizations per minute."""
+
+    def render(self, task: Task) -> Text:
+        speed = task.finished_speed or task.speed
+        return Text("" if speed is None else f"{60 * speed:.1f}/min")
+
+
+def summary_table(summary: Summary) -> Table:
+    """The per-derivative statistics as a rich table."""
+    table = Table(title=f"{summary.realizations} realizations, {summary.failures} failed")
+    for head in ("derivative", "truth", "bias", "scatter", "mean bound", "scatter/bound",
+                 "coverage 95 %", "unidentifiable"):
+        table.add_column(head, justify="left" if head == "derivative" else "right")
+    for r in summary.rows:
+        table.add_row(r.name, f"{r.truth:.4g}", f"{r.bias:+.3g}", f"{r.scatter:.3g}",
+                      f"{r.mean_bound:.3g}", f"{r.ratio:.2f}", f"{100 * r.coverage:.0f} %",
+                      f"{100 * r.unidentifiable:.0f} %")
+    return table
+
+
+def _print(summary: Summary, format: str) -> None:
+    if format == "json":
+        print(json.dumps(summary.as_dict(), indent=2))
+    else:
+        Console().print(summary_table(summary))
+
+
+def montecarlo_command(
+    card: Annotated[str, typer.Argument(help="card file or library card name")],
+    n: Annotated[int, typer.Option("-n", help="number of realizations")],
+    output: Annotated[str, typer.Option(
+        "-o", "--output", help="study folder (continued when it exists)")],
+    method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
+    model: Annotated[str, typer.Option(help="model (as for flightid identify)")] = "lat",
+    option: Annotated[list[str] | None, typer.Option(
+        help="method option KEY=VALUE (repeatable)")] = None,
+    seed: Annotated[int | None, typer.Option(
+        help="base seed of the realizations (default: the card's)")] = None,
+    workers: Annotated[int | None, typer.Option(
+        help="local worker processes (default: one per CPU)")] = None,
+    dask: Annotated[str | None, typer.Option(
+        "--dask", help="Dask scheduler address, e.g. tcp://host:8786")] = None,
+    dask_scheduler_file: Annotated[str | None, typer.Option(
+        help="Dask scheduler file")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+) -> None:
+    """Fly a card N times, identify each flight, and summarize bias, scatter and the
+    coverage of the reported bounds; a rerun continues the study in -o."""
+    if format not in ("table", "json"):
+        raise ValueError(f"--format must be table or json, got {format!r}")
+    if dask and dask_scheduler_file:
+        raise ValueError("give --dask or --dask-scheduler-file, not both")
+    options = parse_options(option or [])
+    kwargs = dict(method=method, model=model, options=options, study_dir=output,
+                  workers=workers, dask_address=dask, seed=seed,
+                  dask_scheduler_file=dask_scheduler_file)
+    if quiet:
+        summary = montecarlo.run(card, n, **kwargs)
+    else:
+        with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
+                      MofNCompleteColumn(), RateColumn(), TimeElapsedColumn(),
+                      TimeRemainingColumn(), transient=True,
+                      console=Console(stderr=True)) as bar:
+            task = bar.add_task(f"Monte Carlo {card}", total=None)
+
+            def progress(done: int, total: int) -> None:
+                bar.update(task, completed=done, total=total)
+
+            summary = montecarlo.run(card, n, progress=progress, **kwargs)
+    _print(summary, format)
+    if format == "table":
+        typer.echo(f"wrote {output}/report.html")
+
+
+def montecarlo_report_command(
+    study: Annotated[str, typer.Argument(help="study folder")],
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+) -> None:
+    """Rebuild STUDY/report.html from the stored results and print the summary."""
+    if format not in ("table", "json"):
+        raise ValueError(f"--format must be table or json, got {format!r}")
+    path, summary = montecarlo.rebuild_report(study)
+    _print(summary, format)
+    if format == "table":
+        typer.echo(f"wrote {path}")

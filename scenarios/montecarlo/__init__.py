@@ -1,0 +1,80 @@
+"""Monte Carlo accuracy studies: fly a card many times, identify every flight, and measure
+bias, scatter and the coverage of the reported bounds; locally or on a Dask cluster.
+
+    from flightid.scenarios import montecarlo
+    summary = montecarlo.run("navion-demo", 100, method="oe", model="lat",
+                             study_dir="studies/navion-oe-lat")
+
+Modules: ``study`` (the description, one realization), ``store`` (STUDY/study.json and
+one Parquet file per realization; continuing), ``executors`` (local processes, Dask),
+``summary`` (per-derivative statistics), ``report`` (STUDY/report.html). docs/montecarlo.md.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from flightid.scenarios.cards import load_card
+from flightid.scenarios.montecarlo import store
+from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
+from flightid.scenarios.montecarlo.report import write_report
+from flightid.scenarios.montecarlo.store import StudyMismatch, done, load
+from flightid.scenarios.montecarlo.study import Study, run_realization
+from flightid.scenarios.montecarlo.summary import Summary, summarize
+
+__all__ = ["Study", "StudyMismatch", "Summary", "done", "load", "rebuild_report", "run",
+           "run_realization", "summarize"]
+
+
+def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
+        options: Mapping[str, Any] | None = None, study_dir: str | Path | None = None,
+        workers: int | None = None, dask_address: str | None = None,
+        progress: Callable[[int, int], None] | None = None, *, seed: int | None = None,
+        dask_scheduler_file: str | Path | None = None, report: bool = True) -> Summary:
+    """Run (or continue, or extend) the study of ``n`` realizations of ``card`` in
+    ``study_dir`` (default ``montecarlo/<card>-<method>-<model>``) and return its Summary.
+
+    Realizations already stored are not recomputed; a stored study described otherwise
+    (card, method, model, options, seed) is refused (StudyMismatch). ``workers`` local
+    processes (default: one per CPU), or the Dask scheduler at ``dask_address`` / in
+    ``dask_scheduler_file``. ``progress(done, total)`` after each realization.
+    """
+    if int(n) < 1:
+        raise ValueError(f"n must be at least 1, got {n}")
+    loaded = load_card(card)  # a bad card fails here, not once per realization
+    description = Study(str(card), int(n), method, model, dict(options or {}), seed)
+    folder = Path(study_dir) if study_dir is not None else \
+        Path("montecarlo") / f"{loaded.name}-{method}-{model}"
+    store.open_study(folder, description)
+    todo = sorted(set(range(int(n))) - done(folder))
+
+    def keep(index: int, rows: list[dict[str, Any]]) -> None:
+        store.write_realization(folder, index, rows)
+
+    if dask_address is not None or dask_scheduler_file is not None:
+        with dask_client(dask_address, None if dask_scheduler_file is None
+                         else str(dask_scheduler_file)) as client:
+            run_dask(description, todo, keep, client, progress)
+    else:
+        run_local(description, todo, keep, workers, progress)
+    df = load(folder)
+    df = df[df["index"] < int(n)]
+    summary = summarize(df)
+    if report:
+        write_report(folder, df, summary, _title(description))
+    return summary
+
+
+def _title(description: Study | dict[str, Any]) -> str:
+    d = description.as_dict() if isinstance(description, Study) else description
+    return f"Monte Carlo: {d['card']}, {d['method']} {d['model']}, n={d['n']}"
+
+
+def rebuild_report(study_dir: str | Path) -> tuple[Path, Summary]:
+    """Rebuild STUDY/report.html from the stored rows (all of them)."""
+    stored = store.read_description(study_dir)
+    df = load(study_dir)
+    summary = summarize(df)
+    return write_report(study_dir, df, summary, _title(stored["description"])), summary

@@ -1,0 +1,124 @@
+"""Run realizations: local worker processes (``concurrent.futures.ProcessPoolExecutor``)
+or a Dask cluster (``dask.distributed.Client`` from an address or a scheduler file).
+
+Both keep at most ``window`` realizations in flight (submitted as others finish, results
+consumed as they complete) so that memory stays bounded however large n is; each finished
+realization goes to ``on_result(index, rows)`` (the store) and to ``progress(done, total)``.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any
+
+from dask import distributed
+
+from flightid.scenarios.montecarlo.study import Study, run_realization
+
+Rows = list[dict[str, Any]]
+OnResult = Callable[[int, Rows], None]
+Progress = Callable[[int, int], None]
+
+
+def _report(progress: Progress | None, finished: int, total: int) -> None:
+    if progress is not None:
+        progress(finished, total)
+
+
+def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
+              workers: int | None = None, progress: Progress | None = None,
+              window: int | None = None) -> None:
+    """Run the realizations ``indices`` in ``workers`` local processes (default: one per
+    CPU). Workers start from a clean process (forkserver), never a fork of this one."""
+    todo = list(indices)
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    window = max(1, int(window or 2 * workers))
+    total, finished = len(todo), 0
+    _report(progress, 0, total)
+    if not todo:
+        return
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context) as pool:
+        pending: dict[Future, int] = {}
+        queue = iter(todo)
+        try:
+            for index in queue:
+                pending[pool.submit(run_realization, description, index)] = index
+                if len(pending) >= window:
+                    break
+            while pending:
+                complete, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in complete:
+                    index = pending.pop(fut)
+                    on_result(index, fut.result())
+                    finished += 1
+                    _report(progress, finished, total)
+                for index in queue:
+                    pending[pool.submit(run_realization, description, index)] = index
+                    if len(pending) >= window:
+                        break
+        except BaseException:
+            for fut in pending:
+                fut.cancel()
+            raise
+
+
+def dask_client(address: str | None = None, scheduler_file: str | None = None
+                ) -> distributed.Client:
+    """A client of the Dask scheduler at ``address`` (e.g. tcp://host:8786) or described
+    by ``scheduler_file`` (as written by ``dask scheduler --scheduler-file``)."""
+    if (address is None) == (scheduler_file is None):
+        raise ValueError("give a Dask scheduler address or a scheduler file (one of them)")
+    if scheduler_file is not None:
+        return distributed.Client(scheduler_file=str(scheduler_file))
+    return distributed.Client(address)
+
+
+def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,
+             client: distributed.Client, progress: Progress | None = None,
+             window: int | None = None) -> None:
+    """Run the realizations ``indices`` on the workers of a Dask ``client`` (flightid
+    must be installed on them); at most ``window`` (default: twice the worker threads)
+    are submitted at a time."""
+    todo = list(indices)
+    total, finished = len(todo), 0
+    _report(progress, 0, total)
+    if not todo:
+        return
+    if window is None:
+        threads = sum(client.nthreads().values()) or 1
+        window = 2 * threads
+    window = max(1, int(window))
+    queue = iter(todo)
+    ident = description.identity()["card_sha256"][:12]
+
+    def submit(index: int) -> distributed.Future:
+        return client.submit(run_realization, description, index, pure=False,
+                             key=f"flightid-montecarlo-{ident}-{index}-{os.getpid()}")
+
+    first = []
+    for index in queue:
+        first.append(submit(index))
+        if len(first) >= window:
+            break
+    indices_of = {f.key: i for f, i in zip(first, todo, strict=False)}
+    completed = distributed.as_completed(first)
+    try:
+        for fut in completed:
+            index = indices_of.pop(fut.key)
+            on_result(index, fut.result())
+            fut.release()
+            finished += 1
+            _report(progress, finished, total)
+            nxt = next(queue, None)
+            if nxt is not None:
+                new = submit(nxt)
+                indices_of[new.key] = nxt
+                completed.add(new)
+    except BaseException:
+        completed.clear()
+        raise

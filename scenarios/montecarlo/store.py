@@ -1,0 +1,119 @@
+"""Where a study lives: STUDY/study.json (description and versions) and one Parquet file
+per finished realization under STUDY/results/ (written atomically: a temporary name, then
+``os.replace``). What is stored is never recomputed: ``done(study_dir)`` lists it, and a
+rerun with the same description runs only the rest (a larger n extends the study)."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+from collections.abc import Iterable
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from flightid.scenarios.montecarlo.study import COLUMNS, FLOAT_COLUMNS, Study
+
+DESCRIPTION = "study.json"
+RESULTS = "results"
+_PREFIX, _SUFFIX = "realization-", ".parquet"
+
+
+class StudyMismatch(ValueError):
+    """A stored study was described differently from the run that wants to continue it."""
+
+
+def versions() -> dict[str, str]:
+    """The versions that produced a study (flightid, jsbsim, numpy, python)."""
+    out = {}
+    for name in ("flightid", "jsbsim", "numpy"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "unknown"
+    out["python"] = platform.python_version()
+    return out
+
+
+def result_path(study_dir: str | Path, index: int) -> Path:
+    return Path(study_dir) / RESULTS / f"{_PREFIX}{int(index):06d}{_SUFFIX}"
+
+
+def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
+    """Create STUDY/ for ``description``, or check that the stored study has the same
+    identity (card and its content, method, model, options, base seed; n may differ: a
+    larger n extends it). Raises StudyMismatch naming each difference. Returns the
+    stored description document."""
+    root = Path(study_dir)
+    path = root / DESCRIPTION
+    identity = description.identity()
+    if path.exists():
+        stored = json.loads(path.read_text())
+        old = stored.get("identity", {})
+        diffs = [f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}"
+                 for k in sorted(set(old) | set(identity)) if old.get(k) != identity.get(k)]
+        if diffs:
+            raise StudyMismatch(f"{root} holds another study ({'; '.join(diffs)}); "
+                                "use another folder or the stored description")
+        if description.n > int(stored["description"]["n"]):
+            stored["description"]["n"] = int(description.n)
+            _write_json(path, stored)
+        return stored
+    (root / RESULTS).mkdir(parents=True, exist_ok=True)
+    stored = {"description": description.as_dict(), "identity": identity,
+              "versions": versions(), "created": datetime.now(UTC).isoformat()}
+    _write_json(path, stored)
+    return stored
+
+
+def read_description(study_dir: str | Path) -> dict[str, Any]:
+    """The stored study.json of ``study_dir``."""
+    path = Path(study_dir) / DESCRIPTION
+    if not path.exists():
+        raise FileNotFoundError(f"{study_dir}: not a Monte Carlo study (no {DESCRIPTION})")
+    return json.loads(path.read_text())
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(data, indent=2) + "\n")
+    os.replace(tmp, path)
+
+
+def frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
+    """Result rows as a DataFrame with the study's columns and dtypes."""
+    df = pd.DataFrame(list(rows), columns=list(COLUMNS))
+    df = df.astype({"index": "int64", "seed": "int64", "name": str, "status": str,
+                    "reason": str, **{c: "float64" for c in FLOAT_COLUMNS}})
+    return df
+
+
+def write_realization(study_dir: str | Path, index: int, rows: list[dict[str, Any]]) -> Path:
+    """Store one realization's rows (atomically: a reader sees all of them or none)."""
+    path = result_path(study_dir, index)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    frame(rows).to_parquet(tmp, index=False)
+    os.replace(tmp, path)
+    return path
+
+
+def done(study_dir: str | Path) -> set[int]:
+    """The indices of the realizations already stored in ``study_dir``."""
+    folder = Path(study_dir) / RESULTS
+    if not folder.is_dir():
+        return set()
+    return {int(p.name[len(_PREFIX):-len(_SUFFIX)]) for p in folder.glob(f"{_PREFIX}*{_SUFFIX}")}
+
+
+def load(study_dir: str | Path) -> pd.DataFrame:
+    """Every stored row of the study, sorted by realization index and derivative name."""
+    files = sorted((Path(study_dir) / RESULTS).glob(f"{_PREFIX}*{_SUFFIX}"))
+    if not files:
+        return frame([])
+    df = pd.concat([pd.read_parquet(p) for p in files], ignore_index=True)
+    return df.sort_values(["index", "name"], kind="stable").reset_index(drop=True)

@@ -1,0 +1,129 @@
+"""What a Monte Carlo study is, and one realization of it.
+
+A study flies one card ``n`` times, each realization with its own seed (derived from the
+study's base seed with ``flightid.scenarios.cards.sub_seed``), identifies each flight with
+one method and model, and scores every estimated derivative against the exact truth.
+``run_realization(description, index)`` is a pure function of its arguments: a worker
+process (local or on a Dask cluster) needs nothing else.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from flightid.identification.identify import identify
+from flightid.identification.scoring import record_truth, score
+from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed
+from flightid.sim.flight import DepartureError
+from flightid.sim.trim import TrimError
+
+# the columns of a result row, in order
+COLUMNS = ("index", "seed", "name", "truth", "estimate", "std", "error", "sigmas",
+           "status", "reason")
+FLOAT_COLUMNS = ("truth", "estimate", "std", "error", "sigmas")
+STATUS_FAILED = "failed"
+# what makes one realization fail (recorded as a failure row); anything else is a bug
+# and stops the study
+REALIZATION_ERRORS = (DepartureError, TrimError, ValueError, np.linalg.LinAlgError)
+
+
+@dataclass(frozen=True)
+class Study:
+    """A Monte Carlo study: fly ``card`` (library name or TOML path) ``n`` times, identify
+    each flight with ``method`` and ``model`` (``options`` as for ``identify``); seeds
+    derived from the base ``seed`` (None: the card's seed)."""
+
+    card: str
+    n: int
+    method: str = "oe"
+    model: str = "lat"
+    options: dict[str, Any] = field(default_factory=dict)
+    seed: int | None = None
+
+    def base_seed(self, card: Card | None = None) -> int:
+        """The base seed: the study's, else the card's."""
+        if self.seed is not None:
+            return int(self.seed)
+        return int((card or load_card(self.card)).seed)
+
+    def realization_seed(self, index: int, card: Card | None = None) -> int:
+        """The seed of realization ``index`` (independent of n and of the other ones)."""
+        return sub_seed(self.base_seed(card), f"montecarlo:{int(index)}")
+
+    def identity(self) -> dict[str, Any]:
+        """Everything that makes two studies the same except their size n (JSON-able);
+        a stored study continues only under the same identity."""
+        card = load_card(self.card)
+        text = json.dumps(card.to_dict(), sort_keys=True, default=str)
+        return {
+            "card": self.card,
+            "card_sha256": hashlib.sha256(text.encode()).hexdigest(),
+            "method": self.method,
+            "model": self.model,
+            "options": {k: _plain(v) for k, v in sorted(self.options.items())},
+            "seed": self.base_seed(card),
+        }
+
+    def as_dict(self) -> dict[str, Any]:
+        """The description as plain data (options JSON-able)."""
+        out = asdict(self)
+        out["options"] = {k: _plain(v) for k, v in self.options.items()}
+        return out
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, str | int | float | bool) or value is None:
+        return value
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return str(value)
+
+
+def run_realization(description: Study, index: int) -> list[dict[str, Any]]:
+    """Fly, identify and score realization ``index``: one row per scored derivative
+    (columns ``COLUMNS``), or one row with status 'failed' and the reason (the flight
+    departed or could not be trimmed, the method refused the record, the fit did not
+    converge). Never empty."""
+    with threadpool_limits(1):  # one BLAS thread: the parallelism is the realizations
+        return _realization(description, index)
+
+
+def _realization(description: Study, index: int) -> list[dict[str, Any]]:
+    card = load_card(description.card)
+    seed = description.realization_seed(index, card)
+    base = {"index": int(index), "seed": int(seed)}
+    try:
+        measured, truth_record = fly_card(card, seed)
+        est = identify(measured, description.method, description.model,
+                       **dict(description.options))
+    except REALIZATION_ERRORS as exc:
+        return [_failure(base, f"{type(exc).__name__}: {exc}")]
+    if est.fit.get("converged") is False:
+        why = est.fit.get("message") or est.fit.get("reason") or ""
+        return [_failure(base, f"not converged{': ' + str(why) if why else ''}")]
+    scored = score(est, record_truth(truth_record))
+    rows = []
+    for r in scored.rows:
+        rows.append({**base, "name": r.name, "truth": _num(r.truth),
+                     "estimate": _num(r.estimate), "std": _num(r.std),
+                     "error": _num(r.error), "sigmas": _num(r.sigmas),
+                     "status": r.status, "reason": r.reason or ""})
+    if not rows:
+        return [_failure(base, "the estimate scored no derivative")]
+    return rows
+
+
+def _num(x: Any) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def _failure(base: dict[str, Any], reason: str) -> dict[str, Any]:
+    row: dict[str, Any] = {**base, "name": "", "status": STATUS_FAILED, "reason": reason}
+    row.update({c: float("nan") for c in FLOAT_COLUMNS})
+    return row

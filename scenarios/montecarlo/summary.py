@@ -1,0 +1,106 @@
+"""Per-derivative statistics of a study's rows: is the estimator unbiased, and are its
+standard errors (the bounds the method reports) the real scatter?
+
+bias: mean estimate - truth; scatter: standard deviation of the estimates (ddof 1);
+mean_bound: mean of the reported standard errors; ratio: scatter / mean_bound (1 when the
+bounds are right, > 1 when they are optimistic); coverage: share of the realizations with
+|error| <= 1.96 std (0.95 for a Gaussian estimator whose bounds are right);
+unidentifiable: share of the realizations (that did not fail) that found the derivative
+unidentifiable; failures: realizations that produced no estimate at all.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from flightid.identification.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
+from flightid.scenarios.montecarlo.study import STATUS_FAILED
+
+Z95 = 1.96
+
+
+@dataclass
+class DerivativeSummary:
+    """The statistics of one derivative over a study (NaN where undefined)."""
+
+    name: str
+    truth: float
+    estimated: int  # realizations that estimated it
+    mean: float
+    bias: float
+    scatter: float
+    mean_bound: float
+    ratio: float
+    coverage: float
+    unidentifiable: float
+    failures: int
+
+
+@dataclass
+class Summary:
+    """A study's statistics: one row per derivative; realizations and failures counted."""
+
+    realizations: int
+    failures: int
+    rows: list[DerivativeSummary] = field(default_factory=list)
+    failure_reasons: dict[str, int] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data (NaN as None), JSON-ready."""
+        return {"realizations": self.realizations, "failures": self.failures,
+                "failure_reasons": dict(self.failure_reasons),
+                "rows": [{k: _finite(v) for k, v in asdict(r).items()} for r in self.rows]}
+
+    def frame(self) -> pd.DataFrame:
+        """The rows as a DataFrame indexed by derivative name."""
+        return pd.DataFrame([asdict(r) for r in self.rows]).set_index("name")
+
+    def row(self, name: str) -> DerivativeSummary:
+        for r in self.rows:
+            if r.name == name:
+                return r
+        raise KeyError(f"{name} is not in the summary; it has {', '.join(self.names)}")
+
+    @property
+    def names(self) -> list[str]:
+        return [r.name for r in self.rows]
+
+
+def _finite(v: Any) -> Any:
+    return None if isinstance(v, float) and not math.isfinite(v) else v
+
+
+def summarize(df: pd.DataFrame) -> Summary:
+    """The Summary of a study's rows (``store.load``)."""
+    if df.empty:
+        return Summary(0, 0)
+    realizations = int(df["index"].nunique())
+    failed = df[df["status"] == STATUS_FAILED]
+    failures = int(failed["index"].nunique())
+    reasons = failed["reason"].str.split(":").str[0].value_counts()
+    ok = df[df["status"] != STATUS_FAILED]
+    survivors = realizations - failures
+    rows = []
+    for name, g in ok.groupby("name", sort=True):
+        est = g[g["status"] == STATUS_ESTIMATED]
+        values, std, err = (est[c].to_numpy(float) for c in ("estimate", "std", "error"))
+        truth = float(g["truth"].iloc[0])
+        n = len(est)
+        mean = float(values.mean()) if n else math.nan
+        scatter = float(values.std(ddof=1)) if n > 1 else math.nan
+        bound = float(std.mean()) if n else math.nan
+        rows.append(DerivativeSummary(
+            name=str(name), truth=truth, estimated=n, mean=mean, bias=mean - truth,
+            scatter=scatter, mean_bound=bound,
+            ratio=scatter / bound if n > 1 and bound > 0 else math.nan,
+            coverage=float(np.mean(np.abs(err) <= Z95 * std)) if n else math.nan,
+            unidentifiable=(float((g["status"] == STATUS_UNIDENTIFIABLE).sum()) / survivors
+                            if survivors else math.nan),
+            failures=failures))
+    return Summary(realizations, failures, rows,
+                   {str(k): int(v) for k, v in reasons.items()})
