@@ -36,7 +36,7 @@ from flightid.cli.simulate import simulate_command
 from flightid.cli.trim_truth import trim_command, truth_command
 from flightid.scenarios.cards import CardError
 from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError
+from flightid.sim.trim import TrimError, TrimInputError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_PHYSICAL = 0, 1, 2, 3
 DEBUG_ENV = "FLIGHTID_DEBUG"
@@ -45,29 +45,18 @@ DEBUG_ENV = "FLIGHTID_DEBUG"
 # when they name a file, else as internal errors)
 _PATH_ERRORS = (FileNotFoundError, FileExistsError, IsADirectoryError, NotADirectoryError,
                 PermissionError)
-# the input checks of flightid.sim.trim: a TrimError raised there is bad input, not physics
-_TRIM_INPUT_CHECKS = frozenset({"_check_inputs", "_set_flaps"})
 # what a click context has (typer vendors click: duck-typed, no click import)
 _CONTEXT = ("info_name", "parent", "command", "params")
-
-
-def _raised_in(exc: BaseException) -> str:
-    """The name of the function that raised ``exc`` (the innermost frame)."""
-    tb: TracebackType | None = exc.__traceback__
-    name = ""
-    while tb is not None:
-        name = tb.tb_frame.f_code.co_name
-        tb = tb.tb_next
-    return name
 
 
 def classify(exc: BaseException) -> tuple[int, str]:
     """The exit code and the one-line message for an exception a command raised."""
     if isinstance(exc, DepartureError):
         return EXIT_PHYSICAL, f"the flight departed: {exc}"
+    if isinstance(exc, TrimInputError):
+        return EXIT_BAD_INPUT, str(exc)
     if isinstance(exc, TrimError):
-        bad_input = _raised_in(exc) in _TRIM_INPUT_CHECKS
-        return (EXIT_BAD_INPUT if bad_input else EXIT_PHYSICAL), str(exc)
+        return EXIT_PHYSICAL, str(exc)
     if isinstance(exc, TimeoutError):  # a bridge link that never delivered
         return EXIT_PHYSICAL, str(exc)
     if isinstance(exc, np.linalg.LinAlgError):  # a ValueError, but a numerical failure

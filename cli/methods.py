@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from flightid.api import methods
@@ -32,11 +33,12 @@ def methods_command(
         return
     console = Console()
     for m in chosen:
-        table = Table(title=f"{m.id}: {m.name}", caption=f"{m.summary}. Models: "
-                      f"{', '.join(m.models)} (default {m.default_model}). {m.reference}",
+        table = Table(title=escape(f"{m.id}: {m.name}"), caption=escape(
+                          f"{m.summary}. Models: {', '.join(m.models)} (default "
+                          f"{m.default_model}). {m.reference}"),
                       title_justify="left", caption_justify="left")
         for col in ("option", "type", "default", "meaning"):
             table.add_column(col, overflow="fold")
         for row in m.describe():
-            table.add_row(row["name"], row["type"], row["default"], row["help"])
+            table.add_row(*(escape(row[k]) for k in ("name", "type", "default", "help")))
         console.print(table)

@@ -36,6 +36,11 @@ class TrimError(ValueError):
     """The aircraft cannot be trimmed at the requested condition; the message says why."""
 
 
+class TrimInputError(TrimError):
+    """The requested condition itself is invalid (negative altitude, no flaps, ...): bad
+    input rather than a physical failure to trim."""
+
+
 @dataclass(frozen=True)
 class Trim:
     """A trimmed flight condition; angles and surfaces in rad (project signs), throttle 0..1."""
@@ -130,19 +135,19 @@ def _check_inputs(model: Model, altitude_m: float, speed_m_s: float, gamma: floa
                   bank: float) -> None:
     where = f"{model.name} at {speed_m_s:g} m/s, {altitude_m:g} m"
     if not all(map(math.isfinite, (altitude_m, speed_m_s, gamma, bank))):
-        raise TrimError(f"{where}: altitude, speed, gamma and bank must be finite numbers")
+        raise TrimInputError(f"{where}: altitude, speed, gamma and bank must be finite numbers")
     if speed_m_s <= 0:
-        raise TrimError(f"{model.name}: speed must be positive, got {speed_m_s:g} m/s")
+        raise TrimInputError(f"{model.name}: speed must be positive, got {speed_m_s:g} m/s")
     if altitude_m < 0:
-        raise TrimError(f"{model.name}: altitude must be >= 0 m, got {altitude_m:g} m")
+        raise TrimInputError(f"{model.name}: altitude must be >= 0 m, got {altitude_m:g} m")
     if altitude_m > MAX_ALTITUDE_M:
-        raise TrimError(
+        raise TrimInputError(
             f"{model.name}: altitude {altitude_m:g} m is absurd (above {MAX_ALTITUDE_M:g} m)"
         )
     if abs(gamma) >= math.radians(60):
-        raise TrimError(f"{where}: flight-path angle {math.degrees(gamma):g} deg is absurd")
+        raise TrimInputError(f"{where}: flight-path angle {math.degrees(gamma):g} deg is absurd")
     if abs(bank) >= math.radians(80):
-        raise TrimError(f"{where}: bank {math.degrees(bank):g} deg is absurd (>= 80 deg)")
+        raise TrimInputError(f"{where}: bank {math.degrees(bank):g} deg is absurd (>= 80 deg)")
 
 
 def _set_condition(model: Model, altitude_m: float, speed_m_s: float, gamma: float,
@@ -247,7 +252,7 @@ def _power_check(model: Model, altitude_m: float, speed_m_s: float, gamma: float
 def _set_flaps(model: Model, flaps_rad: float) -> None:
     if not model.has("fcs/flap-cmd-norm") or not model.has("fcs/flap-pos-rad"):
         if flaps_rad:
-            raise TrimError(f"{model.name} has no flaps (fcs/flap-cmd-norm)")
+            raise TrimInputError(f"{model.name} has no flaps (fcs/flap-cmd-norm)")
         return
     fdm = model.fdm
     lo, hi = 0.0, 1.0
@@ -255,7 +260,7 @@ def _set_flaps(model: Model, flaps_rad: float) -> None:
     _settle_surfaces(model)
     full = fdm["fcs/flap-pos-rad"]
     if flaps_rad < 0 or flaps_rad > full + 1e-9:
-        raise TrimError(
+        raise TrimInputError(
             f"{model.name}: flaps {math.degrees(flaps_rad):g} deg outside 0..{math.degrees(full):g}"
         )
     for _ in range(40):  # bisection on the (monotone) command -> position map
@@ -298,7 +303,7 @@ def trim(model: Model | str, altitude_m: float | FlightCondition,
         altitude_m, speed_m_s, gamma_rad, bank_rad, flaps_rad = (
             c.altitude_m, c.speed_m_s, c.gamma_rad, c.bank_rad, c.flaps_rad)
     if speed_m_s is None:
-        raise TrimError("trim needs a speed (m/s) or a FlightCondition")
+        raise TrimInputError("trim needs a speed (m/s) or a FlightCondition")
     model = as_model(model)
     _check_inputs(model, altitude_m, speed_m_s, gamma_rad, bank_rad)
     fdm = model.fdm
