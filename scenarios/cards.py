@@ -35,11 +35,17 @@ degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a co
     kind = "turbulence"
     intensity = "light"
 
+    [[effect]]                  # airframe and actuator effects: flown in an augmented
+    name = "rate_limit"         # copy of the aircraft's JSBSim XML (flightid.sim.augment)
+    surface = "de"
+    rate_deg = 20.0
+
 Every ``effect`` and ``kind`` above names one entry of the effect catalogue
 (``flightid.sim.effects.catalogue.CATALOGUE``; ``flightid effects`` lists it, with each
 effect's parameters, units and defaults; docs/effects.md): sensor effects in a channel's
 chain, mounting and vibration effects in ``mounting``, disturbances and vibration in
-``[[disturbance]]``. An unknown name, or one given in the wrong place, is an error that
+``[[disturbance]]``, airframe and actuator effects in ``[[effect]]`` (``name = ...``).
+An unknown name, or one given in the wrong place, is an error that
 names the file, line and field and lists the names valid there. ``Card.effects`` maps
 each such field to its catalogue entry.
 
@@ -48,6 +54,9 @@ the line and the field. ``fly_card(card, seed) -> (measured, truth)`` is a pure 
 of its arguments: same card and seed, identical records; another seed changes only the
 random parts (sensor noise, turbulence, the hand-flying pilot). Each random part draws
 from its own stream derived from the seed, so adding one leaves the others unchanged.
+A card with ``[[effect]]`` tables flies the aircraft augmented with them (written once per
+aircraft and effect list into a cache folder, ``AUGMENT_CACHE``); the truth record's
+``meta.extra["injected"]`` lists every injected effect with its magnitude.
 """
 
 from __future__ import annotations
@@ -55,6 +64,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import tempfile
 import tomllib
 import zlib
 from collections.abc import Callable
@@ -70,6 +80,7 @@ from flightid.scenarios.flight_meta import maneuver_list, truth_table
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.scenarios.toml_locate import line_index, line_of
+from flightid.sim.augment import augment, cache_folder
 from flightid.sim.condition import FlightCondition
 from flightid.sim.disturbances import (
     Gust,
@@ -89,7 +100,9 @@ from flightid.units import DEG
 
 LIBRARY = Path(__file__).resolve().parent / "library"
 TOP_FIELDS = ("name", "description", "source", "aircraft", "duration", "rate", "seed",
-              "condition", "maneuver", "sensors", "disturbance", "a_priori")
+              "condition", "maneuver", "sensors", "disturbance", "effect", "a_priori")
+# where fly_card writes augmented aircraft (one folder per aircraft and effect list)
+AUGMENT_CACHE = Path(tempfile.gettempdir()) / "flightid-augmented"
 A_PRIORI_FIELDS = ("value", "std", "source")
 CONDITION_FIELDS = ("altitude", "speed", "gamma", "bank", "flaps")
 NO_SENSORS = "none"
@@ -126,6 +139,8 @@ class Card:
     maneuvers: tuple[InputDesign, ...] = ()
     sensors: Any = None  # flightid.sim.sensors.SensorSuite or None
     disturbances: tuple[Any, ...] = ()
+    # airframe and actuator effects ([[effect]]), flown in an augmented aircraft
+    augmentation: tuple[Any, ...] = ()
     description: str = ""
     source: str = ""
     path: str = ""
@@ -341,6 +356,29 @@ def _disturbances(chk: _Checker, items: Any, duration: float) -> tuple[Any, ...]
     return tuple(out)
 
 
+def _augmentation(chk: _Checker, items: Any) -> tuple[Any, ...]:
+    """[[effect]] tables: airframe and actuator effects of the catalogue, by ``name``."""
+    if not isinstance(items, list):
+        raise chk.fail("effect", "must be an array of tables ([[effect]])")
+    out = []
+    for i, d in enumerate(items):
+        where = f"effect[{i}]"
+        try:
+            out.append(CATALOGUE.from_dict(d, "effect", where))
+        except ValueError as exc:
+            raise chk.wrap(exc, where) from None
+    seen: dict[tuple, int] = {}
+    for i, e in enumerate(out):
+        if e.name in ("derivative_delta", "control_effectiveness"):
+            continue
+        key = (e.name, e.options().get("surface", ""))
+        if key in seen:
+            raise chk.fail(f"effect[{i}].name", f"{e.name} given twice (also effect"
+                           f"[{seen[key]}]); give it once" + (" per surface" if key[1] else ""))
+        seen[key] = i
+    return tuple(out)
+
+
 def _effect_entries(data: dict[str, Any]) -> dict[str, str]:
     """Card field -> catalogue entry of every effect table of a validated card."""
     out: dict[str, str] = {}
@@ -353,6 +391,7 @@ def _effect_entries(data: dict[str, Any]) -> dict[str, str]:
                    for i, m in enumerate(sensors.get("mounting", []))]
     tables += [("disturbance", f"disturbance[{i}]", d)
                for i, d in enumerate(data.get("disturbance", []))]
+    tables += [("effect", f"effect[{i}]", d) for i, d in enumerate(data.get("effect", []))]
     for section, where, table in tables:
         out[where] = CATALOGUE.lookup(table[SECTIONS[section].key], section, where).name
     return out
@@ -416,10 +455,11 @@ def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None 
     if vibration_of(disturbances) is not None and sensors is None:
         raise chk.fail("disturbance", "engine_vibration acts on the sensors; give a [sensors] "
                        "table")
+    augmentation = _augmentation(chk, data.get("effect", []))
     default_name = Path(path).stem if path != "<card>" else "card"
     return Card(name=data.get("name", default_name), aircraft=aircraft, condition=condition,
                 duration=duration, rate=rate, seed=seed, maneuvers=maneuvers,
-                sensors=sensors, disturbances=disturbances,
+                sensors=sensors, disturbances=disturbances, augmentation=augmentation,
                 description=data.get("description", ""), source=data.get("source", ""),
                 path=str(path), data=data, a_priori=_a_priori(chk, data.get("a_priori", {})),
                 effects=_effect_entries(data))
@@ -472,7 +512,7 @@ def fly_card(card: Card, seed: int | None = None,
     """
     seed = card.seed if seed is None else int(seed)
     c = card.condition
-    model = load(card.aircraft)
+    model = load(augmented(card) if card.augmentation else card.aircraft)
     trimmed = trim(model, c)
     n = int(round(card.duration * card.rate)) + 1
     t = np.arange(n) / card.rate
@@ -491,6 +531,11 @@ def fly_card(card: Card, seed: int | None = None,
                              exc.record) from None
     truth.meta.extra["inputs"] = [d.to_dict() for d in designs]
     truth.meta.extra["disturbances"] = [d.to_dict() for d in card.disturbances]
+    if card.augmentation:
+        # what was injected, for scoring a diagnosis; a diagnosis must not read it
+        truth.meta.extra["injected"] = {"aircraft": card.aircraft,
+                                        "augmented": model.name,
+                                        "effects": [e.to_dict() for e in card.augmentation]}
     truth.meta.extra["maneuvers"] = maneuver_list(designs)
     truth.meta.extra["truth"] = truth_table(model, trimmed)
     if card.a_priori:
@@ -505,5 +550,26 @@ def fly_card(card: Card, seed: int | None = None,
     return measure(truth, suite, sub_seed(seed, "sensors")), truth
 
 
-__all__ = ["Card", "CardError", "Condition", "FlightCondition", "card_from_dict", "find_card",
-           "fly_card", "library_cards", "load_card", "sub_seed"]
+def augmented(card: Card, cache: Path | None = None) -> str:
+    """The XML path of the card's aircraft with its [[effect]]s (written once, then reused)."""
+    folder = cache_folder(cache or AUGMENT_CACHE, card.aircraft, card.augmentation)
+    name = f"{card.aircraft}-augmented"
+    xml = folder / "aircraft" / name / f"{name}.xml"
+    if not xml.is_file():
+        tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=folder.parent if folder.parent.is_dir()
+                                    else _mkdir(folder.parent)))
+        augment(card.aircraft, card.augmentation, tmp, name=name)
+        try:
+            (tmp / "aircraft").rename(_mkdir(folder) / "aircraft")
+        except OSError:  # another process wrote it first
+            pass
+    return str(xml)
+
+
+def _mkdir(p: Path) -> Path:
+    p.mkdir(parents=True, exist_ok=True)
+    return p
+
+
+__all__ = ["AUGMENT_CACHE", "Card", "CardError", "Condition", "FlightCondition", "augmented",
+           "card_from_dict", "find_card", "fly_card", "library_cards", "load_card", "sub_seed"]

@@ -214,6 +214,11 @@ def set_integrators(fdm: jsbsim.FGFDMExec) -> None:
         fdm[prop] = code
 
 
+def locate(aircraft: str) -> tuple[str, Path, str]:
+    """(name, XML path, origin) of an aircraft name, XML path or aircraft folder."""
+    return _locate(aircraft)
+
+
 def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     """Load an aircraft by name (project aircraft/ first, then jsbsim's) or XML path.
 
@@ -226,6 +231,10 @@ def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     fdm = jsbsim.FGFDMExec(str(PACKAGE_ROOT))
     fdm.set_debug_level(0)
     fdm.disable_output()
+    # before loading: JSBSim's FCS components (actuator lag, rate limit, filters) take
+    # their time step when they are built; set afterwards, a rate limit of R acts as
+    # R x rate_hz / 120 (120 Hz is JSBSim's default)
+    fdm.set_dt(1.0 / rate_hz)
     try:
         with quiet():
             ok = fdm.load_model_with_paths(

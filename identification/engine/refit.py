@@ -63,3 +63,24 @@ def refit_without_unidentifiable(
         found_all.update(found)
         values.update(result.values)
     return result, found_all
+
+
+def refit_iterated(
+    names: Sequence[str],
+    start: Mapping[str, float],
+    fit: Callable[[list[str], dict[str, float], int], F],
+    singular: Callable[[list[str], F], Mapping[str, str]],
+    *,
+    check_identifiability: bool = True,
+    known: Mapping[str, str] | None = None,
+) -> tuple[F, dict[str, str]]:
+    """``refit_without_unidentifiable`` for an iterative fit ``fit(active, values,
+    iterations)``: with ``check_identifiability`` each pass is first probed at its start
+    values with zero iterations, so the iteration never meets a singular information
+    matrix, and ``singular`` judges the fits; without it the first fit is accepted."""
+    if not check_identifiability:
+        return refit_without_unidentifiable(names, start, fit, lambda active, f: {},
+                                            known=known)
+    return refit_without_unidentifiable(
+        names, start, fit, singular, probe=lambda active, values: fit(active, values, 0),
+        known=known)

@@ -40,7 +40,7 @@ from flightid.identification.coefficients import (
     smoothed,
 )
 from flightid.identification.estimate import Estimate, merge
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.record import FlightRecord
 
 ID = "ee"
@@ -448,11 +448,9 @@ def _term_unit(record: FlightRecord, term: Term) -> str:
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options:
+class Options(RegressionOptions):
     """Options of ``--method ee``."""
 
-    coefficients: list[str] | None = option(
-        None, "estimate only these coefficients of the model, e.g. [\"Cl\", \"Cn\"]")
     bias: bool = option(True, "estimate a constant term C<coef>_0 per coefficient")
     reference: str = option("mean", "regressors as perturbations from the record's 'mean', "
                                     "its 'initial' value, or 'none'")

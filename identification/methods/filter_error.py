@@ -60,7 +60,7 @@ from flightid.identification.engine.refit import refit_without_unidentifiable
 from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel
 from flightid.identification.methods import output_error as oe
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import HeldOptions, Method, option
 from flightid.record import FlightRecord
 
 ID = "fem"
@@ -675,14 +675,10 @@ def _result(prob: _Problem, fit: _Relaxed, unidentifiable: dict[str, str],
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options:
+class Options(HeldOptions):
     """Options of ``--method fem``."""
 
-    derivatives: list[str] | None = option(
-        None, "derivatives of the model structure (default: the preset's)")
     free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
-    a_priori: dict[str, float] | None = option(
-        None, "parameters held at these values (default: the record's a priori table)")
     start: dict[str, float] | None = option(None, "start (a priori) values")
     process_noise: list[str] | None = option(
         None, "states with process noise (default: all but the Euler angles)")

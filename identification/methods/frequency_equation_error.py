@@ -10,18 +10,16 @@ import numpy as np
 
 from flightid.identification import frequency_domain, model_structure
 from flightid.identification.estimate import Estimate, merge
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.record import FlightRecord
 
 ID = "fdee"
 
 
 @dataclass(frozen=True)
-class Options:
+class Options(RegressionOptions):
     """Options of ``--method fdee``."""
 
-    coefficients: list[str] | None = option(
-        None, "estimate only these coefficients of the model, e.g. [\"Cn\"]")
     frequencies: list[float] | None = option(
         None, "analysis frequencies, Hz (default 0.1-1.5 Hz spaced 1/T)")
 

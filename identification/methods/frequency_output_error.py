@@ -10,7 +10,7 @@ import numpy as np
 
 from flightid.identification import a_priori, frequency_domain, model_structure
 from flightid.identification.estimate import Estimate
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import HeldOptions, Method, option
 from flightid.record import FlightRecord
 
 ID = "fdoe"
@@ -19,15 +19,11 @@ DEFAULT_BAND_HZ = (0.1, 1.5, 0.02)
 
 
 @dataclass(frozen=True)
-class Options:
+class Options(HeldOptions):
     """Options of ``--method fdoe``."""
 
-    derivatives: list[str] | None = option(
-        None, "derivatives of the model structure (default: the preset's)")
     estimate: list[str] | None = option(
         None, "parameters to estimate (default: all derivatives not held)")
-    a_priori: dict[str, float] | None = option(
-        None, "parameters held at these values (default: the record's a priori table)")
     start: dict[str, float] | None = option(None, "start values")
     frequencies: list[float] | None = option(
         None, "analysis frequencies, Hz (default 0.1-1.5 Hz spaced 0.02 Hz)")

@@ -17,7 +17,7 @@ from flightid.identification import linear_models as lm
 from flightid.identification.estimate import Estimate
 from flightid.identification.frequency_response import frequency_response_arrays
 from flightid.identification.linear_models import condition_from_record
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import LinearModelOptions, Method, option
 from flightid.identification.transfer_function import COHERENCE_MIN
 from flightid.record import FlightRecord
 
@@ -49,11 +49,9 @@ def reference_condition(records: Sequence[FlightRecord], trim_seconds: float = T
 
 
 @dataclass(frozen=True)
-class Options:
+class Options(LinearModelOptions):
     """Options of ``--method fr``."""
 
-    derivatives: list[str] | None = option(
-        None, "derivatives of the model structure (default: the preset's)")
     estimate: list[str] | None = option(None, "parameters to estimate (default: all but "
                                               "the biases)")
     start: dict[str, float] | None = option(

@@ -61,7 +61,7 @@ from flightid.identification import identifiability as ident
 from flightid.identification import rigid_body as rb
 from flightid.identification.coefficients import mass_properties
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
-from flightid.identification.engine.refit import refit_without_unidentifiable
+from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
@@ -680,16 +680,9 @@ def estimate(
                 active, current, iterations, full_noise_covariance, step_tolerance,
                 cost_tolerance)
 
-    def probe(active: list[str], current: dict[str, float]) -> MaximumLikelihoodFit:
-        # at the start values first, so that the iteration never meets a singular M
-        return fit(active, current, 0)
-
-    def singular(active: list[str], fitted: MaximumLikelihoodFit) -> dict[str, str]:
-        return _singular(active, fitted, singular_eigenvalue) if check_identifiability else {}
-
-    final, unidentifiable = refit_without_unidentifiable(
-        names, values, fit, singular, probe=probe if check_identifiability else None,
-        known=unexcited)
+    final, unidentifiable = refit_iterated(
+        names, values, fit, lambda active, fitted: _singular(active, fitted, singular_eigenvalue),
+        check_identifiability=check_identifiability, known=unexcited)
     # the estimate of output error ("oe"; ``run`` names the 6-DOF variant)
     est = estimate_from_fit(
         final, method="oe", model=problem.model.name, time=problem.time, measured=problem.z,

@@ -35,12 +35,12 @@ from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
 )
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
-from flightid.identification.engine.refit import refit_without_unidentifiable
+from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel, matrix_sensitivities
 from flightid.identification.methods import equation_error
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import HeldOptions, Method, option
 from flightid.identification.multistep_input import MultistepParameters, from_measurement
 from flightid.record import FlightRecord
 
@@ -400,16 +400,9 @@ def estimate(
         return _iterate(problem, active, current, iterations, full_noise_covariance,
                         step_tolerance, cost_tolerance)
 
-    def probe(active: list[str], current: dict[str, float]) -> MaximumLikelihoodFit:
-        # at the start values first, so that the iteration never meets a singular M
-        return fit(active, current, 0)
-
-    def singular(active: list[str], fitted: MaximumLikelihoodFit) -> dict[str, str]:
-        return _singular(active, fitted, singular_eigenvalue) if check_identifiability else {}
-
-    final, unidentifiable = refit_without_unidentifiable(
-        names, values, fit, singular, probe=probe if check_identifiability else None,
-        known=unexcited)
+    final, unidentifiable = refit_iterated(
+        names, values, fit, lambda active, fitted: _singular(active, fitted, singular_eigenvalue),
+        check_identifiability=check_identifiability, known=unexcited)
     return estimate_from_fit(
         final, method=ID, model=problem.model.name, time=problem.time, measured=problem.z,
         output_names=problem.output_names, fixed=problem.fixed,
@@ -450,14 +443,10 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options:
+class Options(HeldOptions):
     """Options of ``--method oe`` (defaults: the settings validated on simulated cards)."""
 
-    derivatives: list[str] | None = option(
-        None, "derivatives of the model structure (default: the preset's)")
     free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
-    a_priori: dict[str, float] | None = option(
-        None, "parameters held at these values (default: the record's a priori table)")
     start: dict[str, float] | str | None = option(
         "equation_error", "start values, or 'equation_error' for the free parameters")
     initial_state: str = option("estimate", "'estimate' (x0 parameters), 'measured' or 'zero'")

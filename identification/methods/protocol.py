@@ -140,3 +140,27 @@ def _matches(value: Any, kind: Any) -> bool:
     if kind in (dict, Mapping):
         return isinstance(value, dict)
     return isinstance(value, kind) if isinstance(kind, type) else False
+
+
+@dataclass(frozen=True)
+class LinearModelOptions:
+    """Options every method that fits a linear-model preset takes (oe, fem, fdoe, fr)."""
+
+    derivatives: list[str] | None = option(
+        None, "derivatives of the model structure (default: the preset's)")
+
+
+@dataclass(frozen=True)
+class HeldOptions(LinearModelOptions):
+    """A linear-model method that holds the record's a priori derivatives."""
+
+    a_priori: dict[str, float] | None = option(
+        None, "parameters held at these values (default: the record's a priori table)")
+
+
+@dataclass(frozen=True)
+class RegressionOptions:
+    """Options every per-coefficient regression method takes (ee, swr, fdee)."""
+
+    coefficients: list[str] | None = option(
+        None, "fit only these coefficients of the model, e.g. [\"Cl\", \"Cn\"]")

@@ -38,7 +38,7 @@ import numpy as np
 from flightid.identification import model_structure
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.record import FlightRecord
 
 ID = "swr"
@@ -209,11 +209,9 @@ def estimate(
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options:
+class Options(RegressionOptions):
     """Options of ``--method swr``."""
 
-    coefficients: list[str] | None = option(
-        None, "search only these coefficients of the model, e.g. [\"Cm\"]")
     order: int = option(2, "candidates: 1 linear terms, 2 also squares and products")
     f_in: float = option(4.0, "partial F a candidate must exceed to enter")
     f_out: float = option(4.0, "partial F below which a regressor leaves")

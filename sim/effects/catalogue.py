@@ -11,12 +11,13 @@ Where an effect acts decides how it is injected (docs/effects.md, "Where effects
 ``sensor`` on one measured channel in the sensor chain, ``mounting`` on several channels
 from where the sensors sit, ``vibration`` on the IMU from the engine speed (both in
 ``flightid.sim.sensors.measure``), ``disturbance`` in the atmosphere JSBSim flies through
-(``flightid.sim.disturbances``), ``link`` and ``clock`` in the bridge. ``airframe`` and
-``actuator`` are reserved for effects written into the JSBSim XML.
+(``flightid.sim.disturbances``), ``link`` and ``clock`` in the bridge, ``airframe`` and
+``actuator`` written into a copy of the aircraft's JSBSim XML (``flightid.sim.augment``).
 
 Cards name effects in three places (``SECTIONS``): a sensor channel's chain
 (``effect = ...``), the sensor suite's mounting list (``effect = ...``) and
-``[[disturbance]]`` (``kind = ...``); ``CATALOGUE.lookup`` resolves each name to exactly
+``[[disturbance]]`` (``kind = ...``), and ``[[effect]]`` (``name = ...``) for airframe and
+actuator effects; ``CATALOGUE.lookup`` resolves each name to exactly
 one entry and says where a name belongs if it is given in the wrong place.
 ``engine_vibration`` is one entry that cards accept in both the mounting list and
 ``[[disturbance]]``.
@@ -35,6 +36,22 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
+from flightid.sim.augment.effects import (
+    AXES_CHOICES,
+    DERIVATIVES,
+    SURFACE_CHOICES,
+    ActuatorBias,
+    ActuatorLag,
+    Backlash,
+    CgOffset,
+    ControlEffectiveness,
+    Deadband,
+    DerivativeDelta,
+    InertiaScale,
+    MassScale,
+    RateLimit,
+    ThrustMoment,
+)
 from flightid.sim.effects.base import NamedEffect, Reference
 from flightid.sim.effects.clock import RECORDER_CLOCK
 from flightid.sim.effects.disturbance import INTENSITIES, TURBULENCE_MODELS, Gust, Turbulence, Wind
@@ -75,11 +92,12 @@ class ActsOn(StrEnum):
     VIBRATION = "vibration"  # engine/propeller vibration on the IMU, from the rpm
     LINK = "link"  # the bridge's telemetry link
     CLOCK = "clock"  # a recorder's clock
-    AIRFRAME = "airframe"  # reserved: aerodynamics, mass properties (JSBSim XML)
-    ACTUATOR = "actuator"  # reserved: lag, rate limit, deadband (JSBSim XML)
+    AIRFRAME = "airframe"  # aerodynamics, mass properties (an augmented JSBSim XML)
+    ACTUATOR = "actuator"  # lag, rate limit, deadband, backlash, bias (JSBSim XML)
 
 
-RESERVED: frozenset[ActsOn] = frozenset({ActsOn.AIRFRAME, ActsOn.ACTUATOR})
+# places without effects yet (none since airframe and actuator effects exist)
+RESERVED: frozenset[ActsOn] = frozenset()
 
 WHERE: dict[ActsOn, str] = {
     ActsOn.SENSOR: "one measured channel (sensor chain)",
@@ -88,8 +106,8 @@ WHERE: dict[ActsOn, str] = {
     ActsOn.VIBRATION: "the IMU channels, from the engine speed",
     ActsOn.LINK: "the bridge's packets",
     ActsOn.CLOCK: "a recorder's time stamps",
-    ActsOn.AIRFRAME: "the aircraft model (reserved)",
-    ActsOn.ACTUATOR: "the control actuators (reserved)",
+    ActsOn.AIRFRAME: "the aircraft model (augmented JSBSim XML)",
+    ActsOn.ACTUATOR: "the control actuators (augmented JSBSim XML)",
 }
 
 
@@ -165,6 +183,8 @@ SECTIONS: dict[str, Section] = {
                 '[sensors] mounting = [{{effect = "{name}", ...}}]'),
         Section("disturbance", "kind", "disturbance", (ActsOn.DISTURBANCE, ActsOn.VIBRATION),
                 '[[disturbance]] kind = "{name}"'),
+        Section("effect", "name", "airframe or actuator effect",
+                (ActsOn.AIRFRAME, ActsOn.ACTUATOR), '[[effect]] name = "{name}"'),
     )
 }
 # how an effect that no card section takes is injected
@@ -407,6 +427,12 @@ def _sensor(name: str, cls: type, description: str, *params: Parameter) -> Entry
 
 
 _VANE = "vane position from the CG, body {axis} (m)"
+_SURFACE = Option("surface", SURFACE_CHOICES, "de", "the control surface (project signs)")
+
+
+def _actuator(name: str, cls: type, description: str, changes: tuple[str, ...],
+              *params: Parameter) -> Entry:
+    return Entry(name, ActsOn.ACTUATOR, description, params, cls, changes, options=(_SURFACE,))
 
 CATALOGUE = Catalogue((
     # -- sensor: one channel, in the order a chain usually applies them -------------------
@@ -518,6 +544,54 @@ CATALOGUE = Catalogue((
                    Option("intensity", ("", *INTENSITIES), "",
                           "MIL-F-8785C intensity by probability of exceedance; sets sigma "
                           "and scale lengths from the height"))),
+    # -- airframe: written into a copy of the JSBSim XML (flightid.sim.augment) ----------------
+    Entry("derivative_delta", ActsOn.AIRFRAME, "additive delta to one aerodynamic derivative "
+          "(an extra JSBSim <function> term)",
+          (_p("delta", "1/rad", "delta, per rad (per unit nondimensional rate for p q r "
+              "alphadot)", 0.02),),
+          DerivativeDelta, ("r", "beta"),
+          options=(Option("derivative", DERIVATIVES, "Cn_beta",
+                          "the derivative, C<coef>_<var> (flightid.derivatives)"),
+                   Option("axes", AXES_CHOICES, "stability",
+                          "axes of the delta: stability (CL CD CY, Cl Cm Cn, stability-axis "
+                          "rates) or body (CX CY CZ, body rates)"))),
+    Entry("control_effectiveness", ActsOn.AIRFRAME, "every aerodynamic term reading a "
+          "surface scaled (effectiveness loss, tail ice)",
+          (_p("factor", "1", "scale of the surface's terms", 0.8, 0.0, neutral=1.0),),
+          ControlEffectiveness, ("de", "q"), options=(_SURFACE,)),
+    Entry("cg_offset", ActsOn.AIRFRAME, "CG moved (every mass item: CG, point masses, tanks)",
+          (_p("x", "m", "CG shift, body x (forward)", 0.05),
+           _p("z", "m", "CG shift, body z (down)", 0.0)),
+          CgOffset, ("de", "q")),
+    Entry("mass_scale", ActsOn.AIRFRAME, "empty weight and point masses scaled (mass error)",
+          (_p("factor", "1", "mass scale factor", 1.1, 0.0, neutral=1.0, low_open=True),),
+          MassScale, ("alpha", "de")),
+    Entry("inertia_scale", ActsOn.AIRFRAME, "moments of inertia scaled (Ixz by sqrt(ixx izz))",
+          (_p("ixx", "1", "Ixx scale factor", 1.1, 0.0, neutral=1.0, low_open=True),
+           _p("iyy", "1", "Iyy scale factor", 1.1, 0.0, neutral=1.0, low_open=True),
+           _p("izz", "1", "Izz scale factor", 1.1, 0.0, neutral=1.0, low_open=True)),
+          InertiaScale, ("q", "p")),
+    Entry("thrust_moment", ActsOn.AIRFRAME, "pitching moment proportional to thrust (thrust "
+          "line, propwash)",
+          (_p("arm", "m", "N m per N of thrust, nose up positive", 0.1),),
+          ThrustMoment, ("de",)),
+    # -- actuator: JSBSim <actuator> components (flightid.sim.augment) -------------------------
+    _actuator("actuator_lag", ActuatorLag, "first-order lag 1/(tau s + 1) in series with the "
+              "surface actuator", ("de", "q"),
+              _p("tau", "s", "time constant", 0.05, 0.0)),
+    _actuator("rate_limit", RateLimit, "surface rate limit in series with the actuator",
+              ("de", "q"),
+              _p("rate", "rad/s", "rate limit (inf: none)", 20 * DEG, 0.0, neutral=INF,
+                 low_open=True)),
+    _actuator("deadband", Deadband, "deadband (around zero) between the measured surface "
+              "and the aerodynamics", ("q",),
+              _p("width", "rad", "full width of the band", 0.5 * DEG, 0.0)),
+    _actuator("backlash", Backlash, "backlash (hysteresis) between the measured surface and "
+              "the aerodynamics", ("q",),
+              _p("width", "rad", "full width of the hysteresis", 0.5 * DEG, 0.0)),
+    _actuator("actuator_bias", ActuatorBias, "rigging bias: the aerodynamics see the measured "
+              "surface plus a bias", ("de",),
+              _p("bias", "rad", "aerodynamic minus measured deflection", 0.5 * DEG)),
     # -- link: the bridge's LinkFaults ---------------------------------------------------------
     Entry("corrupt", ActsOn.LINK, "bytes corrupted on the link (packets then fail their CRC)",
           (_p("probability", "1", "probability per byte", 1e-3, 0.0, 1.0),),

@@ -12,7 +12,9 @@ For each entry of ``flightid.sim.effects.catalogue.CATALOGUE``:
   (sensor, mounting and vibration effects nothing else), and at zero magnitude it leaves
   the data unchanged (to float precision). Sensor, mounting and vibration effects go
   through ``measure``; disturbances are flown; link faults and clocks go through the
-  bridge into a byte sink (the bytes a recorder would write to its tlog).
+  bridge into a byte sink (the bytes a recorder would write to its tlog); airframe and
+  actuator effects are written into a copy of the Navion's JSBSim XML
+  (``flightid.sim.augment``), which is trimmed and flown like the original.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from flightid.cli.effects import effects_command
 from flightid.identification.compatibility import CATALOGUE_EFFECTS
 from flightid.record import FlightRecord
 from flightid.sim import disturbances as dist
+from flightid.sim.augment import augment
 from flightid.sim.bridge.air import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link
@@ -82,8 +85,12 @@ def aircraft():
     return model, tr, controls
 
 
-def fly(aircraft, disturbances):
-    model, tr, controls = aircraft
+def fly(aircraft, disturbances, model=None):
+    base, tr, controls = aircraft
+    if model is None:
+        model = base
+    else:  # an augmented aircraft: its own trim at the same condition
+        tr = trim(model, 500.0, 53.64)
     n = len(next(iter(controls.values())))
     gusts, turb = dist.wind_schedule(disturbances, n, RATE, tr, np.random.default_rng(1))
     return dist.fly_disturbed(model, tr, controls, DURATION, RATE,
@@ -133,7 +140,18 @@ def _bridged(truth, entry: Entry | None = None, values=None) -> dict[str, list]:
             TIME_STAMPS: [message_time(f.msg) for f in frames]}
 
 
-def inject(entry: Entry, values, truth, aircraft) -> dict[str, np.ndarray | list]:
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    return tmp_path_factory.mktemp("augmented")
+
+
+def _augmented(entry: Entry, values, aircraft, folder: Path):
+    """The contract flight on the Navion with ``entry`` written into its XML."""
+    xml = augment("navion", [entry.build(values)], folder / entry.name)
+    return fly(aircraft, [], model=load(str(xml)))
+
+
+def inject(entry: Entry, values, truth, aircraft, folder=None) -> dict[str, np.ndarray | list]:
     """The data an entry changes, with it injected at ``values``: channel or link data."""
     if entry.acts_on is ActsOn.SENSOR:
         rec = _measure(truth, [entry.build(values)], channel=entry.channel)
@@ -143,6 +161,8 @@ def inject(entry: Entry, values, truth, aircraft) -> dict[str, np.ndarray | list
         rec = fly(aircraft, [entry.build(values)])
     elif entry.acts_on in (ActsOn.LINK, ActsOn.CLOCK):
         return _bridged(truth, entry, values)
+    elif entry.acts_on in (ActsOn.AIRFRAME, ActsOn.ACTUATOR):
+        rec = _augmented(entry, values, aircraft, folder)
     else:
         raise AssertionError(f"{entry.name}: the contract does not know how to inject an "
                              f"effect acting on {entry.acts_on}; extend inject()")
@@ -152,7 +172,7 @@ def inject(entry: Entry, values, truth, aircraft) -> dict[str, np.ndarray | list
 def baseline(entry: Entry, truth, aircraft):
     if entry.acts_on in (ActsOn.SENSOR, ActsOn.MOUNTING, ActsOn.VIBRATION):
         return dict(_measure(truth).channels)
-    if entry.acts_on is ActsOn.DISTURBANCE:
+    if entry.acts_on in (ActsOn.DISTURBANCE, ActsOn.AIRFRAME, ActsOn.ACTUATOR):
         return dict(truth.channels)
     return _bridged(truth)
 
@@ -251,9 +271,9 @@ def test_unknown_names_list_the_valid_ones():
 
 
 @pytest.mark.parametrize("entry", ENTRIES, ids=IDS)
-def test_default_magnitude_changes_the_data_where_declared(entry: Entry, truth, aircraft):
+def test_default_magnitude_changes_the_data_where_declared(entry: Entry, truth, aircraft, folder):
     clean = baseline(entry, truth, aircraft)
-    hit = inject(entry, entry.defaults(), truth, aircraft)
+    hit = inject(entry, entry.defaults(), truth, aircraft, folder)
     for c in entry.changes:
         assert not _same(hit[c], clean[c]), f"{entry.name} left {c} unchanged"
     if entry.acts_on in (ActsOn.SENSOR, ActsOn.MOUNTING, ActsOn.VIBRATION):
@@ -262,9 +282,9 @@ def test_default_magnitude_changes_the_data_where_declared(entry: Entry, truth, 
 
 
 @pytest.mark.parametrize("entry", ENTRIES, ids=IDS)
-def test_zero_magnitude_leaves_the_data_unchanged(entry: Entry, truth, aircraft):
+def test_zero_magnitude_leaves_the_data_unchanged(entry: Entry, truth, aircraft, folder):
     clean = baseline(entry, truth, aircraft)
-    zero = inject(entry, entry.zeros(), truth, aircraft)
+    zero = inject(entry, entry.zeros(), truth, aircraft, folder)
     assert set(zero) == set(clean)
     changed = [c for c in clean if not _same(zero[c], clean[c])]
     assert not changed, f"{entry.name} at zero magnitude changed {changed}"

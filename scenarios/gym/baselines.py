@@ -1,0 +1,190 @@
+"""Baseline excitation policies for ``flightid/Excitation-v0``, evaluated on the same seeds.
+
+    python -m flightid.scenarios.gym.baselines [--seeds 0 1 2] [--out FILE] [--no-search]
+
+Policies are open-loop schedules of normalised actions (de, da, dr) on the decision
+grid: ``zero``; ``doublet`` (aileron doublet, then rudder doublet); ``3211`` (aileron
+3-2-1-1, then rudder 3-2-1-1); ``multisine`` (aileron and rudder at once, interleaved
+harmonics of a 20 s period with Schroeder phases, Morelli's orthogonal multisine idea);
+``random`` (``action_space.sample()`` seeded with the episode's seed, the usual RL
+baseline). All have peak ``AMPLITUDE`` on the surfaces they move, except ``random``.
+Reported per policy: mean return, mean relative Cramer-Rao bound (crb / |truth|) and mean
+relative error of the final estimate (|estimate - truth| / |truth|) over the targets, and
+how many episodes terminated early.
+
+``cross_entropy`` searches the multisine's parameters (aileron and rudder peak, highest
+frequency) with the cross-entropy method on training seeds; the result is evaluated on
+held-out seeds beside the baselines.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from flightid.scenarios.gym.env import ExcitationEnv
+from flightid.scenarios.multisine import schroeder_phases
+
+AMPLITUDE = 0.2  # normalised: 0.2 of the travel (Navion: 4 deg aileron, 5 deg rudder)
+DEFAULT_OUT = Path(__file__).resolve().parents[2] / "benchmarks" / "results" / "gym_baselines.txt"
+TRAIN_SEEDS = (100, 101)
+HELD_OUT_SEEDS = (0, 1, 2, 3)
+
+Schedule = Callable[[ExcitationEnv, int], np.ndarray]  # (env, seed) -> n x 3 actions
+
+
+def _grid(env: ExcitationEnv) -> np.ndarray:
+    return np.arange(env.n_decisions) / env.decision_hz
+
+
+def _pattern(t: np.ndarray, start: float, unit: float, levels: Sequence[float]) -> np.ndarray:
+    out = np.zeros_like(t)
+    for i, level in enumerate(levels):
+        out[(t >= start + i * unit) & (t < start + (i + 1) * unit)] = level
+    return out
+
+
+def zero(env: ExcitationEnv, seed: int) -> np.ndarray:
+    return np.zeros((env.n_decisions, 3))
+
+
+def doublet(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    t, a = _grid(env), np.zeros((env.n_decisions, 3))
+    a[:, 1] = _pattern(t, 1.0, 1.0, (amplitude, -amplitude))
+    a[:, 2] = _pattern(t, 6.0, 1.0, (amplitude, -amplitude))
+    return a
+
+
+def three211(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    t, a = _grid(env), np.zeros((env.n_decisions, 3))
+    levels = (amplitude, amplitude, amplitude, -amplitude, -amplitude, amplitude, -amplitude)
+    a[:, 1] = _pattern(t, 1.0, 0.5, levels)
+    a[:, 2] = _pattern(t, 8.0, 0.5, levels)
+    return a
+
+
+def multisine(env: ExcitationEnv, seed: int, amp_da: float = AMPLITUDE,
+              amp_dr: float = AMPLITUDE, f_max: float = 1.5, period: float = 20.0
+              ) -> np.ndarray:
+    """Aileron and rudder multisines on interleaved harmonics k / period up to f_max (Hz)."""
+    t, a = _grid(env), np.zeros((env.n_decisions, 3))
+    k = np.arange(1, max(2, int(f_max * period)) + 1)
+    for col, ks, amp in ((1, k[0::2], amp_da), (2, k[1::2], amp_dr)):
+        phases = schroeder_phases(np.ones(len(ks)))
+        u = np.sum(np.sin(2 * np.pi * np.outer(t, ks / period) + phases), axis=1)
+        a[:, col] = amp * u / np.max(np.abs(u))
+    return a
+
+
+def random_policy(env: ExcitationEnv, seed: int) -> np.ndarray:
+    env.action_space.seed(seed)
+    return np.array([env.action_space.sample() for _ in range(env.n_decisions)])
+
+
+POLICIES: dict[str, Schedule] = {"zero": zero, "doublet": doublet, "3211": three211,
+                                 "multisine": multisine, "random": random_policy}
+
+
+@dataclass
+class Result:
+    policy: str
+    returns: list[float]
+    rel_crb: list[float]
+    rel_error: list[float]
+    terminated: int
+
+    def line(self) -> str:
+        return (f"{self.policy:<22}{np.mean(self.returns):>10.1f}{np.min(self.returns):>10.1f}"
+                f"{np.mean(self.rel_crb):>12.4f}{np.mean(self.rel_error):>12.4f}"
+                f"{self.terminated:>6d}/{len(self.returns)}")
+
+
+HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}{'rel. CRB':>12}{'rel. error':>12}"
+          f"{'term':>8}")
+
+
+def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
+                ) -> tuple[float, dict, bool]:
+    """Fly one episode with the schedule; (return, last info, terminated early)."""
+    env.reset(seed=seed)
+    total, info, terminated = 0.0, {}, False
+    for a in actions:
+        _, r, terminated, truncated, info = env.step(a.astype(np.float32))
+        total += r
+        if terminated or truncated:
+            break
+    return total, info, terminated
+
+
+def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[int]) -> Result:
+    res = Result(name, [], [], [], 0)
+    truth = np.abs(env._truth_vec)
+    for s in seeds:
+        total, info, term = run_episode(env, schedule(env, s), s)
+        res.returns.append(total)
+        res.rel_crb.append(float(np.mean(info["crb"] / truth)))
+        res.rel_error.append(float(np.mean(np.abs(info["error"]) / truth)))
+        res.terminated += int(term)
+    return res
+
+
+def cross_entropy(env: ExcitationEnv, seeds: Sequence[int] = TRAIN_SEEDS, iterations: int = 5,
+                  population: int = 12, elite: int = 3, rng_seed: int = 0
+                  ) -> tuple[np.ndarray, list[float]]:
+    """Cross-entropy search over (amp_da, amp_dr, f_max) of ``multisine``; (best, history)."""
+    rng = np.random.default_rng(rng_seed)
+    lo, hi = np.array([0.02, 0.02, 0.3]), np.array([0.8, 0.8, 3.0])
+    mean, std = np.array([AMPLITUDE, AMPLITUDE, 1.5]), np.array([0.15, 0.15, 0.6])
+    history = []
+    best, best_score = mean.copy(), -np.inf
+    for _ in range(iterations):
+        pop = np.clip(mean + std * rng.standard_normal((population, 3)), lo, hi)
+        scores = np.array([np.mean([run_episode(env, multisine(env, s, *p), s)[0]
+                                    for s in seeds]) for p in pop])
+        order = np.argsort(scores)[::-1][:elite]
+        if scores[order[0]] > best_score:
+            best, best_score = pop[order[0]].copy(), float(scores[order[0]])
+        mean, std = pop[order].mean(axis=0), pop[order].std(axis=0) + 1e-3
+        history.append(float(scores[order[0]]))
+    return best, history
+
+
+def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
+         search: bool = True) -> str:
+    env = ExcitationEnv()
+    results = [evaluate(env, n, p, seeds) for n, p in POLICIES.items()]
+    lines = [f"flightid/Excitation-v0 baselines: {env.aircraft} at "
+             f"{env.condition.altitude_m:g} m, {env.condition.speed_m_s:g} m/s, "
+             f"{env.episode_s:g} s episodes, {env.decision_hz:g} Hz decisions, "
+             f"sensors {env.suite.name if env.suite else 'ideal'}, seeds {list(seeds)}",
+             f"targets: {' '.join(env.targets)}; amplitude {AMPLITUDE} of travel", "",
+             HEADER, *(r.line() for r in results)]
+    if search:
+        best, history = cross_entropy(env)
+
+        def tuned(e: ExcitationEnv, s: int) -> np.ndarray:
+            return multisine(e, s, *best)
+
+        r = evaluate(env, "multisine (CE-tuned)", tuned, seeds)
+        lines += [r.line(), "",
+                  f"cross-entropy on training seeds {list(TRAIN_SEEDS)}: amp_da {best[0]:.3f}, "
+                  f"amp_dr {best[1]:.3f}, f_max {best[2]:.2f} Hz; best training return per "
+                  f"iteration {', '.join(f'{h:.1f}' for h in history)}"]
+    text = "\n".join(lines) + "\n"
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text)
+    return text
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=list(HELD_OUT_SEEDS))
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    parser.add_argument("--no-search", action="store_true")
+    args = parser.parse_args()
+    print(main(args.seeds, args.out, not args.no_search))

@@ -1,0 +1,367 @@
+"""``ExcitationEnv``: a gymnasium environment for excitation-policy research.
+
+An episode starts at a trim and lets a policy move the elevator, aileron and rudder
+(normalised commands) at the decision rate; the reward is the gain in information about
+the target derivatives (D-optimality), with a penalty and termination when the flight
+leaves a safe envelope. ``record()`` gives the episode as a measured FlightRecord, so that
+any identification method (``flightid.identify``) runs on it.
+
+Spaces
+------
+Action: Box(-1, 1, (3,)) = (de, da, dr). 0 is the trim position; +1 moves the surface to
+the positive end of its travel, -1 to the negative end (piecewise linear, through the
+flight core's command path: FCS command map and its limits). Project signs
+(flightid/channels.py): +de trailing edge down (nose down), so -1 on de is full up elevator.
+Held for one decision interval (zero-order hold).
+
+Observation: Box of ``OBS_CHANNELS`` = (t, V, alpha, beta, p, q, r, phi, theta, ax, ay,
+az, de, da, dr, h) in SI units (s, m/s, rad, rad/s, m/s^2, m): the flight core's channels
+at the decision instant plus the white noise of the sensor suite's channels (``research``:
+its ``noise`` sigmas; ``ideal``: none). The full sensor model (anti-alias filters,
+quantisation, mounting) is applied to the whole episode by ``record()``.
+
+Reward (D-optimality)
+---------------------
+Targets are grouped by coefficient (Cl, Cn, Cm, CX, CY, CZ); each group's regressors are a
+bias and the variables of its targets (beta, alpha: measured; p, q, r: phat, qhat, rhat
+from the measured rates and airspeed; de, da, dr: measured surfaces), as perturbations
+from trim: the equation-error model y = theta^T x + e with e white, std ``SIGMA[coef]``.
+Each group carries the information M = I + sum x x^T / sigma^2 (the identity is a prior of
+std 1 per derivative and on the bias, so M is invertible from the first step); the
+information of the targets is the Schur complement S of the bias in M. The reward of a
+step is the increase of sum_groups log det S, updated by rank-one (Sherman-Morrison)
+updates; an episode's return is therefore log det of the final target information (minus
+penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
+order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y, with y
+the simulator's aerodynamic coefficient plus white noise of ``SIGMA``; ``info['error']``:
+estimate - truth (flightid.sim.truth at the trim, body axes).
+
+Termination
+-----------
+At the envelope limits ``LIMITS`` (alpha, bank, load factor, airspeed, altitude loss) or
+on the flight core's DepartureError: terminated, reward - ``penalty``. Truncated at the
+episode length.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from flightid.record import FlightRecord
+from flightid.scenarios.cards import Card, load_card, sub_seed
+from flightid.sim.condition import FlightCondition
+from flightid.sim.effects.sensor import WhiteNoise
+from flightid.sim.flight import Atmosphere, DepartureError, Simulation
+from flightid.sim.model import Model, load
+from flightid.sim.sensors import SensorSuite, builtin_suite, measure
+from flightid.sim.trim import Trim, trim
+from flightid.sim.truth import derivatives
+from flightid.units import G0
+
+OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",
+                "de", "da", "dr", "h")
+CONTROLS = ("de", "da", "dr")
+# |value| bounds of the observation space (far outside the envelope, which ends episodes)
+OBS_BOUNDS = {"V": 400.0, "alpha": math.pi, "beta": math.pi, "p": 20.0, "q": 20.0, "r": 20.0,
+              "phi": math.pi, "theta": math.pi, "ax": 200.0, "ay": 200.0, "az": 200.0,
+              "de": 1.6, "da": 1.6, "dr": 1.6, "h": 30000.0}
+PRESETS = {
+    "lateral": ("Cl_beta", "Cl_p", "Cl_r", "Cl_da", "Cl_dr",
+                "Cn_beta", "Cn_p", "Cn_r", "Cn_da", "Cn_dr"),
+    "longitudinal": ("CZ_alpha", "CZ_q", "CZ_de", "Cm_alpha", "Cm_q", "Cm_de"),
+}
+# std of the equation-error residual of each coefficient (nominal, stated): moments 1e-3,
+# forces 1e-2 (the order of the Navion's residuals with the research suite)
+SIGMA = {"Cl": 1e-3, "Cm": 1e-3, "Cn": 1e-3, "CX": 1e-2, "CY": 1e-2, "CZ": 1e-2}
+# regressor variable -> channel of the record
+VARIABLE_CHANNEL = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
+                    "de": "de", "da": "da", "dr": "dr"}
+# the safe envelope: alpha (deg), |bank| (deg), load factor n = -az / g, airspeed as a
+# fraction of the trim airspeed, altitude loss below the trim altitude (m)
+LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
+          "speed_ratio": (0.7, 1.4), "altitude_loss_m": 150.0}
+PENALTY = 20.0
+TURBULENCE = ("none", "light")
+# light turbulence: MIL-F-8785C Dryden, 15 kt at 20 ft, POE 1e-2 (JSBSim severity 3)
+LIGHT = {"turbulence": "milspec", "windspeed_20ft_m_s": 15 * 0.514444, "severity": 3}
+
+_CACHE: dict[tuple, tuple[Model, Trim, dict[str, float]]] = {}
+
+
+def _setup(aircraft: str, condition: FlightCondition) -> tuple[Model, Trim, dict[str, float]]:
+    """(model, trim, body-axis truth derivatives), cached per aircraft and condition."""
+    key = (aircraft, condition)
+    if key not in _CACHE:
+        model = load(aircraft)
+        trimmed = trim(model, condition)
+        _CACHE[key] = (model, trimmed, dict(derivatives(model, trimmed, axes="body").values))
+    return _CACHE[key]
+
+
+def _noise_sigma(suite: SensorSuite | None, channel: str) -> float:
+    if suite is None or channel not in suite.channels:
+        return 0.0
+    return float(sum(e.sigma for e in suite.channels[channel] if isinstance(e, WhiteNoise)))
+
+
+class _Information:
+    """Information, inverse and right-hand side of every coefficient's regression, batched.
+
+    Groups with fewer variables are padded with regressors that stay zero: with the prior
+    I their entries stay decoupled (information 1, no contribution to log det).
+    """
+
+    def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
+        g = len(spec)
+        k = 1 + max(len(v) for _, v in spec)
+        self.inv = np.tile(np.eye(k), (g, 1, 1))
+        self.rhs = np.zeros((g, k))
+        self.w = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
+        self.logdet_m = 0.0  # sum over groups of log det M (prior I)
+        self.n = 0
+
+    @property
+    def logdet(self) -> float:
+        """Sum of log det of the targets' information (Schur complements of the biases)."""
+        return self.logdet_m - float(np.sum(np.log1p(self.n * self.w)))
+
+    def add(self, x: np.ndarray, y: np.ndarray) -> None:
+        """One sample: regressors x (groups x k, bias first), dependent variables y."""
+        v = np.einsum("gij,gj->gi", self.inv, x)
+        wd = self.w / (1.0 + self.w * np.einsum("gi,gi->g", x, v))
+        self.logdet_m -= float(np.sum(np.log(wd / self.w)))
+        self.inv -= v[:, :, None] * v[:, None, :] * wd[:, None, None]
+        self.rhs += x * (self.w * y)[:, None]
+        self.n += 1
+
+
+class ExcitationEnv(gymnasium.Env):
+    """Excite an aircraft for identification; see the module docstring for the spaces,
+    reward and termination."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, aircraft: str = "navion", condition: Sequence[float] | None = None,
+                 card: str | Card | None = None, targets: str | Sequence[str] = "lateral",
+                 episode_s: float = 20.0, decision_hz: float = 50.0, sim_hz: float | None = None,
+                 sensors: str = "research", turbulence: str = "none",
+                 penalty: float = PENALTY, render_mode: str | None = None) -> None:
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if turbulence not in TURBULENCE:
+            raise ValueError(f"turbulence must be one of {TURBULENCE}, got {turbulence!r}")
+        suite: SensorSuite | None
+        if card is not None:
+            c = card if isinstance(card, Card) else load_card(card)
+            aircraft, cond, suite = c.aircraft, c.condition, c.sensors
+        else:
+            alt, speed = condition if condition is not None else (1524.0, 46.3)
+            cond = FlightCondition(float(alt), float(speed))
+            suite = None if sensors in ("none", "ideal") else builtin_suite(sensors)
+        self.render_mode = render_mode
+        self.aircraft, self.condition, self.suite = aircraft, cond, suite
+        self.targets = tuple(PRESETS[targets] if isinstance(targets, str) else targets)
+        self.episode_s, self.decision_hz = float(episode_s), float(decision_hz)
+        sim_hz = self.decision_hz if sim_hz is None else float(sim_hz)
+        self.sim_per_decision = int(round(sim_hz / self.decision_hz))
+        if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
+                                            - sim_hz) > 1e-9:
+            raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz")
+        self.n_decisions = int(round(self.episode_s * self.decision_hz))
+        self.penalty = float(penalty)
+        model, self.trim, self.truth = _setup(aircraft, cond)
+        self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
+        self.sim = Simulation(model, rate_hz=sim_hz, atmosphere=self._atmosphere)
+        self.reference = self.sim.model.reference
+        self.sim.reset(self.trim)  # the command maps: the travel of each surface
+        tp = {"de": self.trim.elevator, "da": self.trim.aileron, "dr": self.trim.rudder}
+        self._span: list[tuple[float, float]] = []
+        for c in CONTROLS:
+            pos = self.sim._maps.get(c, ([tp[c]], [0.0]))[0]  # (positions, commands)
+            self._span.append((tp[c] - pos[0], pos[-1] - tp[c]))  # (down, up) travel
+        # targets -> regression groups
+        groups: dict[str, list[str]] = {}
+        for name in self.targets:
+            coef, _, var = name.partition("_")
+            if coef not in SIGMA or var not in VARIABLE_CHANNEL:
+                raise ValueError(f"unsupported target {name!r}: use C{{l,m,n,X,Y,Z}}_"
+                                 f"{{{','.join(VARIABLE_CHANNEL)}}}")
+            groups.setdefault(coef, []).append(var)
+        self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
+        width = max(len(v) for v in groups.values())
+        # regressor vector: VARIABLE_CHANNEL order, then a slot that stays zero (padding)
+        names = list(VARIABLE_CHANNEL)
+        self._vidx = np.array([[names.index(v) for v in vs] + [len(names)] * (width - len(vs))
+                               for _, vs in self._group_spec])
+        coefs = [c for c, _ in self._group_spec]
+        self._coefs = coefs
+        self._sigma_y = np.array([SIGMA[c] for c in coefs])
+        # target i -> flat index into (groups, width)
+        self._tidx = np.array([coefs.index(n.partition("_")[0]) * width
+                               + groups[n.partition("_")[0]].index(n.partition("_")[2])
+                               for n in self.targets])
+        span, chord = self.reference.span, self.reference.chord
+        self._rate_ref = np.array([0.0, 0.0, span, chord, span, 0.0, 0.0, 0.0, 0.0])
+        self._obs_of_var = np.array([OBS_CHANNELS.index(v) for v in VARIABLE_CHANNEL])
+        self._truth_vec = np.array([self.truth.get(n, np.nan) for n in self.targets])
+        self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        high = np.array([self.episode_s + 1.0, *OBS_BOUNDS.values()])
+        low = np.array([0.0, *(-b for b in OBS_BOUNDS.values())])
+        low[OBS_CHANNELS.index("V")] = 0.0
+        self.observation_space = spaces.Box(low, high, dtype=np.float64)
+        self._samples: list[dict[str, float]] = []
+        self._obs_hist: list[np.ndarray] = []
+        self._trim_obs = np.zeros(len(OBS_CHANNELS))
+        self._seed = 0
+
+    # -- gymnasium ------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        self._seed = int(self.np_random.integers(2**31))
+        if self._atmosphere.turbulence != "none":
+            self.sim.atmosphere = replace(self._atmosphere, seed=sub_seed(self._seed, "jsbsim"))
+        sample = self.sim.reset(self.trim)
+        self._samples = [sample]
+        self._info_state = _Information(self._group_spec)
+        n = self.n_decisions + 1
+        self._obs_noise = self._sigma_obs * self.np_random.standard_normal((n, len(OBS_CHANNELS)))
+        self._y_noise = self._sigma_y * self.np_random.standard_normal((n, len(self._coefs)))
+        self._y0 = np.array([sample[c] for c in self._coefs])
+        self._logdet = 0.0
+        self._k = 0
+        self._h0 = sample["h"]
+        self._trim_obs = np.array([0.0] + [sample[c] for c in OBS_CHANNELS[1:]])
+        self._trim_obs_var = np.append(self._trim_obs[self._obs_of_var], 0.0)
+        obs = self._observe(sample, 0.0)
+        self._obs_hist = [obs]
+        self._actions = [np.zeros(3)]
+        return obs, self._info(None)
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        a = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        inc = {}
+        for i, c in enumerate(CONTROLS):
+            ai = float(a[i])
+            inc[c] = ai * (self._span[i][1] if ai > 0 else self._span[i][0])
+        self._k += 1
+        departure = None
+        try:
+            for _ in range(self.sim_per_decision):
+                sample = self.sim.step(inc)
+                self._samples.append(sample)
+        except DepartureError as exc:
+            departure = exc.reason
+            sample = self._samples[-1]
+        t = self._k / self.decision_hz
+        obs = self._observe(sample, t)
+        self._obs_hist.append(obs)
+        self._actions.append(a)
+        reward = 0.0
+        if departure is None:
+            self._update(obs, sample)
+            logdet = self._info_state.logdet
+            reward = logdet - self._logdet
+            self._logdet = logdet
+            departure = self._envelope(sample)
+        terminated = departure is not None
+        if terminated:
+            reward -= self.penalty
+        truncated = not terminated and self._k >= self.n_decisions
+        info = self._info(departure)
+        return obs, float(reward), terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        obs = np.array(self._obs_hist)
+        act = np.array(self._actions)
+        fig = Figure(figsize=(6.4, 4.8), dpi=80)
+        canvas = FigureCanvasAgg(fig)
+        ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+        t = obs[:, 0]
+        for i, c in enumerate(CONTROLS):
+            ax1.plot(t, act[:, i], label=c)
+        ax1.set_ylabel("action")
+        ax1.set_ylim(-1.05, 1.05)
+        ax1.legend(loc="upper right", fontsize=7)
+        for c in ("p", "q", "r"):
+            ax2.plot(t, np.degrees(obs[:, OBS_CHANNELS.index(c)]), label=c)
+        ax2.set_ylabel("rate (deg/s)")
+        ax2.legend(loc="upper right", fontsize=7)
+        for c in ("alpha", "beta", "phi"):
+            ax3.plot(t, np.degrees(obs[:, OBS_CHANNELS.index(c)]), label=c)
+        ax3.set_ylabel("angle (deg)")
+        ax3.set_xlabel("t (s)")
+        ax3.legend(loc="upper right", fontsize=7)
+        fig.suptitle(f"{self.aircraft}: log det information {self._logdet:.1f}", fontsize=9)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+    # -- the episode as a record ------------------------------------------------------
+    def record(self, measured: bool = True) -> FlightRecord:
+        """The episode so far: the truth through the sensor suite (``measured``) or the
+        truth itself, at the simulation rate, with the truth derivatives in its metadata."""
+        samples = self._samples
+        channels = {c: np.array([s[c] for s in samples]) for c in samples[0]}
+        meta = self.sim.meta({"name": "gym:flightid/Excitation-v0", "seed": self._seed})
+        meta.extra["truth"] = {"trim": self.trim.condition, "body": dict(self.truth)}
+        truth = FlightRecord(np.arange(len(samples)) / self.sim.rate_hz, channels, meta)
+        if not measured or self.suite is None:
+            return truth
+        return measure(truth, self.suite, sub_seed(self._seed, "sensors"))
+
+    # -- internals ------------------------------------------------------------------------
+    def _observe(self, sample: dict[str, float], t: float) -> np.ndarray:
+        obs = np.array([t] + [sample[c] for c in OBS_CHANNELS[1:]])
+        return obs + self._obs_noise[min(self._k, len(self._obs_noise) - 1)]
+
+    def _update(self, obs: np.ndarray, sample: dict[str, float]) -> None:
+        r = np.append(obs[self._obs_of_var], 0.0) - self._trim_obs_var
+        # p, q, r -> phat, qhat, rhat with the measured airspeed
+        scale = self._rate_ref / (2.0 * obs[1])
+        r = np.where(scale != 0.0, r * scale, r)
+        x = np.ones((len(self._coefs), self._vidx.shape[1] + 1))
+        x[:, 1:] = r[self._vidx]
+        y = (np.array([sample[c] for c in self._coefs]) - self._y0
+             + self._y_noise[min(self._k, len(self._y_noise) - 1)])
+        self._info_state.add(x, y)
+
+    def _envelope(self, s: dict[str, float]) -> str | None:
+        lim = LIMITS
+        alpha = math.degrees(s["alpha"])
+        if not lim["alpha_deg"][0] <= alpha <= lim["alpha_deg"][1]:
+            return f"alpha {alpha:.1f} deg outside {lim['alpha_deg']}"
+        bank = math.degrees(s["phi"])
+        if abs(bank) > lim["bank_deg"]:
+            return f"bank {bank:.1f} deg beyond {lim['bank_deg']}"
+        n = -s["az"] / G0
+        if not lim["load_factor"][0] <= n <= lim["load_factor"][1]:
+            return f"load factor {n:.2f} outside {lim['load_factor']}"
+        ratio = s["V"] / self.trim.speed_m_s
+        if not lim["speed_ratio"][0] <= ratio <= lim["speed_ratio"][1]:
+            return f"airspeed {s['V']:.1f} m/s outside {lim['speed_ratio']} x trim"
+        if self._h0 - s["h"] > lim["altitude_loss_m"]:
+            return f"altitude loss {self._h0 - s['h']:.0f} m > {lim['altitude_loss_m']} m"
+        return None
+
+    def _info(self, departure: str | None) -> dict[str, Any]:
+        inf = self._info_state
+        # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
+        crb = np.sqrt(np.diagonal(inf.inv, axis1=1, axis2=2)[:, 1:]).ravel()[self._tidx]
+        est = np.einsum("gij,gj->gi", inf.inv, inf.rhs)[:, 1:].ravel()[self._tidx]
+        info: dict[str, Any] = {"crb": crb, "estimate": est, "error": est - self._truth_vec,
+                                "logdet": self._logdet, "time": self._k / self.decision_hz}
+        if departure is not None:
+            info["departure"] = departure
+        return info

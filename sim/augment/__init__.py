@@ -1,0 +1,24 @@
+"""Augmented aircraft: airframe and actuator effects written into a copy of a JSBSim model."""
+
+from flightid.sim.augment.effects import (
+    ACTUATOR_EFFECTS,
+    AIRFRAME_EFFECTS,
+    ActuatorBias,
+    ActuatorLag,
+    AugmentEffect,
+    Backlash,
+    CgOffset,
+    ControlEffectiveness,
+    Deadband,
+    DerivativeDelta,
+    InertiaScale,
+    MassScale,
+    RateLimit,
+    ThrustMoment,
+)
+from flightid.sim.augment.writer import AugmentError, augment, cache_folder
+
+__all__ = ["ACTUATOR_EFFECTS", "AIRFRAME_EFFECTS", "ActuatorBias", "ActuatorLag",
+           "AugmentEffect", "AugmentError", "Backlash", "CgOffset", "ControlEffectiveness",
+           "Deadband", "DerivativeDelta", "InertiaScale", "MassScale", "RateLimit",
+           "ThrustMoment", "augment", "cache_folder"]

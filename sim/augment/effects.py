@@ -1,0 +1,259 @@
+"""Airframe and actuator effects: the parameters an augmented JSBSim aircraft is written from.
+
+Each class is one entry of the effect catalogue (``flightid.sim.effects.catalogue``,
+``acts on`` airframe or actuator); ``flightid.sim.augment.writer.augment`` writes them into
+a copy of an aircraft's JSBSim XML. They have the same form as the catalogue's other
+effects (``flightid.sim.effects.base.NamedEffect``: float parameters in SI units, string
+options, a ``source``), restated here because ``flightid.sim.effects`` imports this module
+for its catalogue and the sub-packages of ``flightid.sim`` must not import each other in a
+cycle. A card names them in ``[[effect]]`` tables by ``name``.
+
+Derivative deltas are nondimensional, per rad (angles, surfaces) or per unit of the
+nondimensional rate (phat = p b/2V, qhat = q cbar/2V, rhat = r b/2V, alphadot cbar/2V),
+in the axes of ``axes``: ``stability`` (CL, CD, CY; Cl, Cm, Cn about the stability axes
+of the current alpha, stability-axis rates) or ``body`` (CX, CY, CZ; Cl, Cm, Cn, body rates).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+SURFACE_CHOICES = ("de", "da", "dr")
+AXES_CHOICES = ("stability", "body")
+# coefficient letters (flightid.derivatives) per axes and variables a delta can act on
+COEFS = {"stability": ("L", "D", "Y", "l", "m", "n"), "body": ("X", "Y", "Z", "l", "m", "n")}
+VARIABLES = ("0", "alpha", "beta", "p", "q", "r", "alphadot", "de", "da", "dr")
+DERIVATIVES: tuple[str, ...] = tuple(dict.fromkeys(
+    f"C{c}_{v}" for axes in AXES_CHOICES for c in COEFS[axes] for v in VARIABLES))
+
+
+@dataclass(kw_only=True)
+class AugmentEffect:
+    """Base: a named effect written into a JSBSim aircraft (float parameters in SI)."""
+
+    name: ClassVar[str] = ""
+    key: ClassVar[str] = "name"  # the card-table key that names the effect ([[effect]])
+    source: str = dataclasses.field(default="", compare=False)
+
+    def parameters(self) -> dict[str, float]:
+        """Float parameters by name (SI units)."""
+        return {f.name: float(v) for f in dataclasses.fields(self)
+                if f.name != "source" and isinstance(v := getattr(self, f.name), int | float)
+                and not isinstance(v, bool)}
+
+    def options(self) -> dict[str, str]:
+        """String options by name (e.g. the surface)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if f.name != "source" and isinstance(getattr(self, f.name), str)}
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"name": name, **fields}`` plus the source if any (the card table)."""
+        d: dict[str, Any] = {self.key: self.name}
+        d.update({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                  if f.name != "source"})
+        if self.source:
+            d["source"] = self.source
+        return d
+
+    def neutral(self) -> bool:
+        """True when the effect does nothing (written as a comment only)."""
+        raise NotImplementedError
+
+    def label(self) -> str:
+        """One line for the XML comment and the record: name, options and magnitudes."""
+        opts = " ".join(f"{k}={v}" for k, v in self.options().items())
+        vals = " ".join(f"{k}={v:.6g}" for k, v in self.parameters().items())
+        return f"{self.name} {opts} {vals}".replace("  ", " ").strip()
+
+    def _choice(self, field: str, choices: tuple[str, ...]) -> None:
+        if getattr(self, field) not in choices:
+            raise ValueError(f"{self.name}: field {field!r} must be one of "
+                             f"{', '.join(choices)}, got {getattr(self, field)!r}")
+
+    def _finite(self, *fields: str) -> None:
+        for f in fields:
+            v = getattr(self, f)
+            if not isinstance(v, int | float) or not math.isfinite(v):
+                raise ValueError(f"{self.name}: field {f!r} must be finite, got {v!r}")
+
+
+# -- airframe ------------------------------------------------------------------------------
+
+
+@dataclass(kw_only=True)
+class DerivativeDelta(AugmentEffect):
+    """An additive delta to one derivative: an extra <function> term in the aero axes."""
+
+    name: ClassVar[str] = "derivative_delta"
+    delta: float = 0.02
+    derivative: str = "Cn_beta"
+    axes: str = "stability"
+
+    def __post_init__(self) -> None:
+        self._choice("axes", AXES_CHOICES)
+        self._finite("delta")
+        ok = tuple(f"C{c}_{v}" for c in COEFS[self.axes] for v in VARIABLES)
+        if self.derivative not in ok:
+            raise ValueError(f"{self.name}: field 'derivative': {self.derivative!r} is not a "
+                             f"derivative in {self.axes} axes; one of {', '.join(ok)}")
+
+    def neutral(self) -> bool:
+        return self.delta == 0.0
+
+
+@dataclass(kw_only=True)
+class ControlEffectiveness(AugmentEffect):
+    """Every aerodynamic term that depends on a surface scaled by a factor."""
+
+    name: ClassVar[str] = "control_effectiveness"
+    factor: float = 0.8
+    surface: str = "de"
+
+    def __post_init__(self) -> None:
+        self._choice("surface", SURFACE_CHOICES)
+        self._finite("factor")
+
+    def neutral(self) -> bool:
+        return self.factor == 1.0
+
+
+@dataclass(kw_only=True)
+class CgOffset(AugmentEffect):
+    """The CG moved (body axes: x forward, z down), every mass item with it."""
+
+    name: ClassVar[str] = "cg_offset"
+    x: float = 0.05
+    z: float = 0.0
+
+    def __post_init__(self) -> None:
+        self._finite("x", "z")
+
+    def neutral(self) -> bool:
+        return self.x == 0.0 and self.z == 0.0
+
+
+@dataclass(kw_only=True)
+class MassScale(AugmentEffect):
+    """Empty weight and point masses scaled (fuel unchanged)."""
+
+    name: ClassVar[str] = "mass_scale"
+    factor: float = 1.1
+
+    def __post_init__(self) -> None:
+        self._finite("factor")
+        if not self.factor > 0:
+            raise ValueError(f"{self.name}: field 'factor' must be > 0, got {self.factor}")
+
+    def neutral(self) -> bool:
+        return self.factor == 1.0
+
+
+@dataclass(kw_only=True)
+class InertiaScale(AugmentEffect):
+    """Moments of inertia scaled (Ixz by sqrt(ixx izz))."""
+
+    name: ClassVar[str] = "inertia_scale"
+    ixx: float = 1.1
+    iyy: float = 1.1
+    izz: float = 1.1
+
+    def __post_init__(self) -> None:
+        self._finite("ixx", "iyy", "izz")
+        for f in ("ixx", "iyy", "izz"):
+            if not getattr(self, f) > 0:
+                raise ValueError(f"{self.name}: field {f!r} must be > 0, got {getattr(self, f)}")
+
+    def neutral(self) -> bool:
+        return self.ixx == self.iyy == self.izz == 1.0
+
+
+@dataclass(kw_only=True)
+class ThrustMoment(AugmentEffect):
+    """A pitching moment proportional to the thrust (thrust line off the CG, propwash)."""
+
+    name: ClassVar[str] = "thrust_moment"
+    arm: float = 0.1
+
+    def __post_init__(self) -> None:
+        self._finite("arm")
+
+    def neutral(self) -> bool:
+        return self.arm == 0.0
+
+
+# -- actuator --------------------------------------------------------------------------------
+
+
+@dataclass(kw_only=True)
+class _Surface(AugmentEffect):
+    surface: str = "de"
+
+    def __post_init__(self) -> None:
+        self._choice("surface", SURFACE_CHOICES)
+
+
+@dataclass(kw_only=True)
+class ActuatorLag(_Surface):
+    """First-order lag 1/(tau s + 1) in series with the surface's actuator."""
+
+    name: ClassVar[str] = "actuator_lag"
+    tau: float = 0.05
+
+    def neutral(self) -> bool:
+        return self.tau == 0.0
+
+
+@dataclass(kw_only=True)
+class RateLimit(_Surface):
+    """Surface rate limit in series with the surface's actuator."""
+
+    name: ClassVar[str] = "rate_limit"
+    rate: float = math.radians(20.0)
+
+    def neutral(self) -> bool:
+        return math.isinf(self.rate)
+
+
+@dataclass(kw_only=True)
+class Deadband(_Surface):
+    """Deadband between the measured surface position and the surface the air sees."""
+
+    name: ClassVar[str] = "deadband"
+    width: float = math.radians(0.5)
+
+    def neutral(self) -> bool:
+        return self.width == 0.0
+
+
+@dataclass(kw_only=True)
+class Backlash(_Surface):
+    """Backlash (hysteresis) between the measured surface position and the surface."""
+
+    name: ClassVar[str] = "backlash"
+    width: float = math.radians(0.5)
+
+    def neutral(self) -> bool:
+        return self.width == 0.0
+
+
+@dataclass(kw_only=True)
+class ActuatorBias(_Surface):
+    """Rigging bias: the surface the air sees is offset from the measured position."""
+
+    name: ClassVar[str] = "actuator_bias"
+    bias: float = math.radians(0.5)
+
+    def neutral(self) -> bool:
+        return self.bias == 0.0
+
+
+AIRFRAME_EFFECTS = (DerivativeDelta, ControlEffectiveness, CgOffset, MassScale, InertiaScale,
+                    ThrustMoment)
+ACTUATOR_EFFECTS = (ActuatorLag, RateLimit, Deadband, Backlash, ActuatorBias)
+# in series at the surface position (what the record's de/da/dr shows)
+DYNAMIC = (ActuatorLag, RateLimit)
+# between the measured position and the aerodynamics (the linkage)
+LINKAGE = (Deadband, Backlash, ActuatorBias)

@@ -1,0 +1,151 @@
+"""The gymnasium environment flightid/Excitation-v0 (scenarios/gym)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import warnings
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from flightid.identification.identify import identify
+from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
+from flightid.scenarios.gym.baselines import (
+    doublet,
+    multisine,
+    run_episode,
+    three211,
+    zero,
+)
+
+SEEDS = (0, 1)
+
+
+@pytest.fixture(scope="module")
+def env() -> ExcitationEnv:
+    return ExcitationEnv(render_mode="rgb_array")
+
+
+def test_check_env(env):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "no spec" note: made directly, not through make
+        check_env(env)
+
+
+def test_make_by_id():
+    e = gymnasium.make(ENV_ID, episode_s=1.0)
+    obs, _ = e.reset(seed=3)
+    assert obs.shape == (len(OBS_CHANNELS),)
+    obs, r, term, trunc, info = e.step(e.action_space.sample())
+    assert np.isfinite(r) and "crb" in info
+    e.close()
+
+
+def test_make_in_fresh_interpreter_by_module_form():
+    # gymnasium 1.x has no plugin entry points: the documented "module:id" form imports us
+    code = ("import gymnasium; e = gymnasium.make('flightid.scenarios.gym:flightid/Excitation-v0',"
+            " episode_s=0.1); e.reset(seed=0); print(e.unwrapped.targets[0])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "Cl_beta"
+
+
+def test_sync_vector_env_of_four():
+    venv = gymnasium.vector.SyncVectorEnv(
+        [lambda: ExcitationEnv(episode_s=1.0) for _ in range(4)])
+    obs, info = venv.reset(seed=[0, 1, 2, 3])
+    assert obs.shape == (4, len(OBS_CHANNELS))
+    for _ in range(60):  # past the end of the 50-step episodes: autoreset
+        obs, r, term, trunc, info = venv.step(venv.action_space.sample())
+    assert r.shape == (4,) and np.all(np.isfinite(obs))
+    venv.close()
+
+
+def test_async_vector_env_of_two():
+    venv = gymnasium.vector.AsyncVectorEnv(
+        [lambda: ExcitationEnv(episode_s=1.0) for _ in range(2)])
+    obs, _ = venv.reset(seed=[0, 1])
+    for _ in range(10):
+        obs, r, term, trunc, info = venv.step(venv.action_space.sample())
+    assert obs.shape == (2, len(OBS_CHANNELS)) and np.all(np.isfinite(r))
+    venv.close()
+
+
+def test_same_seed_same_observations():
+    def episode(seed: int) -> np.ndarray:
+        e = ExcitationEnv(episode_s=2.0)
+        obs, _ = e.reset(seed=seed)
+        out = [obs]
+        for a in doublet(e, seed)[:100]:
+            out.append(e.step(a.astype(np.float32))[0])
+        return np.array(out)
+
+    a, b, c = episode(7), episode(7), episode(8)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def _returns(env: ExcitationEnv, schedule) -> list[float]:
+    return [run_episode(env, schedule(env, s), s)[0] for s in SEEDS]
+
+
+def test_returns_order(env):
+    # measured (benchmarks/results/gym_baselines.txt): zero 24, doublet 120, 3211 123,
+    # multisine 127 on every seed
+    r = {name: _returns(env, f) for name, f in
+         (("zero", zero), ("doublet", doublet), ("3211", three211), ("multisine", multisine))}
+    for s in range(len(SEEDS)):
+        assert r["zero"][s] < r["doublet"][s] < r["3211"][s] < r["multisine"][s]
+
+
+def test_full_up_elevator_terminates_with_penalty(env):
+    env.reset(seed=0)
+    action = np.array([-1.0, 0.0, 0.0], dtype=np.float32)  # -de: trailing edge up
+    for _ in range(env.n_decisions):
+        _, r, term, trunc, info = env.step(action)
+        if term or trunc:
+            break
+    assert term and not trunc
+    assert r < -env.penalty / 2
+    assert "alpha" in info["departure"] or "load factor" in info["departure"]
+
+
+def test_info_bounds_and_truth_error(env):
+    _, info, _ = run_episode(env, multisine(env, 0), 0)
+    truth = np.abs(env._truth_vec)
+    assert info["crb"].shape == (len(env.targets),)
+    assert np.all(info["crb"] / truth < 0.5)
+    assert np.mean(np.abs(info["error"]) / truth) < 0.2
+
+
+def test_record_identifies(env):
+    run_episode(env, multisine(env, 1), 1)
+    rec = env.record()
+    assert rec.time.size == env.n_decisions * env.sim_per_decision + 1
+    est = identify(rec, "ee", "lateral", window="none")
+    assert np.all(np.isfinite(est.values))
+
+
+def test_render_rgb_array(env):
+    run_episode(env, doublet(env, 0)[:50], 0)
+    img = env.render()
+    assert img.ndim == 3 and img.shape[2] == 3 and img.dtype == np.uint8
+
+
+def test_longitudinal_preset():
+    e = ExcitationEnv(targets="longitudinal", episode_s=1.0)
+    e.reset(seed=0)
+    _, _, _, _, info = e.step(np.array([0.05, 0.0, 0.0], dtype=np.float32))
+    assert info["crb"].shape == (6,)
+
+
+def test_light_turbulence_is_seeded():
+    def first(seed: int) -> np.ndarray:
+        e = ExcitationEnv(turbulence="light", episode_s=1.0)
+        e.reset(seed=seed)
+        return np.array([e.step(np.zeros(3, np.float32))[0] for _ in range(20)])
+
+    np.testing.assert_array_equal(first(1), first(1))
