@@ -21,11 +21,12 @@ from flightid.identification.scoring import Score, record_truth, score
 from flightid.record import FlightRecord
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import Card, fly_card, load_card
+from flightid.scenarios.gym import ENV_ID as EXCITATION_ENV  # registers it with gymnasium
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import Truth, derivatives
 
-__all__ = ["Flight", "fly", "identify", "methods", "montecarlo", "score", "truth"]
+__all__ = ["EXCITATION_ENV", "Flight", "fly", "identify", "methods", "montecarlo", "score", "truth"]
 
 
 @dataclass

@@ -125,20 +125,23 @@ class _Information:
         k = 1 + max(len(v) for _, v in spec)
         self.inv = np.tile(np.eye(k), (g, 1, 1))
         self.rhs = np.zeros((g, k))
-        self.w = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
+        self._w = tuple(1.0 / SIGMA[c] ** 2 for c, _ in spec)
+        self.w = np.array(self._w)
         self.logdet_m = 0.0  # sum over groups of log det M (prior I)
         self.n = 0
 
     @property
     def logdet(self) -> float:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
-        return self.logdet_m - float(np.sum(np.log1p(self.n * self.w)))
+        return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w)
 
     def add(self, x: np.ndarray, y: np.ndarray) -> None:
         """One sample: regressors x (groups x k, bias first), dependent variables y."""
-        v = np.einsum("gij,gj->gi", self.inv, x)
-        wd = self.w / (1.0 + self.w * np.einsum("gi,gi->g", x, v))
-        self.logdet_m -= float(np.sum(np.log(wd / self.w)))
+        v = (self.inv @ x[:, :, None])[:, :, 0]
+        xv = (x * v).sum(1).tolist()
+        # matrix determinant lemma and Sherman-Morrison
+        self.logdet_m += sum(math.log1p(w * q) for w, q in zip(self._w, xv, strict=True))
+        wd = self.w / (1.0 + self.w * np.array(xv))
         self.inv -= v[:, :, None] * v[:, None, :] * wd[:, None, None]
         self.rhs += x * (self.w * y)[:, None]
         self.n += 1
@@ -210,8 +213,11 @@ class ExcitationEnv(gymnasium.Env):
                                + groups[n.partition("_")[0]].index(n.partition("_")[2])
                                for n in self.targets])
         span, chord = self.reference.span, self.reference.chord
-        self._rate_ref = np.array([0.0, 0.0, span, chord, span, 0.0, 0.0, 0.0, 0.0])
-        self._obs_of_var = np.array([OBS_CHANNELS.index(v) for v in VARIABLE_CHANNEL])
+        self._per_v = np.array([0.0, 0.0, span / 2, chord / 2, span / 2, 0.0, 0.0, 0.0, 0.0])
+        self._fixed = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0])
+        # the padding slot reads the time channel minus itself: always zero
+        self._obs_of_var = np.array([OBS_CHANNELS.index(v) for v in VARIABLE_CHANNEL] + [0])
+        self._x = np.ones((len(self._group_spec), width + 1))
         self._truth_vec = np.array([self.truth.get(n, np.nan) for n in self.targets])
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
@@ -242,7 +248,7 @@ class ExcitationEnv(gymnasium.Env):
         self._k = 0
         self._h0 = sample["h"]
         self._trim_obs = np.array([0.0] + [sample[c] for c in OBS_CHANNELS[1:]])
-        self._trim_obs_var = np.append(self._trim_obs[self._obs_of_var], 0.0)
+        self._trim_obs_var = self._trim_obs[self._obs_of_var]
         obs = self._observe(sample, 0.0)
         self._obs_hist = [obs]
         self._actions = [np.zeros(3)]
@@ -327,11 +333,10 @@ class ExcitationEnv(gymnasium.Env):
         return obs + self._obs_noise[min(self._k, len(self._obs_noise) - 1)]
 
     def _update(self, obs: np.ndarray, sample: dict[str, float]) -> None:
-        r = np.append(obs[self._obs_of_var], 0.0) - self._trim_obs_var
-        # p, q, r -> phat, qhat, rhat with the measured airspeed
-        scale = self._rate_ref / (2.0 * obs[1])
-        r = np.where(scale != 0.0, r * scale, r)
-        x = np.ones((len(self._coefs), self._vidx.shape[1] + 1))
+        # perturbations from trim; p, q, r -> phat, qhat, rhat with the measured airspeed;
+        # the last slot stays zero (padding of the smaller groups)
+        r = (obs[self._obs_of_var] - self._trim_obs_var) * (self._fixed + self._per_v / obs[1])
+        x = self._x
         x[:, 1:] = r[self._vidx]
         y = (np.array([sample[c] for c in self._coefs]) - self._y0
              + self._y_noise[min(self._k, len(self._y_noise) - 1)])
