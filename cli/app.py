@@ -29,6 +29,7 @@ from flightid.cli.compatibility import compatibility_command
 from flightid.cli.demo import demo_command
 from flightid.cli.effects import effects_command
 from flightid.cli.frequency_response import frequency_response_command
+from flightid.cli.gap import gap_command
 from flightid.cli.identify import identify_command
 from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
@@ -161,6 +162,7 @@ app.command("convert")(bridge.convert_command)
 app.command("simulate")(simulate_command)
 app.command("compatibility")(compatibility_command)
 app.command("effects")(effects_command)
+app.command("gap")(gap_command)
 app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
 

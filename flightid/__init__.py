@@ -17,6 +17,16 @@ __version__``) once it re-exports from higher layers: the chain through it count
 
 __version__ = "0.1.0"
 
-from flightid.api import Flight, fly, identify, methods, score, truth  # noqa: E402
+from flightid.api import (  # noqa: E402
+    Flight,
+    fly,
+    gap,
+    identify,
+    methods,
+    montecarlo,
+    score,
+    truth,
+)
 
-__all__ = ["Flight", "__version__", "fly", "identify", "methods", "score", "truth"]
+__all__ = ["Flight", "__version__", "fly", "gap", "identify", "methods", "montecarlo", "score",
+           "truth"]

@@ -1,0 +1,13 @@
+"""Sim-to-real gap diagnosis: where a JSBSim model departs from flight data, which effect
+of the catalogue causes it, and how far the gap shrinks on held-out data.
+
+``linearise`` (the model at the record's condition), ``segments`` (maneuver windows),
+``fit`` (output error on one window), ``where`` (gap map), ``candidates`` and ``rank``
+(which effect), ``shrink`` (how far), ``correct`` (the corrected aircraft), ``diagnose``
+(all of it), ``report`` (HTML).
+"""
+
+from flightid.identification.gap.correct import write_aircraft
+from flightid.identification.gap.diagnose import GapResult, diagnose
+
+__all__ = ["GapResult", "diagnose", "write_aircraft"]

@@ -1,0 +1,132 @@
+"""The sim-to-real gap diagnosis: where the gap lies, which effect causes it, how far it
+shrinks (``diagnose``), and its result (``GapResult``: json form, heat map)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.linearise import Linearised, linearise
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
+from flightid.identification.gap.segments import segments
+from flightid.identification.gap.shrink import shrinkage
+from flightid.identification.gap.where import GapMap, gap_map, heat_map
+from flightid.record import FlightRecord, read
+
+TOP = 10  # effects listed in the json form
+
+
+@dataclass
+class GapResult:
+    """The diagnosis of records against a model."""
+
+    aircraft: str
+    linearised: Linearised
+    where: GapMap
+    effects: list[Ranked]  # ranked singles
+    pairs: list[Ranked] = field(default_factory=list)
+    named: list[Ranked] = field(default_factory=list)  # [the named effect or pair], or []
+    windows: dict[str, list[str]] = field(default_factory=dict)  # fit / held out
+
+    @property
+    def unexplained(self) -> bool:
+        return not self.named
+
+    @property
+    def top(self) -> Ranked | None:
+        return self.named[0] if self.named else (self.effects[0] if self.effects else None)
+
+    def shrinkage(self) -> dict:
+        return shrinkage(self.top)
+
+    def remaining(self) -> dict[str, float]:
+        """Where the residual stays (held-out, after the named effect or of the model)."""
+        t = self.top
+        if t is not None and t.heldout_after:
+            return t.heldout_after if self.named else t.heldout_before
+        return {c: d["total"] for c, d in self.where.by_channel().items()}
+
+    def to_json(self, top: int = TOP) -> dict[str, Any]:
+        return _finite({
+            "aircraft": self.aircraft,
+            "model": {"axes": self.linearised.axes, "derivatives": self.linearised.derivatives,
+                      "trim": {"altitude_m": self.linearised.trim.altitude_m,
+                               "speed_m_s": self.linearised.trim.speed_m_s,
+                               "alpha": self.linearised.trim.alpha}},
+            "windows": self.windows,
+            "where": self.where.to_json(),
+            "effects": [r.to_json() for r in self.effects[:top]],
+            "pairs": [r.to_json() for r in self.pairs],
+            "named": [r.to_json() for r in self.named],
+            "shrinkage": self.shrinkage(),
+            "unexplained": ({"remaining": self.remaining(),
+                             "overall": overall(self.remaining())} if self.unexplained else None),
+        })
+
+    def figure(self) -> Figure:
+        return heat_map(self.where, f"gap map: {self.aircraft} (the model as is)")
+
+
+def _finite(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+Records = FlightRecord | str | Path | Sequence[FlightRecord | str | Path]
+
+
+def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
+    items = [x] if isinstance(x, FlightRecord | str | Path) else list(x)
+    recs = [i if isinstance(i, FlightRecord) else read(i) for i in items]
+    names = [Path(i).stem if not isinstance(i, FlightRecord) else f"record {k + 1}"
+             for k, i in enumerate(items)]
+    return recs, names
+
+
+def diagnose(records: Records, aircraft: str, validate: Records | None = None,
+             names: Sequence[str] | None = None,
+             validate_names: Sequence[str] | None = None, try_pairs: bool = True) -> GapResult:
+    """Diagnose ``records`` (lateral maneuvers) against the JSBSim ``aircraft``.
+
+    Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
+    halves of a record without one), or the ``validate`` records when given.
+    """
+    records, found = _records(records)
+    names = names or found
+    if validate is not None:
+        validate, found_val = _records(validate)
+        validate_names = validate_names or [f"validate {n}" for n in found_val]
+    if not records:
+        raise ValueError("gap: no record to diagnose")
+    lin = linearise(aircraft, records)
+    fit_windows = segments(records, list(names) if names else None)
+    val = segments(list(validate), list(validate_names) if validate_names else
+                   [f"validate {k + 1}" for k in range(len(validate))]) if validate else None
+    folds = Folds.make(fit_windows, val)
+    ranker = Ranker(lin, folds)
+    where = gap_map(ranker.base | {k: v for k, v in ranker.base_held.items()
+                                   if k not in ranker.base})
+    ranked = rank(ranker, catalogue_candidates(lin.model))
+    both = pairs(ranker, ranked) if try_pairs else []
+    named: list[Ranked] = []
+    if both and both[0].confirmed:
+        named = [both[0]]
+    elif ranked and ranked[0].confirmed:
+        named = [ranked[0]]
+    windows = {"fit": [s.label for s in fit_windows],
+               "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
+    return GapResult(str(aircraft), lin, where, ranked, both, named, windows)

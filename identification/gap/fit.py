@@ -1,0 +1,71 @@
+"""Output-error fits of the linearised model on one window (the only fitting the gap uses).
+
+``fit`` estimates the given parameters with the nuisance ones (the biases, which take the
+trim offsets, and the initial state) by output error (``methods.output_error``: Gauss-Newton,
+Cramer-Rao bounds corrected for colored residuals; Morelli & Klein 2016 ch. 6; Jategaonkar
+2015 ch. 4); every other parameter is held at its value in the model. With no parameter
+given it is the model as is (only the nuisance fitted): the baseline of the diagnosis and
+the evaluation of a held-out window.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from flightid.identification.gap.linearise import NUISANCE
+from flightid.identification.linear_models import LinearModel
+from flightid.identification.methods import output_error
+from flightid.record import FlightRecord
+
+MAX_ITERATIONS = 15  # from the model's values a window converges in a few steps
+
+
+@dataclass
+class WindowFit:
+    """One window's fit: the freed parameters and the residual of every output."""
+
+    values: dict[str, float]  # the freed parameters (not the nuisance ones)
+    std: dict[str, float]
+    unidentifiable: dict[str, str]
+    cost: float  # N/2 ln det R
+    samples: int
+    time: np.ndarray
+    measured: dict[str, np.ndarray]
+    residual: dict[str, np.ndarray]
+    model: dict[str, np.ndarray]
+
+    def fractions(self) -> dict[str, float]:
+        """Residual energy of each output as a fraction of its measured variation's."""
+        return {c: energy_fraction(self.residual[c], self.measured[c]) for c in self.residual}
+
+
+def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
+    """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal."""
+    spread = float(np.sum((measured - np.mean(measured)) ** 2))
+    return float(np.sum(residual**2) / spread) if spread > 0 else float("nan")
+
+
+def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = ()) -> WindowFit:
+    """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``."""
+    est = output_error.estimate(
+        record, model, free=[*free, *NUISANCE], initial_state="estimate", hold="foh",
+        colored=True, check_identifiability=True, max_iterations=MAX_ITERATIONS)
+    values = {n: float(est.values[est.names.index(n)]) if n in est.names else model.start[n]
+              for n in free}
+    std = {n: float(est.std[est.names.index(n)]) if n in est.names else float("nan")
+           for n in free}
+    unident = {n: r for n, r in est.unidentifiable.items() if n in free}
+    return WindowFit(
+        values=values, std=std, unidentifiable=unident, cost=float(est.fit["cost"]),
+        samples=int(est.fit["samples"]), time=np.asarray(est.time),
+        measured={c: o["measured"] for c, o in est.outputs.items()},
+        residual={c: o["residual"] for c, o in est.outputs.items()},
+        model={c: o["model"] for c, o in est.outputs.items()})
+
+
+def held(model: LinearModel, values: dict[str, float], record: FlightRecord) -> WindowFit:
+    """``model`` with ``values`` held, on ``record`` (only the nuisance fitted)."""
+    return fit(model.with_start(**values) if values else model, record, ())

@@ -1,0 +1,201 @@
+"""Which effect: every candidate fitted with the rest of the model held, ranked by
+evidence and confirmed on held-out windows.
+
+Evidence on the fitted windows is the Bayesian information criterion (Schwarz 1978):
+delta BIC = sum over windows of 2 (J_effect - J_model) + k ln N, with J = N/2 ln det R the
+concentrated output-error cost (Morelli & Klein 2016 eq. 6.27) and k the parameters the
+effect adds; negative favours the effect. Each window is fitted on its own; the effect's
+parameters are the inverse-variance mean over the windows. Held out: each window in turn
+is predicted with the parameters of the other windows (or every fitted window predicts
+the ``validate`` records): an effect is confirmed when it lowers the held-out cost and
+shrinks the held-out gap (mean over channels of residual / measured energy) by at least
+``MIN_SHRINK`` (relative) and ``MIN_GAIN`` (absolute: a model that already reproduces
+the data to a fraction of a percent has no gap to name). Confirmed effects rank first,
+each group by delta BIC.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flightid.identification.gap.candidates import Candidate, pair
+from flightid.identification.gap.fit import WindowFit, fit, held
+from flightid.identification.gap.linearise import Linearised
+from flightid.identification.gap.segments import Segment
+
+MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect
+MIN_GAIN = 0.005  # and absolute: this fraction of the measured energy explained
+PAIR_LEVEL = 0.05  # held-out gap (mean fraction) above which pairs of effects are tried
+PAIR_TOP = 4  # pairs: the top effect with the next ones of the ranking
+
+
+def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
+    """Per channel: residual energy / measured energy (mean removed per window), pooled."""
+    out = {}
+    for ch in fits[0].residual:
+        res = sum(float(np.sum(f.residual[ch] ** 2)) for f in fits)
+        spread = sum(float(np.sum((f.measured[ch] - np.mean(f.measured[ch])) ** 2))
+                     for f in fits)
+        out[ch] = res / spread if spread > 0 else float("nan")
+    return out
+
+
+def overall(fractions: dict[str, float]) -> float:
+    """The gap of a set of channels: the mean of their fractions."""
+    return float(np.nanmean(list(fractions.values())))
+
+
+@dataclass
+class Ranked:
+    """One candidate's fit, evidence and held-out check."""
+
+    candidate: Candidate
+    values: dict[str, float]  # linear-model values of the freed parameters (combined)
+    std: dict[str, float]
+    parameters: dict[str, dict[str, float]]  # catalogue units
+    delta_bic: float
+    fit_cost_change: float
+    heldout_before: dict[str, float] = field(default_factory=dict)
+    heldout_after: dict[str, float] = field(default_factory=dict)
+    heldout_cost_change: float = float("nan")
+    heldout_windows: list[str] = field(default_factory=list)
+    confirmed: bool = False
+    note: str = ""
+
+    @property
+    def shrink(self) -> float:
+        """Relative shrink of the held-out gap (1: closed, 0: unchanged)."""
+        before, after = overall(self.heldout_before), overall(self.heldout_after)
+        return 1.0 - after / before if before > 0 else float("nan")
+
+    def to_json(self) -> dict:
+        return {"name": self.candidate.entry if not self.candidate.parts else "pair",
+                "label": self.candidate.label, "options": dict(self.candidate.options),
+                "parameters": self.parameters,
+                "evidence": {"delta_bic": self.delta_bic, "fit_cost_change": self.fit_cost_change,
+                             "heldout_cost_change": self.heldout_cost_change,
+                             "heldout_shrink": self.shrink, "confirmed": self.confirmed,
+                             "heldout_windows": self.heldout_windows},
+                "heldout_before": self.heldout_before, "heldout_after": self.heldout_after,
+                "note": self.note}
+
+
+def combine(fits: list[WindowFit], names: tuple[str, ...]
+            ) -> tuple[dict[str, float], dict[str, float]] | None:
+    """Inverse-variance mean of the windows' estimates; None when no window identifies."""
+    values, std = {}, {}
+    for n in names:
+        pts = [(f.values[n], f.std[n]) for f in fits
+               if n not in f.unidentifiable and math.isfinite(f.std[n]) and f.std[n] > 0]
+        if not pts:
+            return None
+        w = np.array([1.0 / s**2 for _, s in pts])
+        values[n] = float(np.sum(w * np.array([v for v, _ in pts])) / np.sum(w))
+        std[n] = float(1.0 / math.sqrt(np.sum(w)))
+    return values, std
+
+
+@dataclass
+class Folds:
+    """Which windows fit and which are held out: [(fit indices, held-out windows)]."""
+
+    fit: list[Segment]
+    folds: list[tuple[list[int], list[Segment]]]
+
+    @classmethod
+    def make(cls, fit_windows: list[Segment], validate: list[Segment] | None) -> Folds:
+        if validate:
+            return cls(fit_windows, [(list(range(len(fit_windows))), validate)])
+        if len(fit_windows) < 2:
+            return cls(fit_windows, [])
+        n = len(fit_windows)
+        return cls(fit_windows, [([i for i in range(n) if i != j], [fit_windows[j]])
+                                 for j in range(n)])
+
+
+class Ranker:
+    """Fits candidates on the windows and checks them on the held-out ones (cached)."""
+
+    def __init__(self, lin: Linearised, folds: Folds) -> None:
+        self.lin, self.folds = lin, folds
+        self.base = {s.label: fit(lin.model, s.record) for s in folds.fit}
+        self.base_held: dict[str, WindowFit] = {}
+        for _, test in folds.folds:
+            for s in test:
+                if s.label not in self.base_held:
+                    self.base_held[s.label] = self.base.get(s.label) or fit(lin.model, s.record)
+
+    def evaluate(self, cand: Candidate) -> Ranked | None:
+        model = cand.wrap(self.lin.model)
+        fits = []
+        for s in self.folds.fit:
+            try:
+                fits.append(fit(model, s.record, cand.free))
+            except (ValueError, np.linalg.LinAlgError):
+                fits.append(None)
+        ok = [f for f in fits if f is not None]
+        both = combine(ok, cand.free) if ok else None
+        if both is None:
+            return None
+        values, std = both
+        dbic, dcost = 0.0, 0.0
+        for s, f in zip(self.folds.fit, fits, strict=True):
+            if f is None:
+                continue
+            d = f.cost - self.base[s.label].cost
+            dcost += d
+            dbic += 2 * d + len(cand.free) * math.log(f.samples)
+        r = Ranked(cand, values, std, cand.parameters(values, std, self.lin.model), dbic, dcost)
+        before, after, dheld, labels = [], [], 0.0, []
+        for train, test in self.folds.folds:
+            part = combine([fits[i] for i in train if fits[i] is not None], cand.free)
+            if part is None:
+                continue
+            for s in test:
+                try:
+                    h = held(model, part[0], s.record)
+                except (ValueError, np.linalg.LinAlgError):
+                    continue
+                b = self.base_held[s.label]
+                before.append(b)
+                after.append(h)
+                dheld += h.cost - b.cost
+                labels.append(s.label)
+        if before:
+            r.heldout_before, r.heldout_after = pooled_fractions(before), pooled_fractions(after)
+            r.heldout_cost_change, r.heldout_windows = dheld, labels
+            gain = overall(r.heldout_before) - overall(r.heldout_after)
+            r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and r.shrink >= MIN_SHRINK
+                               and gain >= MIN_GAIN)
+        else:
+            r.note = "no held-out window: not confirmed"
+        return r
+
+
+def rank(ranker: Ranker, candidates: list[Candidate]) -> list[Ranked]:
+    """Every candidate evaluated; confirmed first, each group by delta BIC."""
+    out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
+    return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))
+
+
+def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
+    """The top effect paired with the next ``PAIR_TOP`` ones, when it alone leaves a held-out
+    gap above ``PAIR_LEVEL``; a pair is confirmed when it shrinks the top effect's held-out
+    gap by ``MIN_SHRINK`` more and improves its BIC."""
+    if not ranked or not ranked[0].confirmed or overall(ranked[0].heldout_after) < PAIR_LEVEL:
+        return []
+    top = ranked[0]
+    out = []
+    for other in ranked[1:1 + PAIR_TOP]:
+        c = pair(top.candidate, other.candidate)
+        if c is None or (r := ranker.evaluate(c)) is None:
+            continue
+        single_after = overall(top.heldout_after)
+        pair_after = overall(r.heldout_after) if r.heldout_after else float("nan")
+        r.confirmed = bool(r.confirmed and r.delta_bic < top.delta_bic
+                           and pair_after <= (1 - MIN_SHRINK) * single_after)
+        out.append(r)
+    return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))

@@ -1,0 +1,113 @@
+"""Where the gap lies: the residual of each output by frequency band and by window.
+
+The model as is (only its nuisance parameters fitted) is simulated with each window's
+measured inputs; each output's residual is split into frequency bands by its discrete
+Fourier transform (Parseval), and each band's energy is given as a fraction of the
+measured signal's energy (mean removed) on that window. A fraction near 0: the model
+reproduces the channel; near 1 or above: the model misses it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from flightid.identification.gap.fit import WindowFit
+
+BANDS: tuple[tuple[float, float], ...] = ((0.0, 0.3), (0.3, 1.0), (1.0, 3.0), (3.0, math.inf))
+
+
+def band_label(band: tuple[float, float]) -> str:
+    lo, hi = band
+    return f"<{hi:g} Hz" if lo == 0 else (f">{lo:g} Hz" if math.isinf(hi) else f"{lo:g}-{hi:g} Hz")
+
+
+def band_fractions(residual: np.ndarray, measured: np.ndarray, dt: float,
+                   bands: tuple[tuple[float, float], ...] = BANDS) -> list[float]:
+    """Residual energy in each band / measured energy (mean removed), by Parseval."""
+    n = residual.size
+    f = np.fft.rfftfreq(n, dt)
+    weight = np.full(f.size, 2.0)
+    weight[0] = 1.0
+    if n % 2 == 0:
+        weight[-1] = 1.0
+    er = weight * np.abs(np.fft.rfft(residual)) ** 2
+    total = float(np.sum(weight * np.abs(np.fft.rfft(measured - np.mean(measured))) ** 2))
+    if total <= 0:
+        return [float("nan")] * len(bands)
+    return [float(np.sum(er[(f >= lo) & (f < hi)]) / total) for lo, hi in bands]
+
+
+@dataclass
+class GapMap:
+    """Rows per (window, channel): total residual fraction and its split by band."""
+
+    bands: tuple[tuple[float, float], ...]
+    rows: list[dict] = field(default_factory=list)
+
+    def channels(self) -> list[str]:
+        return list(dict.fromkeys(r["channel"] for r in self.rows))
+
+    def windows(self) -> list[str]:
+        return list(dict.fromkeys(r["window"] for r in self.rows))
+
+    def by_channel(self) -> dict[str, dict[str, float]]:
+        """Per channel, band fractions averaged over the windows, and the total."""
+        out: dict[str, dict[str, float]] = {}
+        for ch in self.channels():
+            rows = [r for r in self.rows if r["channel"] == ch]
+            d = {b: float(np.nanmean([r["bands"][b] for r in rows])) for b in rows[0]["bands"]}
+            d["total"] = float(np.nanmean([r["total"] for r in rows]))
+            out[ch] = d
+        return out
+
+    def to_json(self) -> dict:
+        return {"bands": [band_label(b) for b in self.bands], "rows": self.rows,
+                "by_channel": self.by_channel()}
+
+
+def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] = BANDS
+            ) -> GapMap:
+    """The gap map of the model-as-is fits of each window (``{window label: fit}``)."""
+    out = GapMap(bands)
+    labels = [band_label(b) for b in bands]
+    for window, wf in fits.items():
+        dt = float(np.median(np.diff(wf.time)))
+        for ch, res in wf.residual.items():
+            fr = band_fractions(res, wf.measured[ch], dt, bands)
+            out.rows.append({"window": window, "channel": ch,
+                             "total": float(wf.fractions()[ch]),
+                             "bands": dict(zip(labels, fr, strict=True))})
+    return out
+
+
+def heat_map(gm: GapMap, title: str = "") -> Figure:
+    """Channels x bands (averaged over windows) and channels x windows (total)."""
+    chans = gm.channels()
+    labels = [band_label(b) for b in gm.bands]
+    per = gm.by_channel()
+    a = np.array([[per[c][b] for b in labels] for c in chans])
+    wins = gm.windows()
+    w = np.array([[next(r["total"] for r in gm.rows if r["channel"] == c and r["window"] == k)
+                   for k in wins] for c in chans])
+    fig = Figure(figsize=(4.0 + 1.1 * (len(labels) + len(wins)), 0.5 * len(chans) + 2.6),
+                 layout="constrained")
+    axes = fig.subplots(1, 2, gridspec_kw={"width_ratios": [len(labels), max(len(wins), 1)]})
+    vmax = max(1.0, float(np.nanmax(np.concatenate([a.ravel(), w.ravel()]))))
+    for ax, data, cols, name in ((axes[0], a, labels, "by band (mean over windows)"),
+                                 (axes[1], w, wins, "by window (all bands)")):
+        im = ax.imshow(data, cmap="magma_r", vmin=0.0, vmax=vmax, aspect="auto")
+        ax.set_xticks(range(len(cols)), cols, rotation=30, ha="right", fontsize=8)
+        ax.set_yticks(range(len(chans)), chans)
+        ax.set_title(name, fontsize=9)
+        for i in range(data.shape[0]):
+            for j in range(data.shape[1]):
+                v = data[i, j]
+                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=8,
+                        color="white" if v > 0.5 * vmax else "black")
+    fig.colorbar(im, ax=list(axes), label="residual energy / measured energy", shrink=0.8)
+    fig.suptitle(title or "gap map: the model as is", fontsize=10)
+    return fig
