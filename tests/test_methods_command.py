@@ -19,7 +19,8 @@ def test_json_lists_every_method_and_option():
     for method_id, entry in listed.items():
         spec = registry.get(method_id)
         names = [o["name"] for o in entry["options"]]
-        assert names == [f.name for f in dataclasses.fields(spec.options)]
+        assert names == [f.name for f in spec.option_fields()]
+        assert set(names) == {f.name for f in dataclasses.fields(spec.options)}
         assert all(o["help"] and o["type"] for o in entry["options"])
         assert entry["default_model"] in entry["models"]
 

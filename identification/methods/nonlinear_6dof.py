@@ -66,7 +66,7 @@ from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
 from flightid.identification.methods.equation_error import channel_values
-from flightid.identification.methods.protocol import Method, option
+from flightid.identification.methods.protocol import Method, OutputErrorOptions, option
 from flightid.record import FlightRecord, Reference
 from flightid.units import G0
 
@@ -730,7 +730,7 @@ def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[s
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options:
+class Options(OutputErrorOptions):
     """Options of ``--method oe6dof``."""
 
     structure: dict[str, list[str]] | None = option(
@@ -753,13 +753,6 @@ class Options:
     colored: bool = option(True, "Cramer-Rao bounds corrected for colored residuals")
     full_noise_covariance: bool = option(False, "estimate the full output-noise covariance")
     max_iterations: int = option(30, "Gauss-Newton iteration limit")
-    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
-    cost_tolerance: float = option(1e-7, "or when the cost changes less than this (relative)")
-    check_identifiability: bool = option(True, "report parameters the data cannot determine")
-    min_input_range: float = option(ident.MIN_INPUT_RANGE,
-                                    "an input spanning less than this (rad) is not excited")
-    singular_eigenvalue: float = option(ident.SINGULAR_EIGENVALUE,
-                                        "relative eigenvalue of M below which it is singular")
 
 
 def run(record: FlightRecord, model: str = "6dof", options: Options | None = None

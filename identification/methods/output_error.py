@@ -40,7 +40,12 @@ from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel, matrix_sensitivities
 from flightid.identification.methods import equation_error
-from flightid.identification.methods.protocol import HeldOptions, Method, option
+from flightid.identification.methods.protocol import (
+    HeldOptions,
+    Method,
+    OutputErrorOptions,
+    option,
+)
 from flightid.identification.multistep_input import MultistepParameters, from_measurement
 from flightid.record import FlightRecord
 
@@ -443,7 +448,7 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
 
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
-class Options(HeldOptions):
+class Options(HeldOptions, OutputErrorOptions):
     """Options of ``--method oe`` (defaults: the settings validated on simulated cards)."""
 
     free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
@@ -457,14 +462,6 @@ class Options(HeldOptions):
     multistep_inputs: list[str] = option(
         [], "inputs flown as multisteps whose levels and edge times are estimated")
     max_iterations: int = option(50, "Gauss-Newton iteration limit")
-    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
-    cost_tolerance: float = option(1e-7, "or when the cost changes less than this (relative)")
-    check_identifiability: bool = option(True, "report parameters the data cannot determine "
-                                               "instead of estimating them")
-    min_input_range: float = option(ident.MIN_INPUT_RANGE,
-                                    "an input spanning less than this (rad) is not excited")
-    singular_eigenvalue: float = option(ident.SINGULAR_EIGENVALUE,
-                                        "relative eigenvalue of M below which it is singular")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None

@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from flightid.identification import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 
@@ -47,8 +48,10 @@ class Method:
     contract_model: str = ""
 
     def option_fields(self) -> list[dataclasses.Field]:
-        """The option fields in declaration order."""
-        return list(dataclasses.fields(self.options))
+        """The option fields: the method's own and the model's first, the shared tuning
+        options (convergence, identifiability thresholds) last."""
+        fields = dataclasses.fields(self.options)
+        return sorted(fields, key=lambda f: bool(f.metadata.get("tuning", False)))
 
     def make_options(self, values: Mapping[str, Any] | None = None) -> Any:
         """The options dataclass from keyword values (texts from the command line are
@@ -78,12 +81,14 @@ class Method:
         return rows
 
 
-def option(default: Any, help: str) -> Any:
-    """A dataclass field of an options class: its default and its meaning."""
+def option(default: Any, help: str, tuning: bool = False) -> Any:
+    """A dataclass field of an options class: its default and its meaning; ``tuning``
+    marks a convergence or threshold setting (listed after the others)."""
+    metadata = {"help": help, "tuning": tuning}
     if isinstance(default, list | dict | set):
         return dataclasses.field(default_factory=lambda: type(default)(default),
-                                 metadata={"help": help})
-    return dataclasses.field(default=default, metadata={"help": help})
+                                 metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
 
 
 def type_name(hint: Any) -> str:
@@ -164,3 +169,21 @@ class RegressionOptions:
 
     coefficients: list[str] | None = option(
         None, "fit only these coefficients of the model, e.g. [\"Cl\", \"Cn\"]")
+
+
+@dataclass(frozen=True)
+class OutputErrorOptions:
+    """The convergence and identifiability options of the output-error fits (oe, oe6dof)."""
+
+    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std",
+                                   tuning=True)
+    cost_tolerance: float = option(1e-7, "or when the cost changes less than this (relative)",
+                                   tuning=True)
+    check_identifiability: bool = option(True, "report parameters the data cannot determine "
+                                               "instead of estimating them", tuning=True)
+    min_input_range: float = option(ident.MIN_INPUT_RANGE,
+                                    "an input spanning less than this (rad) is not excited",
+                                    tuning=True)
+    singular_eigenvalue: float = option(ident.SINGULAR_EIGENVALUE,
+                                        "relative eigenvalue of M below which it is singular",
+                                        tuning=True)

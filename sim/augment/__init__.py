@@ -1,6 +1,7 @@
 """Augmented aircraft: airframe and actuator effects written into a copy of a JSBSim model."""
 
-from flightid.sim.augment.effects import (
+from flightid.sim.augment.writer import AugmentError, augment, cache_folder
+from flightid.sim.effects.airframe import (
     ACTUATOR_EFFECTS,
     AIRFRAME_EFFECTS,
     ActuatorBias,
@@ -16,7 +17,6 @@ from flightid.sim.augment.effects import (
     RateLimit,
     ThrustMoment,
 )
-from flightid.sim.augment.writer import AugmentError, augment, cache_folder
 
 __all__ = ["ACTUATOR_EFFECTS", "AIRFRAME_EFFECTS", "ActuatorBias", "ActuatorLag",
            "AugmentEffect", "AugmentError", "Backlash", "CgOffset", "ControlEffectiveness",

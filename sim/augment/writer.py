@@ -36,7 +36,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
-from flightid.sim.augment.effects import (
+from flightid.sim.effects.airframe import (
     DYNAMIC,
     LINKAGE,
     ActuatorBias,

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from flightid.sim.augment.effects import (
+from flightid.sim.effects.airframe import (
     AXES_CHOICES,
     DERIVATIVES,
     SURFACE_CHOICES,

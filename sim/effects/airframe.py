@@ -2,11 +2,9 @@
 
 Each class is one entry of the effect catalogue (``flightid.sim.effects.catalogue``,
 ``acts on`` airframe or actuator); ``flightid.sim.augment.writer.augment`` writes them into
-a copy of an aircraft's JSBSim XML. They have the same form as the catalogue's other
-effects (``flightid.sim.effects.base.NamedEffect``: float parameters in SI units, string
-options, a ``source``), restated here because ``flightid.sim.effects`` imports this module
-for its catalogue and the sub-packages of ``flightid.sim`` must not import each other in a
-cycle. A card names them in ``[[effect]]`` tables by ``name``.
+a copy of an aircraft's JSBSim XML. They are ``NamedEffect``s like the catalogue's other
+effects (float parameters in SI units, string options, a ``source``). A card names them
+in ``[[effect]]`` tables by ``name``.
 
 Derivative deltas are nondimensional, per rad (angles, surfaces) or per unit of the
 nondimensional rate (phat = p b/2V, qhat = q cbar/2V, rhat = r b/2V, alphadot cbar/2V),
@@ -19,7 +17,9 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
+
+from flightid.sim.effects.base import NamedEffect
 
 SURFACE_CHOICES = ("de", "da", "dr")
 AXES_CHOICES = ("stability", "body")
@@ -31,32 +31,15 @@ DERIVATIVES: tuple[str, ...] = tuple(dict.fromkeys(
 
 
 @dataclass(kw_only=True)
-class AugmentEffect:
+class AugmentEffect(NamedEffect):
     """Base: a named effect written into a JSBSim aircraft (float parameters in SI)."""
 
-    name: ClassVar[str] = ""
     key: ClassVar[str] = "name"  # the card-table key that names the effect ([[effect]])
-    source: str = dataclasses.field(default="", compare=False)
-
-    def parameters(self) -> dict[str, float]:
-        """Float parameters by name (SI units)."""
-        return {f.name: float(v) for f in dataclasses.fields(self)
-                if f.name != "source" and isinstance(v := getattr(self, f.name), int | float)
-                and not isinstance(v, bool)}
 
     def options(self) -> dict[str, str]:
         """String options by name (e.g. the surface)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                 if f.name != "source" and isinstance(getattr(self, f.name), str)}
-
-    def to_dict(self) -> dict[str, Any]:
-        """``{"name": name, **fields}`` plus the source if any (the card table)."""
-        d: dict[str, Any] = {self.key: self.name}
-        d.update({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
-                  if f.name != "source"})
-        if self.source:
-            d["source"] = self.source
-        return d
 
     def neutral(self) -> bool:
         """True when the effect does nothing (written as a comment only)."""
