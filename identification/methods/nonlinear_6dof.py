@@ -771,11 +771,7 @@ def run(record: FlightRecord, model: str = "6dof", options: Options | None = Non
         record, six, free=options.free, start=options.start,
         initial_state=options.initial_state, controls=options.controls,
         full_noise_covariance=options.full_noise_covariance, colored=options.colored,
-        max_iterations=options.max_iterations, step_tolerance=options.step_tolerance,
-        cost_tolerance=options.cost_tolerance,
-        check_identifiability=options.check_identifiability,
-        min_input_range=options.min_input_range,
-        singular_eigenvalue=options.singular_eigenvalue)
+        max_iterations=options.max_iterations, **options.tuning())
     est.method = ID
     return est
 

@@ -485,11 +485,7 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
         record, linear, free=free, start=start, initial_state=options.initial_state,
         hold=options.hold, full_noise_covariance=options.full_noise_covariance,
         colored=options.colored, multistep_inputs=options.multistep_inputs,
-        max_iterations=options.max_iterations, step_tolerance=options.step_tolerance,
-        cost_tolerance=options.cost_tolerance,
-        check_identifiability=options.check_identifiability,
-        min_input_range=options.min_input_range,
-        singular_eigenvalue=options.singular_eigenvalue)
+        max_iterations=options.max_iterations, **options.tuning())
     est.method = ID
     est.fit["a_priori"] = a_priori.describe(record, held)
     est.fit["start"] = start_note or ("equation error" if options.start == "equation_error"

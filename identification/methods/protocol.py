@@ -187,3 +187,7 @@ class OutputErrorOptions:
     singular_eigenvalue: float = option(ident.SINGULAR_EIGENVALUE,
                                         "relative eigenvalue of M below which it is singular",
                                         tuning=True)
+
+    def tuning(self) -> dict[str, Any]:
+        """These options as keywords of the estimate functions."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(OutputErrorOptions)}
