@@ -20,7 +20,8 @@ import pytest
 
 from flightid.scenarios.cards import CardError, card_from_dict, fly_card, load_card
 from flightid.sim import disturbances as dist
-from flightid.sim.augment import DerivativeDelta, RateLimit, augment
+from flightid.sim.augment import augment
+from flightid.sim.effects.airframe import DerivativeDelta, RateLimit
 from flightid.sim.model import PACKAGE_AIRCRAFT, load
 from flightid.sim.trim import trim
 from flightid.sim.truth import derivatives

@@ -6,7 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from flightid.sim.augment import AugmentEffect, ControlEffectiveness, DerivativeDelta, augment
+from flightid.sim.augment import augment
+from flightid.sim.effects.airframe import AugmentEffect, ControlEffectiveness, DerivativeDelta
 
 
 def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
