@@ -67,7 +67,7 @@ import re
 import tempfile
 import tomllib
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -552,13 +552,20 @@ def fly_card(card: Card, seed: int | None = None,
 
 def augmented(card: Card, cache: Path | None = None) -> str:
     """The XML path of the card's aircraft with its [[effect]]s (written once, then reused)."""
-    folder = cache_folder(cache or AUGMENT_CACHE, card.aircraft, card.augmentation)
-    name = f"{card.aircraft}-augmented"
+    return augmented_aircraft(card.aircraft, card.augmentation, cache)
+
+
+def augmented_aircraft(aircraft: str, effects: Sequence[Any], cache: Path | None = None) -> str:
+    """The XML path of ``aircraft`` with the airframe and actuator ``effects`` (catalogue
+    effects), written once into the cache folder, then reused."""
+    effects = tuple(effects)
+    folder = cache_folder(cache or AUGMENT_CACHE, aircraft, effects)
+    name = f"{aircraft}-augmented"
     xml = folder / "aircraft" / name / f"{name}.xml"
     if not xml.is_file():
         tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=folder.parent if folder.parent.is_dir()
                                     else _mkdir(folder.parent)))
-        augment(card.aircraft, card.augmentation, tmp, name=name)
+        augment(aircraft, effects, tmp, name=name)
         try:
             (tmp / "aircraft").rename(_mkdir(folder) / "aircraft")
         except OSError:  # another process wrote it first
@@ -572,4 +579,5 @@ def _mkdir(p: Path) -> Path:
 
 
 __all__ = ["AUGMENT_CACHE", "Card", "CardError", "Condition", "FlightCondition", "augmented",
+           "augmented_aircraft",
            "card_from_dict", "find_card", "fly_card", "library_cards", "load_card", "sub_seed"]

@@ -385,6 +385,12 @@ class Simulation:
         self._set_atmosphere()
 
     # -- controls ------------------------------------------------------------------
+    def travel(self, control: str) -> tuple[float, float] | None:
+        """(lowest, highest) surface position (rad) the command path of ``control`` reaches,
+        or None when the aircraft has no command map for it; valid after ``reset``."""
+        m = self._maps.get(control)
+        return None if m is None else (m[0][0], m[0][-1])
+
     def _command_for(self, control: str, increment: float) -> float:
         """JSBSim pilot command that puts the surface at trim + increment (rad)."""
         m = self._maps.get(control)

@@ -46,7 +46,7 @@ episode length.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -57,8 +57,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from flightid.record import FlightRecord
-from flightid.scenarios.cards import Card, load_card, sub_seed
+from flightid.scenarios.cards import Card, augmented_aircraft, load_card, sub_seed
 from flightid.sim.condition import FlightCondition
+from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.flight import Atmosphere, DepartureError, Simulation
 from flightid.sim.model import Model, load
@@ -157,21 +158,27 @@ class ExcitationEnv(gymnasium.Env):
                  card: str | Card | None = None, targets: str | Sequence[str] = "lateral",
                  episode_s: float = 20.0, decision_hz: float = 50.0, sim_hz: float | None = None,
                  sensors: str = "research", turbulence: str = "none",
+                 effects: Sequence[Mapping[str, Any]] = (),
                  penalty: float = PENALTY, render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         if turbulence not in TURBULENCE:
             raise ValueError(f"turbulence must be one of {TURBULENCE}, got {turbulence!r}")
         suite: SensorSuite | None
+        augmentation = tuple(CATALOGUE.from_dict(d, "effect", f"effects[{i}]")
+                             for i, d in enumerate(effects))
         if card is not None:
             c = card if isinstance(card, Card) else load_card(card)
             aircraft, cond, suite = c.aircraft, c.condition, c.sensors
+            augmentation = (*c.augmentation, *augmentation)
         else:
             alt, speed = condition if condition is not None else (1524.0, 46.3)
             cond = FlightCondition(float(alt), float(speed))
             suite = None if sensors in ("none", "ideal") else builtin_suite(sensors)
         self.render_mode = render_mode
         self.aircraft, self.condition, self.suite = aircraft, cond, suite
+        self.effects = augmentation  # airframe and actuator effects flown (and in the truth)
+        flown = augmented_aircraft(aircraft, augmentation) if augmentation else aircraft
         self.targets = tuple(PRESETS[targets] if isinstance(targets, str) else targets)
         self.episode_s, self.decision_hz = float(episode_s), float(decision_hz)
         sim_hz = self.decision_hz if sim_hz is None else float(sim_hz)
@@ -181,7 +188,7 @@ class ExcitationEnv(gymnasium.Env):
             raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz")
         self.n_decisions = int(round(self.episode_s * self.decision_hz))
         self.penalty = float(penalty)
-        model, self.trim, self.truth = _setup(aircraft, cond)
+        model, self.trim, self.truth = _setup(flown, cond)
         self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
         self.sim = Simulation(model, rate_hz=sim_hz, atmosphere=self._atmosphere)
         self.reference = self.sim.model.reference
@@ -189,8 +196,8 @@ class ExcitationEnv(gymnasium.Env):
         tp = {"de": self.trim.elevator, "da": self.trim.aileron, "dr": self.trim.rudder}
         self._span: list[tuple[float, float]] = []
         for c in CONTROLS:
-            pos = self.sim._maps.get(c, ([tp[c]], [0.0]))[0]  # (positions, commands)
-            self._span.append((tp[c] - pos[0], pos[-1] - tp[c]))  # (down, up) travel
+            low, high = self.sim.travel(c) or (tp[c], tp[c])
+            self._span.append((tp[c] - low, high - tp[c]))  # (down, up) travel
         # targets -> regression groups
         groups: dict[str, list[str]] = {}
         for name in self.targets:
@@ -322,6 +329,9 @@ class ExcitationEnv(gymnasium.Env):
         channels = {c: np.array([s[c] for s in samples]) for c in samples[0]}
         meta = self.sim.meta({"name": "gym:flightid/Excitation-v0", "seed": self._seed})
         meta.extra["truth"] = {"trim": self.trim.condition, "body": dict(self.truth)}
+        if self.effects:
+            meta.extra["injected"] = {"aircraft": self.aircraft, "augmented": self.sim.model.name,
+                                      "effects": [e.to_dict() for e in self.effects]}
         truth = FlightRecord(np.arange(len(samples)) / self.sim.rate_hz, channels, meta)
         if not measured or self.suite is None:
             return truth
