@@ -43,6 +43,7 @@ def gap_command(
         print(json.dumps(d, indent=2))
         return
     console = Console()
+    s = result.shrinkage()
     t = Table(title=f"gap map: {model} (residual / measured energy, mean over windows)")
     per = result.where.by_channel()
     cols = list(next(iter(per.values())))
@@ -61,9 +62,14 @@ def gap_command(
         e.add_row(r.candidate.label, params, f"{r.delta_bic:.1f}", f"{r.shrink:.1%}",
                   "yes" if r.confirmed else "no")
     console.print(e)
-    s = result.shrinkage()
+    for k, step in enumerate(s.get("steps", [])[1:], start=2):
+        r = result.named[k - 1]
+        params = "; ".join(f"{n} {v['value']:.4g} ± {v['std']:.2g}"
+                           for n, v in r.parameters.items())
+        console.print(f"step {k} (with the effects before it fixed): {step['effect']} {params}; "
+                      f"held-out gap -> {step['after']:.3f}")
     if result.named and s:
-        console.print(f"named: {result.named[0].candidate.label}; held-out gap "
+        console.print(f"named: {s['effect']}; held-out gap "
                       f"{s['overall']['before']:.3f} -> {s['overall']['after']:.3f} "
                       f"({s['overall']['shrink']:.1%} shrink)")
     else:

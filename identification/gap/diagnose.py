@@ -16,6 +16,7 @@ from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.linearise import Linearised, linearise
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
 from flightid.identification.gap.segments import segments
+from flightid.identification.gap.sequence import STEPS, following
 from flightid.identification.gap.shrink import shrinkage
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
@@ -32,7 +33,9 @@ class GapResult:
     where: GapMap
     effects: list[Ranked]  # ranked singles
     pairs: list[Ranked] = field(default_factory=list)
-    named: list[Ranked] = field(default_factory=list)  # [the named effect or pair], or []
+    # the named effects in sequence (named[0] the top effect or pair; each next one fitted
+    # with the ones before it fixed), or [] when unexplained
+    named: list[Ranked] = field(default_factory=list)
     windows: dict[str, list[str]] = field(default_factory=dict)  # fit / held out
 
     @property
@@ -44,13 +47,17 @@ class GapResult:
         return self.named[0] if self.named else (self.effects[0] if self.effects else None)
 
     def shrinkage(self) -> dict:
-        return shrinkage(self.top)
+        """Held-out gap of the model as is and with every named effect (the sequence);
+        the top ranked effect's when nothing is named."""
+        return shrinkage(self.named or ([self.top] if self.top else []))
 
     def remaining(self) -> dict[str, float]:
-        """Where the residual stays (held-out, after the named effect or of the model)."""
+        """Where the residual stays (held-out, after the named effects or of the model)."""
+        if self.named and self.named[-1].heldout_after:
+            return self.named[-1].heldout_after
         t = self.top
-        if t is not None and t.heldout_after:
-            return t.heldout_after if self.named else t.heldout_before
+        if t is not None and t.heldout_before:
+            return t.heldout_before
         return {c: d["total"] for c, d in self.where.by_channel().items()}
 
     def to_json(self, top: int = TOP) -> dict[str, Any]:
@@ -99,11 +106,13 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
-             validate_names: Sequence[str] | None = None, try_pairs: bool = True) -> GapResult:
+             validate_names: Sequence[str] | None = None, try_pairs: bool = True,
+             steps: int = STEPS) -> GapResult:
     """Diagnose ``records`` (lateral maneuvers) against the JSBSim ``aircraft``.
 
     Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
-    halves of a record without one), or the ``validate`` records when given.
+    halves of a record without one), or the ``validate`` records when given. Up to
+    ``steps`` effects are named in sequence (``sequence.following``).
     """
     records, found = _records(records)
     names = names or found
@@ -127,6 +136,8 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         named = [both[0]]
     elif ranked and ranked[0].confirmed:
         named = [ranked[0]]
+    if named:
+        named += following(lin, folds, named[0], steps - 1)
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows)

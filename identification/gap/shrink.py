@@ -1,20 +1,27 @@
-"""How far the gap shrinks: per channel, the held-out gap before and after the effect."""
+"""How far the gap shrinks: per channel, the held-out gap before and after the effects."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 from flightid.identification.gap.rank import Ranked, overall
 
 
-def shrinkage(r: Ranked | None) -> dict:
-    """{"effect", "channels": {ch: {"before", "after", "shrink"}}, "overall": {...}}
-    (fractions of the measured energy on the held-out windows); empty without a ranked
-    effect or held-out windows."""
-    if r is None or not r.heldout_before:
+def shrinkage(sequence: Sequence[Ranked]) -> dict:
+    """{"effect", "steps", "channels": {ch: {"before", "after", "shrink"}}, "overall"}:
+    the held-out gap (fraction of the measured energy) of the model as is (before the
+    first effect) and with every effect of ``sequence`` (after the last), and the overall
+    gap after each step; empty without an effect or held-out windows."""
+    if not sequence or not sequence[0].heldout_before or not sequence[-1].heldout_after:
         return {}
+    first, last = sequence[0], sequence[-1]
     chans = {}
-    for ch, b in r.heldout_before.items():
-        a = r.heldout_after[ch]
+    for ch, b in first.heldout_before.items():
+        a = last.heldout_after[ch]
         chans[ch] = {"before": b, "after": a, "shrink": 1 - a / b if b > 0 else float("nan")}
-    b, a = overall(r.heldout_before), overall(r.heldout_after)
-    return {"effect": r.candidate.label, "windows": list(r.heldout_windows), "channels": chans,
+    b, a = overall(first.heldout_before), overall(last.heldout_after)
+    return {"effect": " then ".join(r.candidate.label for r in sequence),
+            "windows": list(first.heldout_windows), "channels": chans,
+            "steps": [{"effect": r.candidate.label, "after": overall(r.heldout_after)}
+                      for r in sequence],
             "overall": {"before": b, "after": a, "shrink": 1 - a / b if b > 0 else float("nan")}}

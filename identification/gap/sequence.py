@@ -1,0 +1,65 @@
+"""Effects named in sequence: the top effect fixed in the model, the rest ranked again.
+
+One effect rarely explains a real gap alone, and a large one (a Dutch roll the model gets
+wrong) masks the smaller ones: with it in the data, no single other effect can shrink the
+held-out gap. So, after the top effect is confirmed, the model takes it at its fitted
+values and the remaining candidates are fitted and checked on the held-out windows again
+(forward selection; Morelli & Klein 2016 ch. 5.4 select regressors the same way), until
+none is confirmed or ``STEPS`` effects are named. The held-out check of a later step uses
+the earlier effects at their values fitted on all windows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from flightid.identification.gap.candidates import Candidate, catalogue_candidates
+from flightid.identification.gap.linearise import Linearised
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, rank
+
+STEPS = 3  # effects named at most
+
+
+def fixed(lin: Linearised, effect: Ranked) -> Linearised:
+    """``lin`` with ``effect`` added at its fitted values (no longer free)."""
+    model = effect.candidate.wrap(lin.model).with_start(**effect.values)
+    return dataclasses.replace(lin, model=model)
+
+
+def _taken(named: list[Ranked]) -> tuple[set[str], set[str]]:
+    """(parameters already fitted, surfaces already scaled) by the named effects."""
+    params: set[str] = set()
+    surfaces: set[str] = set()
+    for r in named:
+        for c in r.candidate.parts or (r.candidate,):
+            params.update(c.free)
+            if c.entry == "control_effectiveness":
+                surfaces.add(c.options["surface"])
+    return params, surfaces
+
+
+def _open(c: Candidate, params: set[str], surfaces: set[str]) -> bool:
+    if set(c.free) & params:
+        return False
+    if c.entry == "control_effectiveness" and c.options["surface"] in surfaces:
+        return False
+    return not (c.entry == "derivative_delta"
+                and c.options["derivative"].rpartition("_")[2] in surfaces)
+
+
+def following(lin: Linearised, folds: Folds, first: Ranked, steps: int) -> list[Ranked]:
+    """Up to ``steps`` more effects after ``first``, each confirmed with the ones before it
+    fixed in the model; stops at the first step that confirms nothing."""
+    named = [first]
+    current = fixed(lin, first)
+    out: list[Ranked] = []
+    for _ in range(max(steps, 0)):
+        params, surfaces = _taken(named)
+        cands = [c for c in catalogue_candidates(current.model) if _open(c, params, surfaces)]
+        ranked = rank(Ranker(current, folds), cands)
+        if not ranked or not ranked[0].confirmed:
+            break
+        named.append(ranked[0])
+        out.append(ranked[0])
+        current = fixed(current, ranked[0])
+    return out
