@@ -80,7 +80,7 @@ from flightid.scenarios.flight_meta import maneuver_list, truth_table
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.scenarios.toml_locate import line_index, line_of
-from flightid.sim.augment import augment, cache_folder
+from flightid.sim.augment import augment_cached
 from flightid.sim.condition import FlightCondition
 from flightid.sim.disturbances import (
     Gust,
@@ -558,24 +558,8 @@ def augmented(card: Card, cache: Path | None = None) -> str:
 def augmented_aircraft(aircraft: str, effects: Sequence[Any], cache: Path | None = None) -> str:
     """The XML path of ``aircraft`` with the airframe and actuator ``effects`` (catalogue
     effects), written once into the cache folder, then reused."""
-    effects = tuple(effects)
-    folder = cache_folder(cache or AUGMENT_CACHE, aircraft, effects)
-    name = f"{aircraft}-augmented"
-    xml = folder / "aircraft" / name / f"{name}.xml"
-    if not xml.is_file():
-        tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=folder.parent if folder.parent.is_dir()
-                                    else _mkdir(folder.parent)))
-        augment(aircraft, effects, tmp, name=name)
-        try:
-            (tmp / "aircraft").rename(_mkdir(folder) / "aircraft")
-        except OSError:  # another process wrote it first
-            pass
-    return str(xml)
-
-
-def _mkdir(p: Path) -> Path:
-    p.mkdir(parents=True, exist_ok=True)
-    return p
+    return str(augment_cached(aircraft, tuple(effects), cache or AUGMENT_CACHE,
+                              name=f"{aircraft}-augmented"))
 
 
 __all__ = ["AUGMENT_CACHE", "Card", "CardError", "Condition", "FlightCondition", "augmented",

@@ -16,6 +16,9 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
 - ``cg_offset``, ``mass_scale``, ``inertia_scale``: the ``<mass_balance>`` section (the CG
   offset moves every mass item: CG, point masses and tanks).
 - ``thrust_moment``: a PITCH term arm x the engines' thrust.
+- ``tail_ice``: the PITCH terms scaled by what they read (the elevator, alpha, the pitch
+  rate or alphadot, directly or through helper functions); the defaults turn ``twinotter``
+  into ``twinotter-iced``.
 - ``actuator_lag``, ``rate_limit``: an ``<actuator>`` in series after the component that
   writes the surface position (``fcs/elevator-pos-rad``, ...), so the record's de/da/dr show
   them. ``deadband``, ``backlash``, ``actuator_bias``: an ``<actuator>`` between the
@@ -32,6 +35,7 @@ import hashlib
 import json
 import math
 import shutil
+import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
@@ -50,6 +54,7 @@ from flightid.sim.effects.airframe import (
     InertiaScale,
     MassScale,
     RateLimit,
+    TailIce,
     ThrustMoment,
 )
 from flightid.sim.model import PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
@@ -75,6 +80,31 @@ def cache_folder(base: Path, aircraft: str, effects: Sequence[AugmentEffect]) ->
     """A folder under ``base`` keyed by the aircraft and the effects (for reuse)."""
     key = json.dumps([aircraft, [e.to_dict() for e in effects]], sort_keys=True, default=str)
     return base / hashlib.sha256(key.encode()).hexdigest()[:16]
+
+
+def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base: str | Path,
+                   name: str | None = None) -> Path:
+    """The augmented XML's path under ``base``, written once per aircraft and effect list.
+
+    The folder is ``cache_folder(base, aircraft, effects)``; a process that finds the XML
+    there reuses it. Written into a temporary folder and renamed, so processes that write
+    the same aircraft at once do not see half a folder.
+    """
+    old = locate(str(aircraft))[0]
+    new = name or f"{old}-augmented"
+    folder = cache_folder(Path(base), str(aircraft), effects)
+    xml = folder / "aircraft" / new / f"{new}.xml"
+    if not xml.is_file():
+        Path(base).mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=base))
+        augment(aircraft, effects, tmp, name=new)
+        folder.mkdir(parents=True, exist_ok=True)
+        try:
+            (tmp / "aircraft").rename(folder / "aircraft")
+        except OSError:  # another process wrote it first
+            pass
+        shutil.rmtree(tmp, ignore_errors=True)
+    return xml
 
 
 def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str | Path,
@@ -347,6 +377,55 @@ def _control_effectiveness(doc: _Doc, e: ControlEffectiveness) -> None:
         raise AugmentError(f"{e.label()}: no aerodynamic term reads the {keyword}")
 
 
+# the properties (or their prefixes) a pitching-moment term reads, per tail_ice factor
+TAIL_READS = {
+    "stability": ("aero/alpha-rad", "aero/alpha-deg", "aero/alpha-wing-rad"),
+    "damping": ("velocities/q-aero-rad_sec", "velocities/q-rad_sec", "aero/alphadot-rad_sec",
+                "aero/alphadot-deg_sec"),
+}
+
+
+def _reads_any(el: ET.Element, props: set[str]) -> bool:
+    return any(sub.tag in ("property", "independentVar")
+               and (sub.text or "").strip().lstrip("-") in props for sub in el.iter())
+
+
+def _tail_ice(doc: _Doc, e: TailIce) -> None:
+    aero = doc.aero()
+    helpers = aero.findall("function")
+    reads: dict[str, set[str]] = {}
+    for factor, props in TAIL_READS.items():
+        found = set(props)
+        for _ in range(3):  # helpers of helpers (qhat reads q, ...)
+            found |= {f.get("name", "") for f in helpers if _reads_any(f, found)}
+        reads[factor] = found
+    elevator = {f.get("name", "") for f in helpers if _mentions(f, set(), "elevator")}
+    pitch = doc.axis("PITCH")
+    count = 0
+    for fn in list(pitch):
+        if fn.tag != "function":
+            continue
+        scale, what = 1.0, []
+        if _mentions(fn, elevator, "elevator"):
+            scale, what = scale * e.elevator, [*what, f"elevator x {e.elevator:.6g}"]
+        for factor in ("stability", "damping"):
+            if _reads_any(fn, reads[factor]):
+                f = getattr(e, factor)
+                scale, what = scale * f, [*what, f"{factor} x {f:.6g}"]
+        if not what or scale == 1.0:
+            continue
+        ops = [c for c in fn if c.tag != "description" and isinstance(c.tag, str)]
+        for c in ops:
+            fn.remove(c)
+        fn.append(_el("product", _val(scale), *ops))
+        pitch.insert(list(pitch).index(fn), ET.Comment(
+            f" scaled by flightid augment: tail_ice {', '.join(what)}: horizontal-tail ice "))
+        count += 1
+    if not count:
+        raise AugmentError(f"{e.label()}: no pitching-moment term reads the elevator, alpha "
+                           "or the pitch rate")
+
+
 # -- mass balance ------------------------------------------------------------------------------
 
 
@@ -531,6 +610,7 @@ _APPLY = {
     MassScale: _mass_scale,
     InertiaScale: _inertia_scale,
     ThrustMoment: _thrust_moment,
+    TailIce: _tail_ice,
     ActuatorLag: lambda doc, e: None,  # written per surface, with the other dynamics
     RateLimit: lambda doc, e: None,
     Deadband: lambda doc, e: None,

@@ -167,6 +167,29 @@ class ThrustMoment(AugmentEffect):
         return self.arm == 0.0
 
 
+@dataclass(kw_only=True)
+class TailIce(AugmentEffect):
+    """Horizontal-tail ice: the pitching-moment terms scaled by what they read.
+
+    ``elevator`` scales the pitching-moment terms that read the elevator (Cm_de),
+    ``stability`` those that read alpha (Cm_alpha), ``damping`` those that read the pitch
+    rate or alphadot (Cm_q, Cm_alphadot). The defaults are the project's iced Twin Otter
+    (``twinotter-iced``: Cm_de x 0.85, Cm_alpha and Cm_q x 0.9, chosen from the text of
+    Batterson & O'Mara, NASA TM-4099, 1989). Lift and drag terms are left as they are.
+    """
+
+    name: ClassVar[str] = "tail_ice"
+    elevator: float = 0.85
+    stability: float = 0.9
+    damping: float = 0.9
+
+    def __post_init__(self) -> None:
+        self._finite("elevator", "stability", "damping")
+
+    def neutral(self) -> bool:
+        return self.elevator == self.stability == self.damping == 1.0
+
+
 # -- actuator --------------------------------------------------------------------------------
 
 
@@ -234,7 +257,7 @@ class ActuatorBias(_Surface):
 
 
 AIRFRAME_EFFECTS = (DerivativeDelta, ControlEffectiveness, CgOffset, MassScale, InertiaScale,
-                    ThrustMoment)
+                    ThrustMoment, TailIce)
 ACTUATOR_EFFECTS = (ActuatorLag, RateLimit, Deadband, Backlash, ActuatorBias)
 # in series at the surface position (what the record's de/da/dr shows)
 DYNAMIC = (ActuatorLag, RateLimit)

@@ -50,6 +50,7 @@ from flightid.sim.effects.airframe import (
     InertiaScale,
     MassScale,
     RateLimit,
+    TailIce,
     ThrustMoment,
 )
 from flightid.sim.effects.base import NamedEffect, Reference
@@ -575,6 +576,15 @@ CATALOGUE = Catalogue((
           "line, propwash)",
           (_p("arm", "m", "N m per N of thrust, nose up positive", 0.1),),
           ThrustMoment, ("de",)),
+    Entry("tail_ice", ActsOn.AIRFRAME, "horizontal-tail ice: pitching-moment terms reading the "
+          "elevator, alpha, the pitch rate scaled (as twinotter-iced)",
+          (_p("elevator", "1", "scale of the pitching-moment terms reading the elevator "
+              "(Cm_de)", 0.85, 0.0, neutral=1.0),
+           _p("stability", "1", "scale of the pitching-moment terms reading alpha (Cm_alpha)",
+              0.9, 0.0, neutral=1.0),
+           _p("damping", "1", "scale of the pitching-moment terms reading q or alphadot "
+              "(Cm_q, Cm_alphadot)", 0.9, 0.0, neutral=1.0)),
+          TailIce, ("q", "de")),
     # -- actuator: JSBSim <actuator> components (flightid.sim.augment) -------------------------
     _actuator("actuator_lag", ActuatorLag, "first-order lag 1/(tau s + 1) in series with the "
               "surface actuator", ("de", "q"),

@@ -13,6 +13,17 @@ default magnitude). How each is fitted:
   (the axes the gap's candidates fit in).
 - sensor effects (a channel's chain in ``[sensors.channels]``): flight path reconstruction
   (``identification.compatibility.reconstruct``), whose ``fit["effects"]`` names the entry.
+- the other airframe effects and the actuator effects: output error with the augmented
+  JSBSim aircraft as the model (``identification.effect_fit.fit_effect``), on a 6 s card
+  with the elevator 3211 of the issue (5 deg, 0.3 s pulses), the research suite's white
+  noise on the compared outputs, the commanded inputs from the record's ``inputs``. The
+  fit starts halfway between the neutral and the default value (twice the default for a
+  rate limit). The entry's other parameters are injected and held at their neutral values.
+  For a one-sided parameter whose neutral value is a limit (a lag, a deadband or backlash
+  of width 0, a rate limit of infinity) "zero within its bound" is the likelihood-ratio
+  test 2 (J(neutral) - J(fit)) < 9 (chi-square(1), 3 sigma): the record shows no effect;
+  a width or lag must also end within 3 standard errors of 0, a rate limit beyond twice
+  the default (out of the record's reach).
 
 ``NOT_YET`` lists every other entry with the reason it is not fitted back yet; together the
 two lists must be the catalogue, so a new entry has to be classified here.
@@ -21,18 +32,23 @@ two lists must be the catalogue, so a new entry has to be classified here.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import pytest
 
 from flightid.identification import compatibility as compat
+from flightid.identification.effect_fit import fit_effect, parameter_scale
 from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.linearise import linearise
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
+from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
+from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.sensors import research_suite
 
 BOUNDS = 3.0  # recovered within this many standard errors
+LIKELIHOOD_RATIO = BOUNDS**2  # chi-square(1) at 3 sigma: "no effect" for one-sided parameters
 INFORMATIVE = 0.1  # the standard error under this fraction of the default magnitude
 
 
@@ -41,8 +57,8 @@ class Case:
     """How one entry is injected and fitted back."""
 
     parameter: str  # the catalogue parameter fitted back
-    via: str  # "gap" (airframe, [[effect]]) or "compatibility" (sensor chain)
-    options: dict = dataclasses.field(default_factory=dict)  # gap: the effect's options
+    via: str  # "gap" (lateral model), "jsbsim" (effect_fit) or "compatibility" (sensor chain)
+    options: dict = dataclasses.field(default_factory=dict)  # gap, jsbsim: effect options
     channel: str = ""  # compatibility: the sensor channel the effect sits on
     fitted: str = ""  # compatibility: the reconstruction parameter estimating it
 
@@ -53,12 +69,23 @@ FITTED: dict[str, Case] = {
     "bias": Case("value", "compatibility", channel="q", fitted="bias_q"),
     "scale": Case("factor", "compatibility", channel="q", fitted="scale_q"),
     "delay": Case("tau", "compatibility", channel="alpha", fitted="delay_alpha"),
+    "cg_offset": Case("x", "jsbsim"),
+    "mass_scale": Case("factor", "jsbsim"),
+    "inertia_scale": Case("iyy", "jsbsim"),
+    "thrust_moment": Case("arm", "jsbsim"),
+    "tail_ice": Case("elevator", "jsbsim"),
+    "actuator_lag": Case("tau", "jsbsim", {"surface": "de"}),
+    "rate_limit": Case("rate", "jsbsim", {"surface": "de"}),
+    "deadband": Case("width", "jsbsim", {"surface": "de"}),
+    "backlash": Case("width", "jsbsim", {"surface": "de"}),
+    "actuator_bias": Case("bias", "jsbsim", {"surface": "de"}),
 }
+# one-sided parameters whose neutral value is a range limit: zero checked by likelihood ratio
+ONE_SIDED = {"actuator_lag", "rate_limit", "deadband", "backlash"}
 
 _NOISE = "a random process: no magnitude to fit back by output error (noise levels are " \
          "estimated as residual statistics, not as this entry's parameter)"
 _SHAPE = "changes the signal's shape (dynamics, sampling, nonlinearity); no fit models it yet"
-_FLIGHT = "changes the flight itself; no fit estimates it yet"
 _BRIDGE = "acts on the bridge's packets or clocks, not on a record a fit reads"
 NOT_YET: dict[str, str] = {
     "noise": _NOISE,
@@ -80,15 +107,6 @@ NOT_YET: dict[str, str] = {
     "gust": "a disturbance: output error treats the response as model error (docs/gap.md)",
     "turbulence": "a disturbance: biases output error (docs/gap.md); no filter-error fit "
                   "of its intensity",
-    "cg_offset": _FLIGHT + " (the gap has no candidate for it)",
-    "mass_scale": _FLIGHT + " (the gap has no candidate for it)",
-    "inertia_scale": _FLIGHT + " (the gap has no candidate for it)",
-    "thrust_moment": _FLIGHT + " (longitudinal; the gap's model is lateral)",
-    "actuator_lag": "actuator dynamics: the gap's linear model has none",
-    "rate_limit": "actuator nonlinearity: the gap's linear model has none",
-    "deadband": "actuator nonlinearity: the gap's linear model has none",
-    "backlash": "actuator nonlinearity: the gap's linear model has none",
-    "actuator_bias": "a surface offset: the gap's nuisance biases absorb it",
     "corrupt": _BRIDGE,
     "drop": _BRIDGE,
     "latency": _BRIDGE,
@@ -125,6 +143,37 @@ def _gap(name: str, case: Case, value: float) -> tuple[float, float, float]:
     return float(injected[case.parameter]), got["value"], got["std"]
 
 
+# the issue's elevator 3211 (5 deg, 0.3 s pulses) on a 6 s calm card; the compared outputs
+# carry the research suite's white noise only (the fit's model is JSBSim without sensors)
+JSBSIM_OUTPUTS = ("V", "alpha", "q", "theta", "de")
+_JSBSIM = dict(_BASE, duration=6.0, rate=50.0, sensors={
+    "suite": "research", "drop": ["vanes", "lever_arm"],
+    "channels": {c: [e.to_dict() for e in research_suite().channels[c]
+                     if isinstance(e, WhiteNoise)] for c in JSBSIM_OUTPUTS}})
+ELEVATOR_3211 = [{"kind": "3211", "surface": "de", "start": 1.0, "base": 0.3,
+                  "amplitude_deg": 5.0}]
+
+
+def _jsbsim(name: str, case: Case, value: float) -> tuple[float, float, float, float]:
+    """(injected, fitted, standard error, likelihood ratio against the neutral value)."""
+    entry = CATALOGUE[name]
+    held = {p.name: p.zero for p in entry.parameters if p.sizes and p.name != case.parameter}
+    data = dict(_JSBSIM, maneuver=ELEVATOR_3211,
+                effect=[{"name": name, **case.options, **held, case.parameter: value}])
+    card = card_from_dict(data)
+    measured, truth = fly_card(card)
+    (injected,) = truth.meta.extra["injected"]["effects"]
+    designs = [input_from_dict(d) for d in truth.meta.extra["inputs"]]
+    p = entry.parameter(case.parameter)
+    start = 2 * p.default if math.isinf(p.zero) else (p.default + p.zero) / 2
+    fitted = fit_effect(measured, card.aircraft, card.augmentation[0], [case.parameter],
+                        controls=total_signals(designs, measured.time),
+                        outputs=JSBSIM_OUTPUTS, start={case.parameter: start})
+    assert fitted.estimate.fit["converged"], fitted.estimate.fit["reason"]
+    return (float(injected[case.parameter]), fitted.values[case.parameter],
+            fitted.std[case.parameter], fitted.likelihood_ratio)
+
+
 def _compatibility(name: str, case: Case, value: float) -> tuple[float, float, float]:
     chain = [{"effect": name, case.parameter: value},
              *[e.to_dict() for e in research_suite().channels[case.channel]]]
@@ -157,10 +206,16 @@ def test_fit_back(name, magnitude):
     case = FITTED[name]
     p = CATALOGUE[name].parameter(case.parameter)
     value = p.default if magnitude == "default" else p.zero
-    run = _gap if case.via == "gap" else _compatibility
-    injected, got, std = run(name, case, value)
+    run = {"gap": _gap, "jsbsim": _jsbsim, "compatibility": _compatibility}[case.via]
+    injected, got, std, *ratio = run(name, case, value)
     assert injected == pytest.approx(value)
-    assert 0 < std < INFORMATIVE * abs(p.default - p.zero)
+    if magnitude == "zero" and name in ONE_SIDED:
+        assert ratio[0] < LIKELIHOOD_RATIO, f"{name}: likelihood ratio {ratio[0]:.3g}"
+        if math.isinf(value):  # a rate limit: pushed out of the record's reach
+            assert got > 2 * p.default, f"{name}.{case.parameter}: fitted {got:.4g}"
+            return
+    assert 0 < std < INFORMATIVE * (parameter_scale(p) if case.via == "jsbsim"
+                                    else abs(p.default - p.zero))
     assert abs(got - injected) < BOUNDS * std, (
         f"{name}.{case.parameter}: injected {injected:.6g}, fitted {got:.6g} +- {std:.3g} "
         f"({(got - injected) / std:+.2f} bounds)")

@@ -1,0 +1,242 @@
+"""Fit an airframe or actuator effect's parameters by flying the augmented JSBSim aircraft.
+
+Output error with JSBSim itself as the model (Jategaonkar 2015, ch. 4; Morelli & Klein
+2016, ch. 6): for trial parameter values the catalogue effect is written into a copy of
+the aircraft (``sim.augment``), the copy is trimmed at the record's flight condition and
+flown with the record's commanded inputs (``sim.flight``), and the measured outputs are
+compared with the flown ones. The project's maximum-likelihood engine
+(``identification.engine``: R concentrated out, damped Gauss-Newton, Cramer-Rao bounds)
+does the rest; only the output sensitivities are finite differences of whole flights.
+
+- Steps: a fraction of each parameter's default magnitude |default - neutral| from the
+  catalogue (``SMOOTH_STEP``), larger and central for the effects whose outputs have kinks
+  in the parameter (rate limit, deadband, backlash: ``KINK_STEP``, so the difference sees
+  the kink and not one side of it). At a range limit the difference is one-sided.
+- Range: trial values outside a parameter's allowed range are flown at the nearest
+  allowed value (a lag of -0.01 s is flown as 0), so the fit can end on the limit.
+- Cache: every augmented XML is written once per parameter value (``augment_cached``)
+  and every flight is kept by its parameter values, so a Newton step's accepted trial is
+  not flown again for its sensitivities.
+- ``EffectFit.likelihood_ratio``: 2 (J(neutral) - J(fit)), the likelihood-ratio statistic
+  of "the effect is absent" (chi-square with one degree of freedom per free parameter,
+  Wilks; for a parameter on a range limit the chi-square(1) quantile is conservative).
+  It says whether the record shows an effect where a one-sided parameter (a rate limit no
+  input reaches, a deadband of width 0) has no usable standard error.
+
+Inputs: the flight core maps surface increments through the aircraft's own actuator, so
+``controls`` are the *commanded* increments (rad, throttle fraction) at the record's
+times; without them the measured surfaces' increments are used, which is right only
+when the effect does not act on the measured surfaces and the aircraft's actuator is fast.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from flightid.identification.engine.gauss_newton import maximum_likelihood
+from flightid.identification.engine.likelihood import (
+    concentrated_cost,
+    information_matrix,
+    noise_covariance,
+)
+from flightid.identification.engine.results import estimate_from_fit
+from flightid.identification.estimate import Estimate
+from flightid.record import FlightRecord
+from flightid.sim import flight
+from flightid.sim.augment import augment_cached
+from flightid.sim.effects.airframe import AugmentEffect
+from flightid.sim.effects.catalogue import CATALOGUE, Parameter
+from flightid.sim.model import load
+from flightid.sim.trim import trim
+
+METHOD = "effect_fit"
+CACHE = Path(tempfile.gettempdir()) / "flightid-effect-fit"
+SMOOTH_STEP = 0.05  # finite-difference step, fraction of the default magnitude
+KINK_STEP = 0.1  # the same for effects with kinks (central differences across them)
+KINKED = ("rate_limit", "deadband", "backlash")
+LONGITUDINAL = ("V", "alpha", "q", "theta", "de")
+LATERAL = ("beta", "p", "r", "phi", "da", "dr")
+CONTROLS = ("de", "da", "dr", "throttle")
+
+
+@dataclass
+class EffectFit:
+    """A fitted effect: values and standard errors in the catalogue's units (SI).
+
+    ``effect`` is the effect at the fitted values; ``estimate`` the engine's ``Estimate``
+    (fit statistics, fitted outputs); ``cost`` and ``neutral_cost`` the ML cost
+    N/2 ln det R at the fit and with the effect at its neutral value; ``flights`` how many
+    JSBSim flights the fit took; ``at_limit`` the parameters that ended on a range limit.
+    """
+
+    effect: AugmentEffect
+    names: list[str]
+    values: dict[str, float]
+    std: dict[str, float]
+    estimate: Estimate
+    cost: float
+    neutral_cost: float
+    flights: int
+    at_limit: list[str]
+
+    @property
+    def likelihood_ratio(self) -> float:
+        """2 (J(neutral) - J(fit)): chi-square(len(names)) when the effect is absent."""
+        return 2.0 * (self.neutral_cost - self.cost)
+
+
+def default_outputs(effect: AugmentEffect) -> tuple[str, ...]:
+    """The outputs compared: lateral for an aileron or rudder effect, else longitudinal."""
+    surface = effect.options().get("surface", "de")
+    return LATERAL if surface in ("da", "dr") else LONGITUDINAL
+
+
+def parameter_scale(p: Parameter) -> float:
+    """The size of a parameter's effect: |default - neutral|, or |default| for an
+    infinite neutral value (a rate limit) or a shape parameter."""
+    if p.neutral is None or math.isinf(p.neutral):
+        return abs(p.default) or 1.0
+    return abs(p.default - p.neutral) or 1.0
+
+
+def _limits(p: Parameter) -> tuple[float, float]:
+    low = p.low
+    if p.low_open and math.isfinite(low):
+        low = low + 1e-3 * parameter_scale(p)
+    return low, p.high
+
+
+class _Flights:
+    """The augmented aircraft flown at parameter values, each flight kept."""
+
+    def __init__(self, record: FlightRecord, aircraft: str, effect: AugmentEffect,
+                 names: Sequence[str], outputs: Sequence[str],
+                 controls: Mapping[str, np.ndarray], cache: Path) -> None:
+        self.aircraft, self.effect, self.names = aircraft, effect, list(names)
+        self.outputs, self.controls, self.cache = list(outputs), controls, cache
+        self.n = record.time.size
+        self.rate = 1.0 / record.uniform_step(METHOD, min_samples=10)
+        c = record.meta.condition
+        missing = [k for k in ("altitude_m", "speed_m_s") if k not in c]
+        if missing:
+            raise ValueError(f"{METHOD}: the record's metadata lacks the flight condition "
+                             f"({', '.join(missing)}); it is needed to trim the model")
+        self.condition = (float(c["altitude_m"]), float(c["speed_m_s"]),
+                          float(c.get("gamma_rad", 0.0)), float(c.get("bank_rad", 0.0)),
+                          float(c.get("flaps_rad", 0.0)))
+        entry = CATALOGUE.of(effect)
+        self.params = {n: entry.parameter(n) for n in self.names}
+        self.memo: dict[tuple[float, ...], np.ndarray] = {}
+
+    def clip(self, values: Mapping[str, float]) -> tuple[float, ...]:
+        out = []
+        for n in self.names:
+            low, high = _limits(self.params[n])
+            out.append(float(min(max(values[n], low), high)))
+        return tuple(out)
+
+    def fly(self, values: Mapping[str, float]) -> np.ndarray:
+        """Outputs (N, ny) of the aircraft with the effect at ``values`` (clipped to range)."""
+        key = self.clip(values)
+        if key not in self.memo:
+            e = dataclasses.replace(self.effect, **dict(zip(self.names, key, strict=True)))
+            model = load(str(augment_cached(self.aircraft, [e], self.cache)))
+            trimmed = trim(model, *self.condition)
+            rec = flight.fly(model, trimmed, self.controls, duration_s=(self.n - 1) / self.rate,
+                             rate_hz=self.rate)
+            self.memo[key] = np.column_stack([rec[c][: self.n] for c in self.outputs])
+        return self.memo[key]
+
+    def step(self, name: str) -> float:
+        p = self.params[name]
+        return (KINK_STEP if self.effect.name in KINKED else SMOOTH_STEP) * parameter_scale(p)
+
+    def sensitivities(self, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Outputs and their central (one-sided at a limit) finite-difference sensitivities."""
+        y = self.fly(values)
+        base = dict(zip(self.names, self.clip(values), strict=True))
+        sens = np.zeros((*y.shape, len(self.names)))
+        for k, n in enumerate(self.names):
+            h = self.step(n)
+            low, high = _limits(self.params[n])
+            up, down = min(base[n] + h, high), max(base[n] - h, low)
+            if up == down:
+                continue
+            sens[:, :, k] = (self.fly({**base, n: up}) - self.fly({**base, n: down})) / (up - down)
+        return y, sens
+
+
+def commanded_from_record(record: FlightRecord) -> dict[str, np.ndarray]:
+    """The measured surfaces' and throttle's increments on their first sample (rad, fraction).
+
+    A stand-in for the commanded inputs when they are not known (see the module note).
+    """
+    return {c: record[c] - record[c][0] for c in CONTROLS if c in record}
+
+
+def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
+               free: Sequence[str] | None = None, *,
+               controls: Mapping[str, np.ndarray] | None = None,
+               outputs: Sequence[str] | None = None, start: Mapping[str, float] | None = None,
+               max_iterations: int = 12, colored: bool = False,
+               cache: str | Path | None = None) -> EffectFit:
+    """Fit ``effect``'s ``free`` parameters (default: all that size it) to ``record``.
+
+    ``aircraft``: the model the effect is added to (a name or an XML path); ``effect``: the
+    catalogue effect, its options (surface, derivative) fixed and its other parameters
+    held at their values; ``start``: the first values (default: the effect's own);
+    ``controls``: commanded increments at the record's times (default
+    ``commanded_from_record``); ``outputs``: the record channels compared (default
+    ``default_outputs``); ``colored``: bounds corrected for colored residuals (M&K eq. 6.54).
+    """
+    if not isinstance(effect, AugmentEffect):
+        raise ValueError(f"{METHOD}: {type(effect).__name__} is not an airframe or actuator "
+                         "effect of the catalogue (those are written into the aircraft)")
+    entry = CATALOGUE.of(effect)
+    names = list(free) if free is not None else [p.name for p in entry.parameters if p.sizes]
+    unknown = [n for n in names if n not in effect.parameters()]
+    if unknown or not names:
+        raise ValueError(f"{METHOD}: {effect.name} has no parameter(s) {', '.join(unknown)}; "
+                         f"free parameters are among {', '.join(effect.parameters())}")
+    outputs = list(outputs or default_outputs(effect))
+    missing = [c for c in outputs if c not in record]
+    if missing:
+        raise ValueError(f"{METHOD}: the record lacks output channel(s) {', '.join(missing)}")
+    n = record.time.size
+    controls = dict(controls) if controls is not None else commanded_from_record(record)
+    for c, u in controls.items():
+        if np.asarray(u).shape != (n,):
+            raise ValueError(f"{METHOD}: control {c!r} has shape {np.shape(u)}; the record "
+                             f"has {n} samples")
+    flights = _Flights(record, aircraft, effect, names, outputs, controls,
+                       Path(cache) if cache else CACHE)
+    z = np.column_stack([record[c] for c in outputs])
+    floor = np.maximum(1e-12 * np.var(z, axis=0), 1e-16)
+    values = {nm: float((start or {}).get(nm, effect.parameters()[nm])) for nm in names}
+    ml = maximum_likelihood(z, floor, flights.sensitivities, flights.fly, names, values,
+                            max_iterations, False, step_tol=0.2, cost_tol=0.05)
+    fitted = dict(zip(names, flights.clip(ml.values), strict=True))
+    y, sens = flights.sensitivities(fitted)  # at the clipped values (kept flights)
+    ml.values, ml.y, ml.sens, ml.residuals = fitted, y, sens, z - y
+    ml.noise = noise_covariance(z - y, False, floor)
+    ml.information = information_matrix(sens, np.linalg.inv(ml.noise))
+    blind = np.diag(ml.information) == 0  # the effect is invisible there (no bound)
+    ml.information[blind, blind] = 1.0
+    est = estimate_from_fit(ml, method=METHOD, model=f"{aircraft} + {effect.name}",
+                            time=record.time, measured=z, output_names=outputs, fixed={},
+                            unidentifiable={}, colored=colored, full_noise_covariance=False)
+    neutral = {nm: entry.parameter(nm).zero for nm in names}
+    neutral_cost = concentrated_cost(z - flights.fly(neutral), False, floor)
+    cost = concentrated_cost(z - y, False, floor)
+    at_limit = [nm for nm in names if fitted[nm] in _limits(entry.parameter(nm))]
+    std = {nm: math.inf if blind[k] else float(s)
+           for k, (nm, s) in enumerate(zip(names, est.std, strict=True))}
+    return EffectFit(dataclasses.replace(effect, **fitted), names, fitted, std, est, cost,
+                     neutral_cost, len(flights.memo), at_limit)
