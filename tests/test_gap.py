@@ -28,7 +28,9 @@ def _flown(effect: dict | None):
 @pytest.fixture(scope="module")
 def injected():
     rec = _flown({"name": "derivative_delta", "derivative": "Cn_beta", "delta": INJECTED})
-    return diagnose([rec], "navion", try_pairs=False)
+    # the card's elevator 3211 makes "auto" diagnose the longitudinal axis too (one window:
+    # nothing held out there); the lateral axis alone keeps this file fast
+    return diagnose([rec], "navion", try_pairs=False, axis="lateral")
 
 
 def test_blind_derivative_delta_named(injected):
@@ -49,13 +51,20 @@ def test_json_and_heat_map(injected, tmp_path):
     d = injected.to_json()
     assert set(d) >= {"where", "effects", "shrinkage", "unexplained"}
     assert d["effects"][0]["name"] == "derivative_delta"
+    regimes = d["where"]["regimes"]
+    assert {r["variable"] for r in regimes} == {"alpha", "V"}
+    for var in ("alpha", "V"):  # equal-count bins of the pooled samples
+        rows = [r for r in regimes if r["variable"] == var and r["channel"] == "beta"]
+        assert len(rows) == 3 and all(r["low"] <= r["high"] for r in rows)
+        assert max(r["samples"] for r in rows) - min(r["samples"] for r in rows) <= 2
+        assert all(math.isfinite(r["fraction"]) for r in rows)
     fig = injected.figure()
     fig.savefig(tmp_path / "gap.png")
     assert (tmp_path / "gap.png").stat().st_size > 1000
 
 
 def test_null_case_unexplained():
-    result = diagnose([_flown(None)], "navion", try_pairs=False)
+    result = diagnose([_flown(None)], "navion", try_pairs=False, axis="lateral")
     # the plain model reproduces its own flight to a fraction of a percent: nothing named
     assert result.unexplained
     remaining = result.to_json()["unexplained"]

@@ -8,7 +8,16 @@ parameter) and which parameters a fit frees:
   fitted value minus the model's (body axes, per rad or per unit nondimensional rate);
 - ``control_effectiveness`` (airframe): every derivative of one surface scaled by
   ``factor`` (1: the model);
-- ``scale`` (sensor): one measured output scaled by ``factor`` (1: none).
+- ``scale`` (sensor): one measured output scaled by ``factor`` (1: none);
+- ``tail`` (longitudinal, a group of catalogue entries): ice or damage on the horizontal
+  tail. The tail's lift slope and its elevator effectiveness fall together, so the tail's
+  share of every pitching-moment derivative falls with them (Etkin & Reid 1996 ch. 2:
+  Cm_alpha_tail = -eta V_H a_t (1 - deps/dalpha), Cm_q_tail = -2 eta V_H a_t l_t/cbar,
+  Cm_de = -eta V_H a_t tau; Batterson & O'Mara, NASA TM-4099, 1989: loss of elevator
+  effectiveness, static stability and pitch damping with a glaze-ice tail). The share of
+  Cm_alpha (and of Cm_q) that is the tail's is not known from the model, so the group is
+  ``control_effectiveness`` of the elevator with a ``derivative_delta`` on Cm_alpha and on
+  Cm_q (three parameters, each a catalogue entry ``correct.py`` writes).
 
 Sensor biases are not candidates: the model's output and state biases (nuisance
 parameters fitted on every window) absorb them.
@@ -21,18 +30,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification.gap.linearise import DERIVATIVES
+from flightid.identification.gap.linearise import AXIS_DERIVATIVES, TRIM_TERMS
 from flightid.identification.linear_models import LinearModel
 
-SURFACES = ("da", "dr")
-OUTPUTS = ("beta", "p", "r", "phi", "ay")
+SURFACES = ("da", "dr", "de")
+OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the lateral model's
+LONGITUDINAL_OUTPUTS = ("V", "alpha", "q", "theta", "az")
+TAIL_DERIVATIVES = ("Cm_alpha", "Cm_q")  # the tail's share freed with the elevator's
 
 
 @dataclass(frozen=True)
 class Candidate:
     """One catalogue effect as the gap fits it."""
 
-    entry: str  # catalogue name
+    entry: str  # catalogue name ("pair", "tail": a group of ``parts``)
     options: dict[str, str]
     free: tuple[str, ...]  # linear-model parameters the fit frees
     wrap: Callable[[LinearModel], LinearModel] = field(compare=False, repr=False)
@@ -41,7 +52,8 @@ class Candidate:
     @property
     def label(self) -> str:
         if self.parts:
-            return " + ".join(p.label for p in self.parts)
+            inner = " + ".join(p.label for p in self.parts)
+            return inner if self.entry == "pair" else f"{self.entry}[{inner}]"
         opts = ",".join(f"{v}" for v in self.options.values())
         return f"{self.entry}({opts})"
 
@@ -109,23 +121,52 @@ def _output_scale(channel: str) -> Callable[[LinearModel], LinearModel]:
     return wrap
 
 
-def catalogue_candidates(model: LinearModel) -> list[Candidate]:
-    """Every single-effect candidate for ``model`` (the linearised aircraft)."""
-    out = [Candidate("derivative_delta", {"derivative": d, "axes": "body"}, (d,), _identity)
-           for d in DERIVATIVES if d in model.parameters]
-    out += [Candidate("control_effectiveness", {"surface": s}, (f"factor_{s}",),
-                      _effectiveness(s)) for s in SURFACES if s in model.inputs]
+def _derivative(name: str, axes: str) -> Candidate:
+    return Candidate("derivative_delta", {"derivative": name, "axes": axes}, (name,),
+                     _identity)
+
+
+def _surface(surface: str) -> Candidate:
+    return Candidate("control_effectiveness", {"surface": surface}, (f"factor_{surface}",),
+                     _effectiveness(surface))
+
+
+def catalogue_candidates(model: LinearModel, axes: str = "body") -> list[Candidate]:
+    """Every single-effect candidate for ``model`` (the linearised aircraft, its
+    derivatives in ``axes``), and the tail group when the model is longitudinal."""
+    known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
+    out = [_derivative(d, axes) for d in model.parameters if d in known]
+    out += [_surface(s) for s in SURFACES if s in model.inputs]
     out += [Candidate("scale", {"channel": c}, (f"scale_{c}",), _output_scale(c))
-            for c in OUTPUTS if c in model.outputs]
-    return out
+            for c in model.outputs]
+    tail = tail_candidate(model, axes)
+    return out + ([tail] if tail else [])
+
+
+def tail_candidate(model: LinearModel, axes: str = "stability") -> Candidate | None:
+    """The horizontal tail's loss (ice): the elevator's effectiveness and the tail's share
+    of Cm_alpha and Cm_q, as one group; None when the model has no elevator."""
+    if "de" not in model.inputs or not set(TAIL_DERIVATIVES) <= set(model.parameters):
+        return None
+    return group("tail", [_surface("de"), *(_derivative(d, axes) for d in TAIL_DERIVATIVES)])
+
+
+def group(entry: str, parts: list[Candidate]) -> Candidate | None:
+    """Several effects at once, named ``entry`` (a group among them flattened into its
+    parts); None when two free the same parameter."""
+    parts = [q for p in parts for q in (p.parts or (p,))]
+    free = [f for p in parts for f in p.free]
+    if len(set(free)) < len(free):
+        return None
+
+    def wrap(model: LinearModel) -> LinearModel:
+        for p in parts:
+            model = p.wrap(model)
+        return model
+
+    return Candidate(entry, {}, tuple(free), wrap, tuple(parts))
 
 
 def pair(a: Candidate, b: Candidate) -> Candidate | None:
     """Both effects at once; None when they free the same parameter."""
-    if set(a.free) & set(b.free):
-        return None
-
-    def wrap(model: LinearModel) -> LinearModel:
-        return b.wrap(a.wrap(model))
-
-    return Candidate("pair", {}, (*a.free, *b.free), wrap, (a, b))
+    return group("pair", [a, b])

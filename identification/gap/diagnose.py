@@ -1,5 +1,11 @@
 """The sim-to-real gap diagnosis: where the gap lies, which effect causes it, how far it
-shrinks (``diagnose``), and its result (``GapResult``: json form, heat map)."""
+shrinks (``diagnose``), and its result (``GapResult``: json form, heat map).
+
+Each axis the records excite (``linearise.excited_axes``: elevator -> longitudinal, aileron
+or rudder -> lateral) is diagnosed on its own model and windows; with both, the result is
+the axis whose named effect has the stronger evidence (the lower delta BIC), the ranking
+holds both axes' effects, the gap map both axes' channels, and ``by_axis`` each axis's
+full result."""
 
 from __future__ import annotations
 
@@ -13,7 +19,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.gap.candidates import catalogue_candidates
-from flightid.identification.gap.linearise import Linearised, linearise
+from flightid.identification.gap.linearise import (
+    AXIS_INPUTS,
+    AXIS_NAMES,
+    Linearised,
+    excited_axes,
+    linearise,
+)
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.sequence import STEPS, following
@@ -37,6 +49,13 @@ class GapResult:
     # with the ones before it fixed), or [] when unexplained
     named: list[Ranked] = field(default_factory=list)
     windows: dict[str, list[str]] = field(default_factory=dict)  # fit / held out
+    # each diagnosed axis's own result when the records excite both (else empty)
+    by_axis: dict[str, GapResult] = field(default_factory=dict)
+
+    @property
+    def axis(self) -> str:
+        """The axis of the model (and of ``named``)."""
+        return self.linearised.axis
 
     @property
     def unexplained(self) -> bool:
@@ -63,7 +82,9 @@ class GapResult:
     def to_json(self, top: int = TOP) -> dict[str, Any]:
         return _finite({
             "aircraft": self.aircraft,
-            "model": {"axes": self.linearised.axes, "derivatives": self.linearised.derivatives,
+            "axis": self.axis,
+            "model": {"axes": self.linearised.axes, "axis": self.axis,
+                      "derivatives": self.linearised.derivatives,
                       "trim": {"altitude_m": self.linearised.trim.altitude_m,
                                "speed_m_s": self.linearised.trim.speed_m_s,
                                "alpha": self.linearised.trim.alpha}},
@@ -75,6 +96,9 @@ class GapResult:
             "shrinkage": self.shrinkage(),
             "unexplained": ({"remaining": self.remaining(),
                              "overall": overall(self.remaining())} if self.unexplained else None),
+            "by_axis": {a: {"named": [r.to_json() for r in g.named],
+                            "shrinkage": g.shrinkage(), "unexplained": g.unexplained}
+                        for a, g in self.by_axis.items()},
         })
 
     def figure(self) -> Figure:
@@ -107,12 +131,14 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
-             steps: int = STEPS) -> GapResult:
-    """Diagnose ``records`` (lateral maneuvers) against the JSBSim ``aircraft``.
+             steps: int = STEPS, axis: str = "auto") -> GapResult:
+    """Diagnose ``records`` against the JSBSim ``aircraft``.
 
-    Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
-    halves of a record without one), or the ``validate`` records when given. Up to
-    ``steps`` effects are named in sequence (``sequence.following``).
+    ``axis``: "lateral", "longitudinal", or "auto" (the axes the records excite, each
+    diagnosed; see the module docstring). Held out: each maneuver window in turn (windows
+    of the records' maneuver lists, or the halves of a record without one), or the
+    ``validate`` records when given. Up to ``steps`` effects are named in sequence
+    (``sequence.following``).
     """
     records, found = _records(records)
     names = names or found
@@ -121,15 +147,36 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         validate_names = validate_names or [f"validate {n}" for n in found_val]
     if not records:
         raise ValueError("gap: no record to diagnose")
-    lin = linearise(aircraft, records)
-    fit_windows = segments(records, list(names) if names else None)
+    if axis == "auto":
+        axes = excited_axes(records) or ["lateral"]
+    elif axis in AXIS_NAMES:
+        axes = [axis]
+    else:
+        raise ValueError(f"gap: axis must be auto, {', '.join(AXIS_NAMES)}; got {axis!r}")
+    results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
+                                 try_pairs, steps) for a in axes}
+    return next(iter(results.values())) if len(results) == 1 else _merged(results)
+
+
+def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
+                   validate: list[FlightRecord] | None, names: Sequence[str] | None,
+                   validate_names: Sequence[str] | None, try_pairs: bool,
+                   steps: int) -> GapResult:
+    inputs = AXIS_INPUTS[axis]
+    lin = linearise(aircraft, records, axis)
+    fit_windows = segments(records, list(names) if names else None, inputs)
+    if not fit_windows:
+        raise ValueError(f"gap: the records have no {axis} maneuver window "
+                         f"(inputs {', '.join(inputs)})")
     val = segments(list(validate), list(validate_names) if validate_names else
-                   [f"validate {k + 1}" for k in range(len(validate))]) if validate else None
+                   [f"validate {k + 1}" for k in range(len(validate))], inputs
+                   ) if validate else None
     folds = Folds.make(fit_windows, val)
     ranker = Ranker(lin, folds)
     where = gap_map(ranker.base | {k: v for k, v in ranker.base_held.items()
-                                   if k not in ranker.base})
-    ranked = rank(ranker, catalogue_candidates(lin.model))
+                                   if k not in ranker.base},
+                    records={s.label: s.record for s in [*fit_windows, *(val or [])]})
+    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
     if both and both[0].confirmed:
@@ -141,3 +188,19 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows)
+
+
+def _merged(results: dict[str, GapResult]) -> GapResult:
+    """One result of several axes: the axis with the strongest named effect (lowest delta
+    BIC; the first axis when none is named) gives the model, ``named`` and ``pairs``."""
+    named = [g for g in results.values() if g.named]
+    main = (min(named, key=lambda g: g.named[0].delta_bic) if named
+            else next(iter(results.values())))
+    where = GapMap(main.where.bands, [row for g in results.values() for row in g.where.rows],
+                   [row for g in results.values() for row in g.where.regimes])
+    effects = sorted((r for g in results.values() for r in g.effects),
+                     key=lambda r: (not r.confirmed, r.delta_bic))
+    windows = {k: list(dict.fromkeys(w for g in results.values() for w in g.windows[k]))
+               for k in ("fit", "held_out")}
+    return GapResult(main.aircraft, main.linearised, where, effects, main.pairs, main.named,
+                     windows, dict(results))

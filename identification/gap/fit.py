@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification.gap.linearise import NUISANCE
+from flightid.identification.gap.linearise import nuisance
 from flightid.identification.linear_models import LinearModel
 from flightid.identification.methods import output_error
 from flightid.record import FlightRecord
@@ -51,7 +51,7 @@ def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
 def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = ()) -> WindowFit:
     """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``."""
     est = output_error.estimate(
-        record, model, free=[*free, *NUISANCE], initial_state="estimate", hold="foh",
+        record, model, free=[*free, *nuisance(model)], initial_state="estimate", hold="foh",
         colored=True, check_identifiability=True, max_iterations=MAX_ITERATIONS)
     values = {n: float(est.values[est.names.index(n)]) if n in est.names else model.start[n]
               for n in free}

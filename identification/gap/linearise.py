@@ -1,47 +1,78 @@
-"""The model under test, linearised at a record's condition.
+"""The model under test, linearised at a record's condition, on the axis the records excite.
 
-First version: the JSBSim aircraft is trimmed at the record's mean true airspeed and
-altitude (level flight), its truth derivatives (``flightid.sim.truth.derivatives``, body
-axes, aerodynamic) are taken there, and they become the fixed values of the lateral
-perturbation model of ``identification.linear_models`` (Morelli & Klein 2016 example 6.1)
+The JSBSim aircraft is trimmed at the records' mean true airspeed and altitude (level
+flight), its truth derivatives (``flightid.sim.truth.derivatives``) are taken there, and
+they become the fixed values of a perturbation model of ``identification.linear_models``
 with the model's own mass, inertia and reference geometry and the trim's alpha and theta.
-The biases of that model (trim offsets) and its initial state are nuisance parameters
+A derivative with a kink at trim (a drag polar whose linear segment ends there, as the
+Navion's CD at 46 m/s) takes the mean of its two one-sided slopes.
+
+- ``lateral``: the lateral model of Morelli & Klein (2016) example 6.1, body axes, all 15
+  derivatives, aerodynamic + propulsive (outputs beta, p, r, phi, ay);
+- ``longitudinal``: the full longitudinal model (Morelli & Klein 2016 ch. 3 and 6; Etkin &
+  Reid 1996 ch. 4), stability axes (CL, CD; Cm is the same in both), all 11 derivatives
+  (outputs V, alpha, q, theta, az). When the records carry the engine thrust (N, body x;
+  the NASA record and the simulated ones do), it is a second input (``thrust_input``),
+  the trim thrust is the records' mean, and the derivatives are the aerodynamic ones;
+  otherwise the total (aerodynamic + propulsive) ones with no thrust term. Without the
+  measured thrust the phugoid's speed damping (thrust falling with speed) is missing:
+  Twin Otter null case V gap 0.019 without, 0.002 with.
+
+The biases of the model (trim offsets) and its initial state are nuisance parameters
 fitted on every window; the derivatives are the model.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from flightid.identification import windows
 from flightid.identification.linear_models import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
+    LONGITUDINAL_DERIVATIVES,
     LinearModel,
     ReferenceCondition,
     lateral,
+    longitudinal,
 )
 from flightid.record import FlightRecord
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
 
-AXES = "body"
+AXES = "body"  # the lateral model's derivative axes
 PROPULSION = True  # total derivatives: what a flight (and a flight test) sees
 NUISANCE = LATERAL_BIASES
-DERIVATIVES = LATERAL_DERIVATIVES
+DERIVATIVES = LATERAL_DERIVATIVES  # the lateral model's (kept: other modules import it)
+AXIS_NAMES = ("lateral", "longitudinal")
+# per axis: the derivatives of the model, their axes, the surfaces that excite it
+AXIS_DERIVATIVES = {"lateral": LATERAL_DERIVATIVES, "longitudinal": LONGITUDINAL_DERIVATIVES}
+AXIS_FRAME = {"lateral": "body", "longitudinal": "stability"}
+AXIS_INPUTS = {"lateral": ("da", "dr"), "longitudinal": ("de",)}
+TRIM_TERMS = ("CL_0", "CD_0")  # set by the trim, not candidates of a delta
+EXCITED = 0.25  # a real record's axis is excited when a surface's spread reaches this
+# fraction of the largest surface spread of the record
 
 
 @dataclass
 class Linearised:
-    """The aircraft's lateral perturbation model at the record's condition."""
+    """The aircraft's perturbation model of one axis at the record's condition."""
 
     aircraft: str  # as given (project name, stock JSBSim name or XML path)
-    model: LinearModel  # lateral, all derivatives, start = the aircraft's truth
-    derivatives: dict[str, float]  # the aircraft's lateral derivatives (body axes, per rad)
+    model: LinearModel  # all derivatives of the axis, start = the aircraft's truth
+    derivatives: dict[str, float]  # the aircraft's derivatives (axes ``axes``, per rad)
     trim: Trim
     axes: str = AXES
+    axis: str = "lateral"
+
+
+def nuisance(model: LinearModel) -> tuple[str, ...]:
+    """The bias parameters of ``model`` (trim offsets, fitted on every window)."""
+    return tuple(p for p in model.parameters if p.startswith("bias_"))
 
 
 def record_condition(record: FlightRecord) -> tuple[float, float]:
@@ -62,20 +93,51 @@ def record_condition(record: FlightRecord) -> tuple[float, float]:
     raise ValueError("the record has no altitude h (channel or meta.condition)")
 
 
-def linearise(aircraft: str, records: list[FlightRecord]) -> Linearised:
-    """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised."""
+def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
+    """The axes the records excite: from their maneuver lists (elevator: longitudinal;
+    aileron or rudder: lateral), else from the spread of the measured surfaces (an axis
+    whose surface spread reaches ``EXCITED`` of the largest one). Lateral first."""
+    found: set[str] = set()
+    for r in records:
+        items = windows.maneuvers(r)
+        if items:
+            surfaces = {s for m in items for s in m["surfaces"]}
+        else:
+            spread = {s: float(np.std(r[s])) for s in ("de", "da", "dr") if s in r}
+            top = max(spread.values(), default=0.0)
+            surfaces = {s for s, v in spread.items() if top > 0 and v >= EXCITED * top}
+        found |= {a for a, ins in AXIS_INPUTS.items() if set(ins) & surfaces}
+    return [a for a in AXIS_NAMES if a in found]
+
+
+def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral") -> Linearised:
+    """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
+    ``axis`` ("lateral" or "longitudinal")."""
+    if axis not in AXIS_NAMES:
+        raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])
     altitude, speed = (float(x) for x in conds.mean(axis=0))
     altitude = max(altitude, 0.0)  # a record at sea level averages a little below it
     model = load(aircraft)
     trimmed = trim(model, altitude, speed)
-    truth = derivatives(model, trimmed, axes=AXES, propulsion=PROPULSION)
+    frame = AXIS_FRAME[axis]
+    thrust_input = axis == "longitudinal" and all("thrust" in r for r in records)
+    truth = derivatives(model, trimmed, axes=frame, propulsion=PROPULSION and not thrust_input)
     s = truth.state
+    thrust = float(np.mean([np.mean(r["thrust"]) for r in records])) if thrust_input else 0.0
     ref = model.reference
     condition = ReferenceCondition(
         V=s["V"], qbar=s["qbar"], alpha=trimmed.alpha, theta=trimmed.theta, mass=s["mass"],
         Ixx=s["Ixx"], Iyy=s["Iyy"], Izz=s["Izz"], Ixz=s["Ixz"], area=ref.area,
-        span=ref.span, chord=ref.chord)
-    values = {d: float(truth.values.get(d, 0.0)) for d in DERIVATIVES}
-    linear = lateral(condition, DERIVATIVES, start=values)
-    return Linearised(aircraft, linear, values, trimmed)
+        span=ref.span, chord=ref.chord, thrust=thrust)
+    names = AXIS_DERIVATIVES[axis]
+    known = {**{k: 0.5 * (f.minus + f.plus) for k, f in truth.flags.items()}, **truth.values}
+    if axis == "lateral":
+        values = {d: float(known.get(d, 0.0)) for d in names}
+        linear = lateral(condition, names, start=values)
+    else:
+        values = {d: float(known.get(d, 0.0)) for d in names
+                  if d not in TRIM_TERMS or not thrust_input}
+        linear = longitudinal(condition, names, start=values, thrust_input=thrust_input)
+        values = {d: float(linear.start[d]) for d in names}
+    return Linearised(aircraft, linear, values, trimmed, frame, axis)

@@ -1,9 +1,10 @@
-"""The windows of the records a diagnosis fits and holds out: one per lateral maneuver.
+"""The windows of the records a diagnosis fits and holds out: one per maneuver of the axis.
 
 A simulated record lists its maneuvers (``identification.windows``): each maneuver on the
-model's inputs is one window, from 1 s before its first input to 8 s after its last or
-the next maneuver. A record that lists none (a real record) is cut in two halves, so that
-one half can be held out of the fit of the other.
+model's inputs (aileron and rudder: lateral; elevator: longitudinal) is one window, from
+1 s before its first input to 8 s after its last or the next maneuver; a record whose
+list has none on those inputs gives no window. A record that lists none (a real record)
+is cut in two halves, so that one half can be held out of the fit of the other.
 """
 
 from __future__ import annotations
@@ -33,7 +34,10 @@ def segments(records: list[FlightRecord], names: list[str] | None = None,
     out: list[Segment] = []
     for k, record in enumerate(records):
         name = names[k] if names else f"record {k + 1}"
-        spans = _maneuver_spans(record, inputs) or _halves(record)
+        if windows.maneuvers(record):
+            spans = _maneuver_spans(record, inputs)
+        else:
+            spans = _halves(record)
         for a, b in spans:
             out.append(Segment(f"{name} {a:.0f}-{b:.0f} s", record.slice(a, b), a, b))
     return out

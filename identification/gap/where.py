@@ -1,10 +1,14 @@
-"""Where the gap lies: the residual of each output by frequency band and by window.
+"""Where the gap lies: the residual of each output by frequency band, by window and by
+flight regime.
 
 The model as is (only its nuisance parameters fitted) is simulated with each window's
 measured inputs; each output's residual is split into frequency bands by its discrete
 Fourier transform (Parseval), and each band's energy is given as a fraction of the
 measured signal's energy (mean removed) on that window. A fraction near 0: the model
-reproduces the channel; near 1 or above: the model misses it.
+reproduces the channel; near 1 or above: the model misses it. By regime: the samples of
+all windows pooled and split into ``REGIME_BINS`` equal-count bins of the measured angle
+of attack and of the airspeed; each bin's residual energy over the measured energy (each
+window's mean removed) of its samples.
 """
 
 from __future__ import annotations
@@ -16,8 +20,11 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.gap.fit import WindowFit
+from flightid.record import FlightRecord
 
 BANDS: tuple[tuple[float, float], ...] = ((0.0, 0.3), (0.3, 1.0), (1.0, 3.0), (3.0, math.inf))
+REGIME_BINS = 3  # equal-count bins of each regime variable
+REGIMES = {"alpha": ("deg", 180.0 / math.pi), "V": ("m/s", 1.0)}  # variable: unit, scale
 
 
 def band_label(band: tuple[float, float]) -> str:
@@ -47,6 +54,8 @@ class GapMap:
 
     bands: tuple[tuple[float, float], ...]
     rows: list[dict] = field(default_factory=list)
+    # by regime: {"variable", "unit", "low", "high", "channel", "fraction", "samples"}
+    regimes: list[dict] = field(default_factory=list)
 
     def channels(self) -> list[str]:
         return list(dict.fromkeys(r["channel"] for r in self.rows))
@@ -66,13 +75,42 @@ class GapMap:
 
     def to_json(self) -> dict:
         return {"bands": [band_label(b) for b in self.bands], "rows": self.rows,
-                "by_channel": self.by_channel()}
+                "by_channel": self.by_channel(), "regimes": self.regimes}
 
 
-def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] = BANDS
-            ) -> GapMap:
-    """The gap map of the model-as-is fits of each window (``{window label: fit}``)."""
-    out = GapMap(bands)
+def regime_rows(fits: dict[str, WindowFit], records: dict[str, FlightRecord],
+                bins: int = REGIME_BINS) -> list[dict]:
+    """Per regime variable (alpha, V: measured, from each window's record) and bin, each
+    output's residual energy / measured energy (window means removed) over the samples in
+    the bin; a variable the records lack is left out."""
+    out: list[dict] = []
+    labels = [k for k in fits if k in records]
+    for var, (unit, scale) in REGIMES.items():
+        if not labels or not all(var in records[k] for k in labels):
+            continue
+        x = np.concatenate([np.interp(fits[k].time, records[k].time, records[k][var]) * scale
+                            for k in labels])
+        edges = np.quantile(x, np.linspace(0.0, 1.0, bins + 1))
+        which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+        for ch in fits[labels[0]].residual:
+            res = np.concatenate([fits[k].residual[ch] for k in labels])
+            meas = np.concatenate([fits[k].measured[ch] - np.mean(fits[k].measured[ch])
+                                   for k in labels])
+            for b in range(bins):
+                sel = which == b
+                spread = float(np.sum(meas[sel] ** 2))
+                out.append({"variable": var, "unit": unit, "low": float(edges[b]),
+                            "high": float(edges[b + 1]), "channel": ch,
+                            "fraction": float(np.sum(res[sel] ** 2)) / spread
+                            if spread > 0 else float("nan"), "samples": int(np.sum(sel))})
+    return out
+
+
+def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] = BANDS,
+            records: dict[str, FlightRecord] | None = None) -> GapMap:
+    """The gap map of the model-as-is fits of each window (``{window label: fit}``); by
+    regime too when the windows' ``records`` are given."""
+    out = GapMap(bands, regimes=regime_rows(fits, records) if records else [])
     labels = [band_label(b) for b in bands]
     for window, wf in fits.items():
         dt = float(np.median(np.diff(wf.time)))
@@ -91,8 +129,8 @@ def heat_map(gm: GapMap, title: str = "") -> Figure:
     per = gm.by_channel()
     a = np.array([[per[c][b] for b in labels] for c in chans])
     wins = gm.windows()
-    w = np.array([[next(r["total"] for r in gm.rows if r["channel"] == c and r["window"] == k)
-                   for k in wins] for c in chans])
+    w = np.array([[next((r["total"] for r in gm.rows if r["channel"] == c and r["window"] == k),
+                        math.nan) for k in wins] for c in chans])
     fig = Figure(figsize=(4.0 + 1.1 * (len(labels) + len(wins)), 0.5 * len(chans) + 2.6),
                  layout="constrained")
     axes = fig.subplots(1, 2, gridspec_kw={"width_ratios": [len(labels), max(len(wins), 1)]})
@@ -106,6 +144,8 @@ def heat_map(gm: GapMap, title: str = "") -> Figure:
         for i in range(data.shape[0]):
             for j in range(data.shape[1]):
                 v = data[i, j]
+                if not math.isfinite(v):
+                    continue
                 ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=8,
                         color="white" if v > 0.5 * vmax else "black")
     fig.colorbar(im, ax=list(axes), label="residual energy / measured energy", shrink=0.8)

@@ -1,0 +1,124 @@
+"""The gap diagnosis on the longitudinal axis: tail ice named against the clean Twin Otter,
+and the axis chosen from what the records excite."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from flightid.identification.gap import diagnose, write_aircraft
+from flightid.identification.gap.linearise import excited_axes
+from flightid.record import read
+from flightid.scenarios.cards import card_from_dict, fly_card, load_card
+from flightid.sim.model import load
+from flightid.sim.trim import trim
+from flightid.sim.truth import derivatives
+
+TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
+ALTITUDE, SPEED = 1890.0, 61.7  # TM-4099's 120 kt, the NASA record's altitude
+TAIL = ("Cm_de", "Cm_alpha", "Cm_q")
+
+
+def _elevator_card(aircraft: str, altitude: float = ALTITUDE, speed: float = SPEED) -> dict:
+    """Two elevator maneuvers (3211, doublet; 2 deg) 16 s apart, no turbulence; research
+    sensors after the compatibility check (vane position and upwash, IMU lever arm
+    calibrated out, as the navion-demo card: a vane 4.5 m ahead reads alpha - 4.5 q/V,
+    which the gap would name first)."""
+    return {"name": "gap-elevator", "aircraft": aircraft, "duration": 32.0, "rate": 100.0,
+            "seed": 1, "condition": {"altitude": altitude, "speed": speed},
+            "maneuver": [{"kind": "3211", "surface": "de", "start": 2.0, "base": 0.5,
+                          "amplitude_deg": 2.0},
+                         {"kind": "doublet", "surface": "de", "start": 18.0, "base": 1.0,
+                          "amplitude_deg": 2.0}],
+            "sensors": {"suite": "research", "output_rate": 20.0,
+                        "drop": ["vanes", "lever_arm"]}}
+
+
+def _truth(aircraft: str) -> dict[str, float]:
+    m = load(aircraft)
+    return derivatives(m, trim(m, ALTITUDE, SPEED), axes="stability").values
+
+
+@pytest.fixture(scope="module")
+def iced():
+    rec, _ = fly_card(card_from_dict(_elevator_card("twinotter-iced")))
+    return diagnose([rec], "twinotter", try_pairs=False, steps=1)
+
+
+def test_tail_ice_named_as_tail_effectiveness_loss(iced):
+    assert iced.axis == "longitudinal"
+    top = iced.named[0]
+    assert top.candidate.entry == "tail"
+    labels = [p.label for p in top.candidate.parts]
+    assert labels[0] == "control_effectiveness(de)"
+    clean, ice = _truth("twinotter"), _truth("twinotter-iced")
+    p = top.parameters
+    factor = p["control_effectiveness(de).factor"]
+    estimated = {"Cm_de": ((factor["value"] - 1) * clean["Cm_de"],
+                           factor["std"] * abs(clean["Cm_de"])),
+                 "Cm_alpha": tuple(p["derivative_delta(Cm_alpha,stability).delta"].values()),
+                 "Cm_q": tuple(p["derivative_delta(Cm_q,stability).delta"].values())}
+    for d in TAIL:
+        real = ice[d] - clean[d]
+        value, std = estimated[d]
+        assert value * real > 0  # the right direction: less effectiveness, stability, damping
+        # NOT within 3 bounds (bounds 1-3 % of the changes): the candidate scales the
+        # elevator's lift CL_de with its moment, as tail ice does, but twinotter-iced keeps
+        # CL_de, and Cm_alpha and Cm_q absorb the difference: measured 10 %, 19 %, 14 %
+        # short (docs/gap.md). 25 %: the candidate's misfit to this aircraft, not noise.
+        assert abs(value - real) < 0.25 * abs(real), d
+    s = iced.shrinkage()
+    assert s["overall"]["shrink"] > 0.7
+    for ch in ("alpha", "q", "az"):
+        assert s["channels"][ch]["shrink"] > 0.7
+    d = iced.to_json()
+    assert d["axis"] == "longitudinal" and d["named"][0]["name"] == "tail"
+    assert d["effects"][0]["parameters"]
+
+
+def test_tail_ice_corrected_aircraft(iced, tmp_path):
+    """The named group written into the Twin Otter (``write_aircraft``): its truth moves by
+    the fitted changes (elevator terms scaled, the two moment deltas added)."""
+    path = write_aircraft(iced, tmp_path)
+    clean, corrected = _truth("twinotter"), _truth(str(path))
+    p = iced.named[0].parameters
+    factor = p["control_effectiveness(de).factor"]["value"]
+    assert corrected["Cm_de"] == pytest.approx(factor * clean["Cm_de"], rel=1e-3)
+    assert corrected["CL_de"] == pytest.approx(factor * clean["CL_de"], rel=1e-3)
+    for d in ("Cm_alpha", "Cm_q"):
+        delta = p[f"derivative_delta({d},stability).delta"]["value"]
+        assert corrected[d] == pytest.approx(clean[d] + delta, rel=1e-3)
+
+
+def test_navion_blind_cm_alpha():
+    """A Cm_alpha delta of +0.1 (stability axes; the Navion's -0.683 -> -0.583) flown at
+    Teper's condition (sea level, 53.645 m/s) and diagnosed without being told."""
+    data = _elevator_card("navion", 0.0, 53.645)
+    data["effect"] = [{"name": "derivative_delta", "derivative": "Cm_alpha", "delta": 0.1}]
+    rec, _ = fly_card(card_from_dict(data))
+    result = diagnose([rec], "navion", try_pairs=False, steps=1)
+    top = result.named[0]
+    assert (top.candidate.entry, top.candidate.options["derivative"]) == \
+        ("derivative_delta", "Cm_alpha")
+    delta = top.parameters["delta"]
+    # measured +0.0936 +- 0.0030 (docs/gap.md); 3 bounds or 10 % as the lateral blind case
+    assert abs(delta["value"] - 0.1) < max(3 * delta["std"], 0.01)
+    assert result.shrinkage()["overall"]["shrink"] > 0.7
+
+
+def test_axes_excited():
+    demo, _ = fly_card(load_card("navion-demo"))  # elevator 3211, aileron, rudder
+    assert excited_axes([demo]) == ["lateral", "longitudinal"]
+    elevator, _ = fly_card(card_from_dict(_elevator_card("twinotter")))
+    assert excited_axes([elevator]) == ["longitudinal"]
+    if TWIN_OTTER.is_file():  # rudder and aileron; elevator spread 7 % of the aileron's
+        assert excited_axes([read(TWIN_OTTER)]) == ["lateral"]
+
+
+def test_axis_argument_checked():
+    elevator, _ = fly_card(card_from_dict(_elevator_card("twinotter")))
+    with pytest.raises(ValueError, match="axis must be"):
+        diagnose([elevator], "twinotter", axis="pitch")
+    with pytest.raises(ValueError, match="no lateral maneuver"):
+        diagnose([elevator], "twinotter", axis="lateral")
