@@ -1,14 +1,19 @@
 """``flightid bridge serve|record|fly`` and ``flightid convert``: the recorder bridge
 (``flightid.sim.bridge``) on the command line.
 
-Each command parses its options into library calls and prints a readable report;
-errors are raised as ``typer.BadParameter`` / ``typer.Exit`` with a specific message.
+Each command checks its options before any work (a flight, a trim, a link), parses them
+into library calls and prints a readable report; a bad option or file raises ValueError
+(or an OSError naming the file) with a specific message, which the error policy of
+``flightid.cli.app`` prints as one line with exit 2 (docs/errors.md); a link on which no
+ground station answers raises TimeoutError, exit 3.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -31,8 +36,14 @@ from flightid.sim.bridge.link import (
     open_pty_pair,
     parse_hostport,
 )
-from flightid.sim.bridge.recorder import convert_tlog, record_stream
+from flightid.sim.bridge.recorder import (
+    MAX_GAP_SAMPLES,
+    SEGMENTS,
+    convert_tlog,
+    record_stream,
+)
 from flightid.sim.bridge.schedule import PROFILES
+from flightid.sim.bridge.signing import SenderFilter, read_key
 from flightid.sim.flight import Simulation
 from flightid.sim.trim import trim
 
@@ -49,13 +60,38 @@ app = typer.Typer(
 
 def _config(baud: int | None, faults: str, seed: int, realtime: bool, profile: str) -> BridgeConfig:
     if profile not in PROFILES:
-        raise typer.BadParameter(f"unknown profile {profile!r}; use {', '.join(PROFILES)}")
+        raise ValueError(f"--profile {profile!r} is not known; use {', '.join(PROFILES)}")
     try:
         parsed = LinkFaults.parse(faults)
     except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--faults") from None
+        raise ValueError(f"--faults: {exc}") from None
     return BridgeConfig(streams=PROFILES[profile](), baud=baud, faults=parsed, seed=seed,
                         realtime=realtime)
+
+
+def _positive(option: str, value: float, unit: str = "") -> float:
+    """A finite value > 0, else a ValueError naming the option (exit 2)."""
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{option} must be a number > 0{' ' + unit if unit else ''}, "
+                         f"got {value:g}")
+    return value
+
+
+def _check_link(serial: str | None, udp: str | None, baud: int, *,
+                unlimited_baud: bool) -> None:
+    """The link options, checked before any work: one of --serial / --udp, a loopback
+    HOST:PORT with a port in 1..65535, a baud rate > 0 (or 0 = unlimited where allowed).
+    Raises ValueError naming the option (exit 2)."""
+    if (serial is None) == (udp is None):
+        raise ValueError("give exactly one of --serial PORT or --udp HOST:PORT")
+    if udp is not None:
+        try:
+            parse_hostport(udp)
+        except ValueError as exc:
+            raise ValueError(f"--udp: {exc}") from None
+    if baud < 0 or (baud == 0 and not unlimited_baud):
+        accepted = "> 0 bits/s (0 = unlimited)" if unlimited_baud else "> 0 bits/s"
+        raise ValueError(f"--baud must be {accepted}, got {baud}")
 
 
 def _air_link(serial: str | None, udp: str | None, baud: int, start_delay: float):
@@ -118,8 +154,11 @@ def serve(
     report: Annotated[str | None, typer.Option(help="write the air-side report (JSON)")] = None,
 ) -> None:
     """Stream a flight as MAVLink 2 over a serial port, a pty or loopback UDP."""
-    record = _load_source(source)
+    _check_link(serial, udp, baud, unlimited_baud=True)
+    if start_delay < 0 or not math.isfinite(start_delay):
+        raise ValueError(f"--start-delay must be >= 0 s, got {start_delay:g}")
     config = _config(baud if baud > 0 else None, faults, seed, realtime, profile)
+    record = _load_source(source)
     link, close = _air_link(serial, udp, baud, start_delay)
     try:
         rep = serve_record(record, link, config, keep_fates=False)
@@ -149,12 +188,20 @@ def record(
     baud: Annotated[int, typer.Option(help="serial rate in bits/s")] = 57600,
     duration: Annotated[float | None, typer.Option(help="stop after this many s")] = None,
     idle_timeout: Annotated[float, typer.Option(help="stop after this many s without data")] = 10.0,
+    first_timeout: Annotated[float, typer.Option(
+        help="give up (exit 3) if nothing arrives within this many s")] = 30.0,
 ) -> None:
     """Record a MAVLink stream into a .tlog (every intact packet; report in <tlog>.json)."""
+    _check_link(serial, udp, baud, unlimited_baud=False)
+    if duration is not None:
+        _positive("--duration", duration, "s")
+    _positive("--idle-timeout", idle_timeout, "s")
+    _positive("--first-timeout", first_timeout, "s")
     link = _ground_link(serial, udp, baud)
     typer.echo(f"recording {link.name} to {output}")
     try:
-        rep = record_stream(link, output, duration=duration, idle_timeout=idle_timeout)
+        rep = record_stream(link, output, duration=duration, idle_timeout=idle_timeout,
+                            first_timeout=first_timeout)
     except KeyboardInterrupt:
         typer.echo("interrupted")
         raise typer.Exit(1) from None
@@ -171,14 +218,27 @@ def convert_command(
     rate: Annotated[float | None, typer.Option(help="output rate, Hz")] = None,
     aircraft: Annotated[str, typer.Option(
         help="aircraft: adds its mass properties and geometry (MAVLink has none)")] = "",
+    max_gap: Annotated[int, typer.Option(
+        help="most missing samples of a channel interpolated over")] = MAX_GAP_SAMPLES,
+    segment: Annotated[str, typer.Option(
+        help="all (refuse a longer gap) or longest (keep the longest stretch without one)")
+    ] = "all",
 ) -> None:
     """Convert a MAVLink .tlog to a flight record (SI channels, aligned, uniform time)."""
     if Path(output).suffix.lower() not in (".parquet", ".csv"):
         raise typer.BadParameter(f"{output}: write .parquet or .csv", param_hint="OUTPUT")
-    try:
-        rec = convert_tlog(tlog, align=align, reference=reference, rate=rate, aircraft=aircraft)
-    except (FileNotFoundError, ValueError) as exc:
-        raise typer.BadParameter(str(exc), param_hint="TLOG") from None
+    if rate is not None:
+        _positive("--rate", rate, "Hz")
+    if max_gap < 0:
+        raise ValueError(f"--max-gap must be >= 0 samples, got {max_gap}")
+    if segment not in SEGMENTS:
+        raise ValueError(f"--segment {segment!r} is not accepted; use one of "
+                         f"{', '.join(SEGMENTS)}")
+    if not Path(tlog).is_file():
+        raise FileNotFoundError(f"{tlog}: no such file")
+    # a damaged or unusable tlog raises ValueError: the error policy's one line, exit 2
+    rec = convert_tlog(tlog, align=align, reference=reference, rate=rate, aircraft=aircraft,
+                       max_gap=max_gap, segment=segment)
     rec.write(output)
     b = rec.meta.extra["bridge"]
     typer.echo(f"{output}: {len(rec)} samples at {rec.meta.sample_rate:g} Hz, "
@@ -190,7 +250,21 @@ def convert_command(
         if m["method"] != "reference":
             typer.echo(f"  clock {src}: offset {m['offset_s']:+.4f} s, drift "
                        f"{m['drift_ppm']:+.1f} ppm ({m['method']}, {m['via']})")
-    for note in b["read_notes"]:
+    for kind, u in b["untimed_messages"].items():
+        typer.echo(f"  {kind} (no time field): {u['timed']} timed from the neighbouring "
+                   f"messages (within {1e3 * u['max_bracket_s']:.0f} ms), {u['left_out']} "
+                   "left out")
+    if b["gaps"]["found"]:
+        lo, hi = b["gaps"]["span_s"]
+        typer.echo(f"  kept {lo:.3f} .. {hi:.3f} s, the longest stretch without a gap of more "
+                   f"than {b['gaps']['max_gap_samples']} samples; "
+                   f"{len(b['gaps']['found'])} gap(s): {'; '.join(b['gaps']['found'][:5])}")
+    notes = b["read_notes"]
+    if b["skipped_bytes"]:
+        skips = sum("unreadable bytes" in n for n in notes)
+        typer.echo(f"  {b['skipped_bytes']} unreadable bytes skipped in {skips} place(s) "
+                   "(damaged packets; every intact packet kept)")
+    for note in [n for n in notes if "unreadable bytes" not in n][:5]:
         typer.echo(f"  note: {note}")
 
 
@@ -208,14 +282,34 @@ def fly(
     timeout: Annotated[float, typer.Option(help="s to wait for the ground station")] = 30.0,
     profile: Annotated[str, typer.Option(help="recorders: single or boomerang")] = "single",
     output: Annotated[str | None, typer.Option(help="write the flown record here")] = None,
+    ground_system: Annotated[int, typer.Option(
+        help="system id of the ground station allowed to fly (1..255)")] = 255,
+    ground_component: Annotated[int | None, typer.Option(
+        help="its component id (0..255; default: any component of that system)")] = None,
+    signing_key: Annotated[str | None, typer.Option(
+        help="file with the 32-byte MAVLink 2 signing key (raw or 64 hex digits): "
+             "telemetry is signed, controls must be")] = None,
 ) -> None:
     """Fly the JSBSim aircraft with controls received over the link (HIL_ACTUATOR_CONTROLS,
-    SET_ACTUATOR_CONTROL_TARGET, MANUAL_CONTROL or RC_CHANNELS_OVERRIDE)."""
+    SET_ACTUATOR_CONTROL_TARGET, MANUAL_CONTROL or RC_CHANNELS_OVERRIDE) from the ground
+    station only (its ids; with a signing key, correctly signed packets only)."""
+    _check_link(serial, udp, baud, unlimited_baud=True)
+    key = read_key(signing_key) if signing_key is not None else None
+    SenderFilter(ground_system, ground_component, key)  # checks the ids
+    _positive("--rate", rate, "Hz")
+    _positive("--duration", duration, "s")
+    _positive("--timeout", timeout, "s")
+    if duration * rate < 1:
+        raise ValueError(f"--duration {duration:g} s at {rate:g} Hz is not one step")
+    if profile not in PROFILES:
+        raise ValueError(f"--profile {profile!r} is not known; use {', '.join(PROFILES)}")
     tr = trim(aircraft, altitude, speed)
     sim = FlightCoreAdapter(Simulation(aircraft, rate_hz=rate), tr)
     held = {"de": tr.elevator, "da": tr.aileron, "dr": tr.rudder, "throttle": tr.throttle}
     initial = sim.reset(held)
     config = _config(baud if baud > 0 else None, "", 0, not lockstep, profile)
+    config = replace(config, ground_system=ground_system, ground_component=ground_component,
+                     signing_key=key)
     link, close = _air_link(serial, udp, baud, 0.0)
     typer.echo(f"trimmed {aircraft} at {altitude:g} m, {speed:g} m/s: de {tr.elevator:+.5f}, "
                f"da {tr.aileron:+.5f}, dr {tr.rudder:+.5f} rad, throttle {tr.throttle:.4f}; "
@@ -228,6 +322,11 @@ def fly(
         close()
     typer.echo(rep.summary())
     typer.echo(f"{rep.controls_received} control messages received")
+    if rep.ended:
+        typer.echo(f"warning: the flight ended early: {rep.ended}", err=True)
+    if rep.refused:
+        typer.echo(f"refused {sum(rep.refused.values())} packet(s) that may not fly the "
+                   f"aircraft: {', '.join(f'{n} {k}' for k, n in rep.refused.items())}")
     if output:
         names = sorted(set.intersection(*(set(h) for h in history)))
         t = [k / rate for k in range(len(history))]

@@ -4,7 +4,8 @@ that records and converts it.
 
 Air side: ``air`` (stream a FlightRecord or fly a simulation in the loop), ``schedule``
 (recorder streams and the link budget), ``messages`` (MAVLink 2 encoding of canonical
-channels and its inverse), ``link`` (serial, pty and UDP links and their faults).
+channels and its inverse), ``link`` (serial, pty and UDP links and their faults),
+``signing`` (who may send controls: the ground station's ids, MAVLink 2 signing).
 Ground side: ``frames`` (resynchronising frame scanner, .tlog files), ``recorder``
 (record a stream, convert a tlog to a FlightRecord), ``align`` (clock alignment of
 separately clocked recorders).

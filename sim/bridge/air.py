@@ -45,6 +45,7 @@ from flightid.sim.bridge.messages import (
     encode,
 )
 from flightid.sim.bridge.schedule import Schedule, StreamSpec, plan_schedule, single_stream
+from flightid.sim.bridge.signing import SenderFilter, setup_outgoing
 
 #: unix time of sim time 0 unless told otherwise (June 2008, the Boomerang 60's flight tests)
 DEFAULT_EPOCH = 1_213_488_000.0
@@ -64,6 +65,13 @@ class BridgeConfig:
     epoch_unix: float = DEFAULT_EPOCH
     utilization: float = 0.85
     buffer_bytes: int = 4096
+    ground_system: int = 255  # who may send controls (the ground station's system id)
+    ground_component: int | None = None  # its component id; None = any component
+    signing_key: bytes | None = None  # 32 bytes: sign telemetry, accept signed controls only
+
+    def sender_filter(self) -> SenderFilter:
+        """The check every received packet passes before it may move a surface."""
+        return SenderFilter(self.ground_system, self.ground_component, self.signing_key)
 
 
 @dataclass
@@ -77,6 +85,8 @@ class BridgeReport:
     servo_saturated: int = 0
     controls_received: int = 0
     faults: LinkFaults = field(default_factory=LinkFaults)
+    refused: dict[str, int] = field(default_factory=dict)  # packets refused, by reason
+    ended: str = ""  # why a flight in the loop ended before its last step ("" = it did not)
 
     def per_source(self) -> dict[tuple[int, int], dict[str, int]]:
         """Per (sysid, compid): packets produced and their fates."""
@@ -95,6 +105,8 @@ class BridgeReport:
             "duration_s": self.duration,
             "servo_saturated": self.servo_saturated,
             "controls_received": self.controls_received,
+            "packets_refused": dict(self.refused),
+            "ended_early": self.ended,
             "faults": vars(self.faults),
             "transmit": self.transmit.as_dict(),
             "schedule": self.schedule.as_dict(),
@@ -118,11 +130,14 @@ class AirSide:
                  keep_fates: bool = True) -> None:
         self.config = config
         self.schedule = plan_schedule(config.streams, source_rate, config.baud,
-                                      config.utilization)
+                                      config.utilization, signed=config.signing_key is not None)
         self.tx = Transmitter(link, config.faults, config.baud, config.seed,
                               config.realtime, config.buffer_bytes, keep_fates)
         self.link = link
         self.mavs = {s.name: mavlink2.MAVLink(None, s.sysid, s.compid) for s in config.streams}
+        if config.signing_key is not None:
+            for mav in self.mavs.values():
+                setup_outgoing(mav, config.signing_key)
         epoch = int(round(config.epoch_unix * 1e6))
         self.ctx = {s.name: EncodeContext(config.servo_map, epoch, s.mav_type)
                     for s in config.streams}
@@ -247,10 +262,11 @@ class SteppingSimulation(Protocol):
 
 
 class _ControlReader:
-    """Parses control messages arriving on the link (uplink: no faults injected)."""
+    """Parses control messages arriving on the link (uplink: no faults injected); only
+    packets that pass ``senders`` (the ground station's ids, its signature) count."""
 
-    def __init__(self, link: Link, servo_map: ServoMap) -> None:
-        self.link, self.servo_map = link, servo_map
+    def __init__(self, link: Link, servo_map: ServoMap, senders: SenderFilter) -> None:
+        self.link, self.servo_map, self.senders = link, servo_map, senders
         self.scanner = FrameScanner()
         self.received = 0
         self.heard = False  # any intact message from the ground yet
@@ -270,6 +286,7 @@ class _ControlReader:
         if self.link.datagrams:
             frames += self.scanner.flush()
         out = []
+        frames = [fr for fr in frames if self.senders.accept(fr.raw, fr.source)]
         self.heard = self.heard or bool(frames)
         for fr in frames:
             c = controls_from_message(fr.msg, self.servo_map)
@@ -351,7 +368,7 @@ def serve_simulation(
     if not math.isfinite(sim.dt) or sim.dt <= 0:
         raise ValueError(f"simulation step must be > 0 s, got {sim.dt}")
     air = AirSide(config, 1.0 / sim.dt, link)
-    reader = _ControlReader(link, config.servo_map)
+    reader = _ControlReader(link, config.servo_map, config.sender_filter())
     held = dict(controls or {})
     history = [dict(initial)]
     t = 0.0
@@ -364,14 +381,20 @@ def serve_simulation(
             held.update(got)
         if reader.closed or time.monotonic() > end:
             air.finish()
+            refused = reader.senders.rejected
+            why = (f" (refused {sum(refused.values())} packet(s): "
+                   f"{', '.join(f'{n} {k}' for k, n in refused.items())})" if refused else "")
             raise TimeoutError(f"no ground station answered on {getattr(link, 'name', link)} "
-                               f"within {timeout} s")
+                               f"within {timeout} s{why}")
     air.emit(0, t, initial)
     start = time.monotonic()
+    ended = ""
     for k in range(1, steps + 1):
         if lockstep:
             got = reader.next(timeout)
             if got is None:
+                ended = (f"the link closed after step {k - 1} of {steps}" if reader.closed
+                         else f"no control within {timeout} s after step {k - 1} of {steps}")
                 break
             held.update(got)
         else:
@@ -386,4 +409,6 @@ def serve_simulation(
         air.emit(k, t, channels)
     report = air.finish()
     report.controls_received = reader.received
+    report.refused = dict(reader.senders.rejected)
+    report.ended = ended
     return report, history

@@ -196,7 +196,9 @@ def parse_hostport(text: str) -> tuple[str, int]:
     """``"127.0.0.1:14550"`` -> (address, port), loopback only."""
     host, sep, port = text.rpartition(":")
     if not sep or not port.isdigit():
-        raise ValueError(f"expected HOST:PORT, got {text!r}")
+        raise ValueError(f"expected HOST:PORT (e.g. 127.0.0.1:14550), got {text!r}")
+    if not 1 <= int(port) <= 65535:
+        raise ValueError(f"UDP port {int(port)} in {text!r} is outside 1..65535")
     return _loopback(host or "127.0.0.1"), int(port)
 
 

@@ -138,11 +138,19 @@ def record_stream(
 
     The tlog is written to a temporary file beside ``tlog_path`` and moved there when the
     recording ends (also when it is interrupted: the packets recorded so far are kept); an
-    error leaves no partial tlog and an existing file untouched."""
+    error leaves no partial tlog and an existing file untouched. A recording without a
+    single intact packet raises TimeoutError and writes nothing."""
     tlog_path = Path(tlog_path)
     with atomic_path(tlog_path) as tmp:
         report = _record_into(link, tlog_path, tmp, duration, idle_timeout, first_timeout,
                               on_frame, stop)
+        if isinstance(report, RecordingReport) and not report.scan.get("frames"):
+            name = getattr(link, "name", "the link")
+            junk = report.scan.get("bytes", 0)
+            raise TimeoutError(
+                f"no MAVLink packet arrived on {name} ({report.ended_by}"
+                + (f"; {junk} bytes, none of them an intact packet" if junk else "")
+                + f"); nothing written to {tlog_path}")
     if isinstance(report, KeyboardInterrupt):
         raise report
     write_text(str(tlog_path) + ".json", json.dumps(report.as_dict(), indent=2))
@@ -235,46 +243,152 @@ class TlogData:
     truncated_bytes: int
     skipped_bytes: int
     packets: int
+    untimed: dict[str, dict] = field(default_factory=dict)  # message -> timing from neighbours
+    reversals: list[TimeReversal] = field(default_factory=list)
 
 
-def decode_tlog(path: str | Path, servo_map: ServoMap | None = None) -> TlogData:
-    """Every packet of a tlog decoded to canonical channels, grouped by source and message."""
+@dataclass(frozen=True)
+class TimeReversal:
+    """A message type of one source whose time stamp went back (s, the source's clock)."""
+
+    source: Source
+    message: str
+    packet: int  # index of the packet in the tlog
+    before: float
+    after: float
+
+    def describe(self) -> str:
+        """'1/1 HIGHRES_IMU went back from 45.000 s to 0.000 s at packet 4271'."""
+        return (f"{source_name(self.source)} {self.message} went back from {self.before:.3f} s "
+                f"to {self.after:.3f} s at packet {self.packet}")
+
+
+#: a message type's time may go back this much (s) before it counts as a time reversal
+REVERSAL_TOLERANCE = 1e-3
+#: a message without a time field is timed from its source's neighbouring time-stamped
+#: messages only when they lie within this many seconds of each other
+UNTIMED_WINDOW = 0.5
+
+
+def cadence_times(brackets: list[tuple[float, float, object]]) -> list[float]:
+    """Times (s) of messages without a time field, each known to lie in [t_prev, t_next]
+    (its neighbouring time-stamped messages): t_prev where the bracket is closed; else the
+    end of the bracket that keeps the message's own cadence (whole intervals from the last
+    closed bracket before it, the interval being the shortest step between consecutive
+    closed brackets), t_prev when neither does or the cadence is unknown."""
+    exact = [i for i, (a, b, _) in enumerate(brackets) if b - a <= REVERSAL_TOLERANCE]
+    times = [a for a, _, _ in brackets]
+    steps = [brackets[j][0] - brackets[i][0] for i, j in zip(exact[:-1], exact[1:],
+                                                              strict=True) if j == i + 1]
+    steps = [d for d in steps if d > REVERSAL_TOLERANCE]
+    if not steps:
+        return times
+    dt = min(steps)
+    anchor = None
+    for i, (a, b, _) in enumerate(brackets):
+        if b - a <= REVERSAL_TOLERANCE:
+            anchor = a
+            continue
+        if anchor is None:
+            continue
+        miss = [abs((x - anchor) / dt - round((x - anchor) / dt)) for x in (a, b)]
+        if miss[1] < miss[0] - 1e-6:
+            times[i] = b
+    return times
+
+
+def decode_tlog(path: str | Path, servo_map: ServoMap | None = None,
+                untimed_window: float = UNTIMED_WINDOW) -> TlogData:
+    """Every packet of a tlog decoded to canonical channels, grouped by source and message.
+
+    A message without a time field (VFR_HUD) takes the time of the last time-stamped
+    message of its source before it in the tlog: a sender sends a message after the
+    samples it reports, and a recorder keeps the order. The next time-stamped message of
+    the source bounds the error; a message whose neighbours are more than
+    ``untimed_window`` s apart (a gap in the stream) is left out and counted. A message
+    type whose time goes back (a tlog holding two recordings, a reset clock) is listed in
+    ``reversals``.
+    """
     servo_map = servo_map or ServoMap()
     tr = read_tlog(path)
     raw: dict[tuple[Source, str, str], tuple[list[float], list[float]]] = {}
     sync: dict[Source, tuple[list[float], list[float]]] = {}
     counts: dict[Source, dict[str, int]] = {}
     packets = []
-    for e in tr.entries:
+    last_timed: dict[Source, float] = {}
+    waiting: dict[Source, list[tuple[str, float, dict[str, float]]]] = {}
+    untimed: dict[str, dict] = {}
+    last_of_kind: dict[tuple[Source, str], float] = {}
+    reversals: list[TimeReversal] = []
+
+    def keep(src: Source, kind: str, t: float, values: dict[str, float]) -> None:
+        for ch, v in values.items():
+            ts, vs = raw.setdefault((src, kind, ch), ([], []))
+            ts.append(t)
+            vs.append(v)
+
+    bracketed: dict[tuple[Source, str], list[tuple[float, float, dict[str, float]]]] = {}
+
+    def settle(src: Source, t_next: float | None) -> None:
+        """Bracket the messages waiting for the next time-stamped message of ``src``."""
+        for kind, t_prev, values in waiting.pop(src, []):
+            u = untimed.setdefault(kind, {"timed": 0, "left_out": 0, "max_bracket_s": 0.0})
+            width = 0.0 if t_next is None else t_next - t_prev
+            if not -REVERSAL_TOLERANCE <= width <= untimed_window:
+                u["left_out"] += 1
+                continue
+            u["timed"] += 1
+            u["max_bracket_s"] = max(u["max_bracket_s"], width)
+            bracketed.setdefault((src, kind), []).append(
+                (t_prev, t_prev + max(width, 0.0), values))
+
+    for index, e in enumerate(tr.entries):
         msg, src = e.frame.msg, e.frame.source
         kind = msg.get_type()
         t = message_time(msg)
         packets.append((src, msg.get_seq(), t))
         c = counts.setdefault(src, {})
         c[kind] = c.get(kind, 0) + 1
+        if t is not None:
+            before = last_of_kind.get((src, kind))
+            if before is not None and t < before - REVERSAL_TOLERANCE:
+                reversals.append(TimeReversal(src, kind, index, before, t))
+            last_of_kind[(src, kind)] = t
+            if src in waiting:
+                settle(src, t)
+            last_timed[src] = t
         if kind == "SYSTEM_TIME":
             if msg.time_unix_usec > 0:
                 s = sync.setdefault(src, ([], []))
                 s[0].append(msg.time_unix_usec * 1e-6)
                 s[1].append(msg.time_boot_ms * 1e-3)
             continue
-        if t is None:
+        values = decode(msg, servo_map)
+        if not values:
             continue
-        for ch, v in decode(msg, servo_map).items():
-            ts, vs = raw.setdefault((src, kind, ch), ([], []))
-            ts.append(t)
-            vs.append(v)
+        if t is not None:
+            keep(src, kind, t, values)
+        elif src in last_timed:
+            waiting.setdefault(src, []).append((kind, last_timed[src], values))
+        else:
+            u = untimed.setdefault(kind, {"timed": 0, "left_out": 0, "max_bracket_s": 0.0})
+            u["left_out"] += 1  # before any time-stamped message of its source
+    for src in list(waiting):
+        settle(src, None)
+    for (src, kind), items in bracketed.items():
+        for t, values in zip(cadence_times(items), items, strict=True):
+            keep(src, kind, t, values[2])
     series = {}
     for key, (ts, vs) in raw.items():
         t_arr, v_arr = np.array(ts), np.array(vs)
         order = np.argsort(t_arr, kind="stable")
         t_arr, v_arr = t_arr[order], v_arr[order]
-        keep = np.concatenate([[True], np.diff(t_arr) > 0])  # one value per time stamp
-        series[key] = Series(key[0], key[1], t_arr[keep], v_arr[keep])
+        keep_one = np.concatenate([[True], np.diff(t_arr) > 0])  # one value per time stamp
+        series[key] = Series(key[0], key[1], t_arr[keep_one], v_arr[keep_one])
     return TlogData(
         series, {s: (np.array(a), np.array(b)) for s, (a, b) in sync.items()},
         sequence_losses(packets), counts, tr.notes, tr.truncated_bytes, tr.skipped_bytes,
-        len(tr.entries),
+        len(tr.entries), untimed, reversals,
     )
 
 
@@ -371,24 +485,116 @@ def _xcorr_any(channels, src, maps, max_offset) -> tuple[ClockMap | None, str]:
     return best, ("" if best else err)
 
 
-def _grid_rate(times: list[np.ndarray]) -> float:
-    """Rate (Hz, to 1 mHz) of the most densely sampled series (times on the reference clock)."""
-    fastest = max(times, key=lambda t: len(t) / max(float(np.ptp(t)), 1e-9))
-    return round(1.0 / float(np.median(np.diff(fastest))), 3)
+def nominal_interval(t: np.ndarray) -> float:
+    """The interval (s) a series was sent at: its most frequent time step (to 0.1 ms; the
+    smallest of equally frequent ones). With independent losses a step of k intervals
+    has probability (1 - p) p^(k-1), largest at k = 1 whatever the loss rate p."""
+    steps = np.round(np.diff(t), 4)
+    steps = steps[steps > 0]
+    if not steps.size:
+        return float("inf")
+    values, counts = np.unique(steps, return_counts=True)
+    return float(values[np.argmax(counts)])
+
+
+def _grid_rate(times: list[np.ndarray], intervals: list[float]) -> float:
+    """Rate (Hz, to 1 mHz) of the most densely sampled series (times on the reference clock,
+    their nominal intervals in s)."""
+    usable = [i for i in range(len(times)) if len(times[i]) >= 2 and np.isfinite(intervals[i])]
+    if not usable:
+        return 0.0
+    k = max(usable, key=lambda i: len(times[i]) / max(float(np.ptp(times[i])), 1e-9))
+    return round(1.0 / intervals[k], 3)
+
+
+@dataclass(frozen=True)
+class Gap:
+    """A stretch (s, reference clock) over which a channel has no sample for longer than
+    the allowed number of its own sample intervals (``missing`` samples)."""
+
+    channel: str
+    start: float
+    end: float
+    missing: int
+
+    def describe(self) -> str:
+        """'V from 12.300 to 12.900 s (0.600 s, 14 samples missing)'."""
+        return (f"{self.channel} from {self.start:.3f} to {self.end:.3f} s "
+                f"({self.end - self.start:.3f} s, {self.missing} samples missing)")
+
+
+#: default longest run of missing samples of a channel interpolated over (its own samples)
+MAX_GAP_SAMPLES = 5
+
+
+def long_gaps(chosen: dict[str, np.ndarray], intervals: dict[str, float], start: float,
+              end: float, max_gap: int) -> list[Gap]:
+    """Gaps of more than ``max_gap`` missing samples (of each channel's nominal interval,
+    s) in the channels' times ``chosen`` (s), including the ends of the span [start, end]."""
+    out = []
+    for ch, t in sorted(chosen.items()):
+        dt = intervals[ch]
+        if len(t) < 2 or not np.isfinite(dt):
+            out.append(Gap(ch, start, end, -1))
+            continue
+        edges = np.concatenate([[min(start, t[0])], t, [max(end, t[-1])]])
+        steps = np.diff(edges)
+        missing = np.round(steps / dt).astype(int) - 1
+        missing[0] += 1  # the ends: time before the first / after the last sample
+        missing[-1] += 1
+        for k in np.flatnonzero(missing > max_gap):
+            out.append(Gap(ch, float(edges[k]), float(edges[k + 1]), int(missing[k])))
+    return out
+
+
+def longest_stretch(start: float, end: float, gaps: list[Gap]) -> tuple[float, float]:
+    """The longest part of [start, end] (s) that no gap overlaps."""
+    best, lo = (start, start), start
+    for g in sorted(gaps, key=lambda g: g.start):
+        if g.start > lo and g.start - lo > best[1] - best[0]:
+            best = (lo, g.start)
+        lo = max(lo, g.end)
+    if end - lo > best[1] - best[0]:
+        best = (lo, end)
+    return best
+
+
+SEGMENTS = ("all", "longest")
 
 
 def convert_tlog(
     path: str | Path, *, servo_map: ServoMap | None = None, align: str = "auto",
     reference: str | None = None, rate: float | None = None, aircraft: str = "",
-    max_offset: float = 10.0,
+    max_offset: float = 10.0, max_gap: int = MAX_GAP_SAMPLES, segment: str = "all",
 ) -> FlightRecord:
     """A tlog as a FlightRecord: canonical SI channels, clocks aligned, uniform time base.
 
     reference: 'sysid/compid' of the clock to use (default: the source sending
     HIGHRES_IMU, else the busiest); rate: output rate in Hz (default: the fastest
     channel's). Each channel comes from the source and message that carried it most often.
+
+    A record is never interpolated across more than ``max_gap`` missing samples of a
+    channel (its own sample interval; the record's ends count too): such a gap is refused
+    with ``segment='all'``, and ``segment='longest'`` keeps the longest stretch without
+    one. A tlog whose time stamps go back (two recordings in one file, a reset clock) is
+    refused. Raises ValueError (bad file) or FileNotFoundError.
     """
+    if segment not in SEGMENTS:
+        raise ValueError(f"segment {segment!r}: use one of {', '.join(SEGMENTS)}")
+    if isinstance(max_gap, bool) or not isinstance(max_gap, int) or max_gap < 0:
+        raise ValueError(f"max_gap must be a whole number of samples >= 0, got {max_gap!r}")
+    if rate is not None and not (np.isfinite(rate) and rate > 0):
+        raise ValueError(f"output rate must be > 0 Hz, got {rate}")
     data = decode_tlog(path, servo_map)
+    if data.reversals:
+        first = data.reversals[0]
+        kinds = sorted({r.message for r in data.reversals if r.packet == first.packet
+                        or abs(r.packet - first.packet) < 50})
+        raise ValueError(
+            f"{path}: time reversal: {first.describe()} ({len(data.reversals)} reversal(s) "
+            f"in all; {', '.join(kinds)} go back there): the tlog holds more than one "
+            "recording (files joined?) or the sender's clock was reset; split the file "
+            "at that packet")
     ref = _reference(data, reference)
     maps = align_sources(data, ref, align, max_offset)
     chosen: dict[str, tuple[Series, np.ndarray]] = {}
@@ -400,19 +606,40 @@ def convert_tlog(
             chosen[ch] = (ser, maps[src].to_reference(ser.t))
     if not chosen:
         raise ValueError(f"{path}: no message in the tlog carries a flight-record channel")
-    fs = rate or _grid_rate([t for _, t in chosen.values()])
-    if fs <= 0:
-        raise ValueError(f"output rate must be > 0 Hz, got {fs}")
+    intervals = {ch: nominal_interval(t) for ch, (_, t) in chosen.items()}
+    fs = rate or _grid_rate([t for _, t in chosen.values()], [intervals[c] for c in chosen])
+    if not fs > 0:
+        raise ValueError(f"{path}: too few intact packets: no channel has two time-stamped "
+                         "samples to find an output rate from")
     # the grid spans the fastest channel (on the reference clock)
     fastest = max(chosen.values(), key=lambda c: len(c[1]))[1]
-    n = int(np.floor((fastest[-1] - fastest[0]) * fs + 1e-6)) + 1
-    grid = fastest[0] + np.arange(n) / fs
+    span = (float(fastest[0]), float(fastest[-1]))
+    gaps_found = long_gaps({ch: t for ch, (_, t) in chosen.items()}, intervals, *span,
+                           max_gap)
+    if gaps_found and segment == "all":
+        worst = sorted(gaps_found, key=lambda g: g.start - g.end)[:3]
+        raise ValueError(
+            f"{path}: {len(gaps_found)} gap(s) of more than {max_gap} missing samples, "
+            f"the longest: {'; '.join(g.describe() for g in worst)}; a record is not "
+            "interpolated across them: allow longer gaps (--max-gap) or keep the longest "
+            "stretch without them (--segment longest)")
+    lo, hi = longest_stretch(*span, gaps_found) if gaps_found else span
+    n = int(np.floor((hi - lo) * fs + 1e-6)) + 1
+    if n < 2:
+        raise ValueError(
+            f"{path}: no stretch of two samples at {fs:g} Hz without a gap of more than "
+            f"{max_gap} missing samples ({len(gaps_found)} gaps, e.g. "
+            f"{gaps_found[0].describe()})")
+    grid = lo + np.arange(n) / fs
     out, held, gaps, sources = {}, {}, {}, {}
     for ch, (ser, t) in sorted(chosen.items()):
         v = np.unwrap(ser.v) if ch == "psi" else ser.v
         out[ch] = np.interp(grid, t, v)
+        if not np.all(np.isfinite(out[ch])):  # decode keeps finite values only
+            raise ValueError(f"{path}: channel {ch} has non-finite values after resampling")
         held[ch] = int(np.sum((grid < t[0]) | (grid > t[-1])))
-        gaps[ch] = float(np.max(np.diff(t))) if len(t) > 1 else 0.0
+        inside = t[(t >= lo) & (t <= hi)]
+        gaps[ch] = float(np.max(np.diff(inside))) if len(inside) > 1 else 0.0
         sources[ch] = ser.label
     extra = {
         "bridge": {
@@ -422,12 +649,22 @@ def convert_tlog(
             "resampling": {
                 "method": "linear interpolation (numpy.interp) of each channel from its own "
                           "message time stamps, mapped to the reference clock, onto a uniform "
-                          f"grid at {fs:g} Hz spanning the fastest channel; psi unwrapped "
-                          "before interpolation; values outside a channel's own span held",
+                          f"grid at {fs:g} Hz spanning the fastest channel (or its longest "
+                          "stretch without a long gap); psi unwrapped before interpolation; "
+                          "values outside a channel's own span held (at most max_gap "
+                          "samples)",
                 "rate_hz": fs,
                 "held_samples": held,
                 "max_gap_s": gaps,
             },
+            "gaps": {
+                "max_gap_samples": max_gap,
+                "segment": segment,
+                "span_s": [lo, hi],
+                "tlog_span_s": list(span),
+                "found": [g.describe() for g in gaps_found],
+            },
+            "untimed_messages": data.untimed,
             "sources": sources,
             "losses": _loss_dict(data.losses),
             "packets": data.packets,

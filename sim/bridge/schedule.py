@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from flightid.sim.bridge.messages import TELEMETRY, frame_size
+from flightid.sim.bridge.signing import SIGNATURE_BYTES
 
 #: default importance of each message (0 = never reduced; larger = reduced first)
 PRIORITY = {
@@ -223,13 +224,14 @@ class Schedule:
 
 def plan_schedule(
     streams: tuple[StreamSpec, ...], source_rate: float, baud: int | None,
-    utilization: float = 0.85,
+    utilization: float = 0.85, signed: bool = False,
 ) -> Schedule:
     """Fit the streams' requested rates into the link (baud: bits/s, None = unlimited).
 
     ``source_rate`` (Hz) is the rate of the samples the bridge gets; a message can go at
     source_rate / k for integer k. Importance-0 messages are kept at their rate; the others
     are reduced least important first, the largest byte rate first within a class.
+    ``signed``: every frame carries the 13-byte MAVLink 2 signature.
     """
     if source_rate <= 0:
         raise ValueError(f"source rate must be > 0 Hz, got {source_rate}")
@@ -241,7 +243,8 @@ def plan_schedule(
     for st in streams:
         for m in st.messages:
             k = max(1, round(source_rate / m.rate))
-            g = Grant(st.name, m.name, m.rate, k, source_rate, frame_size(m.name),
+            g = Grant(st.name, m.name, m.rate, k, source_rate,
+                      frame_size(m.name) + (SIGNATURE_BYTES if signed else 0),
                       m.importance(), k)
             if abs(g.rate - m.rate) > 1e-9 * m.rate and m.rate <= source_rate:
                 notes.append(f"{st.name}/{m.name}: {m.rate:g} Hz is not source/k; "

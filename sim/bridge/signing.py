@@ -1,0 +1,120 @@
+"""Who may fly the aircraft: the ground station's ids and MAVLink 2 message signing.
+
+A signed MAVLink 2 packet (incompat flag 0x01) carries 13 bytes after its CRC: a link id
+(1 byte), a timestamp (6 bytes, little-endian, in 10 us units since 2015-01-01 00:00 UTC)
+and the first 6 bytes of SHA-256(secret key + the packet up to and including the
+timestamp), with a 32-byte secret key shared by both ends (MAVLink 2 "Message signing";
+as ArduPilot and PX4 use it). A receiver accepts a packet only if the signature matches
+and its timestamp is newer than the last one accepted on the same (link id, system,
+component) stream, so a recorded packet cannot be replayed.
+
+The signature is checked here before the timestamp is stored (pymavlink's
+``check_signature`` stores the timestamp first, so one forged packet with a large
+timestamp would lock the real sender out). Outgoing packets are signed by pymavlink
+(``MAVLink.signing``), as ``mavutil``'s ``setup_signing`` does.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+#: unix time of the MAVLink signing epoch (2015-01-01 00:00:00 UTC)
+SIGNING_EPOCH_UNIX = 1_420_070_400
+KEY_BYTES = 32
+SIGNATURE_BYTES = 13  # link id, 6-byte timestamp, 6-byte signature
+_SIGNED_FLAG = 0x01
+#: reasons a packet is refused, in the report
+REASONS = ("other sender", "unsigned", "bad signature", "replayed")
+
+
+def read_key(path: str | Path) -> bytes:
+    """A 32-byte signing key from a file: 32 raw bytes, or 64 hexadecimal digits (text,
+    white space ignored). Raises FileNotFoundError or ValueError."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such key file")
+    data = path.read_bytes()
+    if len(data) == KEY_BYTES:
+        return data
+    text = re.sub(rb"\s+", b"", data)
+    if len(text) == 2 * KEY_BYTES and re.fullmatch(rb"[0-9a-fA-F]+", text):
+        return bytes.fromhex(text.decode())
+    raise ValueError(f"{path}: a signing key is {KEY_BYTES} raw bytes or {2 * KEY_BYTES} "
+                     f"hexadecimal digits; the file holds {len(data)} bytes")
+
+
+def signing_timestamp(unix_time: float | None = None) -> int:
+    """The signing timestamp (10 us units since 2015-01-01 UTC) of a unix time (s)."""
+    now = time.time() if unix_time is None else unix_time
+    return int(max(now - SIGNING_EPOCH_UNIX, 0.0) * 100_000)
+
+
+def setup_outgoing(mav, key: bytes, link_id: int = 0) -> None:
+    """Sign every packet a pymavlink ``MAVLink`` encoder packs from now on."""
+    mav.signing.secret_key = key
+    mav.signing.sign_outgoing = True
+    mav.signing.link_id = link_id
+    mav.signing.timestamp = signing_timestamp()
+
+
+def signature_valid(raw: bytes, key: bytes) -> bool:
+    """Whether a signed MAVLink 2 frame's signature matches ``key``."""
+    if len(raw) < 12 + SIGNATURE_BYTES or not raw[2] & _SIGNED_FLAG:
+        return False
+    digest = hashlib.sha256(key + bytes(raw[:-6])).digest()[:6]
+    return digest == bytes(raw[-6:])
+
+
+@dataclass
+class SenderFilter:
+    """Accepts packets from the ground station only: its system id, its component id
+    (None = any component of that system) and, with a key, a valid signature whose
+    timestamp is newer than the last accepted on its stream. Counts what it refuses."""
+
+    ground_system: int = 255
+    ground_component: int | None = None
+    key: bytes | None = None
+    accepted: int = 0
+    rejected: dict[str, int] = field(default_factory=dict)
+    _last: dict[tuple[int, int, int], int] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.ground_system <= 255:
+            raise ValueError(f"ground system id must be 1..255, got {self.ground_system}")
+        if self.ground_component is not None and not 0 <= self.ground_component <= 255:
+            raise ValueError(f"ground component id must be 0..255, got "
+                             f"{self.ground_component}")
+        if self.key is not None and len(self.key) != KEY_BYTES:
+            raise ValueError(f"a signing key has {KEY_BYTES} bytes, got {len(self.key)}")
+
+    def reason(self, raw: bytes, source: tuple[int, int]) -> str | None:
+        """Why a frame from ``source`` (sysid, compid) is refused, or None to accept it."""
+        sysid, compid = source
+        if sysid != self.ground_system or (self.ground_component is not None
+                                           and compid != self.ground_component):
+            return "other sender"
+        if self.key is None:
+            return None
+        if raw[0] != 0xFD or not raw[2] & _SIGNED_FLAG:
+            return "unsigned"
+        if not signature_valid(raw, self.key):
+            return "bad signature"
+        stream = (raw[-13], sysid, compid)
+        stamp = int.from_bytes(raw[-12:-6], "little")
+        if stamp <= self._last.get(stream, -1):
+            return "replayed"
+        self._last[stream] = stamp
+        return None
+
+    def accept(self, raw: bytes, source: tuple[int, int]) -> bool:
+        """Check one frame and count it; True if it may command the aircraft."""
+        why = self.reason(raw, source)
+        if why is None:
+            self.accepted += 1
+            return True
+        self.rejected[why] = self.rejected.get(why, 0) + 1
+        return False
