@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from flightid.cli.checks import check_choice, check_suffix, check_writable
 from flightid.identification.compatibility import PARAMETERS, reconstruct
 from flightid.record import read
 
@@ -27,8 +28,9 @@ def compatibility_command(
 ) -> None:
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
+    check_writable("--output", output)
+    check_suffix("--output", output, (".parquet", ".csv"))
     rec = read(record)
     corrected, est = reconstruct(rec)
     if output:

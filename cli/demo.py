@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from flightid.cli.checks import check_writable
 from flightid.cli.progress import flight_progress
 from flightid.cli.tables import estimate_table, print_score
 from flightid.scenarios import demo
@@ -18,6 +19,7 @@ def demo_command(
     report: Annotated[str, typer.Option(help="HTML report to write")] = "flightid-demo.html",
 ) -> None:
     """The main job: fly the built-in Navion card, identify by output error, score, report."""
+    check_writable("--report", report)
     console = Console()
     with flight_progress("flying the card", 1.0) as progress:
         result = demo.run(card, seed, report, progress=progress)

@@ -9,6 +9,12 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from flightid.cli.checks import (
+    check_frequency_band,
+    check_number,
+    check_suffix,
+    check_writable,
+)
 from flightid.files import atomic_path
 from flightid.identification.frequency_response import (
     bode_figure,
@@ -33,12 +39,27 @@ def frequency_response_command(
     plot: Annotated[str | None, typer.Option(help="write a Bode/coherence PNG here")] = None,
 ) -> None:
     """Frequency response output/input with coherence and random error (CIFER style)."""
+    for w in window or ():
+        check_number("--window", w, low=0.0, low_open=True, unit="s")
+    check_writable("--plot", plot)
+    check_suffix("--plot", plot, (".png", ".svg", ".pdf"))
     rec = read(record)
-    wins = tuple(window) if window else default_windows(rec.time[-1] - rec.time[0], rec.dt)
+    check_frequency_band(f_min, f_max, rec.dt)
+    span = float(rec.time[-1] - rec.time[0]) if len(rec) > 1 else 0.0
+    for w in window or ():
+        if w > span:
+            raise ValueError(f"--window {w:g} s is longer than the record ({span:g} s)")
+    for name in (input, output, *(condition_on or [])):
+        rec[name]  # KeyError naming the channels the record has
+    wins = tuple(window) if window else default_windows(span, rec.dt)
     freqs = None
     if f_min is not None or f_max is not None:
         lo = f_min if f_min is not None else 2.0 / max(wins)
         hi = f_max if f_max is not None else 0.2 / rec.dt
+        if not lo < hi:
+            raise ValueError(f"the band {lo:g}..{hi:g} Hz is empty; give --f-min below "
+                             f"--f-max (the longest window, {max(wins):g} s, resolves "
+                             f"down to {2.0 / max(wins):g} Hz)")
         freqs = np.geomspace(lo, hi, 100)
     r = frequency_response(rec, input, output, other_inputs=condition_on or [], windows=wins,
                            frequencies=freqs)

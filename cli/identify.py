@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 from typing import Annotated, Any
 
 import typer
 from rich.console import Console
 
+from flightid.cli.checks import check_choice, check_writable, read_options
 from flightid.cli.tables import estimate_table, print_score
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
@@ -33,10 +35,14 @@ def parse_window(text: str) -> str | tuple[float, float]:
         return text
     start, sep, end = text.partition(",")
     try:
-        return float(start), float(end)
+        first, last = float(start), float(end)
     except ValueError:
         raise ValueError(f"--window must be auto, none or START,END in s, got {text!r}") \
             from None
+    if not (math.isfinite(first) and math.isfinite(last) and first < last):
+        raise ValueError(f"--window {text!r}: START and END must be finite with START < END "
+                         "(s)")
+    return first, last
 
 
 def identify_command(
@@ -65,10 +71,10 @@ def identify_command(
              "constant (repeatable)")] = None,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
     span = parse_window(window)
-    options: dict[str, Any] = parse_options(option or [])
+    options: dict[str, Any] = read_options(method, parse_options(option or []))
+    check_writable("--report", report)
     data = read(record)
     if multistep_input and method == "oe":
         options["multistep_inputs"] = list(multistep_input)

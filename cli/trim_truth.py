@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from flightid.cli.checks import check_aircraft_xml
 from flightid.sim.model import Model, load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
@@ -34,6 +35,7 @@ def _trimmed(aircraft: str, altitude: float, speed: float, gamma_deg: float,
              bank_deg: float, flaps_deg: float) -> tuple[Model, Trim]:
     # UnknownAircraftError (a ValueError): exit 2; TrimError: exit 3, or 2 when its input
     # checks failed (the app's error policy)
+    check_aircraft_xml(aircraft)
     model = load(aircraft)
     return model, trim(model, altitude, speed, math.radians(gamma_deg),
                        math.radians(bank_deg), math.radians(flaps_deg))

@@ -96,3 +96,19 @@ def atomic_write(path: str | Path, write: Callable[[Path], Any]) -> Path:
 def write_text(path: str | Path, text: str, encoding: str = "utf-8") -> Path:
     """``Path.write_text``, atomically."""
     return atomic_write(path, lambda tmp: tmp.write_text(text, encoding=encoding))
+
+
+def check_writable(path: str | Path) -> None:
+    """Raise the OSError :func:`atomic_path` would raise for ``path`` (``cannot write
+    <path>: <reason>``), without writing it: a temporary file is created beside it and
+    removed. Lets a command refuse an unwritable output before its work starts."""
+    path = Path(path)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    try:
+        tmp = _create_temporary(path)
+    except OSError as exc:
+        raise _cannot_write(path, exc) from None
+    tmp.unlink(missing_ok=True)
+    if path.exists() and not os.access(path, os.W_OK):
+        raise _cannot_write(path, PermissionError(errno.EACCES, "permission denied"))

@@ -15,6 +15,7 @@ boundary (readers, simulator).
 from __future__ import annotations
 
 import json
+import zlib
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,11 @@ from flightid.files import atomic_path
 
 FORMAT_VERSION = 1
 _CSV_MARK = "# flightid-record "
+# a Parquet record carries a CRC-32 of every block of this many rows of every column under
+# this schema key, so damage that still decodes (zeroed or flipped bytes inside a data
+# page) is found on read and named by column and rows
+_CRC_KEY = b"flightid-crc32"
+CRC_BLOCK = 1024
 
 
 @dataclass(frozen=True)
@@ -169,11 +175,15 @@ class FlightRecord:
         suffix = path.suffix.lower()
         if suffix == ".parquet":
             table = pa.Table.from_pandas(self.to_frame(), preserve_index=False)
+            crc = json.dumps({"block": CRC_BLOCK, "columns": {
+                name: block_crcs(values) for name, values in
+                (("time", self.time), *self.channels.items())}})
             table = table.replace_schema_metadata(
-                {**(table.schema.metadata or {}), b"flightid": self.meta.to_json().encode()}
+                {**(table.schema.metadata or {}), b"flightid": self.meta.to_json().encode(),
+                 _CRC_KEY: crc.encode()}
             )
             with atomic_path(path) as tmp:
-                pq.write_table(table, tmp)
+                pq.write_table(table, tmp, write_page_checksum=True)
         elif suffix == ".csv":
             with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
                 fh.write(_CSV_MARK + self.meta.to_json() + "\n")
@@ -184,16 +194,117 @@ class FlightRecord:
         return path
 
 
+def block_crcs(values: np.ndarray, block: int = CRC_BLOCK) -> list[int]:
+    """CRC-32 of the float64 bytes of each block of ``block`` samples."""
+    data = np.ascontiguousarray(values, dtype="<f8")
+    return [zlib.crc32(data[i:i + block].tobytes()) for i in range(0, max(data.size, 1), block)]
+
+
+def rows_text(bad: np.ndarray) -> str:
+    """'rows 12-15' (first run of True in ``bad``, 0-based data rows) and how many more."""
+    idx = np.flatnonzero(bad)
+    first = int(idx[0])
+    last = first
+    while last + 1 < bad.size and bad[last + 1]:
+        last += 1
+    where = f"row {first}" if last == first else f"rows {first}-{last}"
+    more = idx.size - (last - first + 1)
+    return where + (f" (and {more} more row(s))" if more else "")
+
+
+def check_samples(source: str, time: np.ndarray, channels: dict[str, np.ndarray]) -> None:
+    """Refuse a damaged record: a time or channel value that is not finite, or time that
+    does not increase, named by the column and its row range (``source`` names the file)."""
+    for name, values in (("time", time), *channels.items()):
+        bad = ~np.isfinite(values)
+        if bad.any():
+            raise ValueError(f"{source}: column {name!r} has values that are not finite "
+                             f"(NaN or infinite) in {rows_text(bad)}: the file is damaged "
+                             "or has gaps; repair or cut it")
+    if time.size > 1:
+        back = np.diff(time) <= 0
+        if back.any():
+            i = int(np.argmax(back))
+            raise ValueError(f"{source}: column 'time' does not increase in {rows_text(back)} "
+                             f"(t = {time[i]:.6g} s then {time[i + 1]:.6g} s): the file is "
+                             "damaged or two records were joined")
+
+
+def _check_crc(path: Path, raw: bytes | None, frame: pd.DataFrame) -> None:
+    if not raw:
+        return
+    try:
+        stored = json.loads(raw.decode())
+        block, columns = int(stored["block"]), stored["columns"]
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+        raise ValueError(f"{path}: its checksums are damaged; the file is corrupt") from None
+    for name, crcs in columns.items():
+        if name not in frame.columns:
+            raise ValueError(f"{path}: column {name!r} is missing; the file is damaged")
+        now = block_crcs(frame[name].to_numpy(dtype=float), block)
+        for k, (a, b) in enumerate(zip(crcs, now, strict=False)):
+            if a != b:
+                raise ValueError(
+                    f"{path}: column {name!r} rows {k * block}-"
+                    f"{min((k + 1) * block, len(frame)) - 1} do not match their checksum: "
+                    "the file is damaged")
+        if len(crcs) != len(now):
+            raise ValueError(f"{path}: column {name!r} has {len(frame)} rows, not the number "
+                             "written; the file is damaged")
+
+
 def read_parquet(path: str | Path) -> FlightRecord:
     """Read a record written as .parquet (metadata from the schema's ``flightid`` key; a
-    Parquet file from elsewhere gets only its path as provenance)."""
+    Parquet file from elsewhere gets only its path as provenance). A file that is not
+    Parquet, is truncated or damaged raises ValueError naming it (and, where the damage
+    decodes, the column and rows: the block checksums written by
+    :meth:`FlightRecord.write`)."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
-    table = pq.read_table(path)
-    raw = (table.schema.metadata or {}).get(b"flightid")
-    meta = RecordMeta.from_json(raw.decode()) if raw else RecordMeta(provenance=str(path))
-    return _from_frame(path, table.to_pandas(), meta)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a folder, not a record file")
+    try:
+        table = pq.read_table(path, page_checksum_verification=True)
+        frame = table.to_pandas()
+    except (pa.ArrowException, OSError, ValueError, TypeError) as exc:
+        reason = " ".join(str(exc).split())[:200]
+        where = _damaged_column(path)
+        raise ValueError(f"{path}: not a readable Parquet record (damaged, truncated or "
+                         f"another format{where}: {reason})") from None
+    metadata = table.schema.metadata or {}
+    raw = metadata.get(b"flightid")
+    meta = _meta(path, raw.decode(errors="replace")) if raw else \
+        RecordMeta(provenance=str(path))
+    _check_crc(path, metadata.get(_CRC_KEY), frame)
+    return _from_frame(path, frame, meta)
+
+
+def _damaged_column(path: Path) -> str:
+    """', column 'q' rows 0-999' when the file's footer still reads and one column chunk
+    does not (its page checksum fails or it does not decode); '' otherwise."""
+    try:
+        pf = pq.ParquetFile(path, page_checksum_verification=True)
+        names = pf.schema_arrow.names
+    except (pa.ArrowException, OSError, ValueError, TypeError):
+        return ""
+    start = 0
+    for g in range(pf.num_row_groups):
+        rows = pf.metadata.row_group(g).num_rows
+        for name in names:
+            try:
+                pf.read_row_group(g, columns=[name])
+            except (pa.ArrowException, OSError, ValueError, TypeError):
+                return f", column {name!r} rows {start}-{start + rows - 1}"
+        start += rows
+    return ""
+
+
+def _meta(path: Path, text: str) -> RecordMeta:
+    try:
+        return RecordMeta.from_json(text)
+    except (ValueError, TypeError, AttributeError) as exc:
+        raise ValueError(f"{path}: its flightid metadata is damaged ({exc})") from None
 
 
 def read_csv(path: str | Path) -> FlightRecord:
@@ -202,19 +313,46 @@ def read_csv(path: str | Path) -> FlightRecord:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
-    with open(path, encoding="utf-8") as fh:
-        first = fh.readline()
-    if first.startswith(_CSV_MARK):
-        meta = RecordMeta.from_json(first[len(_CSV_MARK):])
-        frame = pd.read_csv(path, skiprows=1)
-    else:
-        meta = RecordMeta(provenance=str(path))
-        frame = pd.read_csv(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a folder, not a record file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            first = fh.readline()
+        if first.startswith(_CSV_MARK):
+            meta = _meta(path, first[len(_CSV_MARK):])
+            frame = pd.read_csv(path, skiprows=1)
+        else:
+            meta = RecordMeta(provenance=str(path))
+            frame = pd.read_csv(path)
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a UTF-8 text file (byte {exc.start}): not a CSV "
+                         "record") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        reason = " ".join(str(exc).split())[:200]
+        raise ValueError(f"{path}: not a readable CSV record ({reason})") from None
     return _from_frame(path, frame, meta)
 
 
 def _from_frame(path: Path, frame: pd.DataFrame, meta: RecordMeta) -> FlightRecord:
     if "time" not in frame.columns:
-        raise ValueError(f"{path}: no 'time' column")
-    time = frame.pop("time").to_numpy(dtype=float)
-    return FlightRecord(time, {c: frame[c].to_numpy(dtype=float) for c in frame.columns}, meta)
+        raise ValueError(f"{path}: no 'time' column (columns: "
+                         f"{', '.join(map(str, frame.columns[:12])) or 'none'})")
+    if len(frame) == 0:
+        raise ValueError(f"{path}: the record has no rows")
+    columns: dict[str, np.ndarray] = {}
+    for name in frame.columns:
+        numbers = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
+        text = frame[name].to_numpy()
+        bad = np.isnan(numbers) & ~pd.isna(text)  # text that does not read as a number
+        if bad.any():
+            raise ValueError(f"{path}: column {name!r} has values that are not numbers in "
+                             f"{rows_text(bad)} (e.g. {str(text[np.argmax(bad)])[:20]!r})")
+        columns[str(name)] = numbers
+    if len(columns) != len(frame.columns):
+        raise ValueError(f"{path}: a column name appears twice")
+    time = columns.pop("time")
+    check_samples(str(path), time, columns)
+    try:
+        return FlightRecord(time, columns, meta)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import scipy.io
 
-from flightid.flight_record import FlightRecord, RecordMeta, Reference
+from flightid.flight_record import FlightRecord, RecordMeta, Reference, check_samples
 from flightid.units import DEG, FT, G0, IN, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
 
 # (1-based fdata column, flightid channel name, factor to SI)
@@ -138,8 +138,13 @@ def read_mat(path: str | Path) -> FlightRecord:
                 f"{path}: not a SIDPAC flight-data file: variable {key!r} is missing "
                 f"(variables present: {present})"
             )
-    fdata = np.asarray(mat["fdata"], dtype=float)
-    time = np.asarray(mat["t"], dtype=float).ravel()
+    try:
+        fdata = np.asarray(mat["fdata"], dtype=float)
+        time = np.asarray(mat["t"], dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"{path}: fdata and t must be numeric arrays (got "
+                         f"{type(mat['fdata']).__name__} of {getattr(mat['fdata'], 'dtype', '?')}"
+                         f", {getattr(mat['t'], 'dtype', '?')})") from None
     if fdata.ndim != 2 or fdata.shape[1] < N_COLUMNS:
         raise ValueError(
             f"{path}: fdata has shape {fdata.shape}; SIDPAC fdata has {N_COLUMNS} columns"
@@ -150,12 +155,16 @@ def read_mat(path: str | Path) -> FlightRecord:
     channels: dict[str, np.ndarray] = {}
     for col, name, factor in COLUMNS:
         channels[name] = fdata[:, col - 1] * factor
+    check_samples(f"{path} (SIDPAC fdata)", time, channels)
     channels["thrust"] = channels["thrust_1"] + channels["thrust_2"]
 
     fds = _struct(mat.get("fds"))
-    area = _scalar(mat, fds, "sarea", fdata[:, 76])
-    span = _scalar(mat, fds, "bspan", fdata[:, 77])
-    chord = _scalar(mat, fds, "cbar", fdata[:, 78])
+    try:
+        area = _scalar(mat, fds, "sarea", fdata[:, 76])
+        span = _scalar(mat, fds, "bspan", fdata[:, 77])
+        chord = _scalar(mat, fds, "cbar", fdata[:, 78])
+    except (ValueError, TypeError, IndexError) as exc:
+        raise ValueError(f"{path}: {exc}") from None
     aircraft_raw = _text(fds.get("aircraft")) or "unknown"
     aircraft = AIRCRAFT_NAMES.get(aircraft_raw.strip().lower(), aircraft_raw)
     dt = float(np.mean(np.diff(time))) if time.size > 1 else 0.0

@@ -4,7 +4,8 @@ Resolves the method (``methods.registry``), the model (``model_structure``: pres
 ``lat``/``lon``), and the options (the method's dataclass, unknown keys refused); cuts a
 simulated record to the maneuvers on the model's inputs (``windows``); checks that the
 record has the channels the method needs; and returns the method's one Estimate with
-the window in ``fit['window']``.
+the window in ``fit['window']``. Channels whose magnitudes cannot be in their SI unit
+(``unit_sanity``: angles in degrees, rates in deg/s, speeds in knots) are refused first.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from flightid.identification import identifiability as ident
 from flightid.identification import model_structure, windows
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import registry
+from flightid.identification.unit_sanity import check_units
 from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
@@ -55,6 +57,8 @@ def identify(record: FlightRecord, method: str = "oe", model: str | None = None,
             f"record lacks channel(s) {', '.join(missing)} needed by method {spec.id} with "
             f"model {model}; it has {', '.join(sorted(record.channels))}")
     inputs = [c for c in (model_inputs(model) or CONTROLS) if c in record]
+    check_units(record, None, f"method {spec.id}")  # every channel: one wrong unit is
+    # a conversion error that may have touched the others
     quiet = ident.input_excitation(record, inputs)
     if inputs and len(quiet) == len(inputs):
         where = f" in the window {span[0]:g}-{span[1]:g} s" if span else ""

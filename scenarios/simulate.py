@@ -9,6 +9,7 @@ command line's (``flightid.cli.simulate``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from matplotlib.figure import Figure
 from flightid.files import atomic_path
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, describe, fly_card, library_cards, load_card
+from flightid.scenarios.inputs import total_signals
 from flightid.units import DEG
 
 # (channel, label, scale to the plotted unit) per panel: inputs first, then responses
@@ -99,14 +101,69 @@ def fly_with_progress(card: Card, seed: int | None = None, show: bool = True,
     return fly_card(card, seed, progress=steps)
 
 
+# a surface whose flown peak falls short of the commanded one by more than this fraction
+# (plus CLIP_TOLERANCE_RAD) hit its travel limit; an actuator lag alone does not cut the
+# peak of a held step by 5 %
+CLIP_FRACTION = 0.05
+CLIP_TOLERANCE_RAD = 0.002
+
+
+class ClippedInputWarning(UserWarning):
+    """A commanded input went beyond the surface's travel and was clipped."""
+
+
+def clipped_inputs(card: Card, truth: FlightRecord) -> dict[str, dict[str, float]]:
+    """The surfaces whose commanded increments (the card's maneuvers) went beyond what the
+    aircraft flew, i.e. were clipped at the surface's travel limit: {surface:
+    {"commanded_rad", "flown_rad", "samples"}} with the peak |increment| commanded and
+    flown (rad from the trim) and how many samples fell short."""
+    if not card.maneuvers:
+        return {}
+    planned = total_signals(list(card.maneuvers), truth.time)
+    out: dict[str, dict[str, float]] = {}
+    for surface, u in planned.items():
+        if surface not in ("de", "da", "dr") or surface not in truth:
+            continue
+        flown = truth[surface] - truth[surface][0]
+        for sign in (1.0, -1.0):
+            want, got = float(np.max(sign * u)), float(np.max(sign * flown))
+            if want > got * (1 + CLIP_FRACTION) + CLIP_TOLERANCE_RAD:
+                short = int(np.sum(sign * u > sign * flown + CLIP_TOLERANCE_RAD + CLIP_FRACTION
+                                   * np.abs(u)))
+                entry = out.setdefault(surface, {"commanded_rad": 0.0, "flown_rad": 0.0,
+                                                 "samples": 0})
+                if want > entry["commanded_rad"]:
+                    entry["commanded_rad"], entry["flown_rad"] = want, got
+                entry["samples"] += short
+    return out
+
+
+def _mark_clipped(card: Card, measured: FlightRecord, truth: FlightRecord) -> None:
+    clipped = clipped_inputs(card, truth)
+    if not clipped:
+        return
+    for rec in {id(measured): measured, id(truth): truth}.values():
+        rec.meta.extra["clipped"] = clipped
+    for surface, c in clipped.items():
+        warnings.warn(
+            f"card {card.name}: {surface} was commanded {c['commanded_rad']:.3g} rad "
+            f"({c['commanded_rad'] / DEG:.1f} deg) from trim but reached only "
+            f"{c['flown_rad']:.3g} rad ({c['flown_rad'] / DEG:.1f} deg): clipped at its "
+            f"travel limit in {int(c['samples'])} samples (recorded in meta.extra['clipped'])",
+            ClippedInputWarning, stacklevel=3)
+
+
 def simulate(card: str | Card, output: str | Path, truth_path: str | Path | None = None,
              plot_path: str | Path | None = None, seed: int | None = None,
              progress: Callable[[float, float], None] | None = None
              ) -> tuple[FlightRecord, FlightRecord]:
     """Fly ``card`` (a loaded card, a path or a library name) and write the measured record
-    to ``output``; ``progress(flown_s, total_s)`` as in :func:`fly_with_progress`."""
+    to ``output``; ``progress(flown_s, total_s)`` as in :func:`fly_with_progress`. An input
+clipped at a surface's travel limit is recorded in ``meta.extra['clipped']`` of both
+records and warned about (:class:`ClippedInputWarning`)."""
     c = card if isinstance(card, Card) else load_card(card)
     measured, truth = fly_with_progress(c, seed, progress=progress)
+    _mark_clipped(c, measured, truth)
     measured.write(output)
     if truth_path is not None:
         truth.write(truth_path)

@@ -1,0 +1,207 @@
+"""Argument checks of the command line, run before any work starts (docs/errors.md).
+
+Every check raises ``ValueError`` (the error policy's exit 2) with a message saying what
+was wrong, in which option, and what is accepted. Commands call them first, before a file
+is read, an aircraft trimmed or a flight flown, so a bad argument never costs a flight and
+never surfaces as a traceback after the work.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import typing
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+
+from flightid import files
+from flightid.identification.methods import registry
+
+# a command refuses to write more than this without --force (bytes)
+SIZE_LIMIT = 1_000_000_000
+BYTES_PER_VALUE = 8  # float64 samples
+MAX_RATE_HZ = 10_000.0  # above this no flight-test recorder or JSBSim run makes sense
+MIN_SAMPLES = 10  # an output rate must give at least this many samples
+BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
+         921600, 1000000, 1500000, 2000000)
+_TRUE, _FALSE = ("true", "1", "yes", "on"), ("false", "0", "no", "off")
+
+
+def check_choice(option: str, value: str, accepted: Sequence[str]) -> str:
+    """``value`` if it is one of ``accepted``, else a ValueError naming them."""
+    if value not in accepted:
+        raise ValueError(f"{option} {value!r} is not accepted; use one of "
+                         f"{', '.join(accepted)}")
+    return value
+
+
+def check_number(option: str, value: float, *, low: float | None = None,
+                 high: float | None = None, low_open: bool = False, unit: str = "") -> float:
+    """A finite number within [low, high] (``low_open``: strictly above low)."""
+    u = f" {unit}" if unit else ""
+    if not isinstance(value, int | float) or isinstance(value, bool) or not math.isfinite(value):
+        raise ValueError(f"{option} must be a finite number{u}, got {value!r}")
+    if low is not None and (value <= low if low_open else value < low):
+        sign = ">" if low_open else ">="
+        raise ValueError(f"{option} must be {sign} {low:g}{u}, got {value:g}")
+    if high is not None and value > high:
+        raise ValueError(f"{option} must be <= {high:g}{u}, got {value:g}")
+    return float(value)
+
+
+def check_count(option: str, value: int, low: int = 1, high: int | None = None) -> int:
+    """An integer count within [low, high]."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{option} must be a whole number, got {value!r}")
+    if value < low or (high is not None and value > high):
+        span = f"{low}..{high}" if high is not None else f">= {low}"
+        raise ValueError(f"{option} must be {span}, got {value}")
+    return value
+
+
+def check_rate(option: str, rate_hz: float, duration_s: float | None = None,
+               max_hz: float = MAX_RATE_HZ, min_samples: int = MIN_SAMPLES) -> float:
+    """A sample rate (Hz): positive, at most ``max_hz``, and, over ``duration_s``, giving at
+    least ``min_samples`` samples."""
+    check_number(option, rate_hz, low=0.0, low_open=True, high=max_hz, unit="Hz")
+    if duration_s is not None and duration_s * rate_hz + 1 < min_samples:
+        raise ValueError(
+            f"{option} {rate_hz:g} Hz gives {int(duration_s * rate_hz) + 1} sample(s) over "
+            f"{duration_s:g} s; use at least {min_samples / max(duration_s, 1e-9):.3g} Hz")
+    return float(rate_hz)
+
+
+def check_frequency_band(f_min: float | None, f_max: float | None, sample_interval_s: float
+                         ) -> tuple[float | None, float | None]:
+    """--f-min and --f-max (Hz): positive, f_min < f_max, f_max at most the Nyquist
+    frequency 1 / (2 dt) of the record."""
+    nyquist = 0.5 / sample_interval_s if sample_interval_s > 0 else math.inf
+    for name, f in (("--f-min", f_min), ("--f-max", f_max)):
+        if f is not None:
+            check_number(name, f, low=0.0, low_open=True, unit="Hz")
+            if f > nyquist:
+                raise ValueError(
+                    f"{name} {f:g} Hz is above the Nyquist frequency {nyquist:g} Hz of the "
+                    f"record (sampled every {sample_interval_s:g} s); use at most "
+                    f"{nyquist:g} Hz")
+    if f_min is not None and f_max is not None and not f_min < f_max:
+        raise ValueError(f"--f-min {f_min:g} Hz must be below --f-max {f_max:g} Hz")
+    return f_min, f_max
+
+
+def check_port(option: str, port: int) -> int:
+    """A TCP/UDP port number, 1..65535."""
+    if isinstance(port, bool) or not isinstance(port, int) or not 1 <= port <= 65535:
+        raise ValueError(f"{option} port {port!r} is not a port number; use 1..65535")
+    return port
+
+
+def check_udp(option: str, text: str) -> tuple[str, int]:
+    """'HOST:PORT' or ':PORT' into (host, port)."""
+    host, sep, port = text.rpartition(":")
+    if not sep or not port.strip().isdigit():
+        raise ValueError(f"{option} {text!r} must be HOST:PORT with PORT in 1..65535")
+    return host, check_port(option, int(port))
+
+
+def check_baud(option: str, baud: int, allow_unlimited: bool = True) -> int:
+    """A serial rate (bits/s): one of the standard rates, or 0 for unlimited."""
+    if allow_unlimited and baud == 0:
+        return 0
+    if baud not in BAUDS:
+        extra = "0 (unlimited) or " if allow_unlimited else ""
+        raise ValueError(f"{option} {baud!r} is not a serial rate; use {extra}one of "
+                         f"{', '.join(map(str, BAUDS))} bits/s")
+    return baud
+
+
+def check_writable(option: str, path: str | os.PathLike[str] | None) -> None:
+    """The output ``path`` can be written (its folder exists and takes a new file, it is
+    not a folder): checked before the work, so a flight is not flown for an output that
+    cannot be written (the write itself stays atomic: ``flightid.files``)."""
+    if path is None:
+        return
+    if str(path).strip() == "":
+        raise ValueError(f"{option}: an empty path; give a file name")
+    files.check_writable(path)
+
+
+def check_suffix(option: str, path: str | None, accepted: Sequence[str]) -> None:
+    """An output path whose suffix is one of ``accepted`` (e.g. '.parquet', '.csv')."""
+    if path is None:
+        return
+    suffix = Path(path).suffix.lower()
+    if suffix not in accepted:
+        raise ValueError(f"{option} {path}: unknown format {suffix or '(no suffix)'!r}; use "
+                         f"{' or '.join(accepted)}")
+
+
+def estimated_bytes(samples: float, channels: int) -> float:
+    """Bytes of a record of ``samples`` x ``channels`` float64 values (plus time)."""
+    return float(samples) * (channels + 1) * BYTES_PER_VALUE
+
+
+def check_size(what: str, n_bytes: float, force: bool, limit: float = SIZE_LIMIT) -> None:
+    """Refuse to write more than ``limit`` bytes unless ``force``."""
+    if n_bytes > limit and not force:
+        raise ValueError(f"{what} would write about {n_bytes / 1e9:.3g} GB (limit "
+                         f"{limit / 1e9:g} GB); lower the rate or the duration, or add "
+                         "--force")
+
+
+def check_method_options(method: str, texts: Mapping[str, str]) -> None:
+    """--method and --option KEY=VALUE against the method's declared options: unknown
+    methods and keys are refused naming the valid ones, a value that does not read as the
+    option's type names the accepted values (true or false for a switch)."""
+    spec = registry.get(method)  # unknown method: ValueError naming the known ones
+    hints = typing.get_type_hints(spec.options)
+    for key, text in texts.items():
+        hint = hints.get(key)
+        if hint is bool and str(text).strip().lower() not in _TRUE + _FALSE:
+            raise ValueError(f"--option {key}={text}: option {key} of method {spec.id} is a "
+                             f"switch; accepted values: true or false")
+    spec.make_options(_read_switches(hints, texts))
+
+
+def _read_switches(hints: Mapping[str, object], texts: Mapping[str, str]) -> dict[str, object]:
+    return {k: (v.strip().lower() in _TRUE if hints.get(k) is bool and isinstance(v, str)
+                else v) for k, v in texts.items()}
+
+
+def read_options(method: str, texts: Mapping[str, str]) -> dict[str, object]:
+    """The checked option texts with switches read as booleans (what ``identify`` takes)."""
+    check_method_options(method, texts)
+    return _read_switches(typing.get_type_hints(registry.get(method).options), texts)
+
+
+def check_unique(option: str, values: Iterable[str]) -> None:
+    """No value given twice."""
+    seen: set[str] = set()
+    for v in values:
+        if v in seen:
+            raise ValueError(f"{option} {v!r} is given twice")
+        seen.add(v)
+
+
+def check_aircraft_xml(aircraft: str) -> None:
+    """An aircraft given as a JSBSim XML path: a readable XML file whose root is
+    ``<fdm_config>`` with an ``<aerodynamics>`` section that has at least one ``<axis>``
+    (JSBSim itself only prints a warning and then fails deep inside a trim). Project and
+    stock aircraft names pass unchecked."""
+    path = Path(aircraft)
+    if path.suffix.lower() != ".xml":
+        return
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such aircraft file")
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise ValueError(f"{path}: not a well-formed JSBSim XML file ({exc})") from None
+    if root.tag != "fdm_config":
+        raise ValueError(f"{path}: not a JSBSim aircraft: its root element is <{root.tag}>, "
+                         "expected <fdm_config>")
+    aero = root.find("aerodynamics")
+    if aero is None or aero.find("axis") is None:
+        raise ValueError(f"{path}: the aircraft has no <aerodynamics> section with an "
+                         "<axis>: JSBSim cannot compute its forces; add the aerodynamics")
