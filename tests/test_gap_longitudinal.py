@@ -17,7 +17,6 @@ from flightid.sim.truth import derivatives
 
 TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 ALTITUDE, SPEED = 1890.0, 61.7  # TM-4099's 120 kt, the NASA record's altitude
-TAIL = ("Cm_de", "Cm_alpha", "Cm_q")
 
 
 def _elevator_card(aircraft: str, altitude: float = ALTITUDE, speed: float = SPEED) -> dict:
@@ -49,46 +48,36 @@ def iced():
 def test_tail_ice_named_as_tail_effectiveness_loss(iced):
     assert iced.axis == "longitudinal"
     top = iced.named[0]
-    assert top.candidate.entry == "tail"
-    labels = [p.label for p in top.candidate.parts]
-    assert labels[0] == "control_effectiveness(de)"
+    assert top.candidate.entry == "tail_ice"
     clean, ice = _truth("twinotter"), _truth("twinotter-iced")
-    p = top.parameters
-    factor = p["control_effectiveness(de).factor"]
-    estimated = {"Cm_de": ((factor["value"] - 1) * clean["Cm_de"],
-                           factor["std"] * abs(clean["Cm_de"])),
-                 "Cm_alpha": tuple(p["derivative_delta(Cm_alpha,stability).delta"].values()),
-                 "Cm_q": tuple(p["derivative_delta(Cm_q,stability).delta"].values())}
-    for d in TAIL:
-        real = ice[d] - clean[d]
-        value, std = estimated[d]
-        assert value * real > 0  # the right direction: less effectiveness, stability, damping
-        # NOT within 3 bounds (bounds 1-3 % of the changes): the candidate scales the
-        # elevator's lift CL_de with its moment, as tail ice does, but twinotter-iced keeps
-        # CL_de, and Cm_alpha and Cm_q absorb the difference: measured 10 %, 19 %, 14 %
-        # short (docs/gap.md). 25 %: the candidate's misfit to this aircraft, not noise.
-        assert abs(value - real) < 0.25 * abs(real), d
+    for part, d in (("elevator", "Cm_de"), ("stability", "Cm_alpha"), ("damping", "Cm_q")):
+        real = ice[d] / clean[d] - 1.0  # the iced factor's change: -0.15, -0.10, -0.10
+        est = top.parameters[part]["value"] - 1.0
+        assert est * real > 0  # the right direction: less effectiveness, stability, damping
+        # NOT within 3 bounds (bounds 1-3 % of the changes): the estimated changes are
+        # 7-10 % short, with the sensors and without them (docs/gap.md: the linearised
+        # model's approximation, the same shortfall as the lateral blind case's 8 %).
+        # 15 %: that measured misfit, not noise.
+        assert abs(est - real) < 0.15 * abs(real), d
     s = iced.shrinkage()
     assert s["overall"]["shrink"] > 0.7
     for ch in ("alpha", "q", "az"):
         assert s["channels"][ch]["shrink"] > 0.7
     d = iced.to_json()
-    assert d["axis"] == "longitudinal" and d["named"][0]["name"] == "tail"
-    assert d["effects"][0]["parameters"]
+    assert d["axis"] == "longitudinal" and d["named"][0]["name"] == "tail_ice"
+    assert set(d["named"][0]["parameters"]) == {"elevator", "stability", "damping"}
 
 
 def test_tail_ice_corrected_aircraft(iced, tmp_path):
-    """The named group written into the Twin Otter (``write_aircraft``): its truth moves by
-    the fitted changes (elevator terms scaled, the two moment deltas added)."""
+    """The named tail ice written into the Twin Otter (``write_aircraft``): its truth's
+    pitching-moment derivatives are the clean ones times the fitted factors, its lift
+    derivatives unchanged."""
     path = write_aircraft(iced, tmp_path)
     clean, corrected = _truth("twinotter"), _truth(str(path))
     p = iced.named[0].parameters
-    factor = p["control_effectiveness(de).factor"]["value"]
-    assert corrected["Cm_de"] == pytest.approx(factor * clean["Cm_de"], rel=1e-3)
-    assert corrected["CL_de"] == pytest.approx(factor * clean["CL_de"], rel=1e-3)
-    for d in ("Cm_alpha", "Cm_q"):
-        delta = p[f"derivative_delta({d},stability).delta"]["value"]
-        assert corrected[d] == pytest.approx(clean[d] + delta, rel=1e-3)
+    for part, d in (("elevator", "Cm_de"), ("stability", "Cm_alpha"), ("damping", "Cm_q")):
+        assert corrected[d] == pytest.approx(p[part]["value"] * clean[d], rel=1e-3)
+    assert corrected["CL_de"] == pytest.approx(clean["CL_de"], rel=1e-3)
 
 
 def test_navion_blind_cm_alpha():

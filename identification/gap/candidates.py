@@ -9,15 +9,14 @@ parameter) and which parameters a fit frees:
 - ``control_effectiveness`` (airframe): every derivative of one surface scaled by
   ``factor`` (1: the model);
 - ``scale`` (sensor): one measured output scaled by ``factor`` (1: none);
-- ``tail`` (longitudinal, a group of catalogue entries): ice or damage on the horizontal
-  tail. The tail's lift slope and its elevator effectiveness fall together, so the tail's
-  share of every pitching-moment derivative falls with them (Etkin & Reid 1996 ch. 2:
+- ``tail_ice`` (airframe, longitudinal): ice on the horizontal tail. The tail's lift slope
+  and its elevator effectiveness fall together, so the tail's share of every
+  pitching-moment derivative falls with them (Etkin & Reid 1996 ch. 2:
   Cm_alpha_tail = -eta V_H a_t (1 - deps/dalpha), Cm_q_tail = -2 eta V_H a_t l_t/cbar,
   Cm_de = -eta V_H a_t tau; Batterson & O'Mara, NASA TM-4099, 1989: loss of elevator
-  effectiveness, static stability and pitch damping with a glaze-ice tail). The share of
-  Cm_alpha (and of Cm_q) that is the tail's is not known from the model, so the group is
-  ``control_effectiveness`` of the elevator with a ``derivative_delta`` on Cm_alpha and on
-  Cm_q (three parameters, each a catalogue entry ``correct.py`` writes).
+  effectiveness, static stability and pitch damping with a glaze-ice tail). The catalogue
+  entry's three factors: ``elevator`` scales Cm_de, ``stability`` Cm_alpha, ``damping``
+  Cm_q (and Cm_alphadot); lift and drag are left as they are.
 
 Sensor biases are not candidates: the model's output and state biases (nuisance
 parameters fitted on every window) absorb them.
@@ -36,14 +35,13 @@ from flightid.identification.linear_models import LinearModel
 SURFACES = ("da", "dr", "de")
 OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the lateral model's
 LONGITUDINAL_OUTPUTS = ("V", "alpha", "q", "theta", "az")
-TAIL_DERIVATIVES = ("Cm_alpha", "Cm_q")  # the tail's share freed with the elevator's
 
 
 @dataclass(frozen=True)
 class Candidate:
     """One catalogue effect as the gap fits it."""
 
-    entry: str  # catalogue name ("pair", "tail": a group of ``parts``)
+    entry: str  # catalogue name ("pair": a group of ``parts``)
     options: dict[str, str]
     free: tuple[str, ...]  # linear-model parameters the fit frees
     wrap: Callable[[LinearModel], LinearModel] = field(compare=False, repr=False)
@@ -66,6 +64,9 @@ class Candidate:
                 for k, v in p.parameters(values, std, base).items():
                     out[f"{p.label}.{k}"] = v
             return out
+        if self.entry == "tail_ice":
+            return {k: {"value": float(values[f"tail_{k}"]), "std": float(std[f"tail_{k}"])}
+                    for k in TAIL_ICE}
         (name,) = self.free
         value, s = float(values[name]), float(std[name])
         if self.entry == "derivative_delta":
@@ -133,22 +134,42 @@ def _surface(surface: str) -> Candidate:
 
 def catalogue_candidates(model: LinearModel, axes: str = "body") -> list[Candidate]:
     """Every single-effect candidate for ``model`` (the linearised aircraft, its
-    derivatives in ``axes``), and the tail group when the model is longitudinal."""
+    derivatives in ``axes``), and tail ice when the model is longitudinal."""
     known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
     out = [_derivative(d, axes) for d in model.parameters if d in known]
     out += [_surface(s) for s in SURFACES if s in model.inputs]
     out += [Candidate("scale", {"channel": c}, (f"scale_{c}",), _output_scale(c))
             for c in model.outputs]
-    tail = tail_candidate(model, axes)
+    tail = tail_candidate(model)
     return out + ([tail] if tail else [])
 
 
-def tail_candidate(model: LinearModel, axes: str = "stability") -> Candidate | None:
-    """The horizontal tail's loss (ice): the elevator's effectiveness and the tail's share
-    of Cm_alpha and Cm_q, as one group; None when the model has no elevator."""
-    if "de" not in model.inputs or not set(TAIL_DERIVATIVES) <= set(model.parameters):
+TAIL_ICE = {"elevator": ("Cm_de",), "stability": ("Cm_alpha",),
+            "damping": ("Cm_q", "Cm_alphadot")}  # catalogue parameter -> scaled derivatives
+
+
+def _tail_ice(model: LinearModel) -> LinearModel:
+    scaled = {f"tail_{k}": [d for d in ds if d in model.parameters] for k, ds in TAIL_ICE.items()}
+    names = tuple(scaled)
+
+    def build(v: Mapping[str, complex]) -> tuple:
+        w = dict(v)
+        for factor, derivs in scaled.items():
+            for d in derivs:
+                w[d] = v[d] * v[factor]
+        return model.build(w)
+
+    return LinearModel(model.name, model.states, model.inputs, model.outputs,
+                       (*model.parameters, *names), {**model.start, **dict.fromkeys(names, 1.0)},
+                       build, model.condition, model.description, dict(model.state_channels))
+
+
+def tail_candidate(model: LinearModel) -> Candidate | None:
+    """The catalogue's ``tail_ice`` (three factors); None when the model has no elevator
+    or no pitching-moment derivatives."""
+    if "de" not in model.inputs or not {"Cm_de", "Cm_alpha", "Cm_q"} <= set(model.parameters):
         return None
-    return group("tail", [_surface("de"), *(_derivative(d, axes) for d in TAIL_DERIVATIVES)])
+    return Candidate("tail_ice", {}, tuple(f"tail_{k}" for k in TAIL_ICE), _tail_ice)
 
 
 def group(entry: str, parts: list[Candidate]) -> Candidate | None:
