@@ -19,6 +19,7 @@ from typing import Annotated
 
 import typer
 
+from flightid.cli.checks import check_number, check_rate
 from flightid.files import write_text
 from flightid.record import FlightRecord, read
 from flightid.scenarios import cards
@@ -71,10 +72,7 @@ def _config(baud: int | None, faults: str, seed: int, realtime: bool, profile: s
 
 def _positive(option: str, value: float, unit: str = "") -> float:
     """A finite value > 0, else a ValueError naming the option (exit 2)."""
-    if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{option} must be a number > 0{' ' + unit if unit else ''}, "
-                         f"got {value:g}")
-    return value
+    return check_number(option, value, low=0.0, low_open=True, unit=unit)
 
 
 def _check_link(serial: str | None, udp: str | None, baud: int, *,
@@ -228,7 +226,7 @@ def convert_command(
     if Path(output).suffix.lower() not in (".parquet", ".csv"):
         raise typer.BadParameter(f"{output}: write .parquet or .csv", param_hint="OUTPUT")
     if rate is not None:
-        _positive("--rate", rate, "Hz")
+        check_rate("--rate", rate)
     if max_gap < 0:
         raise ValueError(f"--max-gap must be >= 0 samples, got {max_gap}")
     if segment not in SEGMENTS:
