@@ -5,6 +5,7 @@ rebuild its HTML report from the stored rows."""
 from __future__ import annotations
 
 import json
+import tomllib
 from typing import Annotated
 
 import typer
@@ -48,6 +49,20 @@ def summary_table(summary: Summary) -> Table:
     return table
 
 
+def read_dispersions(path: str) -> list[str]:
+    """The ``disperse`` list of strings of a TOML file."""
+    with open(path, "rb") as f:
+        try:
+            data = tomllib.load(f)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"{path}: TOML syntax error: {exc}") from None
+    specs = data.get("disperse")
+    if not isinstance(specs, list) or not all(isinstance(s, str) for s in specs):
+        raise ValueError(f"{path}: expected disperse = [\"EFFECT[.PARAMETER]:WIDTH\", ...], "
+                         f"got {specs!r}")
+    return specs
+
+
 def _print(summary: Summary, format: str) -> None:
     if format == "json":
         print(json.dumps(summary.as_dict(), indent=2))
@@ -72,6 +87,11 @@ def montecarlo_command(
         "--dask", help="Dask scheduler address, e.g. tcp://host:8786")] = None,
     dask_scheduler_file: Annotated[str | None, typer.Option(
         help="Dask scheduler file")] = None,
+    disperse: Annotated[list[str] | None, typer.Option(
+        help="disperse EFFECT[OPTION=VALUE][.PARAMETER]:WIDTH[:normal|uniform] per "
+             "realization, e.g. mass_scale:0.05 (repeatable; docs/montecarlo.md)")] = None,
+    disperse_file: Annotated[str | None, typer.Option(
+        help="TOML file with disperse = [\"mass_scale:0.05\", ...]")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
     quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
 ) -> None:
@@ -82,9 +102,10 @@ def montecarlo_command(
     if dask and dask_scheduler_file:
         raise ValueError("give --dask or --dask-scheduler-file, not both")
     options = parse_options(option or [])
+    specs = [*(read_dispersions(disperse_file) if disperse_file else []), *(disperse or [])]
     kwargs = dict(method=method, model=model, options=options, study_dir=output,
                   workers=workers, dask_address=dask, seed=seed,
-                  dask_scheduler_file=dask_scheduler_file)
+                  dask_scheduler_file=dask_scheduler_file, disperse=specs)
     if quiet:
         summary = montecarlo.run(card, n, **kwargs)
     else:

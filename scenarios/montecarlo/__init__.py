@@ -12,12 +12,13 @@ one Parquet file per realization; continuing), ``executors`` (local processes, D
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from flightid.scenarios.cards import load_card
 from flightid.scenarios.montecarlo import store
+from flightid.scenarios.montecarlo.disperse import dispersed_card, parse_all
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
 from flightid.scenarios.montecarlo.report import write_report
 from flightid.scenarios.montecarlo.store import StudyMismatch, done, load
@@ -32,19 +33,26 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
         options: Mapping[str, Any] | None = None, study_dir: str | Path | None = None,
         workers: int | None = None, dask_address: str | None = None,
         progress: Callable[[int, int], None] | None = None, *, seed: int | None = None,
-        dask_scheduler_file: str | Path | None = None, report: bool = True) -> Summary:
+        dask_scheduler_file: str | Path | None = None, report: bool = True,
+        disperse: Sequence[str] = ()) -> Summary:
     """Run (or continue, or extend) the study of ``n`` realizations of ``card`` in
     ``study_dir`` (default ``montecarlo/<card>-<method>-<model>``) and return its Summary.
 
     Realizations already stored are not recomputed; a stored study described otherwise
-    (card, method, model, options, seed) is refused (StudyMismatch). ``workers`` local
+    (card, method, model, options, seed, dispersions) is refused (StudyMismatch). ``workers`` local
     processes (default: one per CPU), or the Dask scheduler at ``dask_address`` / in
     ``dask_scheduler_file``. ``progress(done, total)`` after each realization.
+    ``disperse``: dispersion specs such as ``mass_scale:0.05`` (``disperse.parse``), drawn
+    anew for each realization; their values are stored in its rows and its truth is the
+    dispersed aircraft's.
     """
     if int(n) < 1:
         raise ValueError(f"n must be at least 1, got {n}")
     loaded = load_card(card)  # a bad card fails here, not once per realization
-    description = Study(str(card), int(n), method, model, dict(options or {}), seed)
+    dispersions = parse_all(disperse)  # a bad spec fails here, not once per realization
+    dispersed_card(loaded, dispersions, {d.key: d.neutral for d in dispersions})
+    description = Study(str(card), int(n), method, model, dict(options or {}), seed,
+                        tuple(d.text() for d in dispersions))
     folder = Path(study_dir) if study_dir is not None else \
         Path("montecarlo") / f"{loaded.name}-{method}-{model}"
     store.open_study(folder, description)

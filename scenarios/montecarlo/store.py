@@ -85,10 +85,13 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
 
 
 def frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
-    """Result rows as a DataFrame with the study's columns and dtypes."""
-    df = pd.DataFrame(list(rows), columns=list(COLUMNS))
+    """Result rows as a DataFrame with the study's columns and dtypes; any other key of
+    the rows (the drawn dispersions, ``disperse:<parameter>``) follows as a float column."""
+    rows = list(rows)
+    extra = sorted({k for r in rows for k in r} - set(COLUMNS))
+    df = pd.DataFrame(rows, columns=[*COLUMNS, *extra])
     df = df.astype({"index": "int64", "seed": "int64", "name": str, "status": str,
-                    "reason": str, **{c: "float64" for c in FLOAT_COLUMNS}})
+                    "reason": str, **{c: "float64" for c in (*FLOAT_COLUMNS, *extra)}})
     return df
 
 

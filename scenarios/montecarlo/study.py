@@ -20,6 +20,7 @@ from threadpoolctl import threadpool_limits
 from flightid.identification.identify import identify
 from flightid.identification.scoring import record_truth, score
 from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed
+from flightid.scenarios.montecarlo.disperse import COLUMN_PREFIX, dispersed_card, draw, parse_all
 from flightid.sim.flight import DepartureError
 from flightid.sim.trim import TrimError
 
@@ -45,6 +46,7 @@ class Study:
     model: str = "lat"
     options: dict[str, Any] = field(default_factory=dict)
     seed: int | None = None
+    disperse: tuple[str, ...] = ()
 
     def base_seed(self, card: Card | None = None) -> int:
         """The base seed: the study's, else the card's."""
@@ -61,7 +63,9 @@ class Study:
         a stored study continues only under the same identity."""
         card = load_card(self.card)
         text = json.dumps(card.to_dict(), sort_keys=True, default=str)
-        return {
+        extra = {"disperse": [d.text() for d in parse_all(self.disperse)]} \
+            if self.disperse else {}  # absent without dispersions: older studies continue
+        return {**extra,
             "card": self.card,
             "card_sha256": hashlib.sha256(text.encode()).hexdigest(),
             "method": self.method,
@@ -74,6 +78,7 @@ class Study:
         """The description as plain data (options JSON-able)."""
         out = asdict(self)
         out["options"] = {k: _plain(v) for k, v in self.options.items()}
+        out["disperse"] = list(self.disperse)
         return out
 
 
@@ -97,7 +102,12 @@ def run_realization(description: Study, index: int) -> list[dict[str, Any]]:
 def _realization(description: Study, index: int) -> list[dict[str, Any]]:
     card = load_card(description.card)
     seed = description.realization_seed(index, card)
-    base = {"index": int(index), "seed": int(seed)}
+    base: dict[str, Any] = {"index": int(index), "seed": int(seed)}
+    dispersions = parse_all(description.disperse)
+    if dispersions:  # the drawn values go into every row of the realization
+        values = draw(dispersions, seed)
+        card = dispersed_card(card, dispersions, values)
+        base.update({COLUMN_PREFIX + k: v for k, v in values.items()})
     try:
         measured, truth_record = fly_card(card, seed)
         est = identify(measured, description.method, description.model,

@@ -1,7 +1,9 @@
 """Per-derivative statistics of a study's rows: is the estimator unbiased, and are its
 standard errors (the bounds the method reports) the real scatter?
 
-bias: mean estimate - truth; scatter: standard deviation of the estimates (ddof 1);
+bias: mean of estimate - truth; scatter: standard deviation of estimate - truth (ddof 1;
+the standard deviation of the estimates when the truth is one value, as it is without
+dispersions); truth: the mean truth;
 mean_bound: mean of the reported standard errors; ratio: scatter / mean_bound (1 when the
 bounds are right, > 1 when they are optimistic); coverage: share of the realizations with
 |error| <= 1.96 std (0.95 for a Gaussian estimator whose bounds are right);
@@ -89,13 +91,16 @@ def summarize(df: pd.DataFrame) -> Summary:
     for name, g in ok.groupby("name", sort=True):
         est = g[g["status"] == STATUS_ESTIMATED]
         values, std, err = (est[c].to_numpy(float) for c in ("estimate", "std", "error"))
-        truth = float(g["truth"].iloc[0])
+        truth = float(g["truth"].mean())  # one value unless the aircraft is dispersed
         n = len(est)
         mean = float(values.mean()) if n else math.nan
-        scatter = float(values.std(ddof=1)) if n > 1 else math.nan
+        # of the errors: with dispersions the truth differs from one realization to the
+        # next, and the estimator's bias and scatter are those of estimate - truth
+        scatter = float(err.std(ddof=1)) if n > 1 else math.nan
         bound = float(std.mean()) if n else math.nan
         rows.append(DerivativeSummary(
-            name=str(name), truth=truth, estimated=n, mean=mean, bias=mean - truth,
+            name=str(name), truth=truth, estimated=n, mean=mean,
+            bias=float(err.mean()) if n else math.nan,
             scatter=scatter, mean_bound=bound,
             ratio=scatter / bound if n > 1 and bound > 0 else math.nan,
             coverage=float(np.mean(np.abs(err) <= Z95 * std)) if n else math.nan,

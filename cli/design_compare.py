@@ -1,0 +1,119 @@
+"""``flightid design-compare``: doublet, 2-1-1, 3211, sweep and multisine on the same
+aircraft and condition, each over a Monte Carlo study with the same seeds; a table of each
+derivative's scatter by design, the designs' flight time and input energy, and
+STUDY/design-compare.{png,html} (the work is ``flightid.api.design_compare``)."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from flightid.api import design_compare
+from flightid.cli.identify import parse_options
+from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
+from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
+from flightid.units import DEG
+
+
+def _tables(comparison: Comparison) -> list[Table]:
+    costs = Table(title=f"designs (equal {comparison.equal}"
+                  + (f": the energy of the {comparison.reference})"
+                     if comparison.equal == "energy" else ")"))
+    for head in COST_HEAD:
+        costs.add_column(head, justify="left" if head == "design" else "right")
+    for row in costs_rows(comparison):
+        costs.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
+    scatter, bound = comparison.table("scatter"), comparison.table("mean_bound")
+    kinds = list(scatter.columns)
+    by = Table(title="scatter of the estimates (mean reported bound) by design; "
+               "* smallest scatter")
+    by.add_column("derivative", justify="left")
+    for k in kinds:
+        by.add_column(k, justify="right")
+    for name in scatter.index:
+        values = scatter.loc[name].astype(float)
+        best = values.idxmin() if values.notna().any() else None
+        by.add_row(str(name), *(
+            "-" if not math.isfinite(float(values[k])) else
+            f"{values[k]:.4f} ({bound.loc[name, k]:.4f}){' *' if k == best else ''}"
+            for k in kinds))
+    return [costs, by]
+
+
+def design_compare_command(
+    card: Annotated[str, typer.Option(
+        help="card giving aircraft, condition, sensors, disturbances (its maneuvers are "
+             "replaced by each design)")] = "navion-demo",
+    n: Annotated[int, typer.Option("-n", help="realizations per design")] = 30,
+    output: Annotated[str, typer.Option(
+        "-o", "--output", help="study folder (continued when it exists)")] = "design-compare",
+    method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
+    model: Annotated[str, typer.Option(help="model (as for flightid identify)")] = "lon",
+    surface: Annotated[str, typer.Option(help="the surface every design moves")] = "de",
+    amplitude_deg: Annotated[float, typer.Option(
+        help="peak amplitude (deg) of every design (equal amplitude) or of the reference "
+             "(equal energy)")] = 3.0,
+    base: Annotated[float, typer.Option(help="pulse base time (s) of the multi-steps")] = 0.4,
+    design: Annotated[list[str] | None, typer.Option(
+        help=f"design to fly (repeatable; default all: {', '.join(DESIGNS)})")] = None,
+    equal: Annotated[str, typer.Option(help="amplitude or energy")] = "amplitude",
+    reference: Annotated[str, typer.Option(
+        help="with --equal energy: the design whose energy all get")] = "3211",
+    option: Annotated[list[str] | None, typer.Option(
+        help="method option KEY=VALUE (repeatable)")] = None,
+    seed: Annotated[int | None, typer.Option(
+        help="base seed of the realizations (default: the card's)")] = None,
+    workers: Annotated[int | None, typer.Option(
+        help="local worker processes (default: one per CPU)")] = None,
+    dask: Annotated[str | None, typer.Option(
+        "--dask", help="Dask scheduler address, e.g. tcp://host:8786")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+) -> None:
+    """Compare input designs by the scatter of the derivatives they give over a Monte
+    Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
+    if format not in ("table", "json"):
+        raise ValueError(f"--format must be table or json, got {format!r}")
+    if equal not in EQUAL:
+        raise ValueError(f"--equal must be amplitude or energy, got {equal!r}")
+    if not (math.isfinite(amplitude_deg) and amplitude_deg > 0):
+        raise ValueError(f"--amplitude-deg must be > 0, got {amplitude_deg}")
+    if not (math.isfinite(base) and base > 0):
+        raise ValueError(f"--base must be > 0 s, got {base}")
+    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
+    kwargs = dict(card=card, n=n, method=method, model=model,
+                  designs=tuple(design or DESIGNS), equal=equal, settings=settings,
+                  reference=reference, workers=workers, dask_address=dask, seed=seed,
+                  options=parse_options(option or []))
+    if quiet:
+        comparison, png, page = design_compare(output, **kwargs)
+    else:
+        with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
+                      MofNCompleteColumn(), TimeElapsedColumn(), transient=True,
+                      console=Console(stderr=True)) as bar:
+            task = bar.add_task("design-compare", total=None)
+
+            def progress(kind: str, done: int, total: int) -> None:
+                bar.update(task, description=f"design-compare {kind}", completed=done,
+                           total=total)
+
+            comparison, png, page = design_compare(output, progress=progress, **kwargs)
+    if format == "json":
+        print(json.dumps(comparison.as_dict(), indent=2, default=str))
+        return
+    console = Console()
+    for table in _tables(comparison):
+        console.print(table)
+    verdict = comparison.as_dict()["3211_beats_doublet"]
+    if verdict is not None:
+        wins, total = len(verdict["3211_smaller_scatter"]), verdict["derivatives"]
+        console.print(f"3211 smaller scatter than the doublet for {wins} of {total} "
+                      "derivatives" + ("" if wins * 2 > total else
+                                       " (NOT most: see docs/montecarlo.md for why)"))
+    typer.echo(f"wrote {png} and {page}")

@@ -1,0 +1,273 @@
+"""Input-design experiments: the same aircraft, condition, sensors and disturbances flown
+with a doublet, a 2-1-1, a 3211, a frequency sweep and a phase-optimised multisine on one
+surface, each over a Monte Carlo study (the same realization seeds for every design), so
+that each derivative's scatter can be compared by design.
+
+Designs are compared at equal peak amplitude (``equal="amplitude"``, the default) or at
+equal input energy (``equal="energy"``: every design scaled, ``scale_to_energy``, to the
+energy of the reference design, the 3211 by default). Each design's flight card is
+written to ``STUDY/cards/<design>.toml`` and its study to ``STUDY/<design>/`` (continued
+when rerun, as any Monte Carlo study). Classic expectation (Plaetschke & Schulz 1979;
+Jategaonkar 2015, 2.5; Morelli & Klein 2016, 9.3): at equal amplitude a 3211 gives
+smaller scatter than a doublet for most longitudinal derivatives, because its spectrum
+is broader and it carries more energy (7 base times at full amplitude against 2).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from flightid.scenarios.cards import load_card
+from flightid.scenarios.input_design import InputDesign
+from flightid.scenarios.inputs import (
+    Doublet,
+    Sweep,
+    ThreeTwoOneOne,
+    TwoOneOne,
+    energy,
+    scale_to_energy,
+)
+from flightid.scenarios.montecarlo import run as run_study
+from flightid.scenarios.montecarlo.summary import Summary
+from flightid.scenarios.multisine import Multisine
+from flightid.units import DEG
+
+DESIGNS = ("doublet", "211", "3211", "sweep", "multisine")
+EQUAL = ("amplitude", "energy")
+START_S = 2.0  # s of trimmed flight before the input
+SETTLE_S = 8.0  # s of free response after it (the identification window keeps 8 s)
+CARDS = "cards"
+
+
+@dataclass(frozen=True)
+class DesignSettings:
+    """What the designs share: ``surface``, peak ``amplitude`` (rad), multi-step ``base``
+    (s), the sweep's band (Hz) and duration (s), the multisine's band (Hz) and period (s)."""
+
+    surface: str = "de"
+    amplitude: float = 3.0 * DEG
+    base: float = 0.4
+    sweep_band: tuple[float, float] = (0.2, 2.0)
+    sweep_duration: float = 12.0
+    multisine_band: tuple[float, float] = (0.2, 2.0)
+    multisine_period: float = 10.0
+
+
+def make_design(kind: str, settings: DesignSettings = DesignSettings(),
+                start: float = START_S) -> InputDesign:
+    """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude."""
+    s = settings
+    common = dict(surface=s.surface, amplitude=s.amplitude, start=start)
+    if kind == "doublet":
+        return Doublet(base=s.base, **common)
+    if kind == "211":
+        return TwoOneOne(base=s.base, **common)
+    if kind == "3211":
+        return ThreeTwoOneOne(base=s.base, **common)
+    if kind == "sweep":
+        return Sweep(f_start=s.sweep_band[0], f_end=s.sweep_band[1],
+                     duration=s.sweep_duration, law="log", fade_in=1.0, fade_out=1.0,
+                     **common)
+    if kind == "multisine":
+        return Multisine(f_min=s.multisine_band[0], f_max=s.multisine_band[1],
+                         period=s.multisine_period, phases="optimized", **common)
+    raise ValueError(f"unknown design {kind!r}; designs: {', '.join(DESIGNS)}")
+
+
+def time_grid(design: InputDesign, rate: float) -> np.ndarray:
+    """Sample times (s) from 0 to the end of ``design`` plus SETTLE_S at ``rate`` (Hz)."""
+    duration = design.end + SETTLE_S
+    return np.arange(int(round(duration * rate)) + 1) / rate
+
+
+def input_energy(design: InputDesign, rate: float) -> float:
+    """Integral of u^2 dt over the flight (rad^2 s), summed over the design's surfaces."""
+    t = time_grid(design, rate)
+    return float(sum(energy(t, u) for u in design.signals(t).values()))
+
+
+def peak(design: InputDesign, rate: float) -> float:
+    """The largest |u| of the design (rad)."""
+    t = time_grid(design, rate)
+    return float(max(np.abs(u).max() for u in design.signals(t).values()))
+
+
+def equalized_designs(kinds: Sequence[str], settings: DesignSettings, equal: str,
+                      rate: float, reference: str = "3211") -> dict[str, InputDesign]:
+    """The designs at equal peak amplitude, or scaled to the reference's input energy."""
+    if equal not in EQUAL:
+        raise ValueError(f"equal must be one of {', '.join(EQUAL)}, got {equal!r}")
+    designs = {k: make_design(k, settings) for k in kinds}
+    if equal == "amplitude":
+        return designs
+    target = input_energy(make_design(reference, settings), rate)
+    out = {}
+    for k, d in designs.items():
+        t = time_grid(d, rate)
+        out[k] = scale_to_energy(d, t, target)
+    return out
+
+
+def toml_value(v: Any) -> str:
+    """A plain value (str, number, bool, list, dict) as an inline TOML value."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | np.integer):
+        return str(int(v))
+    if isinstance(v, float | np.floating):
+        x = float(v)
+        return "nan" if math.isnan(x) else ("inf" if x == math.inf else
+                                             "-inf" if x == -math.inf else repr(x))
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(str(k))} = {toml_value(x)}"
+                               for k, x in v.items()) + "}"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML: {v!r}")
+
+
+def card_text(data: Mapping[str, Any]) -> str:
+    """A flight card (plain dict) as TOML text, one key per line with inline tables."""
+    return "".join(f"{json.dumps(str(k))} = {toml_value(v)}\n" for k, v in data.items())
+
+
+def design_card(base: Mapping[str, Any], kind: str, design: InputDesign,
+                rate: float) -> dict[str, Any]:
+    """The base card's data with its maneuvers replaced by ``design`` and its duration
+    set to the input plus SETTLE_S."""
+    data = {k: v for k, v in base.items() if k != "maneuver"}
+    data["name"] = f"{base.get('name', 'card')}-{kind}"
+    data["description"] = f"design-compare: {kind} on {design.surfaces()[0]}"
+    data["duration"] = float(time_grid(design, rate)[-1])
+    data["maneuver"] = [design.to_dict()]
+    return data
+
+
+@dataclass
+class DesignResult:
+    """One design's cost and its study: flight time (s, the card's duration), input time
+    (s), input energy (rad^2 s), peak |u| (rad) and the Monte Carlo summary."""
+
+    kind: str
+    flight_time: float
+    input_time: float
+    energy: float
+    peak: float
+    summary: Summary
+    study_dir: str
+
+    def as_dict(self) -> dict[str, Any]:
+        d = {k: v for k, v in asdict(self).items() if k != "summary"}
+        d["summary"] = self.summary.as_dict()
+        return d
+
+
+@dataclass
+class Comparison:
+    """The results of every design, and how they were made comparable."""
+
+    card: str
+    aircraft: str
+    method: str
+    model: str
+    n: int
+    equal: str
+    reference: str
+    settings: DesignSettings
+    results: list[DesignResult] = field(default_factory=list)
+
+    def frame(self) -> pd.DataFrame:
+        """One row per (derivative, design): truth, bias, scatter, mean_bound, ratio,
+        coverage, estimated, unidentifiable."""
+        rows = []
+        for r in self.results:
+            for s in r.summary.rows:
+                rows.append({"derivative": s.name, "design": r.kind, "truth": s.truth,
+                             "bias": s.bias, "scatter": s.scatter,
+                             "mean_bound": s.mean_bound, "ratio": s.ratio,
+                             "coverage": s.coverage, "estimated": s.estimated,
+                             "unidentifiable": s.unidentifiable})
+        return pd.DataFrame(rows)
+
+    def table(self, column: str = "scatter") -> pd.DataFrame:
+        """``column`` by derivative (rows) and design (columns, in DESIGNS order)."""
+        df = self.frame()
+        if df.empty:
+            return df
+        wide = df.pivot(index="derivative", columns="design", values=column)
+        return wide[[r.kind for r in self.results if r.kind in wide.columns]]
+
+    def better(self, a: str, b: str) -> list[str]:
+        """Derivatives whose scatter is smaller with design ``a`` than with ``b``."""
+        t = self.table()
+        return [str(d) for d in t.index if t.loc[d, a] < t.loc[d, b]]
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data, JSON-ready (NaN as None)."""
+        return {"card": self.card, "aircraft": self.aircraft, "method": self.method,
+                "model": self.model, "n": self.n, "equal": self.equal,
+                "reference": self.reference, "settings": asdict(self.settings),
+                "designs": [r.as_dict() for r in self.results],
+                "3211_beats_doublet": self._verdict()}
+
+    def _verdict(self) -> dict[str, Any] | None:
+        kinds = [r.kind for r in self.results]
+        if "3211" not in kinds or "doublet" not in kinds:
+            return None
+        names = list(self.table().index)
+        wins = self.better("3211", "doublet")
+        return {"derivatives": len(names), "3211_smaller_scatter": wins,
+                "doublet_smaller_or_equal": [n for n in names if n not in wins]}
+
+
+def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
+            model: str = "lon", study_dir: str | Path = "design-compare",
+            designs: Sequence[str] = DESIGNS, equal: str = "amplitude",
+            settings: DesignSettings = DesignSettings(), reference: str = "3211",
+            workers: int | None = None, dask_address: str | None = None,
+            seed: int | None = None, options: Mapping[str, Any] | None = None,
+            progress: Callable[[str, int, int], None] | None = None) -> Comparison:
+    """Fly every design in ``designs`` on ``card``'s aircraft, condition, sensors and
+    disturbances (its maneuvers are replaced), ``n`` realizations each with the same
+    seeds, identify with ``method`` and ``model``, and return the Comparison.
+    ``progress(design, done, total)`` after each realization."""
+    unknown = [d for d in designs if d not in DESIGNS]
+    if unknown:
+        raise ValueError(f"unknown design(s) {', '.join(unknown)}; designs: "
+                         f"{', '.join(DESIGNS)}")
+    if not designs:
+        raise ValueError("no design to compare")
+    if reference not in DESIGNS:
+        raise ValueError(f"unknown reference design {reference!r}; designs: "
+                         f"{', '.join(DESIGNS)}")
+    base = load_card(card)
+    root = Path(study_dir)
+    (root / CARDS).mkdir(parents=True, exist_ok=True)
+    built = equalized_designs(designs, settings, equal, base.rate, reference)
+    result = Comparison(str(card), base.aircraft, method, model, int(n), equal, reference,
+                        settings)
+    for kind, design in built.items():
+        path = root / CARDS / f"{kind}.toml"
+        text = card_text(design_card(base.to_dict(), kind, design, base.rate))
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+        report = None if progress is None else \
+            (lambda done, total, kind=kind: progress(kind, done, total))
+        summary = run_study(str(path), n, method, model, options, root / kind, workers,
+                            dask_address, report, seed=base.seed if seed is None else seed)
+        t = time_grid(design, base.rate)
+        result.results.append(DesignResult(
+            kind=kind, flight_time=float(t[-1]), input_time=float(design.end - design.start),
+            energy=input_energy(design, base.rate), peak=peak(design, base.rate),
+            summary=summary, study_dir=str(root / kind)))
+    return result

@@ -1,0 +1,135 @@
+"""The report of an input-design comparison: a PNG of each derivative's scatter by design
+(relative to |truth|, log scale, with the mean reported bound as a marker), the same
+figure and the tables in STUDY/design-compare.html, and a Markdown table for docs/."""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from flightid.scenarios.montecarlo.design import Comparison, compare
+
+PNG = "design-compare.png"
+HTML = "design-compare.html"
+COLORS = {"doublet": "#c0392b", "211": "#e67e22", "3211": "#2e86c1", "sweep": "#27ae60",
+          "multisine": "#8e44ad"}
+
+
+def figure(comparison: Comparison) -> Figure:
+    """Bars: scatter / |truth| (%) per derivative and design; dots: mean bound / |truth|."""
+    scatter, bound = comparison.table("scatter"), comparison.table("mean_bound")
+    truth = comparison.frame().groupby("derivative")["truth"].mean().abs()
+    names = list(scatter.index)
+    kinds = list(scatter.columns)
+    fig = Figure(figsize=(max(6.0, 1.3 * len(names) + 2), 4.2), dpi=110, layout="constrained")
+    ax = fig.add_subplot()
+    width = 0.8 / max(1, len(kinds))
+    x = np.arange(len(names))
+    for j, kind in enumerate(kinds):
+        scale = 100 / truth.reindex(names).replace(0, np.nan).to_numpy(float)
+        pos = x - 0.4 + width * (j + 0.5)
+        ax.bar(pos, scatter[kind].to_numpy(float) * scale, width, color=COLORS.get(kind),
+               label=kind)
+        ax.plot(pos, bound[kind].to_numpy(float) * scale, "k_", ms=8)
+    ax.set_yscale("log")
+    ax.set_xticks(x, names, fontsize=9)
+    ax.set_ylabel("scatter / |truth| (%)")
+    ax.set_title(f"{comparison.aircraft} {comparison.model}, {comparison.method}, "
+                 f"equal {comparison.equal}, n={comparison.n} per design "
+                 "(bars: scatter, dashes: mean bound)", fontsize=9)
+    ax.legend(fontsize=8, ncol=len(kinds))
+    ax.grid(axis="y", which="both", alpha=0.3)
+    return fig
+
+
+def _cell(v: object) -> str:
+    if isinstance(v, float):
+        return "" if not math.isfinite(v) else f"{v:.4g}"
+    return html.escape(str(v))
+
+
+def costs_rows(comparison: Comparison) -> list[list[object]]:
+    """[design, flight time s, input time s, energy rad^2 s, peak deg, realizations,
+    failures] per design."""
+    return [[r.kind, r.flight_time, r.input_time, r.energy, math.degrees(r.peak),
+             r.summary.realizations, r.summary.failures] for r in comparison.results]
+
+
+COST_HEAD = ["design", "flight time (s)", "input time (s)", "input energy (rad² s)",
+             "peak (deg)", "realizations", "failures"]
+
+
+def markdown(comparison: Comparison) -> str:
+    """Markdown tables: the designs' costs, then scatter (bias, mean bound) by derivative."""
+    lines = ["| " + " | ".join(COST_HEAD) + " |", "|" + "---|" * len(COST_HEAD)]
+    for row in costs_rows(comparison):
+        lines.append("| " + " | ".join(
+            f"{v:.4g}" if isinstance(v, float) else str(v) for v in row) + " |")
+    scatter, bias, bound = (comparison.table(c) for c in ("scatter", "bias", "mean_bound"))
+    truth = comparison.frame().groupby("derivative")["truth"].first()
+    kinds = list(scatter.columns)
+    lines += ["", "scatter (bias, mean bound) by design:", "",
+              "| derivative | truth | " + " | ".join(kinds) + " |",
+              "|---|---|" + "---|" * len(kinds)]
+    for name in scatter.index:
+        best = scatter.loc[name].astype(float).idxmin()
+        cells = []
+        for k in kinds:
+            s = f"{scatter.loc[name, k]:.4f} ({bias.loc[name, k]:+.4f}, {bound.loc[name, k]:.4f})"
+            cells.append(f"**{s}**" if k == best else s)
+        lines.append(f"| {name} | {truth[name]:+.4f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
+    """Write FOLDER/design-compare.png and FOLDER/design-compare.html; return both."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    png = folder / PNG
+    figure(comparison).savefig(png)
+    data = base64.b64encode(png.read_bytes()).decode()
+    scatter, bias, bound = (comparison.table(c) for c in ("scatter", "bias", "mean_bound"))
+    kinds = list(scatter.columns)
+    parts = ["<!doctype html><html><head><meta charset='utf-8'><title>design-compare"
+             "</title><style>body{font-family:sans-serif;margin:2em}table{border-collapse:"
+             "collapse;margin-bottom:1em}td,th{border:1px solid #ccc;padding:2px 8px;"
+             "text-align:right}</style></head><body>",
+             f"<h1>Input designs: {html.escape(comparison.aircraft)}, "
+             f"{html.escape(comparison.model)}, {html.escape(comparison.method)}</h1>",
+             f"<p>card {html.escape(comparison.card)}; equal {comparison.equal}"
+             + (f" (the energy of the {comparison.reference})"
+                if comparison.equal == "energy" else "")
+             + f"; {comparison.n} realizations per design, the same seeds for every design."
+             "</p><table><tr>" + "".join(f"<th>{h}</th>" for h in COST_HEAD) + "</tr>"]
+    for row in costs_rows(comparison):
+        parts.append("<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>")
+    parts.append("</table>")
+    for title, table in (("scatter (standard deviation of the estimates)", scatter),
+                         ("bias", bias), ("mean reported bound", bound)):
+        parts.append(f"<h2>{title}</h2><table><tr><th>derivative</th>"
+                     + "".join(f"<th>{k}</th>" for k in kinds) + "</tr>")
+        for name in table.index:
+            parts.append(f"<tr><td>{html.escape(str(name))}</td>" + "".join(
+                f"<td>{_cell(float(table.loc[name, k]))}</td>" for k in kinds) + "</tr>")
+        parts.append("</table>")
+    parts.append(f"<img alt='scatter by design' src='data:image/png;base64,{data}'>")
+    parts.append("<p>Per design: " + ", ".join(
+        f"<a href='{html.escape(r.kind)}/report.html'>{html.escape(r.kind)}</a>"
+        for r in comparison.results) + "</p></body></html>")
+    page = folder / HTML
+    page.write_text("\n".join(parts), encoding="utf-8")
+    return png, page
+
+
+def compare_and_report(study_dir: str | Path = "design-compare", **kwargs: object
+                       ) -> tuple[Comparison, Path, Path]:
+    """``design.compare`` (same keywords) and then ``write`` into ``study_dir``: the
+    Comparison, the PNG and the HTML page."""
+    comparison = compare(study_dir=study_dir, **kwargs)  # type: ignore[arg-type]
+    png, page = write(comparison, study_dir)
+    return comparison, png, page
