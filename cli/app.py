@@ -27,9 +27,11 @@ from flightid import __version__
 from flightid.cli import bridge
 from flightid.cli.compatibility import compatibility_command
 from flightid.cli.demo import demo_command
+from flightid.cli.design_compare import design_compare_command
 from flightid.cli.effects import effects_command
 from flightid.cli.frequency_response import frequency_response_command
 from flightid.cli.gap import gap_command
+from flightid.cli.gap_benchmark import gap_benchmark_command
 from flightid.cli.identify import identify_command
 from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
@@ -163,8 +165,10 @@ app.command("simulate")(simulate_command)
 app.command("compatibility")(compatibility_command)
 app.command("effects")(effects_command)
 app.command("gap")(gap_command)
+app.command("gap-benchmark")(gap_benchmark_command)
 app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
+app.command("design-compare")(design_compare_command)
 
 
 def main() -> None:

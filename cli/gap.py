@@ -5,6 +5,7 @@ HTML report and the corrected aircraft optionally written (printing only; the wo
 from __future__ import annotations
 
 import json
+import math
 from typing import Annotated
 
 import typer
@@ -13,7 +14,9 @@ from rich.table import Table
 
 from flightid.api import gap
 from flightid.identification.gap import write_aircraft
+from flightid.identification.gap.correct import refly
 from flightid.identification.gap.report import write_report
+from flightid.record import read
 
 
 def gap_command(
@@ -26,7 +29,8 @@ def gap_command(
     report: Annotated[str | None, typer.Option("--report", help="write an HTML report")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
     write: Annotated[str | None, typer.Option(
-        "--write-aircraft", help="write the aircraft with the named effect here")] = None,
+        "--write-aircraft", help="write the aircraft with the named effect here, and fly it "
+                                 "again in JSBSim with the records' inputs")] = None,
 ) -> None:
     """Where a JSBSim model departs from flight data, which catalogue effect causes it, and
     how far the gap shrinks on held-out data (lateral axis)."""
@@ -34,12 +38,15 @@ def gap_command(
         raise ValueError(f"--format must be table or json, got {format!r}")
     result = gap(records, model, validate=validate or None)
     written = write_aircraft(result, write) if write else None
+    # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
+    again = refly(result, [read(r) for r in records], write, written) if written else None
     if report:
-        write_report(result, report)
+        write_report(result, report, records, validate or None, again)
     if format == "json":
         d = result.to_json()
         if written:
             d["aircraft_written"] = str(written)
+            d["refly"] = _finite(again)
         print(json.dumps(d, indent=2))
         return
     console = Console()
@@ -77,3 +84,24 @@ def gap_command(
                       + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining().items()))
     if written:
         console.print(f"corrected aircraft: {written}")
+        o = (again or {}).get("overall")
+        if o:
+            console.print(f"flown again in JSBSim with the records' inputs (open loop from "
+                          f"trim): gap {o['before']:.3f} (as is) -> {o['after']:.3f} "
+                          f"(corrected), {o['shrink']:.1%} shrink")
+        for r in (again or {}).get("records", []):
+            for key, name in (("before", "the aircraft as is"), ("after", "the corrected one")):
+                if f"{key}_departed" in r:
+                    console.print(f"flown again in JSBSim, record {r['record']}: {name} "
+                                  f"departed ({r[f'{key}_departed']})")
+
+
+def _finite(x: object) -> object:
+    """``x`` with NaN and infinities as None (strict JSON)."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x

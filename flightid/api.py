@@ -21,14 +21,17 @@ from flightid.identification.methods.protocol import Method
 from flightid.identification.scoring import Score, record_truth, score
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, fly_card, load_card
+from flightid.scenarios.gap_benchmark import benchmark as gap_benchmark
 from flightid.scenarios.gym import ENV_ID as EXCITATION_ENV  # registers it with gymnasium
 from flightid.scenarios.montecarlo import run as montecarlo
+from flightid.scenarios.montecarlo.design_report import compare_and_report as design_compare
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import Truth, derivatives
 
 __all__ = ["EXCITATION_ENV", "Flight", "fly", "gap", "identify", "methods", "montecarlo", "score",
-           "truth"]
+           "truth", "gap_benchmark"]
+__all__ += ["design_compare"]  # design.compare + its PNG/HTML report (docs/montecarlo.md)
 
 
 @dataclass

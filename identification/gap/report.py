@@ -1,28 +1,108 @@
 """The HTML report of a gap diagnosis: the gap map, the ranked effects with their
-evidence and parameters, the shrink on held-out data and what stays unexplained."""
+evidence and parameters, the shrink on held-out data, the time histories of the held-out
+windows (measured, the model as is, the model with the named effects) and what stays
+unexplained."""
 
 from __future__ import annotations
 
 import base64
 import html
 import io
+import math
+from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+from matplotlib.figure import Figure
+
 from flightid.identification.gap.diagnose import GapResult
+from flightid.identification.gap.fit import held
+from flightid.identification.gap.linearise import AXIS_INPUTS
+from flightid.identification.gap.segments import Segment, segments
+from flightid.identification.gap.sequence import fixed
+from flightid.record import FlightRecord, read
+
+MAX_WINDOWS = 3  # held-out windows drawn
+ANGLES = ("beta", "p", "r", "phi", "alpha", "q", "theta")  # drawn in deg (deg/s)
+UNITS = {"beta": "deg", "phi": "deg", "alpha": "deg", "theta": "deg", "p": "deg/s",
+         "r": "deg/s", "q": "deg/s", "V": "m/s"}
+
+Records = Sequence[FlightRecord | str | Path]
 
 
-def _png(result: GapResult) -> str:
+def _png(fig: Figure) -> str:
     buf = io.BytesIO()
-    result.figure().savefig(buf, format="png", dpi=100, bbox_inches="tight")
+    fig.savefig(buf, format="png", dpi=100, bbox_inches="tight")
     return base64.b64encode(buf.getvalue()).decode()
+
+
+def _loaded(items: Records, prefix: str = "") -> tuple[list[FlightRecord], list[str]]:
+    recs = [i if isinstance(i, FlightRecord) else read(i) for i in items]
+    names = [f"{prefix}{Path(i).stem}" if not isinstance(i, FlightRecord)
+             else f"{prefix}record {k + 1}" for k, i in enumerate(items)]
+    return recs, names
+
+
+def held_out_windows(result: GapResult, records: Records, validate: Records | None = None
+                     ) -> list[Segment]:
+    """The windows ``result`` held out, cut again from ``records`` (or ``validate``) as the
+    diagnosis cut them; every window when the labels do not match."""
+    recs, names = _loaded(validate, "validate ") if validate else _loaded(records)
+    windows = segments(recs, names, AXIS_INPUTS[result.axis])
+    chosen = [w for w in windows if w.label in set(result.windows.get("held_out", []))]
+    return chosen or windows
+
+
+def time_histories(result: GapResult, records: Records, validate: Records | None = None
+                   ) -> Figure:
+    """Per held-out window (at most ``MAX_WINDOWS``) and output: measured, the model as is
+    and the model with every named effect (at the values fitted on all windows; the
+    nuisance biases and initial state refitted on the window, as in the held-out check)."""
+    windows = held_out_windows(result, records, validate)[:MAX_WINDOWS]
+    lin = result.linearised
+    corrected = lin
+    for effect in result.named:
+        corrected = fixed(corrected, effect)
+    outputs = list(lin.model.outputs)
+    fig = Figure(figsize=(4.2 * len(windows) + 0.8, 1.7 * len(outputs) + 0.9),
+                 layout="constrained")
+    axes = np.atleast_2d(fig.subplots(len(outputs), len(windows), sharex="col",
+                                      squeeze=False))
+    for j, w in enumerate(windows):
+        before = held(lin.model, {}, w.record)
+        after = held(corrected.model, {}, w.record) if result.named else None
+        t = before.time
+        for i, ch in enumerate(outputs):
+            k = math.degrees(1.0) if ch in ANGLES else 1.0
+            ax = axes[i, j]
+            ax.plot(t, k * before.measured[ch], color="black", lw=1.0, label="measured")
+            ax.plot(t, k * before.model[ch], color="tab:red", lw=1.0, ls="--",
+                    label=f"model as is ({before.fractions()[ch]:.3f})")
+            if after is not None:
+                ax.plot(after.time, k * after.model[ch], color="tab:blue", lw=1.0,
+                        label=f"with named ({after.fractions()[ch]:.3f})")
+            unit = UNITS.get(ch, "m/s²")
+            ax.set_ylabel(f"{ch} ({unit})" if j == 0 else "", fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.legend(fontsize=6, loc="best", frameon=False)
+            if i == 0:
+                ax.set_title(f"held out: {w.label}", fontsize=9)
+        axes[-1, j].set_xlabel("time (s)", fontsize=8)
+    named = " then ".join(r.candidate.label for r in result.named) or "nothing (unexplained)"
+    fig.suptitle(f"{result.aircraft}: held-out windows; named {named} "
+                 "(legend: residual / measured energy)", fontsize=9)
+    return fig
 
 
 def _f(x: float | None, fmt: str = ".4g") -> str:
     return "-" if x is None else format(x, fmt)
 
 
-def html_report(result: GapResult) -> str:
-    """The report as one self-contained HTML page."""
+def html_report(result: GapResult, records: Records | None = None,
+                validate: Records | None = None, refly: dict | None = None) -> str:
+    """The report as one self-contained HTML page; with ``records`` (those diagnosed), the
+    time histories of the held-out windows; with ``refly`` (``correct.refly``), the gap of
+    the corrected aircraft flown again in JSBSim."""
     d = result.to_json()
     rows = []
     for i, e in enumerate(d["effects"] + d["pairs"]):
@@ -49,17 +129,47 @@ border-bottom:1px solid #ddd}}</style></head><body>
 <h1>Sim-to-real gap: {html.escape(result.aircraft)}</h1>
 <p>Windows fitted: {html.escape(', '.join(d['windows']['fit']))}; held out:
 {html.escape(', '.join(d['windows']['held_out']) or 'none')}.</p>
-<h2>Where</h2><img src="data:image/png;base64,{_png(result)}" alt="gap map">
+<h2>Where</h2><img src="data:image/png;base64,{_png(result.figure())}" alt="gap map">
 <h2>Which</h2><p>Named: <b>{named}</b></p>
 <table><tr><th>#</th><th>effect</th><th>parameters (catalogue units)</th><th>&Delta;BIC</th>
 <th>held-out shrink</th><th>confirmed</th></tr>{''.join(rows)}</table>{unexpl}
 <h2>How far</h2><p>Held-out gap (residual / measured energy) with
 {html.escape(shrink.get('effect', '-'))}:</p>
 <table><tr><th>channel</th><th>before</th><th>after</th><th>shrink</th></tr>{srows}</table>
+{_histories(result, records, validate)}{_refly(refly)}
 </body></html>"""
 
 
-def write_report(result: GapResult, path: str | Path) -> Path:
+def _histories(result: GapResult, records: Records | None, validate: Records | None) -> str:
+    if not records:
+        return ""
+    png = _png(time_histories(result, records, validate))
+    return ("<h2>Before and after, held out</h2><p>Measured (black), the model as is (red) "
+            "and with the named effects at their values fitted on all windows (blue); the "
+            "biases and the initial state refitted on each window.</p>"
+            f'<img src="data:image/png;base64,{png}" alt="held-out time histories">')
+
+
+def _refly(refly: dict | None) -> str:
+    if not refly or "overall" not in refly:
+        return ""
+    rows = "".join(
+        f"<tr><td>record {r['record']}</td><td>{c}</td><td>{_f(v['before'], '.3f')}</td>"
+        f"<td>{_f(v['after'], '.3f')}</td><td>{_f(v['shrink'], '.1%')}</td></tr>"
+        for r in refly["records"] for c, v in (r.get("channels") or {}).items())
+    o = refly["overall"]
+    name = html.escape(refly["aircraft"])
+    return (f"<h2>The corrected aircraft flown again in JSBSim</h2><p>{name}"
+            " and the aircraft as is, trimmed at each record's condition and flown open loop "
+            "with its measured surfaces: gap (residual / measured energy, means removed) "
+            f"{_f(o['before'], '.3f')} &rarr; {_f(o['after'], '.3f')} "
+            f"({_f(o['shrink'], '.1%')} shrink).</p><table><tr><th>record</th><th>channel</th>"
+            f"<th>before</th><th>after</th><th>shrink</th></tr>{rows}</table>")
+
+
+def write_report(result: GapResult, path: str | Path, records: Records | None = None,
+                 validate: Records | None = None, refly: dict | None = None) -> Path:
+    """Write ``html_report`` to ``path``."""
     path = Path(path)
-    path.write_text(html_report(result))
+    path.write_text(html_report(result, records, validate, refly))
     return path

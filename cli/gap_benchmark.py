@@ -1,0 +1,87 @@
+"""``flightid gap-benchmark``: the blind check of the gap diagnosis (cases drawn, flown,
+diagnosed without being told, scored) with a progress bar, printed as a table or JSON (the
+work is ``flightid.api.gap_benchmark``)."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+
+from flightid.api import gap_benchmark
+from flightid.scenarios.gap_benchmark import Benchmark
+
+
+def _pct(x: float | None) -> str:
+    return "-" if x is None else f"{100 * x:.0f} %"
+
+
+def _print(bench: Benchmark) -> None:
+    console = Console()
+    t = Table(title=f"gap blind check: {bench.n} cases, seed {bench.seed}")
+    for c in ("#", "case (injected)", "named", "top-1", "top-3", "held-out shrink",
+              "magnitude error"):
+        t.add_column(c, justify="left" if c in ("case (injected)", "named") else "right")
+    for r in bench.results:
+        named = r.error or (", ".join(r.named) if r.named else "unexplained")
+        ok = "" if not r.case.in_catalogue else ("yes" if r.top1 else "no")
+        t.add_row(str(r.case.index), r.case.label, named, ok,
+                  "" if not r.case.in_catalogue else ("yes" if r.top3 else "no"),
+                  "-" if r.shrink != r.shrink else f"{r.shrink:.0%}",
+                  "-" if r.magnitude_error != r.magnitude_error else f"{r.magnitude_error:.0%}")
+    console.print(t)
+    s = bench.summary()
+    console.print(
+        f"in the catalogue ({s['in_catalogue']} cases): top-1 {_pct(s['top1'])}, top-3 "
+        f"{_pct(s['top3'])}, median held-out shrink {_pct(s['shrinkage'])} (of the gap above "
+        f"the noise: {_pct(s['excess_shrinkage'])}), median magnitude error "
+        f"{_pct(s['magnitude_error_median'])}; reported unexplained "
+        f"{_pct(s['false_unexplained'])}")
+    console.print(f"outside the catalogue ({s['outside']} cases): reported unexplained "
+                  f"{_pct(s['unexplained_correct'])}")
+
+
+def gap_benchmark_command(
+    n: Annotated[int, typer.Option("--n", "-n", help="number of cases")] = 10,
+    seed: Annotated[int, typer.Option(help="seed of the draw")] = 0,
+    output: Annotated[str | None, typer.Option(
+        "-o", "--output", help="folder: cases.jsonl (each case as it finishes), "
+                               "summary.json")] = None,
+    format: Annotated[str, typer.Option(help="table or json")] = "table",
+    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+) -> None:
+    """The gap diagnosis's blind check: N cases (an aircraft, an effect in or outside the
+    catalogue, a moderate magnitude) flown, diagnosed without being told, and scored: top-1
+    and top-3 attribution, held-out shrink, magnitude error, unexplained when outside."""
+    if format not in ("table", "json"):
+        raise ValueError(f"--format must be table or json, got {format!r}")
+    if n < 1:
+        raise ValueError(f"--n must be at least 1, got {n}")
+    if quiet:
+        bench = gap_benchmark(n, seed, output)
+    else:
+        with Progress(TextColumn("[bold]gap blind check"), BarColumn(), MofNCompleteColumn(),
+                      TextColumn("{task.description}"), TimeElapsedColumn(),
+                      TimeRemainingColumn(), transient=True, console=Console(stderr=True)
+                      ) as bar:
+            task = bar.add_task("", total=n)
+
+            def progress(done: int, total: int, label: str) -> None:
+                bar.update(task, completed=done, total=total, description=label)
+
+            bench = gap_benchmark(n, seed, output, progress)
+    if format == "json":
+        print(json.dumps(bench.to_json(), indent=2))
+    else:
+        _print(bench)
