@@ -11,11 +11,11 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from flightid.api import design_compare
 from flightid.cli.identify import parse_options
+from flightid.cli.progress import count_progress
 from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
 from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
 from flightid.units import DEG
@@ -91,19 +91,10 @@ def design_compare_command(
                   designs=tuple(design or DESIGNS), equal=equal, settings=settings,
                   reference=reference, workers=workers, dask_address=dask, seed=seed,
                   options=parse_options(option or []))
-    if quiet:
-        comparison, png, page = design_compare(output, **kwargs)
-    else:
-        with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                      MofNCompleteColumn(), TimeElapsedColumn(), transient=True,
-                      console=Console(stderr=True)) as bar:
-            task = bar.add_task("design-compare", total=None)
-
-            def progress(kind: str, done: int, total: int) -> None:
-                bar.update(task, description=f"design-compare {kind}", completed=done,
-                           total=total)
-
-            comparison, png, page = design_compare(output, progress=progress, **kwargs)
+    with count_progress("design-compare", show=not quiet) as update:
+        progress = ((lambda kind, done, total: update(done, total, f"design-compare {kind}"))
+                    if update else None)
+        comparison, png, page = design_compare(output, progress=progress, **kwargs)
     if format == "json":
         print(json.dumps(comparison.as_dict(), indent=2, default=str))
         return

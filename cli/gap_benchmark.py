@@ -9,17 +9,10 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 
 from flightid.api import gap_benchmark
+from flightid.cli.progress import count_progress
 from flightid.scenarios.gap_benchmark import Benchmark
 
 
@@ -68,19 +61,8 @@ def gap_benchmark_command(
         raise ValueError(f"--format must be table or json, got {format!r}")
     if n < 1:
         raise ValueError(f"--n must be at least 1, got {n}")
-    if quiet:
-        bench = gap_benchmark(n, seed, output)
-    else:
-        with Progress(TextColumn("[bold]gap blind check"), BarColumn(), MofNCompleteColumn(),
-                      TextColumn("{task.description}"), TimeElapsedColumn(),
-                      TimeRemainingColumn(), transient=True, console=Console(stderr=True)
-                      ) as bar:
-            task = bar.add_task("", total=n)
-
-            def progress(done: int, total: int, label: str) -> None:
-                bar.update(task, completed=done, total=total, description=label)
-
-            bench = gap_benchmark(n, seed, output, progress)
+    with count_progress("gap blind check", show=not quiet) as update:
+        bench = gap_benchmark(n, seed, output, update)
     if format == "json":
         print(json.dumps(bench.to_json(), indent=2))
     else:

@@ -10,30 +10,12 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    ProgressColumn,
-    Task,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
-from rich.text import Text
 
 from flightid.cli.identify import parse_options
+from flightid.cli.progress import count_progress
 from flightid.scenarios import montecarlo
 from flightid.scenarios.montecarlo.summary import Summary
-
-
-class RateColumn(ProgressColumn):
-    """Realizations per minute."""
-
-    def render(self, task: Task) -> Text:
-        speed = task.finished_speed or task.speed
-        return Text("" if speed is None else f"{60 * speed:.1f}/min")
 
 
 def summary_table(summary: Summary) -> Table:
@@ -106,19 +88,9 @@ def montecarlo_command(
     kwargs = dict(method=method, model=model, options=options, study_dir=output,
                   workers=workers, dask_address=dask, seed=seed,
                   dask_scheduler_file=dask_scheduler_file, disperse=specs)
-    if quiet:
-        summary = montecarlo.run(card, n, **kwargs)
-    else:
-        with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                      MofNCompleteColumn(), RateColumn(), TimeElapsedColumn(),
-                      TimeRemainingColumn(), transient=True,
-                      console=Console(stderr=True)) as bar:
-            task = bar.add_task(f"Monte Carlo {card}", total=None)
-
-            def progress(done: int, total: int) -> None:
-                bar.update(task, completed=done, total=total)
-
-            summary = montecarlo.run(card, n, progress=progress, **kwargs)
+    with count_progress(f"Monte Carlo {card}", show=not quiet) as update:
+        progress = (lambda done, total: update(done, total)) if update else None
+        summary = montecarlo.run(card, n, progress=progress, **kwargs)
     _print(summary, format)
     if format == "table":
         typer.echo(f"wrote {output}/report.html")
