@@ -82,6 +82,12 @@ def gap_command(
     else:
         console.print("unexplained: no candidate shrinks the held-out gap; remaining: "
                       + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining().items()))
+    if result.partly_unexplained:
+        console.print(f"partly unexplained: the named effects leave "
+                      f"{result.unexplained_share():.0%} of the held-out gap above the noise "
+                      "floor; an effect outside the catalogue is likely (above the floor: "
+                      + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining_above_floor().items())
+                      + ")")
     if written:
         console.print(f"corrected aircraft: {written}")
         o = (again or {}).get("overall")

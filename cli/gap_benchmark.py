@@ -27,7 +27,8 @@ def _print(bench: Benchmark) -> None:
               "magnitude error"):
         t.add_column(c, justify="left" if c in ("case (injected)", "named") else "right")
     for r in bench.results:
-        named = r.error or (", ".join(r.named) if r.named else "unexplained")
+        named = r.error or ((", ".join(r.named) + (" (partly unexplained)" if r.partly else ""))
+                           if r.named else "unexplained")
         ok = "" if not r.case.in_catalogue else ("yes" if r.top1 else "no")
         t.add_row(str(r.case.index), r.case.label, named, ok,
                   "" if not r.case.in_catalogue else ("yes" if r.top3 else "no"),
@@ -41,8 +42,9 @@ def _print(bench: Benchmark) -> None:
         f"the noise: {_pct(s['excess_shrinkage'])}), median magnitude error "
         f"{_pct(s['magnitude_error_median'])}; reported unexplained "
         f"{_pct(s['false_unexplained'])}")
-    console.print(f"outside the catalogue ({s['outside']} cases): reported unexplained "
-                  f"{_pct(s['unexplained_correct'])}")
+    console.print(f"outside the catalogue ({s['outside']} cases): reported unexplained or "
+                  f"partly unexplained {_pct(s['unexplained_correct'])}; right attributions "
+                  f"reported partly unexplained {_pct(s['false_partly_unexplained'])}")
 
 
 def gap_benchmark_command(

@@ -27,6 +27,8 @@ def results():
         Case(1, 12, "twinotter", "control_effectiveness", {"surface": "dr"}, {"factor": 0.7}),
         Case(2, 13, "navion", "structural_mode", {},
              {"frequency_hz": 4.0, "damping": 0.03, "gain": 0.8}, in_catalogue=False),
+        Case(3, 14, "twinotter", "vane_nonlinearity", {"channel": "beta"}, {"k": 7.0},
+             in_catalogue=False),
     ]
     return [run_case(c, floor=False, **FAST) for c in cases]
 
@@ -56,9 +58,19 @@ def test_structural_mode_unexplained(results):
     assert not r.top1 and not r.top3
 
 
+def test_vane_nonlinearity_partly_unexplained(results):
+    """A quadratic sideslip vane is mostly a beta scale at these sideslips: the closest
+    catalogue entry is named, and the diagnosis says it leaves part of the gap above the
+    noise floor (measured shares 0.21-0.46 on the blind check's vane cases, threshold 0.2;
+    a right attribution, results[1], leaves 0.04 at most: docs/gap_benchmark.md)."""
+    r = results[3]
+    assert r.partly or r.unexplained, r.named
+    assert not results[1].partly
+
+
 def test_summary_fractions(results):
     s = summary(results)
-    assert s["in_catalogue"] == 2 and s["outside"] == 1
+    assert s["in_catalogue"] == 2 and s["outside"] == 2
     assert s["top1"] == 1.0 and s["unexplained_correct"] == 1.0
     assert s["false_unexplained"] == 0.0
     assert s["shrinkage"] > 0.7
@@ -88,8 +100,8 @@ def test_command_rejects_bad_input():
 
 
 def test_json_shape(results, tmp_path):
-    d = json.loads(json.dumps(Benchmark(3, 0, results).to_json()))
+    d = json.loads(json.dumps(Benchmark(4, 0, results).to_json()))
     for key in ("top1", "top3", "shrinkage", "unexplained_correct", "cases"):
         assert key in d
-    assert len(d["cases"]) == 3
+    assert len(d["cases"]) == 4
     assert d["cases"][2]["shrink"] is None or math.isfinite(d["cases"][2]["shrink"])

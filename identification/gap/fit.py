@@ -42,6 +42,18 @@ class WindowFit:
         return {c: energy_fraction(self.residual[c], self.measured[c]) for c in self.residual}
 
 
+def noise_energy(residual: np.ndarray) -> float:
+    """The white-noise part of sum(residual^2): N sigma^2 with sigma^2 = mean(diff^2) / 2.
+
+    Differencing removes what varies slowly (a model's misfit of the rigid-body response)
+    and keeps white measurement noise, whose differences have twice its variance (the
+    difference-based noise estimate of the residual; Morelli & Klein 2016 ch. 11 estimate
+    noise from the high-frequency part of a residual the same way)."""
+    if residual.size < 2:
+        return float("nan")
+    return residual.size * float(np.mean(np.diff(residual) ** 2)) / 2.0
+
+
 def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
     """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal."""
     spread = float(np.sum((measured - np.mean(measured)) ** 2))

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.gap.candidates import Candidate, pair
-from flightid.identification.gap.fit import WindowFit, fit, held
+from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
 from flightid.identification.gap.linearise import Linearised
 from flightid.identification.gap.segments import Segment
 
@@ -40,6 +40,18 @@ def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
         spread = sum(float(np.sum((f.measured[ch] - np.mean(f.measured[ch])) ** 2))
                      for f in fits)
         out[ch] = res / spread if spread > 0 else float("nan")
+    return out
+
+
+def pooled_noise(fits: list[WindowFit]) -> dict[str, float]:
+    """Per channel: the white-noise energy of the residual (``fit.noise_energy``) / measured
+    energy, pooled over windows: the floor no effect can take a gap below."""
+    out = {}
+    for ch in fits[0].residual:
+        noise = sum(noise_energy(f.residual[ch]) for f in fits)
+        spread = sum(float(np.sum((f.measured[ch] - np.mean(f.measured[ch])) ** 2))
+                     for f in fits)
+        out[ch] = noise / spread if spread > 0 else float("nan")
     return out
 
 
@@ -128,6 +140,9 @@ class Ranker:
             for s in test:
                 if s.label not in self.base_held:
                     self.base_held[s.label] = self.base.get(s.label) or fit(lin.model, s.record)
+        # the noise floor of the held-out windows (the model as is: differencing removes its
+        # slowly varying misfit)
+        self.floor = pooled_noise(list(self.base_held.values())) if self.base_held else {}
 
     def evaluate(self, cand: Candidate) -> Ranked | None:
         model = cand.wrap(self.lin.model)

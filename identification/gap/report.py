@@ -119,6 +119,12 @@ def html_report(result: GapResult, records: Records | None = None,
     named = (html.escape(result.named[0].candidate.label) if result.named
              else "unexplained: no candidate shrinks the held-out gap")
     unexpl = ""
+    if d["partly_unexplained"]:
+        unexpl = ("<p><b>Partly unexplained</b>: the named effects leave "
+                  f"{_f(d['partly_unexplained']['share'], '.0%')} of the held-out gap above the "
+                  "noise floor (an effect outside the catalogue is likely); above the floor: "
+                  + ", ".join(f"{c} {_f(v, '.3f')}" for c, v in
+                              d["partly_unexplained"]["remaining_above_floor"].items()) + "</p>")
     if d["unexplained"]:
         unexpl = "<p>Remaining held-out residual by channel: " + ", ".join(
             f"{c} {_f(v, '.3f')}" for c, v in d["unexplained"]["remaining"].items()) + "</p>"

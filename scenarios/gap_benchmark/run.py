@@ -134,6 +134,7 @@ class CaseResult:
     estimate: dict[str, dict[str, float]] = field(default_factory=dict)
     seconds: float = float("nan")
     error: str = ""
+    partly: bool = False  # named effects leave part of the gap above the noise floor
 
     def to_json(self) -> dict[str, Any]:
         return {"case": self.case.to_json(), "label": self.case.label, "named": self.named,
@@ -141,7 +142,8 @@ class CaseResult:
                 "unexplained": self.unexplained, "shrink": _finite(self.shrink),
                 "floor": _finite(self.floor), "excess_shrink": _finite(self.excess_shrink),
                 "magnitude_error": _finite(self.magnitude_error), "estimate": self.estimate,
-                "seconds": _finite(self.seconds), "error": self.error}
+                "seconds": _finite(self.seconds), "error": self.error,
+                "partly_unexplained": self.partly}
 
 
     @classmethod
@@ -153,7 +155,7 @@ class CaseResult:
         return cls(Case(**d["case"]), d["named"], d["ranked"], d["top1"], d["top3"],
                    d["unexplained"], num(d["shrink"]), num(d["floor"]),
                    num(d["excess_shrink"]), num(d["magnitude_error"]), d["estimate"],
-                   num(d["seconds"]), d["error"])
+                   num(d["seconds"]), d["error"], d.get("partly_unexplained", False))
 
 
 def _finite(x: float) -> float | None:
@@ -185,7 +187,8 @@ def score(case: Case, result: GapResult, floor: float = float("nan"),
         shrink=first.shrink if first is not None else float("nan"), floor=floor,
         excess_shrink=excess,
         magnitude_error=_relative_error(case, match) if match is not None else float("nan"),
-        estimate=dict(match.parameters) if match is not None else {}, seconds=seconds)
+        estimate=dict(match.parameters) if match is not None else {}, seconds=seconds,
+        partly=result.partly_unexplained)
 
 
 def run_case(case: Case, floor: bool = True, **options: Any) -> CaseResult:
@@ -203,7 +206,8 @@ def summary(results: list[CaseResult]) -> dict[str, Any]:
     """The fractions of the blind check: ``top1`` and ``top3`` (in-catalogue cases),
     ``shrinkage`` (median held-out shrink after the named effect, correctly named cases;
     ``excess_shrinkage`` the same of the gap above the noise floor),
-    ``unexplained_correct`` (cases outside the catalogue reported unexplained). A case
+    ``unexplained_correct`` (cases outside the catalogue reported unexplained, or partly
+    unexplained: the named effects leave part of the gap above the noise floor). A case
     that could not be flown (it departed: the drawn effect made the aircraft unflyable
     open loop) is counted in ``failed`` and left out of the fractions."""
     flown = [r for r in results if not r.error]
@@ -231,8 +235,9 @@ def summary(results: list[CaseResult]) -> dict[str, Any]:
         "excess_shrinkage": float(np.median(excess)) if excess else None,
         "excess_shrink_at_least_70": frac([s >= 0.7 for s in excess]),
         "magnitude_error_median": float(np.median(errors)) if errors else None,
-        "unexplained_correct": frac([r.unexplained for r in outside]),
+        "unexplained_correct": frac([r.unexplained or r.partly for r in outside]),
         "false_unexplained": frac([r.unexplained for r in inside]),
+        "false_partly_unexplained": frac([r.partly for r in right]),
         "by_entry": by,
         "seconds": float(sum(r.seconds for r in results if math.isfinite(r.seconds))),
     }
