@@ -46,6 +46,7 @@ episode length.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
@@ -115,36 +116,43 @@ def _noise_sigma(suite: SensorSuite | None, channel: str) -> float:
 
 
 class _Information:
-    """Information, inverse and right-hand side of every coefficient's regression, batched.
+    """Information, inverse and right-hand side of every coefficient's regression.
 
-    Groups with fewer variables are padded with regressors that stay zero: with the prior
-    I their entries stay decoupled (information 1, no contribution to log det).
+    Coefficients with the same regressors and residual std (Cl and Cn of the lateral
+    preset) share one information matrix: ``design[g]`` is coefficient g's, and a shared
+    matrix counts once per coefficient in log det. Designs with fewer variables are padded
+    with regressors that stay zero: with the prior I their entries stay decoupled
+    (information 1, no contribution to log det).
     """
 
     def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
-        g = len(spec)
+        keys = [(v, SIGMA[c]) for c, v in spec]
+        unique = list(dict.fromkeys(keys))
+        self.design = np.array([unique.index(k) for k in keys])
         k = 1 + max(len(v) for _, v in spec)
-        self.inv = np.tile(np.eye(k), (g, 1, 1))
-        self.rhs = np.zeros((g, k))
-        self._w = tuple(1.0 / SIGMA[c] ** 2 for c, _ in spec)
-        self.w = np.array(self._w)
-        self.logdet_m = 0.0  # sum over groups of log det M (prior I)
+        self.inv = np.tile(np.eye(k), (len(unique), 1, 1))
+        self.rhs = np.zeros((len(spec), k))
+        self.w = np.array([1.0 / s**2 for _, s in unique])  # per design
+        self.count = np.bincount(self.design, minlength=len(unique)).astype(float)
+        self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
+        self._w_coef = self.w_coef.tolist()
+        self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
         self.n = 0
 
     @property
     def logdet(self) -> float:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
-        return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w)
+        return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w_coef)
 
     def add(self, x: np.ndarray, y: np.ndarray) -> None:
-        """One sample: regressors x (groups x k, bias first), dependent variables y."""
-        v = (self.inv @ x[:, :, None])[:, :, 0]
-        xv = (x * v).sum(1).tolist()
+        """One sample: regressors x (designs x k, bias first), dependent variables y (per
+        coefficient)."""
+        v = np.matmul(self.inv, x[:, :, None])[:, :, 0]
+        wq = self.w * (x * v).sum(1)
         # matrix determinant lemma and Sherman-Morrison
-        self.logdet_m += sum(math.log1p(w * q) for w, q in zip(self._w, xv, strict=True))
-        wd = self.w / (1.0 + self.w * np.array(xv))
-        self.inv -= v[:, :, None] * v[:, None, :] * wd[:, None, None]
-        self.rhs += x * (self.w * y)[:, None]
+        self.logdet_m += float(self.count @ np.log1p(wq))
+        self.inv -= v[:, :, None] * v[:, None, :] * (self.w / (1.0 + wq))[:, None, None]
+        self.rhs += x[self.design] * (self.w_coef * y)[:, None]
         self.n += 1
 
 
@@ -208,23 +216,33 @@ class ExcitationEnv(gymnasium.Env):
             groups.setdefault(coef, []).append(var)
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
+        k = width + 1  # bias first
+        self._design = _Information(self._group_spec).design  # coefficient -> its design
+        designs: dict[int, tuple[str, ...]] = {}
+        for d, (_, vs) in zip(self._design.tolist(), self._group_spec, strict=True):
+            designs.setdefault(d, vs)
         # regressor vector: VARIABLE_CHANNEL order, then a slot that stays zero (padding)
         names = list(VARIABLE_CHANNEL)
         self._vidx = np.array([[names.index(v) for v in vs] + [len(names)] * (width - len(vs))
-                               for _, vs in self._group_spec])
+                               for _, vs in sorted(designs.items())])
         coefs = [c for c, _ in self._group_spec]
         self._coefs = coefs
+        self._coef_values = operator.itemgetter(*coefs)
         self._sigma_y = np.array([SIGMA[c] for c in coefs])
-        # target i -> flat index into (groups, width)
-        self._tidx = np.array([coefs.index(n.partition("_")[0]) * width
-                               + groups[n.partition("_")[0]].index(n.partition("_")[2])
-                               for n in self.targets])
+        # target i -> flat indices of its variance in the designs' M^-1 and of its estimate
+        # in the coefficients' M^-1 X^T y (both (., k) with the bias first)
+        where = [(coefs.index(n.partition("_")[0]),
+                  1 + groups[n.partition("_")[0]].index(n.partition("_")[2]))
+                 for n in self.targets]
+        self._crb_idx = np.array([self._design[g] * k * k + j * k + j for g, j in where])
+        self._est_idx = np.array([g * k + j for g, j in where])
         span, chord = self.reference.span, self.reference.chord
         self._per_v = np.array([0.0, 0.0, span / 2, chord / 2, span / 2, 0.0, 0.0, 0.0, 0.0])
         self._fixed = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0])
         # the padding slot reads the time channel minus itself: always zero
         self._obs_of_var = np.array([OBS_CHANNELS.index(v) for v in VARIABLE_CHANNEL] + [0])
-        self._x = np.ones((len(self._group_spec), width + 1))
+        self._x = np.ones((len(designs), k))
+        self._obs_values = operator.itemgetter(*OBS_CHANNELS[1:])
         self._truth_vec = np.array([self.truth.get(n, np.nan) for n in self.targets])
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
@@ -258,14 +276,14 @@ class ExcitationEnv(gymnasium.Env):
         self._trim_obs_var = self._trim_obs[self._obs_of_var]
         obs = self._observe(sample, 0.0)
         self._obs_hist = [obs]
-        self._actions = [np.zeros(3)]
+        self._actions = [[0.0, 0.0, 0.0]]
         return obs, self._info(None)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        a = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        a = [min(1.0, max(-1.0, v)) for v in np.asarray(action, dtype=float).tolist()]
         inc = {}
         for i, c in enumerate(CONTROLS):
-            ai = float(a[i])
+            ai = a[i]
             inc[c] = ai * (self._span[i][1] if ai > 0 else self._span[i][0])
         self._k += 1
         departure = None
@@ -339,7 +357,7 @@ class ExcitationEnv(gymnasium.Env):
 
     # -- internals ------------------------------------------------------------------------
     def _observe(self, sample: dict[str, float], t: float) -> np.ndarray:
-        obs = np.array([t] + [sample[c] for c in OBS_CHANNELS[1:]])
+        obs = np.array((t, *self._obs_values(sample)))
         return obs + self._obs_noise[min(self._k, len(self._obs_noise) - 1)]
 
     def _update(self, obs: np.ndarray, sample: dict[str, float]) -> None:
@@ -348,7 +366,7 @@ class ExcitationEnv(gymnasium.Env):
         r = (obs[self._obs_of_var] - self._trim_obs_var) * (self._fixed + self._per_v / obs[1])
         x = self._x
         x[:, 1:] = r[self._vidx]
-        y = (np.array([sample[c] for c in self._coefs]) - self._y0
+        y = (np.array(self._coef_values(sample), ndmin=1) - self._y0
              + self._y_noise[min(self._k, len(self._y_noise) - 1)])
         self._info_state.add(x, y)
 
@@ -373,8 +391,8 @@ class ExcitationEnv(gymnasium.Env):
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
-        crb = np.sqrt(np.diagonal(inf.inv, axis1=1, axis2=2)[:, 1:]).ravel()[self._tidx]
-        est = np.einsum("gij,gj->gi", inf.inv, inf.rhs)[:, 1:].ravel()[self._tidx]
+        crb = np.sqrt(inf.inv.reshape(-1)[self._crb_idx])
+        est = np.matmul(inf.inv[self._design], inf.rhs[:, :, None]).reshape(-1)[self._est_idx]
         info: dict[str, Any] = {"crb": crb, "estimate": est, "error": est - self._truth_vec,
                                 "logdet": self._logdet, "time": self._k / self.decision_hz}
         if departure is not None:

@@ -4,6 +4,8 @@ or a Dask cluster (``dask.distributed.Client`` from an address or a scheduler fi
 Both keep at most ``window`` realizations in flight (submitted as others finish, results
 consumed as they complete) so that memory stays bounded however large n is; each finished
 realization goes to ``on_result(index, rows)`` (the store) and to ``progress(done, total)``.
+Local workers can write their realizations themselves (``store_in``); Dask workers, which
+may not share this file system, send the rows back.
 """
 
 from __future__ import annotations
@@ -12,10 +14,12 @@ import multiprocessing
 import os
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from pathlib import Path
 from typing import Any
 
 from dask import distributed
 
+from flightid.scenarios.montecarlo.store import write_realization
 from flightid.scenarios.montecarlo.study import Study, run_realization
 
 Rows = list[dict[str, Any]]
@@ -28,11 +32,21 @@ def _report(progress: Progress | None, finished: int, total: int) -> None:
         progress(finished, total)
 
 
+def _run_and_store(description: Study, index: int, folder: str) -> list[dict[str, Any]]:
+    """In a worker: one realization, written to the study's dataset by the worker itself
+    (the Parquet write costs this process's CPU, which on a machine with one core per
+    worker would be taken from the workers); no rows go back."""
+    write_realization(folder, index, run_realization(description, index))
+    return []
+
+
 def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
               workers: int | None = None, progress: Progress | None = None,
-              window: int | None = None) -> None:
+              window: int | None = None, store_in: str | Path | None = None) -> None:
     """Run the realizations ``indices`` in ``workers`` local processes (default: one per
-    CPU). Workers start from a clean process (forkserver), never a fork of this one."""
+    CPU). Workers start from a clean process (forkserver), never a fork of this one.
+    ``store_in``: each worker writes its realizations to this study folder
+    (``store.write_realization``) and ``on_result`` gets no rows."""
     todo = list(indices)
     workers = max(1, int(workers or os.cpu_count() or 1))
     window = max(1, int(window or 2 * workers))
@@ -42,12 +56,17 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
         return
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    def submit(index: int) -> Future:
+        if store_in is not None:
+            return pool.submit(_run_and_store, description, index, str(store_in))
+        return pool.submit(run_realization, description, index)
+
     with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context) as pool:
         pending: dict[Future, int] = {}
         queue = iter(todo)
         try:
             for index in queue:
-                pending[pool.submit(run_realization, description, index)] = index
+                pending[submit(index)] = index
                 if len(pending) >= window:
                     break
             while pending:
@@ -58,7 +77,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
                     finished += 1
                     _report(progress, finished, total)
                 for index in queue:
-                    pending[pool.submit(run_realization, description, index)] = index
+                    pending[submit(index)] = index
                     if len(pending) >= window:
                         break
         except BaseException:

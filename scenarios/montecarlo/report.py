@@ -22,7 +22,9 @@ REPORT = "report.html"
 
 
 def _figure(name: str, values: np.ndarray, truth: float, bound: float) -> str:
-    fig = Figure(figsize=(4.2, 2.8), dpi=100, layout="constrained")
+    # fixed margins: a constrained layout draws every figure twice (half the report's time)
+    fig = Figure(figsize=(4.2, 2.8), dpi=100)
+    fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.9)
     ax = fig.add_subplot()
     bins = max(5, min(40, int(math.sqrt(values.size)) * 2))
     ax.hist(values, bins=bins, density=True, color="#8fb3d9", edgecolor="white",
