@@ -122,7 +122,8 @@ class _Information:
     preset) share one information matrix: ``design[g]`` is coefficient g's, and a shared
     matrix counts once per coefficient in log det. Designs with fewer variables are padded
     with regressors that stay zero: with the prior I their entries stay decoupled
-    (information 1, no contribution to log det).
+    (information 1, no contribution to log det). One small matrix per design, updated in
+    place: at 6 x 6, numpy's call overhead is the cost, and 2-d calls are the cheapest.
     """
 
     def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
@@ -130,10 +131,10 @@ class _Information:
         unique = list(dict.fromkeys(keys))
         self.design = np.array([unique.index(k) for k in keys])
         k = 1 + max(len(v) for _, v in spec)
-        self.inv = np.tile(np.eye(k), (len(unique), 1, 1))
+        self.inv = [np.eye(k) for _ in unique]
+        self.w = [1.0 / s**2 for _, s in unique]  # per design
+        self.count = [keys.count(u) for u in unique]
         self.rhs = np.zeros((len(spec), k))
-        self.w = np.array([1.0 / s**2 for _, s in unique])  # per design
-        self.count = np.bincount(self.design, minlength=len(unique)).astype(float)
         self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
         self._w_coef = self.w_coef.tolist()
         self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
@@ -147,13 +148,29 @@ class _Information:
     def add(self, x: np.ndarray, y: np.ndarray) -> None:
         """One sample: regressors x (designs x k, bias first), dependent variables y (per
         coefficient)."""
-        v = np.matmul(self.inv, x[:, :, None])[:, :, 0]
-        wq = self.w * (x * v).sum(1)
-        # matrix determinant lemma and Sherman-Morrison
-        self.logdet_m += float(self.count @ np.log1p(wq))
-        self.inv -= v[:, :, None] * v[:, None, :] * (self.w / (1.0 + wq))[:, None, None]
+        for d, inv in enumerate(self.inv):
+            xd = x[d]
+            v = inv @ xd
+            wq = self.w[d] * float(xd @ v)
+            # matrix determinant lemma and Sherman-Morrison
+            self.logdet_m += self.count[d] * math.log1p(wq)
+            inv -= np.outer(v, v * (self.w[d] / (1.0 + wq)))
         self.rhs += x[self.design] * (self.w_coef * y)[:, None]
         self.n += 1
+
+    def variances(self) -> np.ndarray:
+        """The diagonals of the designs' M^-1, one after the other."""
+        return np.concatenate([inv.diagonal() for inv in self.inv])
+
+    def estimates(self) -> np.ndarray:
+        """M^-1 X^T y of every coefficient (bias first), one after the other."""
+        if len(self.inv) == 1:  # M^-1 is symmetric: the rows of rhs M^-1
+            return (self.rhs @ self.inv[0]).ravel()
+        out = np.empty_like(self.rhs)
+        for d, inv in enumerate(self.inv):
+            members = self.design == d
+            out[members] = self.rhs[members] @ inv
+        return out.ravel()
 
 
 class ExcitationEnv(gymnasium.Env):
@@ -229,12 +246,12 @@ class ExcitationEnv(gymnasium.Env):
         self._coefs = coefs
         self._coef_values = operator.itemgetter(*coefs)
         self._sigma_y = np.array([SIGMA[c] for c in coefs])
-        # target i -> flat indices of its variance in the designs' M^-1 and of its estimate
-        # in the coefficients' M^-1 X^T y (both (., k) with the bias first)
+        # target i -> indices of its variance in the designs' M^-1 diagonals and of its
+        # estimate in the coefficients' M^-1 X^T y (both k per block, the bias first)
         where = [(coefs.index(n.partition("_")[0]),
                   1 + groups[n.partition("_")[0]].index(n.partition("_")[2]))
                  for n in self.targets]
-        self._crb_idx = np.array([self._design[g] * k * k + j * k + j for g, j in where])
+        self._crb_idx = np.array([self._design[g] * k + j for g, j in where])
         self._est_idx = np.array([g * k + j for g, j in where])
         span, chord = self.reference.span, self.reference.chord
         self._per_v = np.array([0.0, 0.0, span / 2, chord / 2, span / 2, 0.0, 0.0, 0.0, 0.0])
@@ -391,8 +408,8 @@ class ExcitationEnv(gymnasium.Env):
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
-        crb = np.sqrt(inf.inv.reshape(-1)[self._crb_idx])
-        est = np.matmul(inf.inv[self._design], inf.rhs[:, :, None]).reshape(-1)[self._est_idx]
+        crb = np.sqrt(inf.variances()[self._crb_idx])
+        est = inf.estimates()[self._est_idx]
         info: dict[str, Any] = {"crb": crb, "estimate": est, "error": est - self._truth_vec,
                                 "logdet": self._logdet, "time": self._k / self.decision_hz}
         if departure is not None:
