@@ -320,8 +320,6 @@ def fly(
         close()
     typer.echo(rep.summary())
     typer.echo(f"{rep.controls_received} control messages received")
-    if rep.ended:
-        typer.echo(f"warning: the flight ended early: {rep.ended}", err=True)
     if rep.refused:
         typer.echo(f"refused {sum(rep.refused.values())} packet(s) that may not fly the "
                    f"aircraft: {', '.join(f'{n} {k}' for k, n in rep.refused.items())}")
@@ -330,3 +328,6 @@ def fly(
         t = [k / rate for k in range(len(history))]
         FlightRecord(t, {n: [h[n] for h in history] for n in names},
                      sim.sim.meta({"bridge": "in the loop"})).write(output)
+    if rep.ended:  # the steps flown are kept (written above); the exit says it stopped
+        kept = f"; the {len(history)} samples flown are in {output}" if output else ""
+        raise TimeoutError(f"the flight ended early: {rep.ended}{kept}")

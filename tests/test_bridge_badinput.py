@@ -8,6 +8,8 @@ naming the problem (exit 2 on the command line).
 """
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +17,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
+from flightid.record import read
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.bridge.air import BridgeConfig
 from flightid.sim.bridge.frames import TlogWriter, read_tlog
@@ -192,3 +195,55 @@ def test_a_recorder_that_hears_nothing_exits_3_and_keeps_the_old_file(tmp_path):
     assert done.exit_code == 3, done.output
     assert "no MAVLink packet arrived" in done.output
     assert old.read_bytes() == b"an earlier recording"
+
+
+SILENT_CLIENT = r'''
+import os, sys
+os.environ["MAVLINK20"] = "1"
+from pymavlink import mavutil
+port, answers = sys.argv[1], int(sys.argv[2])
+conn = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", dialect="ardupilotmega",
+                                  source_system=255, source_component=190)
+if conn.recv_match(blocking=True, timeout=20) is None:  # learn the bridge's address
+    sys.exit("no telemetry within 20 s")
+conn.mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, mavutil.mavlink.MAV_AUTOPILOT_INVALID,
+                        0, 0, 0)
+sent = 0
+while sent < answers:
+    m = conn.recv_match(type="HIGHRES_IMU", blocking=True, timeout=20)
+    if m is None:
+        sys.exit("no telemetry within 20 s")
+    conn.mav.hil_actuator_controls_send(m.time_usec + 20000, [0.0] * 16, 0, 0)
+    sent += 1
+'''
+
+
+def test_a_ground_station_that_goes_silent_mid_flight_exits_3_and_keeps_the_steps(tmp_path):
+    """Lock-step ``bridge fly`` over real UDP: the ground station answers 10 samples and
+    goes silent. The 11 samples flown (the trim and 10 steps) are written, then the
+    flight stops with exit 3 and says why."""
+    probe = UdpLink(("127.0.0.1", 0), listen=True)
+    port = probe.local_address[1]
+    probe.close()
+    script = tmp_path / "client.py"
+    script.write_text(SILENT_CLIENT)
+    client = subprocess.Popen([sys.executable, str(script), str(port), "10"],
+                              stderr=subprocess.PIPE, text=True)
+    out = tmp_path / "flown.parquet"
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "flightid.cli.app", "bridge", "fly", "navion", "--altitude", "0",
+             "--speed", "53.64", "--udp", f"127.0.0.1:{port}", "--timeout", "2",
+             "--duration", "2", "--output", str(out)],
+            capture_output=True, text=True, timeout=120)
+        _, err = client.communicate(timeout=30)
+    finally:
+        if client.poll() is None:
+            client.kill()
+    assert client.returncode == 0, err
+    assert done.returncode == 3, done.stdout + done.stderr
+    assert "the flight ended early: no control within 2 s after step 10 of 100" in done.stderr
+    assert "Traceback" not in done.stderr
+    flown = read(out)
+    assert flown.time.size == 11
+    assert np.all(np.isfinite(flown["q"]))

@@ -394,7 +394,7 @@ def serve_simulation(
             got = reader.next(timeout)
             if got is None:
                 ended = (f"the link closed after step {k - 1} of {steps}" if reader.closed
-                         else f"no control within {timeout} s after step {k - 1} of {steps}")
+                         else f"no control within {timeout:g} s after step {k - 1} of {steps}")
                 break
             held.update(got)
         else:
