@@ -23,25 +23,6 @@ from flightid.scenarios.cards import CardError
 from flightid.sim.flight import DepartureError
 from flightid.sim.trim import TrimError
 
-# a card whose elevator doublet is far too big: the Navion departs after about 1.3 s
-DEPARTING_CARD = """name = "departs"
-duration = 6.0
-aircraft = "navion"
-rate = 50.0
-seed = 1
-
-[condition]
-altitude = 300.0
-speed = 50.0
-
-[[maneuver]]
-kind = "doublet"
-surface = "de"
-start = 0.5
-base = 2.0
-amplitude_deg = 25.0
-"""
-
 
 def run(*args, cwd=None, env=None):
     return subprocess.run([sys.executable, "-m", "flightid.cli.app", *map(str, args)],
@@ -59,13 +40,6 @@ def assert_one_line(out, code, *expected):
 def small_record(value: float = 1.0) -> FlightRecord:
     t = np.arange(5) * 0.1
     return FlightRecord(t, {"q": np.full(5, value)}, RecordMeta(aircraft="test"))
-
-
-@pytest.fixture
-def departing_card(tmp_path):
-    card = tmp_path / "departs.toml"
-    card.write_text(DEPARTING_CARD, encoding="utf-8")
-    return card
 
 
 # -- exit 2: bad input or usage -----------------------------------------------------------

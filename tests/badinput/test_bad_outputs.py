@@ -8,25 +8,6 @@ from pathlib import Path
 
 import pytest
 
-# the flight departs after about 1.3 s (an elevator doublet far too big): exit 3
-DEPARTING = """name = "departs"
-duration = 6.0
-aircraft = "navion"
-rate = 50.0
-seed = 1
-
-[condition]
-altitude = 300.0
-speed = 50.0
-
-[[maneuver]]
-kind = "doublet"
-surface = "de"
-start = 0.5
-base = 2.0
-amplitude_deg = 25.0
-"""
-
 
 @pytest.fixture
 def read_only(tmp_path) -> Path:
@@ -80,10 +61,8 @@ def test_read_only_report_and_plot(cli, flight_file, card_path, tmp_path, read_o
     assert not (tmp_path / "ok.parquet").exists()  # refused before anything was written
 
 
-def test_departure_leaves_existing_output_intact(cli, tmp_path, existing):
-    card = tmp_path / "departs.toml"
-    card.write_text(DEPARTING)
-    cli(["simulate", card, "-o", existing], 3, "the flight departed", protect=[existing])
+def test_departure_leaves_existing_output_intact(cli, tmp_path, existing, departing_card):
+    cli(["simulate", departing_card, "-o", existing], 3, "the flight departed", protect=[existing])
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
