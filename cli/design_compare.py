@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import design_compare
+from flightid.cli import study_options as opts
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
@@ -53,8 +54,8 @@ def design_compare_command(
     n: Annotated[int, typer.Option("-n", help="realizations per design")] = 30,
     output: Annotated[str, typer.Option(
         "-o", "--output", help="study folder (continued when it exists)")] = "design-compare",
-    method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
-    model: Annotated[str, typer.Option(help="model (as for flightid identify)")] = "lon",
+    method: opts.Method = "oe",
+    model: opts.Model = "lon",
     surface: Annotated[str, typer.Option(help="the surface every design moves")] = "de",
     amplitude_deg: Annotated[float, typer.Option(
         help="peak amplitude (deg) of every design (equal amplitude) or of the reference "
@@ -65,16 +66,12 @@ def design_compare_command(
     equal: Annotated[str, typer.Option(help="amplitude or energy")] = "amplitude",
     reference: Annotated[str, typer.Option(
         help="with --equal energy: the design whose energy all get")] = "3211",
-    option: Annotated[list[str] | None, typer.Option(
-        help="method option KEY=VALUE (repeatable)")] = None,
-    seed: Annotated[int | None, typer.Option(
-        help="base seed of the realizations (default: the card's)")] = None,
-    workers: Annotated[int | None, typer.Option(
-        help="local worker processes (default: one per CPU)")] = None,
-    dask: Annotated[str | None, typer.Option(
-        "--dask", help="Dask scheduler address, e.g. tcp://host:8786")] = None,
-    format: Annotated[str, typer.Option(help="table or json")] = "table",
-    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+    option: opts.MethodOptions = None,
+    seed: opts.Seed = None,
+    workers: opts.Workers = None,
+    dask: opts.Dask = None,
+    format: opts.Format = "table",
+    quiet: opts.Quiet = False,
 ) -> None:
     """Compare input designs by the scatter of the derivatives they give over a Monte
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""

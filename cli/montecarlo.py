@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from flightid.cli import study_options as opts
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.scenarios import montecarlo
@@ -57,16 +58,12 @@ def montecarlo_command(
     n: Annotated[int, typer.Option("-n", help="number of realizations")],
     output: Annotated[str, typer.Option(
         "-o", "--output", help="study folder (continued when it exists)")],
-    method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
-    model: Annotated[str, typer.Option(help="model (as for flightid identify)")] = "lat",
-    option: Annotated[list[str] | None, typer.Option(
-        help="method option KEY=VALUE (repeatable)")] = None,
-    seed: Annotated[int | None, typer.Option(
-        help="base seed of the realizations (default: the card's)")] = None,
-    workers: Annotated[int | None, typer.Option(
-        help="local worker processes (default: one per CPU)")] = None,
-    dask: Annotated[str | None, typer.Option(
-        "--dask", help="Dask scheduler address, e.g. tcp://host:8786")] = None,
+    method: opts.Method = "oe",
+    model: opts.Model = "lat",
+    option: opts.MethodOptions = None,
+    seed: opts.Seed = None,
+    workers: opts.Workers = None,
+    dask: opts.Dask = None,
     dask_scheduler_file: Annotated[str | None, typer.Option(
         help="Dask scheduler file")] = None,
     disperse: Annotated[list[str] | None, typer.Option(
@@ -74,8 +71,8 @@ def montecarlo_command(
              "realization, e.g. mass_scale:0.05 (repeatable; docs/montecarlo.md)")] = None,
     disperse_file: Annotated[str | None, typer.Option(
         help="TOML file with disperse = [\"mass_scale:0.05\", ...]")] = None,
-    format: Annotated[str, typer.Option(help="table or json")] = "table",
-    quiet: Annotated[bool, typer.Option(help="no progress bar")] = False,
+    format: opts.Format = "table",
+    quiet: opts.Quiet = False,
 ) -> None:
     """Fly a card N times, identify each flight, and summarize bias, scatter and the
     coverage of the reported bounds; a rerun continues the study in -o."""

@@ -1,0 +1,21 @@
+"""Options shared by the commands that run Monte Carlo studies (``montecarlo``,
+``design-compare``): one declaration each, so that their help and names stay the same."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+Method = Annotated[str, typer.Option(help="method id (flightid methods)")]
+Model = Annotated[str, typer.Option(help="model (as for flightid identify)")]
+MethodOptions = Annotated[list[str] | None, typer.Option(
+    help="method option KEY=VALUE (repeatable)")]
+Seed = Annotated[int | None, typer.Option(
+    help="base seed of the realizations (default: the card's)")]
+Workers = Annotated[int | None, typer.Option(
+    help="local worker processes (default: one per CPU)")]
+Dask = Annotated[str | None, typer.Option(
+    "--dask", help="Dask scheduler address, e.g. tcp://host:8786")]
+Format = Annotated[str, typer.Option(help="table or json")]
+Quiet = Annotated[bool, typer.Option(help="no progress bar")]
