@@ -115,6 +115,15 @@ def _noise_sigma(suite: SensorSuite | None, channel: str) -> float:
     return float(sum(e.sigma for e in suite.channels[channel] if isinstance(e, WhiteNoise)))
 
 
+def _designs(spec: Sequence[tuple[str, tuple[str, ...]]]
+             ) -> tuple[list[int], list[tuple[tuple[str, ...], float]]]:
+    """(each coefficient's design, the designs): a design is (variables, residual std);
+    coefficients with the same one share an information matrix."""
+    keys = [(v, SIGMA[c]) for c, v in spec]
+    unique = list(dict.fromkeys(keys))
+    return [unique.index(k) for k in keys], unique
+
+
 class _Information:
     """Information, inverse and right-hand side of every coefficient's regression.
 
@@ -127,13 +136,12 @@ class _Information:
     """
 
     def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
-        keys = [(v, SIGMA[c]) for c, v in spec]
-        unique = list(dict.fromkeys(keys))
-        self.design = np.array([unique.index(k) for k in keys])
+        design, unique = _designs(spec)
+        self.design = np.array(design)
         k = 1 + max(len(v) for _, v in spec)
         self.inv = [np.eye(k) for _ in unique]
         self.w = [1.0 / s**2 for _, s in unique]  # per design
-        self.count = [keys.count(u) for u in unique]
+        self.count = [design.count(d) for d in range(len(unique))]
         self.rhs = np.zeros((len(spec), k))
         self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
         self._w_coef = self.w_coef.tolist()
@@ -234,14 +242,11 @@ class ExcitationEnv(gymnasium.Env):
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
         k = width + 1  # bias first
-        self._design = _Information(self._group_spec).design  # coefficient -> its design
-        designs: dict[int, tuple[str, ...]] = {}
-        for d, (_, vs) in zip(self._design.tolist(), self._group_spec, strict=True):
-            designs.setdefault(d, vs)
+        design, designs = _designs(self._group_spec)  # coefficient -> its design
         # regressor vector: VARIABLE_CHANNEL order, then a slot that stays zero (padding)
         names = list(VARIABLE_CHANNEL)
         self._vidx = np.array([[names.index(v) for v in vs] + [len(names)] * (width - len(vs))
-                               for _, vs in sorted(designs.items())])
+                               for vs, _ in designs])
         coefs = [c for c, _ in self._group_spec]
         self._coefs = coefs
         self._coef_values = operator.itemgetter(*coefs)
@@ -251,7 +256,7 @@ class ExcitationEnv(gymnasium.Env):
         where = [(coefs.index(n.partition("_")[0]),
                   1 + groups[n.partition("_")[0]].index(n.partition("_")[2]))
                  for n in self.targets]
-        self._crb_idx = np.array([self._design[g] * k + j for g, j in where])
+        self._crb_idx = np.array([design[g] * k + j for g, j in where])
         self._est_idx = np.array([g * k + j for g, j in where])
         span, chord = self.reference.span, self.reference.chord
         self._per_v = np.array([0.0, 0.0, span / 2, chord / 2, span / 2, 0.0, 0.0, 0.0, 0.0])

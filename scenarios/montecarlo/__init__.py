@@ -59,15 +59,14 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
     todo = sorted(set(range(int(n))) - done(folder))
 
     def keep(index: int, rows: list[dict[str, Any]]) -> None:
-        if rows:  # the local workers store their own
-            store.write_realization(folder, index, rows)
+        store.write_realization(folder, index, rows)
 
     if dask_address is not None or dask_scheduler_file is not None:
         with dask_client(dask_address, None if dask_scheduler_file is None
                          else str(dask_scheduler_file)) as client:
             run_dask(description, todo, keep, client, progress)
     else:
-        run_local(description, todo, keep, workers, progress, store_in=folder)
+        run_local(description, todo, keep, workers, progress, store_in=folder)  # workers store
     df = load(folder)
     df = df[df["index"] < int(n)]
     summary = summarize(df)

@@ -32,12 +32,11 @@ def _report(progress: Progress | None, finished: int, total: int) -> None:
         progress(finished, total)
 
 
-def _run_and_store(description: Study, index: int, folder: str) -> list[dict[str, Any]]:
+def _run_and_store(description: Study, index: int, folder: str) -> None:
     """In a worker: one realization, written to the study's dataset by the worker itself
     (the Parquet write costs this process's CPU, which on a machine with one core per
     worker would be taken from the workers); no rows go back."""
     write_realization(folder, index, run_realization(description, index))
-    return []
 
 
 def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
@@ -46,7 +45,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
     """Run the realizations ``indices`` in ``workers`` local processes (default: one per
     CPU). Workers start from a clean process (forkserver), never a fork of this one.
     ``store_in``: each worker writes its realizations to this study folder
-    (``store.write_realization``) and ``on_result`` gets no rows."""
+    (``store.write_realization``) and ``on_result`` is not called."""
     todo = list(indices)
     workers = max(1, int(workers or os.cpu_count() or 1))
     window = max(1, int(window or 2 * workers))
@@ -56,6 +55,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
         return
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+
     def submit(index: int) -> Future:
         if store_in is not None:
             return pool.submit(_run_and_store, description, index, str(store_in))
@@ -73,7 +73,9 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
                 complete, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in complete:
                     index = pending.pop(fut)
-                    on_result(index, fut.result())
+                    rows = fut.result()  # a worker's error is raised here either way
+                    if store_in is None:
+                        on_result(index, rows)
                     finished += 1
                     _report(progress, finished, total)
                 for index in queue:
