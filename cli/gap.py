@@ -31,12 +31,15 @@ def gap_command(
     write: Annotated[str | None, typer.Option(
         "--write-aircraft", help="write the aircraft with the named effect here, and fly it "
                                  "again in JSBSim with the records' inputs")] = None,
+    refine: Annotated[bool, typer.Option(
+        "--refine", help="refit the named airframe effect with the JSBSim aircraft flown "
+                         "from the record's measured surfaces (5-20 s more)")] = False,
 ) -> None:
     """Where a JSBSim model departs from flight data, which catalogue effect causes it, and
     how far the gap shrinks on held-out data (lateral axis)."""
     if format not in ("table", "json"):
         raise ValueError(f"--format must be table or json, got {format!r}")
-    result = gap(records, model, validate=validate or None)
+    result = gap(records, model, validate=validate or None, refine=refine)
     written = write_aircraft(result, write) if write else None
     # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
     again = refly(result, [read(r) for r in records], write, written) if written else None
@@ -82,6 +85,13 @@ def gap_command(
     else:
         console.print("unexplained: no candidate shrinks the held-out gap; remaining: "
                       + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining().items()))
+    if result.refined is not None:
+        f = result.refined
+        console.print(f"refined with JSBSim ({f.flights} flights): " + "; ".join(
+            f"{n} {v['value']:.4g} ± {v['std']:.2g} (linear {f.linear[n]['value']:.4g})"
+            for n, v in f.parameters.items()))
+    elif refine:
+        console.print("not refined: the named entry is not one airframe effect")
     if result.partly_unexplained:
         console.print(f"partly unexplained: the named effects leave "
                       f"{result.unexplained_share():.0%} of the held-out gap above the noise "

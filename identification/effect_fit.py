@@ -53,14 +53,16 @@ from flightid.sim import flight
 from flightid.sim.augment import augment_cached
 from flightid.sim.effects.airframe import AugmentEffect
 from flightid.sim.effects.catalogue import CATALOGUE, Parameter
-from flightid.sim.model import load
-from flightid.sim.trim import trim
+from flightid.sim.model import Model, load
+from flightid.sim.trim import Trim, trim
 
 METHOD = "effect_fit"
 CACHE = Path(tempfile.gettempdir()) / "flightid-effect-fit"
 SMOOTH_STEP = 0.05  # finite-difference step, fraction of the default magnitude
 KINK_STEP = 0.1  # the same for effects with kinks (central differences across them)
 KINKED = ("rate_limit", "deadband", "backlash")
+OFFSET = "offset_"  # a control's constant offset, fitted with the effect (rad, fraction)
+OFFSET_STEP = 1e-4  # its finite-difference step (rad: 0.006 deg)
 LONGITUDINAL = ("V", "alpha", "q", "theta", "de")
 LATERAL = ("beta", "p", "r", "phi", "da", "dr")
 CONTROLS = ("de", "da", "dr", "throttle")
@@ -70,7 +72,9 @@ CONTROLS = ("de", "da", "dr", "throttle")
 class EffectFit:
     """A fitted effect: values and standard errors in the catalogue's units (SI).
 
-    ``effect`` is the effect at the fitted values; ``estimate`` the engine's ``Estimate``
+    ``names`` are the effect's free parameters; ``values`` and ``std`` hold them and the
+    fitted input offsets (``offset_de``, ...). ``effect`` is the effect at the fitted
+    values; ``estimate`` the engine's ``Estimate``
     (fit statistics, fitted outputs); ``cost`` and ``neutral_cost`` the ML cost
     N/2 ln det R at the fit and with the effect at its neutral value; ``flights`` how many
     JSBSim flights the fit took; ``at_limit`` the parameters that ended on a range limit.
@@ -118,12 +122,21 @@ class _Flights:
 
     def __init__(self, record: FlightRecord, aircraft: str, effect: AugmentEffect,
                  names: Sequence[str], outputs: Sequence[str],
-                 controls: Mapping[str, np.ndarray], cache: Path) -> None:
-        self.aircraft, self.effect, self.names = aircraft, effect, list(names)
-        self.outputs, self.controls, self.cache = list(outputs), controls, cache
+                 controls: Mapping[str, np.ndarray], cache: Path, surfaces: str,
+                 flight_rate_hz: float, offsets: Sequence[str],
+                 condition: tuple[float, float] | None) -> None:
+        self.aircraft, self.effect = aircraft, effect
+        self.names = list(names) + [OFFSET + c for c in offsets]
+        self.outputs, self.cache, self.surfaces = list(outputs), cache, surfaces
         self.n = record.time.size
         self.rate = 1.0 / record.uniform_step(METHOD, min_samples=10)
-        c = record.meta.condition
+        # flown at a whole multiple of the record rate, the inputs interpolated linearly
+        self.every = max(1, math.ceil(flight_rate_hz / self.rate - 1e-9))
+        fine = np.arange((self.n - 1) * self.every + 1) / self.every
+        self.controls = {c: np.interp(fine, np.arange(self.n), u) for c, u in controls.items()}
+        c = dict(record.meta.condition or {})
+        if condition is not None:
+            c["altitude_m"], c["speed_m_s"] = condition
         missing = [k for k in ("altitude_m", "speed_m_s") if k not in c]
         if missing:
             raise ValueError(f"{METHOD}: the record's metadata lacks the flight condition "
@@ -132,8 +145,10 @@ class _Flights:
                           float(c.get("gamma_rad", 0.0)), float(c.get("bank_rad", 0.0)),
                           float(c.get("flaps_rad", 0.0)))
         entry = CATALOGUE.of(effect)
-        self.params = {n: entry.parameter(n) for n in self.names}
+        self.params = {n: entry.parameter(n) for n in names}
+        self.params.update({OFFSET + c: _offset_parameter(c) for c in offsets})
         self.memo: dict[tuple[float, ...], np.ndarray] = {}
+        self.trimmed: dict[tuple[float, ...], tuple[Model, Trim]] = {}
 
     def clip(self, values: Mapping[str, float]) -> tuple[float, ...]:
         out = []
@@ -146,16 +161,30 @@ class _Flights:
         """Outputs (N, ny) of the aircraft with the effect at ``values`` (clipped to range)."""
         key = self.clip(values)
         if key not in self.memo:
-            e = dataclasses.replace(self.effect, **dict(zip(self.names, key, strict=True)))
-            model = load(str(augment_cached(self.aircraft, [e], self.cache)))
-            trimmed = trim(model, *self.condition)
-            rec = flight.fly(model, trimmed, self.controls, duration_s=(self.n - 1) / self.rate,
-                             rate_hz=self.rate)
-            self.memo[key] = np.column_stack([rec[c][: self.n] for c in self.outputs])
+            named = dict(zip(self.names, key, strict=True))
+            own = {n: v for n, v in named.items() if not n.startswith(OFFSET)}
+            model, trimmed = self.trim(own)
+            controls = {c: u + named.get(OFFSET + c, 0.0) for c, u in self.controls.items()}
+            rec = flight.fly(model, trimmed, controls, duration_s=(self.n - 1) / self.rate,
+                             rate_hz=self.rate * self.every, surfaces=self.surfaces)
+            self.memo[key] = np.column_stack([rec[c][:: self.every][: self.n]
+                                              for c in self.outputs])
         return self.memo[key]
+
+    def trim(self, own: Mapping[str, float]) -> tuple[Model, Trim]:
+        """The aircraft with the effect at ``own`` values, trimmed at the record's condition."""
+        key = tuple(own.values())
+        if key not in self.trimmed:
+            e = dataclasses.replace(self.effect, **own)
+            model = load(str(augment_cached(self.aircraft, [e], self.cache,
+                                            surface_drive=self.surfaces == "driven")))
+            self.trimmed[key] = model, trim(model, *self.condition)
+        return self.trimmed[key]
 
     def step(self, name: str) -> float:
         p = self.params[name]
+        if name.startswith(OFFSET):
+            return OFFSET_STEP
         return (KINK_STEP if self.effect.name in KINKED else SMOOTH_STEP) * parameter_scale(p)
 
     def sensitivities(self, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -173,6 +202,11 @@ class _Flights:
         return y, sens
 
 
+def _offset_parameter(control: str) -> Parameter:
+    return Parameter(OFFSET + control, "rad" if control != "throttle" else "fraction",
+                     f"constant offset of the {control} input from the model's trim", 0.0)
+
+
 def commanded_from_record(record: FlightRecord) -> dict[str, np.ndarray]:
     """The measured surfaces' and throttle's increments on their first sample (rad, fraction).
 
@@ -186,7 +220,9 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
                controls: Mapping[str, np.ndarray] | None = None,
                outputs: Sequence[str] | None = None, start: Mapping[str, float] | None = None,
                max_iterations: int = 12, colored: bool = False,
-               cache: str | Path | None = None) -> EffectFit:
+               cache: str | Path | None = None, surfaces: str = "commanded",
+               flight_rate_hz: float = 0.0, offsets: Sequence[str] = (),
+               condition: tuple[float, float] | None = None) -> EffectFit:
     """Fit ``effect``'s ``free`` parameters (default: all that size it) to ``record``.
 
     ``aircraft``: the model the effect is added to (a name or an XML path); ``effect``: the
@@ -195,6 +231,16 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     ``controls``: commanded increments at the record's times (default
     ``commanded_from_record``); ``outputs``: the record channels compared (default
     ``default_outputs``); ``colored``: bounds corrected for colored residuals (M&K eq. 6.54).
+    ``surfaces``: "commanded" (``controls`` pass the aircraft's actuator) or "driven" (they
+    are surface positions written past it: right for a record's measured surfaces, which
+    have passed the real actuator). ``flight_rate_hz``: fly at the smallest whole multiple
+    of the record rate at least this fast, the inputs interpolated linearly between the
+    record's samples (a held 20 Hz surface lags its record by half a sample).
+    ``offsets``: controls whose constant offset from the model's trim is fitted with the
+    effect (nuisance parameters ``offset_<control>`` in ``values`` and ``std``): a
+    record's trim surface is known only to its noise and quantization, and a constant
+    surface error of 0.005 deg drifts the speed of a 30 s record enough to bias the fit.
+    ``condition``: (altitude m, airspeed m/s) to trim at, instead of the record metadata's.
     """
     if not isinstance(effect, AugmentEffect):
         raise ValueError(f"{METHOD}: {type(effect).__name__} is not an airframe or actuator "
@@ -215,14 +261,20 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
         if np.asarray(u).shape != (n,):
             raise ValueError(f"{METHOD}: control {c!r} has shape {np.shape(u)}; the record "
                              f"has {n} samples")
+    unknown = [c for c in offsets if c not in controls]
+    if unknown:
+        raise ValueError(f"{METHOD}: offset of {', '.join(unknown)} asked for, but the "
+                         f"controls are {', '.join(controls) or 'none'}")
     flights = _Flights(record, aircraft, effect, names, outputs, controls,
-                       Path(cache) if cache else CACHE)
+                       Path(cache) if cache else CACHE, surfaces, flight_rate_hz, offsets,
+                       condition)
+    every = flights.names  # the effect's parameters, then the offsets
     z = np.column_stack([record[c] for c in outputs])
     floor = np.maximum(1e-12 * np.var(z, axis=0), 1e-16)
-    values = {nm: float((start or {}).get(nm, effect.parameters()[nm])) for nm in names}
-    ml = maximum_likelihood(z, floor, flights.sensitivities, flights.fly, names, values,
+    values = {nm: float((start or {}).get(nm, effect.parameters().get(nm, 0.0))) for nm in every}
+    ml = maximum_likelihood(z, floor, flights.sensitivities, flights.fly, every, values,
                             max_iterations, False, step_tol=0.2, cost_tol=0.05)
-    fitted = dict(zip(names, flights.clip(ml.values), strict=True))
+    fitted = dict(zip(every, flights.clip(ml.values), strict=True))
     y, sens = flights.sensitivities(fitted)  # at the clipped values (kept flights)
     ml.values, ml.y, ml.sens, ml.residuals = fitted, y, sens, z - y
     ml.noise = noise_covariance(z - y, False, floor)
@@ -232,11 +284,13 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     est = estimate_from_fit(ml, method=METHOD, model=f"{aircraft} + {effect.name}",
                             time=record.time, measured=z, output_names=outputs, fixed={},
                             unidentifiable={}, colored=colored, full_noise_covariance=False)
-    neutral = {nm: entry.parameter(nm).zero for nm in names}
+    # "the effect absent": its parameters neutral, the offsets where the fit put them
+    neutral = {**fitted, **{nm: entry.parameter(nm).zero for nm in names}}
     neutral_cost = concentrated_cost(z - flights.fly(neutral), False, floor)
     cost = concentrated_cost(z - y, False, floor)
-    at_limit = [nm for nm in names if fitted[nm] in _limits(entry.parameter(nm))]
+    at_limit = [nm for nm in every if fitted[nm] in _limits(flights.params[nm])]
     std = {nm: math.inf if blind[k] else float(s)
-           for k, (nm, s) in enumerate(zip(names, est.std, strict=True))}
-    return EffectFit(dataclasses.replace(effect, **fitted), names, fitted, std, est, cost,
+           for k, (nm, s) in enumerate(zip(every, est.std, strict=True))}
+    own = {nm: fitted[nm] for nm in names}
+    return EffectFit(dataclasses.replace(effect, **own), names, fitted, std, est, cost,
                      neutral_cost, len(flights.memo), at_limit)

@@ -23,7 +23,13 @@ Controls are increments on the trim values: de, da, dr in rad (project signs,
 flightid/channels.py), throttle as a fraction. Surface increments are mapped to JSBSim's
 normalised pilot commands through the FCS's own command -> position map, measured at
 reset (so gearing, asymmetric travel and trim summers are honoured); the recorded de,
-da, dr are the actual surface positions JSBSim used.
+da, dr are the actual surface positions JSBSim used. With ``surfaces="driven"`` (an
+aircraft augmented with ``surface_drive=True``) the increments are surface *positions*
+written past the FCS: the aircraft's actuator is bypassed after trim, as a model flown
+from a record's measured surfaces needs (those have passed the real actuator already).
+``fly`` takes a driven array as samples of a continuous position and writes each sample's
+value interpolated at ``hold_center`` (a held value otherwise lags the surface by
+(substeps - 1) / 2 internal steps: 2 % of the Twin Otter's pitch-rate peak in a 3211).
 
 Speed. Per sample the loop steps JSBSim, writes the pilot commands and gusts that changed
 (the commands of the whole flight are mapped before it, one vectorised ``np.interp`` per
@@ -55,12 +61,23 @@ from typing import Any
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta, Reference
-from flightid.sim.model import COMMANDS, SURFACES, Model, as_model, quiet, set_integrators
+from flightid.sim.model import (
+    COMMANDS,
+    DRIVE,
+    DRIVE_ON,
+    SURFACES,
+    Model,
+    as_model,
+    quiet,
+    set_integrators,
+)
 from flightid.sim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.trim import Trim, apply
 from flightid.units import EARTH_RADIUS_M, FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
 
 MIN_INTERNAL_HZ = 400.0
+SURFACE_MODES = ("commanded", "driven")
+_DRIVE_SPAN = 10.0  # rad: the driven surfaces' identity map spans any position
 TURBULENCE_TYPES = {"none": 0, "standard": 1, "culp": 2, "milspec": 3, "tustin": 4}
 
 Control = np.ndarray | Callable[[float], float] | float
@@ -207,6 +224,18 @@ def _command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | 
     return pos[keep], cmds[keep]
 
 
+def hold_center(rate_hz: float) -> float:
+    """Where a control given for sample k acts, relative to t_k (s).
+
+    JSBSim computes the forces of a run after its FCS, so the control set before the run
+    that ends at t_k makes the forces at t_k and at every substep up to the next setting,
+    t_k + (substeps - 1) h: their middle is (substeps - 1) h / 2, h the internal step. An
+    input sampled from a continuous signal is best taken there.
+    """
+    substeps = max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
+    return (substeps - 1) / (2.0 * substeps * rate_hz)
+
+
 def _interp(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
     """``np.interp`` of one point with numpy's arithmetic (same result, no array overhead)."""
     if x <= xp[0]:
@@ -229,13 +258,18 @@ class Simulation:
     """Stepping core: ``reset(trim)``, then ``step(controls)`` per interval, or ``fly``."""
 
     def __init__(self, model: Model | str, rate_hz: float = 100.0,
-                 atmosphere: Atmosphere | None = None, limits: Limits | None = None) -> None:
+                 atmosphere: Atmosphere | None = None, limits: Limits | None = None,
+                 surfaces: str = "commanded") -> None:
         if not rate_hz > 0:
             raise ValueError(f"rate_hz must be positive, got {rate_hz}")
+        if surfaces not in SURFACE_MODES:
+            raise ValueError(f"surfaces must be one of {', '.join(SURFACE_MODES)}, "
+                             f"got {surfaces!r}")
+        self.driven = surfaces == "driven"
         # a private copy: reset() reloads it, which must not touch the caller's model
         self.model = model.copy() if isinstance(model, Model) else as_model(model)
         self.rate_hz = float(rate_hz)
-        self.substeps = max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
+        self.substeps = max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))  # (hold_center)
         self.internal_hz = self.rate_hz * self.substeps
         self.atmosphere = atmosphere or Atmosphere()
         self.limits = limits or Limits()
@@ -244,6 +278,9 @@ class Simulation:
         self._k = 0
         self.model.fdm.set_dt(1.0 / self.internal_hz)
         model = self.model
+        if self.driven and not model.has(DRIVE_ON):
+            raise ValueError(f"{model.name}: surfaces='driven' needs an aircraft augmented "
+                             "with surface_drive=True (flightid.sim.augment)")
         # the raw columns of a sample: fixed for the aircraft, so decided once
         flap = (_FLAP,) if model.has(_FLAP) else ()
         self._rpm = next((p for p in _RPM if model.has(p)), None)
@@ -269,8 +306,11 @@ class Simulation:
         self._loop_nodes = [node[p] for p in self._loop_columns]
         # the unbound method, mapped over the nodes: the cheapest read from Python
         self._get = type(self._nodes[0]).get_double_value
-        self._cmd_setters = {c: model.node(COMMANDS[c][0]).set_double_value
-                             for c in ("de", "da", "dr") if model.has(COMMANDS[c][0])}
+        if self.driven:
+            self._cmd_setters = {c: model.node(p).set_double_value for c, p in DRIVE.items()}
+        else:
+            self._cmd_setters = {c: model.node(COMMANDS[c][0]).set_double_value
+                                 for c in ("de", "da", "dr") if model.has(COMMANDS[c][0])}
         self._throttle_setters = [model.node(p).set_double_value
                                   for p in model.throttle_props() if model.has(p)]
         self._gust_setters = [model.node(p).set_double_value for p in _GUST]
@@ -324,13 +364,21 @@ class Simulation:
         model, fdm = self.model, self.model.fdm
         apply(model, trim)  # the same sequence on every reset: identical flights
         if self.trim is not trim:
-            self._maps = {c: (pos.tolist(), cmds.tolist())
-                          for c, (pos, cmds) in _command_maps(model, trim).items()}
-            self._trim_cmd = {c: trim.jsbsim.get(COMMANDS[c][0], 0.0) for c in self._cmd_setters}
             self._trim_pos = {"de": trim.elevator, "da": trim.aileron, "dr": trim.rudder}
+            if self.driven:  # the drive takes positions: the map is the identity
+                self._maps = {c: ([-_DRIVE_SPAN, _DRIVE_SPAN], [-_DRIVE_SPAN, _DRIVE_SPAN])
+                              for c in self._cmd_setters}
+                self._trim_cmd = dict(self._trim_pos)
+            else:
+                self._maps = {c: (pos.tolist(), cmds.tolist())
+                              for c, (pos, cmds) in _command_maps(model, trim).items()}
+                self._trim_cmd = {c: trim.jsbsim.get(COMMANDS[c][0], 0.0)
+                                  for c in self._cmd_setters}
             self._trim_throttle = trim.throttle
             self.trim = trim
         self._restart(trim)
+        if self.driven:
+            fdm[DRIVE_ON] = 1.0
         self._k = 0
         self._envelope = self._bounds()
         self._lat0 = fdm["position/lat-geod-rad"]
@@ -475,6 +523,9 @@ class Simulation:
         rate_hz = self.rate_hz
         n = int(round(duration_s * rate_hz)) + 1
         inputs = _sampled(controls or {}, n, rate_hz)
+        if self.driven:  # positions of a continuous surface: each taken where it acts
+            grid, at = np.arange(n), np.arange(n) + hold_center(rate_hz) * rate_hz
+            inputs.update({c: np.interp(at, grid, u) for c, u in inputs.items() if c in DRIVE})
         extra = np.zeros((n, 3))
         for label, part in (("wind", wind), ("turbulence", turbulence)):
             if part is not None:
@@ -785,18 +836,21 @@ def fly(model: Model | str, trim: Trim, controls: Mapping[str, Control] | None =
         atmosphere: Atmosphere | None = None, limits: Limits | None = None,
         scenario: dict[str, Any] | None = None, *, wind: np.ndarray | None = None,
         turbulence: np.ndarray | None = None,
-        progress: Callable[[int, int], None] | None = None) -> FlightRecord:
+        progress: Callable[[int, int], None] | None = None,
+        surfaces: str = "commanded") -> FlightRecord:
     """Fly from trim for duration_s (s) with control increments, recording at rate_hz (Hz).
 
     ``controls`` maps de/da/dr (rad) and throttle (fraction) to arrays sampled at rate_hz
     (at least duration_s * rate_hz + 1 samples), callables of time (s) or constants.
     ``wind`` / ``turbulence``: optional n x 3 NED schedules (m/s) of gusts and turbulence,
     ``progress(k, n)``: called every second of flight (see ``Simulation.fly``).
+    ``surfaces``: "commanded" (through the FCS) or "driven" (positions; see the module note).
     Raises DepartureError (with ``.record`` up to the departure) if the flight departs.
     """
     if not duration_s > 0:
         raise ValueError(f"duration_s must be positive, got {duration_s}")
-    sim = Simulation(model, rate_hz=rate_hz, atmosphere=atmosphere, limits=limits)
+    sim = Simulation(model, rate_hz=rate_hz, atmosphere=atmosphere, limits=limits,
+                     surfaces=surfaces)
     return sim.fly(trim, controls, duration_s, wind=wind, turbulence=turbulence,
                    progress=progress, scenario=scenario)
 

@@ -44,6 +44,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "dr": ("fcs/rudder-cmd-norm", "fcs/yaw-trim-cmd-norm"),
 }
 
+# surface drive of an aircraft augmented with surface_drive=True (sim.augment): while
+# DRIVE_ON is 1 the surfaces sit at DRIVE's positions (rad, project signs), past the FCS
+DRIVE_ON = "fcs/drive/on"
+DRIVE: dict[str, str] = {c: f"fcs/drive/{c}-rad" for c in SURFACES}
+
 
 class UnknownAircraftError(ValueError):
     """The named aircraft is neither in aircraft/ nor shipped with the jsbsim package."""

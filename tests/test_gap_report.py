@@ -73,9 +73,10 @@ def test_fly_record_reproduces_its_own_aircraft():
     the same trajectory up to the sensor noise (a check of the re-fly itself)."""
     plain, _ = fly_card(card("navion", 22))
     fractions = gap_fractions(plain, fly_record("navion", plain))
-    # measured 1.0-2.1 % per channel: the research sensors' noise (on the outputs, and on
-    # the measured surfaces flown as the inputs); a missed effect leaves 10-100 times more
-    assert max(fractions.values()) < 0.05, fractions
+    # measured 0.1-1.0 % per channel with the surfaces driven past the actuators (1.0-2.1 %
+    # when they were fed as commands and lagged again): the research sensors' noise, on the
+    # outputs and on the surfaces flown as the inputs; a missed effect leaves 10-100 x more
+    assert max(fractions.values()) < 0.03, fractions
 
 
 def test_cli_write_aircraft_reflies_and_reports(diagnosed, tmp_path):

@@ -10,9 +10,10 @@ from typing import Any
 
 import numpy as np
 
+from flightid.identification.effect_fit import CACHE
 from flightid.identification.gap.linearise import record_condition
 from flightid.record import FlightRecord
-from flightid.sim.augment import augment
+from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
     AugmentEffect,
     ControlEffectiveness,
@@ -20,6 +21,7 @@ from flightid.sim.effects.airframe import (
     TailIce,
 )
 from flightid.sim.flight import DepartureError, fly
+from flightid.sim.model import load
 from flightid.sim.trim import trim
 
 OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the channels compared
@@ -49,7 +51,8 @@ def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
 
 def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> Path:
     """Write ``result.aircraft`` with the airframe effects of ``result.named`` (the named
-    effect or pair) under ``folder``; the new XML's path. Sensor effects are not
+    effect or pair; the top one at its refined values when the diagnosis refined it)
+    under ``folder``; the new XML's path. Sensor effects are not
     written (they belong to the measurement, not the aircraft)."""
     if not result.named:
         raise ValueError("the diagnosis named no effect: nothing to write")
@@ -57,6 +60,9 @@ def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> 
     if not effects:
         raise ValueError(f"the named effect {result.named[0].candidate.label} is not an "
                          "airframe effect: nothing to write into the aircraft")
+    refined = getattr(result, "refined", None)
+    if refined is not None:  # the top named effect (refine.refinable) as the refit has it
+        effects[0] = refined.effect
     stem = Path(str(result.aircraft)).stem
     return augment(result.aircraft, effects, folder, name=name or f"{stem}-corrected")
 
@@ -79,13 +85,16 @@ def gap_fractions(record: FlightRecord, flown: FlightRecord) -> dict[str, float]
 def fly_record(aircraft: str | Path, record: FlightRecord) -> FlightRecord:
     """``aircraft`` trimmed at ``record``'s condition (mean airspeed and altitude, level)
     and flown open loop with the record's measured surfaces (rad, increments on their
-    first sample) at the record's rate. Raises DepartureError when it departs."""
+    first sample) at the record's rate, driven past its actuators (the measured positions
+    have passed the real ones). Raises DepartureError when it departs."""
     altitude, speed = record_condition(record)
-    trimmed = trim(str(aircraft), max(altitude, 0.0), speed)
+    model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
+    trimmed = trim(model, max(altitude, 0.0), speed)
     t = record.time - record.time[0]
     rate = (len(t) - 1) / float(t[-1])
     controls = {s: record[s] - record[s][0] for s in INPUTS if s in record}
-    return fly(str(aircraft), trimmed, controls, duration_s=float(t[-1]), rate_hz=rate)
+    return fly(model, trimmed, controls, duration_s=float(t[-1]), rate_hz=rate,
+               surfaces="driven")
 
 
 def refly(result: Any, records: FlightRecord | list[FlightRecord], folder: str | Path,

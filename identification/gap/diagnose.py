@@ -27,6 +27,8 @@ from flightid.identification.gap.linearise import (
     linearise,
 )
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
+from flightid.identification.gap.refine import Refined
+from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.sequence import STEPS, following
 from flightid.identification.gap.shrink import shrinkage
@@ -58,6 +60,8 @@ class GapResult:
     by_axis: dict[str, GapResult] = field(default_factory=dict)
     # per channel: the white-noise part of the held-out gap (``rank.pooled_noise``)
     floor: dict[str, float] = field(default_factory=dict)
+    # the top named airframe effect refitted with the JSBSim aircraft (``refine``), or None
+    refined: Refined | None = None
 
     def unexplained_share(self) -> float | None:
         """The share of the held-out gap above the noise floor that the named effects leave,
@@ -127,6 +131,7 @@ class GapResult:
             "partly_unexplained": ({"share": self.unexplained_share(),
                                     "remaining_above_floor": self.remaining_above_floor()}
                                    if self.partly_unexplained else None),
+            "refined": self.refined.to_json() if self.refined else None,
             "by_axis": {a: {"named": [r.to_json() for r in g.named],
                             "shrinkage": g.shrinkage(), "unexplained": g.unexplained}
                         for a, g in self.by_axis.items()},
@@ -166,14 +171,16 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
-             steps: int = STEPS, axis: str = "auto") -> GapResult:
+             steps: int = STEPS, axis: str = "auto", refine: bool = False) -> GapResult:
     """Diagnose ``records`` against the JSBSim ``aircraft``.
 
     ``axis``: "lateral", "longitudinal", or "auto" (the axes the records excite, each
     diagnosed; see the module docstring). Held out: each maneuver window in turn (windows
     of the records' maneuver lists, or the halves of a record without one), or the
     ``validate`` records when given. Up to ``steps`` effects are named in sequence
-    (``sequence.following``).
+    (``sequence.following``). ``refine``: refit the top named airframe effect with the
+    JSBSim aircraft flown from the longest record (``gap.refine``; 5-20 s more): its values
+    are then the ones ``write_aircraft`` writes.
     """
     records, found = _records(records)
     names = names or found
@@ -190,7 +197,10 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         raise ValueError(f"gap: axis must be auto, {', '.join(AXIS_NAMES)}; got {axis!r}")
     results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
                                  try_pairs, steps) for a in axes}
-    return next(iter(results.values())) if len(results) == 1 else _merged(results)
+    result = next(iter(results.values())) if len(results) == 1 else _merged(results)
+    if refine:
+        result.refined = refit(result, records)
+    return result
 
 
 def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,

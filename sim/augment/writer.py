@@ -26,6 +26,13 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
   output. The flight core commands surface positions through the FCS's static map, which
   would invert a static effect placed before the position.
 
+``surface_drive=True`` adds, after everything else, a switch behind each surface position
+(``drive``): while ``fcs/drive/on`` is 0 the FCS drives the surface as before (trim works as
+usual); set to 1, the positions follow ``fcs/drive/de-rad``, ``-da-rad`` and ``-dr-rad``
+(project signs, rad), bypassing the actuator. A record's *measured* surfaces have already
+passed the real actuator: an aircraft flown from them must not lag them again
+(``sim.flight.Simulation(..., surfaces="driven")`` writes them there).
+
 The result loads in plain JSBSim: ``FGFDMExec(root_dir=folder).load_model(name)``.
 """
 
@@ -57,7 +64,7 @@ from flightid.sim.effects.airframe import (
     TailIce,
     ThrustMoment,
 )
-from flightid.sim.model import PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
+from flightid.sim.model import DRIVE, DRIVE_ON, PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
 
 ET.register_namespace("xsi", "http://www.w3.org/2001/XMLSchema-instance")
 FT_PER_M = 1 / 0.3048
@@ -76,28 +83,31 @@ class AugmentError(ValueError):
     """The aircraft cannot take an effect (its XML lacks what the effect needs)."""
 
 
-def cache_folder(base: Path, aircraft: str, effects: Sequence[AugmentEffect]) -> Path:
-    """A folder under ``base`` keyed by the aircraft and the effects (for reuse)."""
-    key = json.dumps([aircraft, [e.to_dict() for e in effects]], sort_keys=True, default=str)
+def cache_folder(base: Path, aircraft: str, effects: Sequence[AugmentEffect],
+                 surface_drive: bool = False) -> Path:
+    """A folder under ``base`` keyed by the aircraft, the effects and the drive (for reuse)."""
+    key = json.dumps([aircraft, [e.to_dict() for e in effects]]
+                     + (["surface_drive"] if surface_drive else []),
+                     sort_keys=True, default=str)
     return base / hashlib.sha256(key.encode()).hexdigest()[:16]
 
 
 def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base: str | Path,
-                   name: str | None = None) -> Path:
+                   name: str | None = None, surface_drive: bool = False) -> Path:
     """The augmented XML's path under ``base``, written once per aircraft and effect list.
 
-    The folder is ``cache_folder(base, aircraft, effects)``; a process that finds the XML
-    there reuses it. Written into a temporary folder and renamed, so processes that write
-    the same aircraft at once do not see half a folder.
+    The folder is ``cache_folder(base, aircraft, effects, surface_drive)``; a process that
+    finds the XML there reuses it. Written into a temporary folder and renamed, so processes
+    that write the same aircraft at once do not see half a folder.
     """
     old = locate(str(aircraft))[0]
     new = name or f"{old}-augmented"
-    folder = cache_folder(Path(base), str(aircraft), effects)
+    folder = cache_folder(Path(base), str(aircraft), effects, surface_drive)
     xml = folder / "aircraft" / new / f"{new}.xml"
     if not xml.is_file():
         Path(base).mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=base))
-        augment(aircraft, effects, tmp, name=new)
+        augment(aircraft, effects, tmp, name=new, surface_drive=surface_drive)
         folder.mkdir(parents=True, exist_ok=True)
         try:
             (tmp / "aircraft").rename(folder / "aircraft")
@@ -108,12 +118,14 @@ def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base:
 
 
 def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str | Path,
-            name: str | None = None) -> Path:
+            name: str | None = None, surface_drive: bool = False) -> Path:
     """Write the aircraft with ``effects`` added under ``folder``; the new XML's path.
 
     ``aircraft``: a name (project or jsbsim) or an XML path; the original stays untouched.
     ``name``: the new aircraft's name (default ``<aircraft>-augmented``). Effects at their
-    neutral value are only noted in a comment. ``flightid.sim.model.load`` takes the path.
+    neutral value are only noted in a comment. ``surface_drive``: add the switches that let
+    a flight set the surface positions directly (module note). ``flightid.sim.model.load``
+    takes the path.
     """
     old, xml, _ = locate(str(aircraft))
     new = name or f"{old}-augmented"
@@ -142,6 +154,8 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
             _dynamic(doc, surface, dyn)
         if link:
             _linkage(doc, surface, link)
+    if surface_drive:
+        _surface_drive(doc)
     doc.write(dest / f"{new}.xml")
     return dest / f"{new}.xml"
 
@@ -601,6 +615,47 @@ def _linkage(doc: _Doc, surface: str, effects: list[AugmentEffect]) -> None:
                 el.text = out
         aero.insert(0, ET.Comment(f" flightid augment: the aerodynamics read {out} "
                                   f"(the linkage output) instead of {prop} "))
+
+
+def _surface_drive(doc: _Doc) -> None:
+    """A switch behind each surface position: the FCS's value, or the drive when on."""
+    declared = False
+    for surface, drive in DRIVE.items():
+        for prop, sign in _positions(doc, surface):
+            path, parent, comp = _producer(doc, prop)  # type: ignore[misc]
+            stem = prop.removeprefix("fcs/").removesuffix("-pos-rad")
+            fcs_value = f"fcs/drive/{stem}-fcs-rad"
+            outs = [o for o in comp.findall("output") if (o.text or "").strip() == prop]
+            for o in outs:
+                o.text = fcs_value
+            if not outs:
+                comp.set("name", fcs_value)
+            source = drive
+            added = []
+            if sign != 1.0:
+                source = f"fcs/drive/{stem}-rad"
+                added.append(_el("pure_gain", _el("input", text=drive),
+                                 _el("gain", text=repr(sign)), name=source))
+            test = _el("test", text=f"{DRIVE_ON} GE 0.5", logic="AND", value=source)
+            added.append(_el("switch", _el("default", value=fcs_value), test,
+                             _el("output", text=prop), name=f"fcs/drive/{stem}-switch"))
+            idx = list(parent).index(comp) + 1
+            parent.insert(idx, ET.Comment(f" added by flightid augment: {prop} follows "
+                                          f"{drive} while {DRIVE_ON} is 1 "))
+            for k, el in enumerate(added):
+                parent.insert(idx + 1 + k, el)
+            if path is not None:
+                doc.changed.add(path)
+            if not declared:  # the drive's properties, declared where the FCS is
+                section = (doc.root.find("flight_control") if path is None
+                           else doc.systems[path].getroot())
+                if section is None:
+                    raise AugmentError(f"{prop} is written outside <flight_control> and "
+                                       "<system>: the surface drive cannot be declared")
+                props = [_el("property", text=p, value="0") for p in (DRIVE_ON, *DRIVE.values())]
+                for k, el in enumerate(props):
+                    section.insert(k, el)
+                declared = True
 
 
 _APPLY = {
