@@ -6,11 +6,13 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.scenarios.gap_benchmark import AIRCRAFT, Case, draw, run_case, summary
+from flightid.scenarios.gap_benchmark.cases import DELTA_SCALE, STABLE_SIGN
 from flightid.scenarios.gap_benchmark.run import truths
 from flightid.scenarios.gap_benchmark.study import Benchmark
 
@@ -101,6 +103,19 @@ def test_draw_is_fixed_by_seed_and_covers_the_aircraft():
         if c.entry in ("control_effectiveness",):
             assert 0.6 <= c.magnitude["factor"] <= 0.8
     assert draw(40, 4, t) != a
+
+
+def test_draw_keeps_near_zero_stability_derivatives_stable():
+    """A delta larger than half a near-zero derivative points the stable way: the
+    telemaster's Cn_beta (-0.003) drawn -0.012 and -0.014 departed on the seeds 0 and 1."""
+    t = truths()
+    cases = [c for seed in range(6) for c in draw(50, seed, t)
+             if c.entry == "derivative_delta" and c.options["derivative"] in STABLE_SIGN
+             and abs(t[c.aircraft][c.options["derivative"]])
+             < DELTA_SCALE[c.options["derivative"]]]
+    assert cases  # the telemaster's Cn_beta is among them
+    for c in cases:
+        assert np.sign(c.magnitude["delta"]) == STABLE_SIGN[c.options["derivative"]], c.label
 
 
 def test_command_rejects_bad_input():

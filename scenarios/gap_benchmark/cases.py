@@ -3,9 +3,10 @@
 Effects of the catalogue the diagnosis has candidates for (lateral axis): a
 ``derivative_delta`` of 30-50 % of the aircraft's own value (body axes, sign drawn; at
 most half, so no sizeable derivative changes sign; of ``DELTA_SCALE`` where the value is
-smaller), a ``control_effectiveness`` factor of 0.6-0.8
-on the aileron or the rudder, a sensor ``scale`` of 1.15-1.30 on p, r or beta. Outside the
-catalogue (about one case in five): a structural mode seen by the rate gyros and the
+smaller, and then in the stabilising direction: a telemaster whose Cn_beta of -0.003 is
+made -0.012 departs, not a case a flight test flies), a ``control_effectiveness`` factor
+of 0.6-0.8 on the aileron or the rudder, a sensor ``scale`` of 1.15-1.30 on p, r or beta.
+Outside the catalogue (about one case in five): a structural mode seen by the rate gyros and the
 lateral accelerometer, or a nonlinear sideslip vane (``outside.py``).
 """
 
@@ -45,6 +46,9 @@ DELTA_FRACTION = (0.3, 0.5)
 # zero (the telemaster's Cn_beta, -0.003) still gets a delta a flight test would notice
 DELTA_SCALE = {"Cn_beta": 0.03, "Cl_beta": 0.03, "Cn_r": 0.05, "Cl_p": 0.1, "Cl_r": 0.03,
                "CY_beta": 0.1, "Cl_da": 0.05, "Cn_dr": 0.03}
+# the stable sign of the derivatives a near-zero value may not be pushed away from
+# (directional and dihedral stability, yaw and roll damping, side-force slope)
+STABLE_SIGN = {"Cn_beta": 1.0, "Cl_beta": -1.0, "Cn_r": -1.0, "Cl_p": -1.0, "CY_beta": -1.0}
 FACTOR = (0.6, 0.8)
 SCALE = (1.15, 1.30)
 SCALED = ("p", "r", "beta")
@@ -96,6 +100,8 @@ def draw(n: int, seed: int, truths: dict[str, dict[str, float]]) -> list[Case]:
             d = str(rng.choice(derivs))
             value = truths[aircraft][d]
             sign = float(rng.choice([-1, 1]))
+            if abs(value) < DELTA_SCALE[d] and d in STABLE_SIGN:
+                sign = STABLE_SIGN[d]  # (drawn all the same: the other cases stay as they were)
             delta = sign * rng.uniform(*DELTA_FRACTION) * max(abs(value), DELTA_SCALE[d])
             out.append(Case(i, flight_seed, aircraft, "derivative_delta",
                             {"derivative": d, "axes": "body"}, {"delta": float(delta)}))

@@ -21,7 +21,7 @@ from flightid.scenarios.montecarlo import store
 from flightid.scenarios.montecarlo.disperse import dispersed_card, parse_all
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
 from flightid.scenarios.montecarlo.report import write_report
-from flightid.scenarios.montecarlo.store import StudyMismatch, done, load
+from flightid.scenarios.montecarlo.store import SUMMARY_COLUMNS, StudyMismatch, done, load
 from flightid.scenarios.montecarlo.study import Study, run_realization
 from flightid.scenarios.montecarlo.summary import Summary, summarize
 
@@ -67,7 +67,7 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
             run_dask(description, todo, keep, client, progress)
     else:
         run_local(description, todo, keep, workers, progress, store_in=folder)  # workers store
-    df = load(folder)
+    df = load(folder, SUMMARY_COLUMNS)
     df = df[df["index"] < int(n)]
     summary = summarize(df)
     if report:
@@ -83,6 +83,6 @@ def _title(description: Study | dict[str, Any]) -> str:
 def rebuild_report(study_dir: str | Path) -> tuple[Path, Summary]:
     """Rebuild STUDY/report.html from the stored rows (all of them)."""
     stored = store.read_description(study_dir)
-    df = load(study_dir)
+    df = load(study_dir, SUMMARY_COLUMNS)
     summary = summarize(df)
     return write_report(study_dir, df, summary, _title(stored["description"])), summary

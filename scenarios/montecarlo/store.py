@@ -8,19 +8,23 @@ from __future__ import annotations
 import json
 import os
 import platform
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 
 from flightid.scenarios.montecarlo.study import COLUMNS, FLOAT_COLUMNS, Study
 
 DESCRIPTION = "study.json"
 RESULTS = "results"
 _PREFIX, _SUFFIX = "realization-", ".parquet"
+# what the summary and the report read
+SUMMARY_COLUMNS = ("index", "name", "truth", "estimate", "std", "error", "status", "reason")
 
 
 class StudyMismatch(ValueError):
@@ -113,10 +117,24 @@ def done(study_dir: str | Path) -> set[int]:
     return {int(p.name[len(_PREFIX):-len(_SUFFIX)]) for p in folder.glob(f"{_PREFIX}*{_SUFFIX}")}
 
 
-def load(study_dir: str | Path) -> pd.DataFrame:
-    """Every stored row of the study, sorted by realization index and derivative name."""
+def load(study_dir: str | Path, columns: Sequence[str] | None = None) -> pd.DataFrame:
+    """Every stored row of the study, sorted by realization index and derivative name.
+
+    ``columns``: only these, their strings as categories (the summary and the report read
+    ``SUMMARY_COLUMNS``), else every column any realization has (the dispersions drawn).
+    Read as Arrow tables, one DataFrame at the end: 10,000 realizations in 8 s instead of
+    53 s with one DataFrame per file (docs/montecarlo.md).
+    """
     files = sorted((Path(study_dir) / RESULTS).glob(f"{_PREFIX}*{_SUFFIX}"))
     if not files:
-        return frame([])
-    df = pd.concat([pd.read_parquet(p) for p in files], ignore_index=True)
+        empty = frame([])
+        return empty[list(columns)] if columns is not None else empty
+    tables = []
+    for f in files:  # ParquetFile.read: the cheapest whole-file read of pyarrow
+        with pq.ParquetFile(f) as handle:
+            tables.append(handle.read(columns=list(columns) if columns is not None else None,
+                                      use_threads=False))
+    # (a failed realization has no dispersion columns: they are null there)
+    table = pa.concat_tables(tables, promote_options="default")
+    df = table.to_pandas(strings_to_categorical=columns is not None)
     return df.sort_values(["index", "name"], kind="stable").reset_index(drop=True)

@@ -88,7 +88,7 @@ def summarize(df: pd.DataFrame) -> Summary:
     ok = df[df["status"] != STATUS_FAILED]
     survivors = realizations - failures
     rows = []
-    for name, g in ok.groupby("name", sort=True):
+    for name, g in ok.groupby("name", sort=True, observed=True):
         est = g[g["status"] == STATUS_ESTIMATED]
         values, std, err = (est[c].to_numpy(float) for c in ("estimate", "std", "error"))
         truth = float(g["truth"].mean())  # one value unless the aircraft is dispersed
