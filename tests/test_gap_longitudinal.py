@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from flightid.identification.gap import diagnose, write_aircraft
+from flightid.identification.gap.correct import refly
 from flightid.identification.gap.linearise import excited_axes
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
@@ -41,9 +42,14 @@ def _truth(aircraft: str) -> dict[str, float]:
 
 
 @pytest.fixture(scope="module")
-def iced():
+def iced_record():
     rec, _ = fly_card(card_from_dict(_elevator_card("twinotter-iced")))
-    return diagnose([rec], "twinotter", try_pairs=False, steps=1, refine=True)
+    return rec
+
+
+@pytest.fixture(scope="module")
+def iced(iced_record):
+    return diagnose([iced_record], "twinotter", try_pairs=False, steps=1, refine=True)
 
 
 def test_tail_ice_named_as_tail_effectiveness_loss(iced):
@@ -89,11 +95,16 @@ def test_tail_ice_refined_within_3_standard_errors(iced):
                                                                   "damping"}
 
 
-def test_tail_ice_corrected_aircraft(iced, tmp_path):
+def test_tail_ice_corrected_aircraft(iced, iced_record, tmp_path):
     """The named tail ice written into the Twin Otter (``write_aircraft``): its truth's
     pitching-moment derivatives are the clean ones times the refined factors, its lift
-    derivatives unchanged."""
+    derivatives unchanged; flown again with the record's elevator (``refly``, the
+    longitudinal channels) it closes the gap of the clean Twin Otter: 0.0080 -> 0.00032
+    measured (96 %; 0.00038 with the ranking's values); what is left is sensor noise."""
     path = write_aircraft(iced, tmp_path)
+    again = refly(iced, [iced_record], tmp_path, path)
+    assert set(again["records"][0]["channels"]) == {"V", "alpha", "q", "theta", "az"}
+    assert again["overall"]["shrink"] > 0.9, again["overall"]
     clean, corrected = _truth("twinotter"), _truth(str(path))
     p = iced.refined.parameters
     for part, d in (("elevator", "Cm_de"), ("stability", "Cm_alpha"), ("damping", "Cm_q")):

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.effect_fit import CACHE
-from flightid.identification.gap.linearise import record_condition
+from flightid.identification.gap.linearise import start_condition
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
@@ -24,7 +24,9 @@ from flightid.sim.flight import DepartureError, fly
 from flightid.sim.model import load
 from flightid.sim.trim import trim
 
-OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the channels compared
+# the channels compared, by the axis diagnosed
+OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
+           "longitudinal": ("V", "alpha", "q", "theta", "az")}
 INPUTS = ("da", "dr", "de")  # the record's surfaces flown (increments on their first value)
 
 
@@ -67,12 +69,13 @@ def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> 
     return augment(result.aircraft, effects, folder, name=name or f"{stem}-corrected")
 
 
-def gap_fractions(record: FlightRecord, flown: FlightRecord) -> dict[str, float]:
+def gap_fractions(record: FlightRecord, flown: FlightRecord,
+                  outputs: tuple[str, ...] = OUTPUTS["lateral"]) -> dict[str, float]:
     """Per channel: residual energy / measured energy, means removed from both (the trim
     offsets and sensor biases a re-flight from trim cannot know)."""
     out = {}
     n = min(len(record.time), len(flown.time))
-    for ch in OUTPUTS:
+    for ch in outputs:
         if ch not in record or ch not in flown:
             continue
         m = record[ch][:n] - np.mean(record[ch][:n])
@@ -83,11 +86,11 @@ def gap_fractions(record: FlightRecord, flown: FlightRecord) -> dict[str, float]
 
 
 def fly_record(aircraft: str | Path, record: FlightRecord) -> FlightRecord:
-    """``aircraft`` trimmed at ``record``'s condition (mean airspeed and altitude, level)
+    """``aircraft`` trimmed where ``record`` starts (``linearise.start_condition``, level)
     and flown open loop with the record's measured surfaces (rad, increments on their
     first sample) at the record's rate, driven past its actuators (the measured positions
     have passed the real ones). Raises DepartureError when it departs."""
-    altitude, speed = record_condition(record)
+    altitude, speed = start_condition(record)
     model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
     trimmed = trim(model, max(altitude, 0.0), speed)
     t = record.time - record.time[0]
@@ -106,13 +109,14 @@ def refly(result: Any, records: FlightRecord | list[FlightRecord], folder: str |
     a record that does not start in trim, or a slow mode (spiral, phugoid) the model gets
     a little wrong, leaves a gap no effect of the catalogue closes."""
     records = [records] if isinstance(records, FlightRecord) else list(records)
+    outputs = OUTPUTS[getattr(result, "axis", "lateral")]
     path = Path(written) if written is not None else write_aircraft(result, folder)
     out: dict[str, Any] = {"aircraft": str(path), "records": []}
     for k, record in enumerate(records):
         row: dict[str, Any] = {"record": k + 1}
         for key, model in (("before", result.aircraft), ("after", path)):
             try:
-                row[key] = gap_fractions(record, fly_record(model, record))
+                row[key] = gap_fractions(record, fly_record(model, record), outputs)
             except DepartureError as exc:
                 row[key] = None
                 row[f"{key}_departed"] = str(exc)

@@ -93,6 +93,16 @@ def record_condition(record: FlightRecord) -> tuple[float, float]:
     raise ValueError("the record has no altitude h (channel or meta.condition)")
 
 
+def start_condition(record: FlightRecord) -> tuple[float, float]:
+    """(altitude m, true airspeed m/s) to trim a JSBSim model at before flying it with the
+    record's inputs: the metadata's condition where the record has one (a card's trim: an
+    elevator 3211 drifts the mean airspeed away from it), else ``record_condition``."""
+    cond = record.meta.condition or {}
+    if "altitude_m" in cond and "speed_m_s" in cond:
+        return float(cond["altitude_m"]), float(cond["speed_m_s"])
+    return record_condition(record)
+
+
 def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
     """The axes the records excite: from their maneuver lists (elevator: longitudinal;
     aileron or rudder: lateral), else from the spread of the measured surfaces (an axis

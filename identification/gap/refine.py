@@ -21,19 +21,16 @@ output error with the augmented JSBSim aircraft flown from the record
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from flightid.identification.effect_fit import OFFSET, fit_effect
 from flightid.identification.gap.correct import airframe_effects
-from flightid.identification.gap.linearise import AXIS_INPUTS
+from flightid.identification.gap.linearise import AXIS_INPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
 
-OUTPUTS = {"longitudinal": ("V", "alpha", "q", "theta"), "lateral": ("beta", "p", "r", "phi")}
+FITTED = {"longitudinal": ("V", "alpha", "q", "theta"), "lateral": ("beta", "p", "r", "phi")}
 FLIGHT_RATE_HZ = 100.0  # the refit's flights (the record's inputs interpolated to it)
 
 
@@ -77,29 +74,15 @@ def refine(result: Any, records: list[FlightRecord], *,
     record = records[k]
     surfaces = [c for c in AXIS_INPUTS[result.axis] if c in record]
     controls = {c: record[c] - record[c][0] for c in surfaces}
-    outputs = [c for c in OUTPUTS[result.axis] if c in record]
+    outputs = [c for c in FITTED[result.axis] if c in record]
     named = result.named[0]
     linear = {n: dict(v) for n, v in named.parameters.items()}
     fit = fit_effect(record, result.aircraft, effect, controls=controls, outputs=outputs,
                      start={n: v["value"] for n, v in linear.items()},
                      max_iterations=max_iterations, colored=True, surfaces="driven",
                      flight_rate_hz=FLIGHT_RATE_HZ, offsets=surfaces,
-                     condition=_initial_condition(record))
+                     condition=start_condition(record))
     params = {n: {"value": fit.values[n], "std": fit.std[n]} for n in fit.names}
     offsets = {n.removeprefix(OFFSET): v for n, v in fit.values.items() if n.startswith(OFFSET)}
     return Refined(fit.effect, params, linear, offsets, fit.cost - fit.neutral_cost,
                    fit.flights, k)
-
-
-def _initial_condition(record: FlightRecord) -> tuple[float, float] | None:
-    """(altitude m, airspeed m/s) the record starts at: its metadata's, else the mean of
-    its first half second (the record is taken to start in trim, as a maneuver does)."""
-    c = record.meta.condition or {}
-    if "altitude_m" in c and "speed_m_s" in c:
-        return None  # fit_effect reads the metadata
-    n = max(1, int(round(0.5 / float(np.median(np.diff(record.time))))))
-    if "V" not in record or not any(h in record for h in ("h", "altitude")):
-        return None
-    h = record["h"] if "h" in record else record["altitude"]
-    speed, altitude = float(np.mean(record["V"][:n])), float(np.mean(h[:n]))
-    return (altitude, speed) if math.isfinite(speed + altitude) else None
