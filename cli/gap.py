@@ -90,8 +90,8 @@ def gap_command(
         console.print(f"refined with JSBSim ({f.flights} flights): " + "; ".join(
             f"{n} {v['value']:.4g} ± {v['std']:.2g} (linear {f.linear[n]['value']:.4g})"
             for n, v in f.parameters.items()))
-    elif refine:
-        console.print("not refined: the named entry is not one airframe effect")
+    elif result.refine_note:
+        console.print(result.refine_note)
     if result.partly_unexplained:
         console.print(f"partly unexplained: the named effects leave "
                       f"{result.unexplained_share():.0%} of the held-out gap above the noise "

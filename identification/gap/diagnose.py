@@ -27,7 +27,7 @@ from flightid.identification.gap.linearise import (
     linearise,
 )
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
-from flightid.identification.gap.refine import Refined
+from flightid.identification.gap.refine import NotRefined, Refined
 from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.sequence import STEPS, following
@@ -62,6 +62,7 @@ class GapResult:
     floor: dict[str, float] = field(default_factory=dict)
     # the top named airframe effect refitted with the JSBSim aircraft (``refine``), or None
     refined: Refined | None = None
+    refine_note: str = ""  # why a refit asked for was not made
 
     def unexplained_share(self) -> float | None:
         """The share of the held-out gap above the noise floor that the named effects leave,
@@ -132,6 +133,7 @@ class GapResult:
                                     "remaining_above_floor": self.remaining_above_floor()}
                                    if self.partly_unexplained else None),
             "refined": self.refined.to_json() if self.refined else None,
+            "refine_note": self.refine_note or None,
             "by_axis": {a: {"named": [r.to_json() for r in g.named],
                             "shrinkage": g.shrinkage(), "unexplained": g.unexplained}
                         for a, g in self.by_axis.items()},
@@ -199,7 +201,10 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
                                  try_pairs, steps) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     if refine:
-        result.refined = refit(result, records)
+        try:
+            result.refined = refit(result, records)
+        except NotRefined as exc:
+            result.refine_note = f"not refined: {exc}"
     return result
 
 

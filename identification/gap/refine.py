@@ -29,6 +29,8 @@ from flightid.identification.gap.correct import airframe_effects
 from flightid.identification.gap.linearise import AXIS_INPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
+from flightid.sim.flight import DepartureError
+from flightid.sim.trim import TrimError
 
 FITTED = {"longitudinal": ("V", "alpha", "q", "theta"), "lateral": ("beta", "p", "r", "phi")}
 FLIGHT_RATE_HZ = 100.0  # the refit's flights (the record's inputs interpolated to it)
@@ -62,14 +64,21 @@ def refinable(result: Any) -> AugmentEffect | None:
     return effects[0] if effects else None
 
 
+class NotRefined(ValueError):
+    """The named effect could not be refitted with JSBSim; the message says why."""
+
+
 def refine(result: Any, records: list[FlightRecord], *,
-           max_iterations: int = 12) -> Refined | None:
+           max_iterations: int = 12) -> Refined:
     """Refit the top named airframe effect of ``result`` (a ``GapResult``) on the longest
-    of ``records`` with the augmented JSBSim aircraft; None when there is none to refit
-    (``refinable``)."""
+    of ``records`` with the augmented JSBSim aircraft. Raises NotRefined when there is
+    none to refit (``refinable``), the aircraft with the effect does not trim where the
+    record starts, or it departs when flown with the record's surfaces (open loop over the
+    whole record: a model that is still wrong elsewhere may not stay in the air)."""
     effect = refinable(result)
     if effect is None or not records:
-        return None
+        raise NotRefined("the named entry is not one airframe effect (nothing named, a "
+                         "pair, or a sensor effect)")
     k = max(range(len(records)), key=lambda i: records[i].time.size)
     record = records[k]
     surfaces = [c for c in AXIS_INPUTS[result.axis] if c in record]
@@ -77,11 +86,19 @@ def refine(result: Any, records: list[FlightRecord], *,
     outputs = [c for c in FITTED[result.axis] if c in record]
     named = result.named[0]
     linear = {n: dict(v) for n, v in named.parameters.items()}
-    fit = fit_effect(record, result.aircraft, effect, controls=controls, outputs=outputs,
-                     start={n: v["value"] for n, v in linear.items()},
-                     max_iterations=max_iterations, colored=True, surfaces="driven",
-                     flight_rate_hz=FLIGHT_RATE_HZ, offsets=surfaces,
-                     condition=start_condition(record))
+    try:
+        fit = fit_effect(record, result.aircraft, effect, controls=controls, outputs=outputs,
+                         start={n: v["value"] for n, v in linear.items()},
+                         max_iterations=max_iterations, colored=True, surfaces="driven",
+                         flight_rate_hz=FLIGHT_RATE_HZ, offsets=surfaces,
+                         condition=start_condition(record))
+    except DepartureError as exc:
+        raise NotRefined(f"{result.aircraft} with {effect.label()} departed when flown "
+                         f"with the record's surfaces ({exc}); the ranking's values "
+                         "stand") from exc
+    except TrimError as exc:
+        raise NotRefined(f"{result.aircraft} with {effect.label()} does not trim where "
+                         f"the record starts ({exc}); the ranking's values stand") from exc
     params = {n: {"value": fit.values[n], "std": fit.std[n]} for n in fit.names}
     offsets = {n.removeprefix(OFFSET): v for n, v in fit.values.items() if n.startswith(OFFSET)}
     return Refined(fit.effect, params, linear, offsets, fit.cost - fit.neutral_cost,
