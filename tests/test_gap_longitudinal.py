@@ -10,6 +10,7 @@ import pytest
 from flightid.identification.gap import diagnose, write_aircraft
 from flightid.identification.gap.correct import refly
 from flightid.identification.gap.linearise import excited_axes
+from flightid.identification.gap.report import html_report
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.sim.model import load
@@ -93,6 +94,7 @@ def test_tail_ice_refined_within_3_standard_errors(iced):
     d = iced.to_json()["refined"]
     assert d["name"] == "tail_ice" and set(d["parameters"]) == {"elevator", "stability",
                                                                   "damping"}
+    assert "Refined with JSBSim" in html_report(iced)
 
 
 def test_tail_ice_corrected_aircraft(iced, iced_record, tmp_path):

@@ -125,6 +125,15 @@ def html_report(result: GapResult, records: Records | None = None,
                   "noise floor (an effect outside the catalogue is likely); above the floor: "
                   + ", ".join(f"{c} {_f(v, '.3f')}" for c, v in
                               d["partly_unexplained"]["remaining_above_floor"].items()) + "</p>")
+    if d["refined"]:
+        r = d["refined"]
+        unexpl += ("<p><b>Refined with JSBSim</b> (the aircraft flown from the record's "
+                   f"measured surfaces, {r['flights']} flights): " + "; ".join(
+                       f"{k} = {_f(v['value'])} &plusmn; {_f(v['std'])} (ranking "
+                       f"{_f(r['linear'][k]['value'])})" for k, v in r["parameters"].items())
+                   + "</p>")
+    elif d["refine_note"]:
+        unexpl += f"<p>{html.escape(d['refine_note'])}</p>"
     if d["unexplained"]:
         unexpl = "<p>Remaining held-out residual by channel: " + ", ".join(
             f"{c} {_f(v, '.3f')}" for c, v in d["unexplained"]["remaining"].items()) + "</p>"
