@@ -185,9 +185,10 @@ def test_twin_otter_colored_residual_bounds_are_larger(twin_otter):
     colored = oe.estimate(twin_otter, model, colored=True)
     ratio = colored.std / plain.std
     # real-data residuals are colored (unmodelled dynamics, M&K example 6.2): the
-    # corrected bounds are larger, here by factors of 3 to 9 (median about 6)
+    # corrected bounds are larger, by factors of 3 to 9 (median about 6) with eq. 6.54
+    # alone, median 9.3 with the fit's leverage put back (engine.bounds)
     assert np.all(ratio > 1.0)
-    assert 1.5 < np.median(ratio) < 8.0
+    assert 1.5 < np.median(ratio) < 12.0
     assert colored.std_kind == StdKind.CRAMER_RAO_COLORED
 
 
@@ -347,7 +348,7 @@ def test_sensitivities_equal_finite_differences():
         assert np.max(np.abs(sens[:, :, k] - fd)) < 1e-5 * scale, name
 
 
-def test_colored_covariance_equals_the_direct_double_sum():
+def test_colored_covariance_without_leverage_equals_the_direct_double_sum():
     rng = np.random.default_rng(0)
     n, ny, k = 60, 3, 4
     sens = rng.standard_normal((n, ny, k))
@@ -355,7 +356,7 @@ def test_colored_covariance_equals_the_direct_double_sum():
     residuals = np.array([white[i:i + 5].sum(axis=0) for i in range(n)])  # colored
     weight = np.diag(1 / residuals.var(axis=0))
     info = np.einsum("iak,ab,ibl->kl", sens, weight, sens)
-    fast = oe.colored_residual_covariance(sens, residuals, weight, info)
+    fast = oe.colored_residual_covariance(sens, residuals, weight, info, leverage=False)
     # M&K eq. 6.54 literally: R_vv(l) = 1/N sum_i v(i+l) v(i)^T over all lags
     middle = np.zeros((k, k))
     ws = np.einsum("ab,ibk->iak", weight, sens)
