@@ -35,6 +35,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from rich.progress import track  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 ALTITUDE_M, SPEED_M_S = 1500.0, 55.0
@@ -224,8 +225,6 @@ def plot(table: dict, names: list[str], path: Path) -> None:
 
 def main(seeds: int = 24, workers: int = 2) -> str:
     """Run the Monte Carlo, write the results file and the plot, return the text."""
-    from tqdm import tqdm
-
     from flightid.identification.linear_models import LATERAL_EXAMPLE_6_1
     from flightid.sim import truth as truth_mod
     from flightid.sim.trim import trim as trim_aircraft
@@ -239,7 +238,7 @@ def main(seeds: int = 24, workers: int = 2) -> str:
         calm_job = pool.submit(calm_reference, trim)
         jobs = [pool.submit(run_one, case, seed, trim) for case in CASES
                 for seed in range(1, seeds + 1)]
-        for job in tqdm(as_completed(jobs), total=len(jobs), desc="flights"):
+        for job in track(as_completed(jobs), total=len(jobs), description="flights"):
             runs.append(job.result())
         calm = calm_job.result()
     seconds = time.perf_counter() - start
