@@ -52,22 +52,21 @@ def colored_residual_covariance(
     n = residuals.shape[0]
     size = int(2 ** np.ceil(np.log2(2 * n)))
     root = np.linalg.cholesky(weight).T  # W = root^T root
-    fa = np.fft.rfft(np.einsum("ab,ibk->iak", root, sens), n=size, axis=0)  # (F, ny, p)
-    fe = np.fft.rfft(residuals @ root.T, n=size, axis=0)  # (F, ny)
+    fa = np.fft.rfft(np.matmul(root, sens), n=size, axis=0)  # (F, ny, p)
+    fe = np.fft.rfft(residuals @ root.T, n=size, axis=0)[:, :, None]  # (F, ny, 1)
     inv = np.linalg.inv(information)
     if leverage:
-        h = np.einsum("fak,kl,fbl->fab", fa, inv, fa.conj()) / n  # (F, ny, ny), Hermitian
+        h = (fa @ inv) @ np.conj(np.swapaxes(fa, 1, 2)) / n  # (F, ny, ny), Hermitian
         vals, vecs = np.linalg.eigh(h)
         keep = 1.0 / (1.0 - np.clip(vals, 0.0, MAX_LEVERAGE))
-        fe = np.einsum("fab,fb,fcb,fc->fa", vecs, keep, vecs.conj(), fe)
-    w = np.einsum("fa,fak->fk", fe.conj(), fa)
-    power = (w.conj()[:, :, None] * w[:, None, :]).real
+        fe = vecs @ (keep[:, :, None] * (np.conj(np.swapaxes(vecs, 1, 2)) @ fe))
+    w = (np.conj(np.swapaxes(fe, 1, 2)) @ fa)[:, 0, :]  # (F, p): e_f^H A_f
     # rfft keeps f = 0 .. L/2: every other bin stands for itself and its mirror image
-    factor = np.full(power.shape[0], 2.0)
+    factor = np.full(w.shape[0], 2.0)
     factor[0] = 1.0
     if size % 2 == 0:
         factor[-1] = 1.0
-    middle = np.einsum("f,fjk->jk", factor, power) / (size * n)
+    middle = (np.conj(w).T @ (factor[:, None] * w)).real / (size * n)
     cov = inv @ middle @ inv
     return 0.5 * (cov + cov.T)
 
