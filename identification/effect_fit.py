@@ -131,8 +131,8 @@ class _Flights:
         self.n = record.time.size
         self.rate = 1.0 / record.uniform_step(METHOD, min_samples=10)
         # flown at a whole multiple of the record rate, the inputs interpolated linearly
-        self.every = max(1, math.ceil(flight_rate_hz / self.rate - 1e-9))
-        fine = np.arange((self.n - 1) * self.every + 1) / self.every
+        self.oversample = max(1, math.ceil(flight_rate_hz / self.rate - 1e-9))
+        fine = np.arange((self.n - 1) * self.oversample + 1) / self.oversample
         self.controls = {c: np.interp(fine, np.arange(self.n), u) for c, u in controls.items()}
         c = dict(record.meta.condition or {})
         if condition is not None:
@@ -166,8 +166,8 @@ class _Flights:
             model, trimmed = self.trim(own)
             controls = {c: u + named.get(OFFSET + c, 0.0) for c, u in self.controls.items()}
             rec = flight.fly(model, trimmed, controls, duration_s=(self.n - 1) / self.rate,
-                             rate_hz=self.rate * self.every, surfaces=self.surfaces)
-            self.memo[key] = np.column_stack([rec[c][:: self.every][: self.n]
+                             rate_hz=self.rate * self.oversample, surfaces=self.surfaces)
+            self.memo[key] = np.column_stack([rec[c][:: self.oversample][: self.n]
                                               for c in self.outputs])
         return self.memo[key]
 
@@ -268,13 +268,14 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     flights = _Flights(record, aircraft, effect, names, outputs, controls,
                        Path(cache) if cache else CACHE, surfaces, flight_rate_hz, offsets,
                        condition)
-    every = flights.names  # the effect's parameters, then the offsets
+    all_names = flights.names  # the effect's parameters, then the offsets
     z = np.column_stack([record[c] for c in outputs])
     floor = np.maximum(1e-12 * np.var(z, axis=0), 1e-16)
-    values = {nm: float((start or {}).get(nm, effect.parameters().get(nm, 0.0))) for nm in every}
-    ml = maximum_likelihood(z, floor, flights.sensitivities, flights.fly, every, values,
+    own_values = effect.parameters()
+    values = {nm: float((start or {}).get(nm, own_values.get(nm, 0.0))) for nm in all_names}
+    ml = maximum_likelihood(z, floor, flights.sensitivities, flights.fly, all_names, values,
                             max_iterations, False, step_tol=0.2, cost_tol=0.05)
-    fitted = dict(zip(every, flights.clip(ml.values), strict=True))
+    fitted = dict(zip(all_names, flights.clip(ml.values), strict=True))
     y, sens = flights.sensitivities(fitted)  # at the clipped values (kept flights)
     ml.values, ml.y, ml.sens, ml.residuals = fitted, y, sens, z - y
     ml.noise = noise_covariance(z - y, False, floor)
@@ -288,9 +289,9 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     neutral = {**fitted, **{nm: entry.parameter(nm).zero for nm in names}}
     neutral_cost = concentrated_cost(z - flights.fly(neutral), False, floor)
     cost = concentrated_cost(z - y, False, floor)
-    at_limit = [nm for nm in every if fitted[nm] in _limits(flights.params[nm])]
+    at_limit = [nm for nm in all_names if fitted[nm] in _limits(flights.params[nm])]
     std = {nm: math.inf if blind[k] else float(s)
-           for k, (nm, s) in enumerate(zip(every, est.std, strict=True))}
+           for k, (nm, s) in enumerate(zip(all_names, est.std, strict=True))}
     own = {nm: fitted[nm] for nm in names}
     return EffectFit(dataclasses.replace(effect, **own), names, fitted, std, est, cost,
                      neutral_cost, len(flights.memo), at_limit)

@@ -232,8 +232,13 @@ def hold_center(rate_hz: float) -> float:
     t_k + (substeps - 1) h: their middle is (substeps - 1) h / 2, h the internal step. An
     input sampled from a continuous signal is best taken there.
     """
-    substeps = max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
-    return (substeps - 1) / (2.0 * substeps * rate_hz)
+    n = substeps(rate_hz)
+    return (n - 1) / (2.0 * n * rate_hz)
+
+
+def substeps(rate_hz: float) -> int:
+    """JSBSim runs per record interval at ``rate_hz``: at least ``MIN_INTERNAL_HZ``."""
+    return max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
 
 
 def _interp(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
@@ -269,7 +274,7 @@ class Simulation:
         # a private copy: reset() reloads it, which must not touch the caller's model
         self.model = model.copy() if isinstance(model, Model) else as_model(model)
         self.rate_hz = float(rate_hz)
-        self.substeps = max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))  # (hold_center)
+        self.substeps = substeps(rate_hz)
         self.internal_hz = self.rate_hz * self.substeps
         self.atmosphere = atmosphere or Atmosphere()
         self.limits = limits or Limits()

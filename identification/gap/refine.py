@@ -16,7 +16,8 @@ output error with the augmented JSBSim aircraft flown from the record
   drifts the speed of a 30 s record);
 - the outputs compared are the axis's states (the surfaces are inputs now; the specific
   forces add little and cost flights' worth of time);
-- the bounds are corrected for colored residuals (Morelli & Klein 2016, eq. 6.54).
+- the bounds are corrected for colored residuals (Morelli & Klein 2016, eq. 6.54, with the
+  fit's leverage put back: ``engine.bounds``).
 """
 
 from __future__ import annotations
@@ -25,14 +26,15 @@ from dataclasses import dataclass
 from typing import Any
 
 from flightid.identification.effect_fit import OFFSET, fit_effect
-from flightid.identification.gap.correct import airframe_effects
+from flightid.identification.gap.correct import OUTPUTS, airframe_effects
 from flightid.identification.gap.linearise import AXIS_INPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
 from flightid.sim.flight import DepartureError
 from flightid.sim.trim import TrimError
 
-FITTED = {"longitudinal": ("V", "alpha", "q", "theta"), "lateral": ("beta", "p", "r", "phi")}
+# the re-fly's channels without the specific forces (they add little and cost flights)
+FITTED = {axis: tuple(c for c in chans if c not in ("ay", "az")) for axis, chans in OUTPUTS.items()}
 FLIGHT_RATE_HZ = 100.0  # the refit's flights (the record's inputs interpolated to it)
 
 
