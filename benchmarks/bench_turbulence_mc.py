@@ -34,8 +34,22 @@ import time  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from rich.progress import track  # noqa: E402
+
+from flightid.identification import linear_models as lm  # noqa: E402
+from flightid.identification.linear_models import LATERAL_EXAMPLE_6_1  # noqa: E402
+from flightid.identification.methods import filter_error as fe  # noqa: E402
+from flightid.identification.methods import output_error as oe  # noqa: E402
+from flightid.record import FlightRecord  # noqa: E402
+from flightid.sim import disturbances as dist  # noqa: E402
+from flightid.sim import truth as truth_mod  # noqa: E402
+from flightid.sim.model import as_model  # noqa: E402
+from flightid.sim.trim import trim as trim_aircraft  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 ALTITUDE_M, SPEED_M_S = 1500.0, 55.0
@@ -58,7 +72,6 @@ def _multistep(t: np.ndarray, start: float, widths: list[float], signs: list[int
 
 def _turbulence_ned(case: str, trim, n: int, seed: int) -> np.ndarray:
     """Moderate Dryden turbulence on the record grid (n x 3, NED, m/s)."""
-    from flightid.sim import disturbances as dist
 
     turb = dist.Turbulence(intensity="moderate")
     rng = np.random.default_rng(seed)
@@ -84,12 +97,6 @@ def calm_reference(trim) -> dict[str, float]:
 
 def run_one(case: str, seed: int, trim) -> dict:
     """Fly one turbulent flight and fit it by output error and filter error."""
-    from flightid.identification import linear_models as lm
-    from flightid.identification.methods import filter_error as fe
-    from flightid.identification.methods import output_error as oe
-    from flightid.record import FlightRecord
-    from flightid.sim import disturbances as dist
-    from flightid.sim.model import as_model
 
     t = np.arange(0.0, DURATION_S + 0.5 / RATE_HZ, 1.0 / RATE_HZ)
     controls = {"da": _multistep(t, 1.0, [1.5, 1.0, 0.5, 0.5], [1, -1, 1, -1], AMPLITUDE_RAD),
@@ -193,11 +200,6 @@ def report(table: dict, runs: list[dict], truth: dict[str, float], names: list[s
 
 def plot(table: dict, names: list[str], path: Path) -> None:
     """Errors in units of each method's own Cramer-Rao bound, per derivative and case."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(len(CASES), 1, figsize=(12, 4.2 * len(CASES)), sharex=True)
     x = np.arange(len(names))
     for ax, case in zip(np.atleast_1d(axes), CASES, strict=True):
@@ -225,9 +227,6 @@ def plot(table: dict, names: list[str], path: Path) -> None:
 
 def main(seeds: int = 24, workers: int = 2) -> str:
     """Run the Monte Carlo, write the results file and the plot, return the text."""
-    from flightid.identification.linear_models import LATERAL_EXAMPLE_6_1
-    from flightid.sim import truth as truth_mod
-    from flightid.sim.trim import trim as trim_aircraft
 
     trim = trim_aircraft("navion", ALTITUDE_M, SPEED_M_S)
     truth = truth_mod.derivatives("navion", trim, axes="body")

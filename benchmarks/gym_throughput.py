@@ -8,11 +8,15 @@ best of ``--repeats``, interleaved, median beside it):
 
 - bare: ``FGFDMExec.run()`` for the same simulated time at the internal rate (400 Hz:
   8 runs per decision), nothing else;
-- core: the flight core's ``Simulation.step`` once per decision (controls mapped, the
-  properties read, the sample converted to SI, departure checks);
+- core: the flight core's ``Simulation.step`` once per decision (controls mapped, every
+  property read, the sample converted to SI, departure checks);
+- lean: the flight core's ``Simulation.stepper`` once per decision, reading the 19
+  channels the environment uses (what ``ExcitationEnv.step`` calls);
 - env: ``ExcitationEnv.step`` (the core plus observation, information update, info);
 - make: the same through ``gymnasium.make`` (its PassiveEnvChecker and OrderEnforcing
-  wrappers).
+  wrappers);
+- no-update: diagnostic, ``ExcitationEnv.step`` with the information update (the reward's
+  rank-one updates) replaced by a no-op: what the rest of the step costs.
 
 Resets are outside the timed part.
 """
@@ -61,30 +65,41 @@ def main(out: Path, repeats: int = 5) -> str:
             step(inc)
         return time.process_time() - t0
 
-    def stepping(e) -> float:
+    def lean() -> float:
+        sim.reset(env.trim)
+        advance = sim.stepper(env._read)
+        t0 = time.process_time()
+        for inc in increments:
+            advance((inc["de"], inc["da"], inc["dr"]))
+        return time.process_time() - t0
+
+    def stepping(e, update: bool = True) -> float:
         e.reset(seed=0)
+        if not update:
+            e.unwrapped._info_state.add = lambda x, y: None
         step = e.step
         t0 = time.process_time()
         for a in actions:
             step(a)
         return time.process_time() - t0
 
-    cases = {"bare": bare, "core": core, "env": lambda: stepping(env),
-             "make": lambda: stepping(made)}
+    cases = {"bare": bare, "core": core, "lean": lean, "env": lambda: stepping(env),
+             "make": lambda: stepping(made), "no-update": lambda: stepping(env, False)}
     times: dict[str, list[float]] = {k: [] for k in cases}
     for _ in range(repeats):
         for k, fn in cases.items():
             times[k].append(fn())
     best = {k: min(v) for k, v in times.items()}
+    width = max(map(len, cases)) + 2
     lines = [f"flightid/Excitation-v0 throughput, {datetime.date.today().isoformat()}: "
              f"{env.aircraft}, {env.episode_s:g} s episode = {n} decisions at "
              f"{env.decision_hz:g} Hz, JSBSim internal {sim.internal_hz:g} Hz "
              f"({substeps} runs per decision); python {platform.python_version()}, "
              f"JSBSim {jsbsim.__version__}, {platform.machine()}; process CPU time, best "
              f"(median) of {repeats}", "",
-             f"{'case':<8}{'steps/s':>10}{'(median)':>10}{'us/step':>10}{'bare/case':>11}"]
+             f"{'case':<{width}}{'steps/s':>10}{'(median)':>10}{'us/step':>10}{'bare/case':>11}"]
     for k in cases:
-        lines.append(f"{k:<8}{n / best[k]:>10.0f}{n / statistics.median(times[k]):>10.0f}"
+        lines.append(f"{k:<{width}}{n / best[k]:>10.0f}{n / statistics.median(times[k]):>10.0f}"
                      f"{best[k] / n * 1e6:>10.1f}{best['bare'] / best[k]:>11.2f}")
     text = "\n".join(lines) + "\n"
     out.parent.mkdir(parents=True, exist_ok=True)

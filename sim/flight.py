@@ -41,7 +41,11 @@ turbulence velocities and rates are zero, so the aero-relative rates equal the b
 rates and the total wind is the steady wind plus the gusts written by the loop: those
 nine properties are filled in after the flight instead of read (and checked against
 JSBSim at the last sample). ``step`` converts its one sample with plain float
-arithmetic, by the same formulas (``_channels``). benchmarks/bench_runner.py measures it.
+arithmetic, by the same formulas (``_channels``, table-driven: ``scaled_channels``).
+``stepper(channels)`` is ``step`` for a loop that needs a few channels (a gym environment):
+it reads only their properties and keeps nothing (0.9 of bare JSBSim stepping, against
+0.6 for ``step``; benchmarks/gym_throughput.py). benchmarks/bench_runner.py measures
+``fly``.
 
 Property nodes belong to one FGFDMExec, and ``reset`` after the first gives the model a
 fresh one (bit-identical restarts): nodes taken from ``sim.model`` before a reset are
@@ -291,6 +295,7 @@ class Simulation:
         self._rpm = next((p for p in _RPM if model.has(p)), None)
         self.columns: tuple[str, ...] = _RAW + flap + ((self._rpm,) if self._rpm else ())
         self._col = {name: i for i, name in enumerate(self.columns)}
+        self._table = scaled_channels(model.reference)
         # what the flight loop reads per sample (the rest is filled in after the flight)
         self._calm = self.atmosphere.turbulence == "none"
         self._loop_columns = tuple(c for c in self.columns if c not in (_AGL, _WOW)
@@ -508,6 +513,54 @@ class Simulation:
             raise DepartureError(reason, self.time)
         return self._sample(row)
 
+    def stepper(self, channels: Sequence[str]) -> Callable[[Sequence[float]], list[float]]:
+        """A lean ``step`` for a loop that needs only a few channels (a gym environment).
+
+        ``advance((de, da, dr))`` (trim increments, rad) advances one record interval as
+        ``step({"de": de, "da": da, "dr": dr})`` does (the same commands, set before the
+        last substep; the same departure checks as ``fly``, raising DepartureError) and
+        returns the SI values of ``channels`` in that order, reading only their JSBSim
+        properties: no sample is kept. ``channels`` must be ones of ``scaled_channels``.
+        Valid until the next ``reset`` (it holds the current FGFDMExec's nodes).
+        """
+        if self.trim is None:
+            raise RuntimeError("call reset(trim) before stepper()")
+        table = self._table
+        unknown = [c for c in channels if c not in table]
+        if unknown:
+            raise ValueError(f"stepper reads only channels of scaled_channels; not {unknown}")
+        alpha, vt, h = "aero/alpha-rad", "velocities/vt-fps", "position/h-sl-ft"
+        props = list(dict.fromkeys([alpha, vt, h, *(p for c in channels
+                                                     for p in table[c][::2] if p)]))
+        col = {p: i for i, p in enumerate(props)}
+        spec = [(col[p], k, col[d] if d else None) for p, k, d in map(table.get, channels)]
+        get, nodes = self._get, [self.model.node(p) for p in props]
+        run, substeps = self._run, range(self.substeps - 1)
+        commands = [(c, self._cmd_setters[c], self._trim_cmd[c])
+                    for c in ("de", "da", "dr") if c in self._cmd_setters]
+        slot = {"de": 0, "da": 1, "dr": 2}
+        command_for = self._command_for
+        a_lo, a_hi, v_lo, v_hi = self._envelope
+        h_guard = self.trim.terrain_m / FT + _NEAR_GROUND_FT
+
+        def advance(increments: Sequence[float]) -> list[float]:
+            for _ in substeps:
+                run()
+            for c, set_cmd, trim_cmd in commands:
+                inc = increments[slot[c]]
+                set_cmd(command_for(c, inc) if inc else trim_cmd)
+            run()
+            self._k += 1
+            row = list(map(get, nodes))
+            # (a non-finite state makes the airspeed nan or inf: it fails here too)
+            if not (a_lo <= row[0] <= a_hi and v_lo <= row[1] <= v_hi and row[2] > h_guard):
+                reason = self._departure(row, col)
+                if reason:
+                    raise DepartureError(reason, self.time)
+            return [row[i] * k if j is None else row[i] * k / row[j] for i, k, j in spec]
+
+        return advance
+
     def fly(self, trim: Trim, controls: Mapping[str, Control] | None = None,
             duration_s: float = 10.0, *, wind: np.ndarray | None = None,
             turbulence: np.ndarray | None = None,
@@ -664,7 +717,7 @@ class Simulation:
         """Canonical SI channels of one raw sample (all columns), as floats."""
         raw = dict(zip(self.columns, row, strict=True))
         try:
-            return _channels(raw, self.model.reference, self._lat0, self._lon0, self._rpm,
+            return _channels(raw, self._table, self._lat0, self._lon0, self._rpm,
                              math.sin, math.cos)
         except ZeroDivisionError:  # qbar or V = 0: let numpy give inf / nan as in a record
             arrays = {k: np.array([v]) for k, v in raw.items()}
@@ -673,7 +726,7 @@ class Simulation:
     def convert(self, raw: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Canonical SI channels from raw JSBSim columns (property -> array), vectorised."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            return _channels(raw, self.model.reference, self._lat0, self._lon0, self._rpm,
+            return _channels(raw, self._table, self._lat0, self._lon0, self._rpm,
                              np.sin, np.cos)
 
     def meta(self, scenario: dict[str, Any] | None = None) -> RecordMeta:
@@ -695,69 +748,77 @@ class Simulation:
         )
 
 
-def _channels(c: Mapping[str, Any], ref: Reference, lat0: float, lon0: float,
-              rpm: str | None, sin: Callable, cos: Callable) -> dict[str, Any]:
-    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy)."""
-    V = c["velocities/vt-fps"] * FT
-    alpha = c["aero/alpha-rad"]
-    mass_slug = c["inertia/mass-slugs"]
-    qs = c["aero/qbar-psf"] * PSF * ref.area  # N
-    fx = c["forces/fbx-aero-lbs"] * LBF / qs
-    fy = c["forces/fby-aero-lbs"] * LBF / qs
-    fz = c["forces/fbz-aero-lbs"] * LBF / qs
-    half_v = 2.0 * V
-    phi, theta, psi = c["attitude/phi-rad"], c["attitude/theta-rad"], c["attitude/psi-rad"]
-    turb = _rotate_to_body(*(c[p] * FT for p in _TURB), phi, theta, psi, sin, cos)
-    lat, lon = c["position/lat-geod-rad"], c["position/long-gc-rad"]
-    out = {
-        "u": c["velocities/u-aero-fps"] * FT,
-        "v": c["velocities/v-aero-fps"] * FT,
-        "w": c["velocities/w-aero-fps"] * FT,
-        "p": c["velocities/p-rad_sec"], "q": c["velocities/q-rad_sec"],
-        "r": c["velocities/r-rad_sec"],
-        "phi": phi, "theta": theta, "psi": psi,
-        "alpha": alpha, "beta": c["aero/beta-rad"], "V": V,
-        "qbar": c["aero/qbar-psf"] * PSF,
-        "rho": c["atmosphere/rho-slugs_ft3"] * SLUG_FT3,
-        "h": c["position/h-sl-ft"] * FT, "mach": c["velocities/mach"],
+def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
+    """The channels that are one raw JSBSim property times a constant, or over a second one:
+    channel -> (property, factor, divisor property or None); SI value = raw * factor [/ divisor].
+
+    ``_channels`` converts them with this table, and ``Simulation.stepper`` reads only the
+    properties of the channels it is asked for.
+    """
+    qs = PSF * ref.area  # N per psf of dynamic pressure
+    half_v = 2.0 * FT  # 2 V = 2 FT vt
+    table: dict[str, tuple[str, float, str | None]] = {
+        "u": ("velocities/u-aero-fps", FT, None), "v": ("velocities/v-aero-fps", FT, None),
+        "w": ("velocities/w-aero-fps", FT, None),
+        "p": ("velocities/p-rad_sec", 1.0, None), "q": ("velocities/q-rad_sec", 1.0, None),
+        "r": ("velocities/r-rad_sec", 1.0, None),
+        "phi": ("attitude/phi-rad", 1.0, None), "theta": ("attitude/theta-rad", 1.0, None),
+        "psi": ("attitude/psi-rad", 1.0, None),
+        "alpha": ("aero/alpha-rad", 1.0, None), "beta": ("aero/beta-rad", 1.0, None),
+        "V": ("velocities/vt-fps", FT, None), "qbar": ("aero/qbar-psf", PSF, None),
+        "rho": ("atmosphere/rho-slugs_ft3", SLUG_FT3, None),
+        "h": ("position/h-sl-ft", FT, None), "mach": ("velocities/mach", 1.0, None),
         # specific force = non-gravitational force / mass (what an accelerometer reads)
-        "ax": c["forces/fbx-total-lbs"] / mass_slug * FT,
-        "ay": c["forces/fby-total-lbs"] / mass_slug * FT,
-        "az": c["forces/fbz-total-lbs"] / mass_slug * FT,
-        "pdot": c["accelerations/pdot-rad_sec2"],
-        "qdot": c["accelerations/qdot-rad_sec2"],
-        "rdot": c["accelerations/rdot-rad_sec2"],
-        "de": c["fcs/elevator-pos-rad"] * SURFACES["de"][1],
-        "da": c["fcs/left-aileron-pos-rad"] * SURFACES["da"][1],
-        "dr": c["fcs/rudder-pos-rad"] * SURFACES["dr"][1],
-        "throttle": c["fcs/throttle-pos-norm"],
-        "thrust": c["forces/fbx-prop-lbs"] * LBF,
-        "L_prop": c["moments/l-prop-lbsft"] * LBF * FT,
-        "M_prop": c["moments/m-prop-lbsft"] * LBF * FT,
-        "N_prop": c["moments/n-prop-lbsft"] * LBF * FT,
-        "mass": mass_slug * SLUG,
-        "Ixx": c["inertia/ixx-slugs_ft2"] * SLUG_FT2,
-        "Iyy": c["inertia/iyy-slugs_ft2"] * SLUG_FT2,
-        "Izz": c["inertia/izz-slugs_ft2"] * SLUG_FT2,
+        "ax": ("forces/fbx-total-lbs", FT, "inertia/mass-slugs"),
+        "ay": ("forces/fby-total-lbs", FT, "inertia/mass-slugs"),
+        "az": ("forces/fbz-total-lbs", FT, "inertia/mass-slugs"),
+        "pdot": ("accelerations/pdot-rad_sec2", 1.0, None),
+        "qdot": ("accelerations/qdot-rad_sec2", 1.0, None),
+        "rdot": ("accelerations/rdot-rad_sec2", 1.0, None),
+        "de": ("fcs/elevator-pos-rad", SURFACES["de"][1], None),
+        "da": ("fcs/left-aileron-pos-rad", SURFACES["da"][1], None),
+        "dr": ("fcs/rudder-pos-rad", SURFACES["dr"][1], None),
+        "throttle": ("fcs/throttle-pos-norm", 1.0, None),
+        "thrust": ("forces/fbx-prop-lbs", LBF, None),
+        "L_prop": ("moments/l-prop-lbsft", LBF * FT, None),
+        "M_prop": ("moments/m-prop-lbsft", LBF * FT, None),
+        "N_prop": ("moments/n-prop-lbsft", LBF * FT, None),
+        "mass": ("inertia/mass-slugs", SLUG, None),
+        "Ixx": ("inertia/ixx-slugs_ft2", SLUG_FT2, None),
+        "Iyy": ("inertia/iyy-slugs_ft2", SLUG_FT2, None),
+        "Izz": ("inertia/izz-slugs_ft2", SLUG_FT2, None),
         # JSBSim reports the tensor element -Ixz; the channel is Etkin's Ixz
-        "Ixz": -c["inertia/ixz-slugs_ft2"] * SLUG_FT2,
-        "CX": fx, "CY": fy, "CZ": fz,
-        "Cl": c["moments/l-aero-lbsft"] * LBF * FT / (qs * ref.span),
-        "Cm": c["moments/m-aero-lbsft"] * LBF * FT / (qs * ref.chord),
-        "Cn": c["moments/n-aero-lbsft"] * LBF * FT / (qs * ref.span),
-        "CL": fx * sin(alpha) - fz * cos(alpha),
-        "CD": -fx * cos(alpha) - fz * sin(alpha),
-        "phat": c["velocities/p-aero-rad_sec"] * ref.span / half_v,
-        "qhat": c["velocities/q-aero-rad_sec"] * ref.chord / half_v,
-        "rhat": c["velocities/r-aero-rad_sec"] * ref.span / half_v,
-        "wind_north": (c["atmosphere/total-wind-north-fps"] - c["atmosphere/turb-north-fps"]) * FT,
-        "wind_east": (c["atmosphere/total-wind-east-fps"] - c["atmosphere/turb-east-fps"]) * FT,
-        "wind_down": (c["atmosphere/total-wind-down-fps"] - c["atmosphere/turb-down-fps"]) * FT,
-        "turb_u": turb[0], "turb_v": turb[1], "turb_w": turb[2],
-        "latitude": lat, "longitude": lon,
-        "north": (lat - lat0) * EARTH_RADIUS_M,
-        "east": (lon - lon0) * EARTH_RADIUS_M * math.cos(lat0),
+        "Ixz": ("inertia/ixz-slugs_ft2", -SLUG_FT2, None),
+        "CX": ("forces/fbx-aero-lbs", LBF / qs, "aero/qbar-psf"),
+        "CY": ("forces/fby-aero-lbs", LBF / qs, "aero/qbar-psf"),
+        "CZ": ("forces/fbz-aero-lbs", LBF / qs, "aero/qbar-psf"),
+        "Cl": ("moments/l-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
+        "Cm": ("moments/m-aero-lbsft", LBF * FT / (qs * ref.chord), "aero/qbar-psf"),
+        "Cn": ("moments/n-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
+        "phat": ("velocities/p-aero-rad_sec", ref.span / half_v, "velocities/vt-fps"),
+        "qhat": ("velocities/q-aero-rad_sec", ref.chord / half_v, "velocities/vt-fps"),
+        "rhat": ("velocities/r-aero-rad_sec", ref.span / half_v, "velocities/vt-fps"),
+        "latitude": ("position/lat-geod-rad", 1.0, None),
+        "longitude": ("position/long-gc-rad", 1.0, None),
     }
+    return table
+
+
+def _channels(c: Mapping[str, Any], table: Mapping[str, tuple[str, float, str | None]],
+              lat0: float, lon0: float, rpm: str | None, sin: Callable, cos: Callable
+              ) -> dict[str, Any]:
+    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy);
+    ``table`` is ``scaled_channels`` of the aircraft's reference."""
+    out = {ch: c[p] * k if d is None else c[p] * k / c[d] for ch, (p, k, d) in table.items()}
+    alpha, fx, fz = out["alpha"], out["CX"], out["CZ"]
+    out["CL"] = fx * sin(alpha) - fz * cos(alpha)
+    out["CD"] = -fx * cos(alpha) - fz * sin(alpha)
+    for axis, total, turb in zip(_AXES, _TOTAL_WIND, _TURB, strict=True):
+        out[f"wind_{axis}"] = (c[total] - c[turb]) * FT
+    out["turb_u"], out["turb_v"], out["turb_w"] = _rotate_to_body(
+        *(c[p] * FT for p in _TURB), out["phi"], out["theta"], out["psi"], sin, cos)
+    out["north"] = (out["latitude"] - lat0) * EARTH_RADIUS_M
+    out["east"] = (out["longitude"] - lon0) * EARTH_RADIUS_M * math.cos(lat0)
     if _FLAP in c:
         out["df"] = c[_FLAP]
     if rpm is not None:
@@ -860,4 +921,4 @@ def fly(model: Model | str, trim: Trim, controls: Mapping[str, Control] | None =
                    progress=progress, scenario=scenario)
 
 
-__all__ = ["Atmosphere", "DepartureError", "Limits", "Simulation", "fly"]
+__all__ = ["Atmosphere", "DepartureError", "Limits", "Simulation", "fly", "scaled_channels"]

@@ -20,6 +20,7 @@ from flightid.scenarios.gym.baselines import (
     three211,
     zero,
 )
+from flightid.scenarios.gym.env import SIGMA, _Information
 
 SEEDS = (0, 1)
 
@@ -127,6 +128,52 @@ def test_record_identifies(env):
     assert rec.time.size == env.n_decisions * env.sim_per_decision + 1
     est = identify(rec, "ee", "lateral", window="none")
     assert np.all(np.isfinite(est.values))
+
+
+@pytest.mark.parametrize("turbulence", ["none", "light"])
+def test_record_is_the_episode_that_was_stepped(turbulence):
+    """A step reads only what it observes; ``record()`` flies the episode again from its
+    actions. With ideal sensors the observations are the truth: the re-flown record must
+    hold them bit for bit, at every decision (here two record samples per decision)."""
+    e = ExcitationEnv(episode_s=2.0, sim_hz=100.0, sensors="ideal", turbulence=turbulence)
+    obs, _ = e.reset(seed=5)
+    seen = [obs]
+    rng = np.random.default_rng(5)
+    for _ in range(e.n_decisions):
+        seen.append(e.step(rng.uniform(-0.3, 0.3, 3).astype(np.float32))[0])
+    rec = e.record(measured=False)
+    assert len(rec) == e.n_decisions * 2 + 1
+    for i, c in enumerate(OBS_CHANNELS[1:], start=1):
+        np.testing.assert_array_equal(rec[c][::2], np.array(seen)[:, i], err_msg=c)
+
+
+def test_record_before_a_step_is_refused():
+    e = ExcitationEnv(episode_s=1.0)
+    e.reset(seed=0)
+    with pytest.raises(ValueError, match="no step since reset"):
+        e.record()
+
+
+def test_information_updates_equal_the_batch_formulas():
+    """The rank-one updates give log det M, M^-1 and the estimate M^-1 X^T W y of the batch
+    regularised least squares (M = I + X^T X / sigma^2) to rounding, for two coefficients
+    sharing a design and one with its own (CY has another sigma)."""
+    spec = [("Cl", ("beta", "p")), ("Cn", ("beta", "p")), ("CY", ("beta", "p"))]
+    info = _Information(spec)
+    rng = np.random.default_rng(0)
+    X = np.column_stack([np.ones(300), rng.normal(0.0, 0.05, (300, 2))])
+    Y = X @ rng.normal(0.0, 0.2, (3, 3)).T + rng.normal(0.0, 1e-3, (300, 3))
+    for x, y in zip(X, Y, strict=True):
+        info.add([x.tolist()] * 2, y.tolist())
+    logdet = 0.0
+    for g, (coef, _) in enumerate(spec):
+        M = np.eye(3) + X.T @ X / SIGMA[coef] ** 2
+        estimate = np.linalg.solve(M, X.T @ Y[:, g] / SIGMA[coef] ** 2)
+        np.testing.assert_allclose(info.theta[g], estimate, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(info.inv[0 if g < 2 else 1], np.linalg.inv(M),
+                                   rtol=1e-7, atol=1e-15)
+        logdet += np.linalg.slogdet(M)[1]
+    assert info.logdet_m == pytest.approx(logdet, rel=1e-10)  # 300 updates' rounding
 
 
 def test_render_rgb_array(env):

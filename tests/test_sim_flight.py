@@ -167,6 +167,35 @@ def test_stepping_api_matches_fly(c172p):
     assert sim.internal_hz == 400.0 and sim.substeps == 4
 
 
+def test_lean_stepper_gives_the_channels_of_step_bit_for_bit(c172p):
+    """``stepper`` reads only the asked channels but flies the same flight as ``step``."""
+    model, t = c172p
+    channels = ("V", "alpha", "beta", "p", "r", "ay", "da", "dr", "Cl", "Cn", "rhat", "h")
+    rng = np.random.default_rng(4)
+    increments = [(0.0, *rng.uniform(-0.05, 0.05, 2)) for _ in range(200)]
+    full, lean = Simulation(model, rate_hz=50.0), Simulation(model, rate_hz=50.0)
+    full.reset(t)
+    lean.reset(t)
+    advance = lean.stepper(channels)
+    for de, da, dr in increments:
+        sample = full.step({"de": de, "da": da, "dr": dr})
+        assert advance((de, da, dr)) == [sample[c] for c in channels]
+    assert lean.time == full.time == pytest.approx(4.0)
+
+
+def test_lean_stepper_departs_and_refuses_derived_channels(c172p):
+    model, t = c172p
+    sim = Simulation(model, rate_hz=50.0)
+    sim.reset(t)
+    with pytest.raises(ValueError, match="CL"):
+        sim.stepper(("V", "CL"))
+    advance = sim.stepper(("alpha",))
+    with pytest.raises(DepartureError, match="alpha") as err:
+        for _ in range(1500):  # full up elevator: the C172 pitches past its alpha range
+            advance((-0.4, 0.0, 0.0))
+    assert 0.2 < err.value.time < 30.0
+
+
 def test_bad_atmosphere_settings_are_named():
     with pytest.raises(ValueError, match="unknown turbulence 'gusty'"):
         Atmosphere(turbulence="gusty")

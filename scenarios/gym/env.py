@@ -32,9 +32,15 @@ information of the targets is the Schur complement S of the bias in M. The rewar
 step is the increase of sum_groups log det S, updated by rank-one (Sherman-Morrison)
 updates; an episode's return is therefore log det of the final target information (minus
 penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
-order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y, with y
-the simulator's aerodynamic coefficient plus white noise of ``SIGMA``; ``info['error']``:
-estimate - truth (flightid.sim.truth at the trim, body axes).
+order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y (updated
+recursively), with y the simulator's aerodynamic coefficient plus white noise of
+``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes).
+
+Speed
+-----
+A step reads from JSBSim only the observed channels and the target coefficients (the
+flight core's lean ``Simulation.stepper``) and keeps no sample: ``record()`` flies the
+episode again from its actions, bit for bit the same flight (tested).
 
 Termination
 -----------
@@ -84,9 +90,8 @@ PRESETS = {
 # std of the equation-error residual of each coefficient (nominal, stated): moments 1e-3,
 # forces 1e-2 (the order of the Navion's residuals with the research suite)
 SIGMA = {"Cl": 1e-3, "Cm": 1e-3, "Cn": 1e-3, "CX": 1e-2, "CY": 1e-2, "CZ": 1e-2}
-# regressor variable -> channel of the record
-VARIABLE_CHANNEL = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
-                    "de": "de", "da": "da", "dr": "dr"}
+# regressor variables: observed channels (p, q, r enter as phat, qhat, rhat)
+VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr")
 # the safe envelope: alpha (deg), |bank| (deg), load factor n = -az / g, airspeed as a
 # fraction of the trim airspeed, altitude loss below the trim altitude (m)
 LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
@@ -125,26 +130,30 @@ def _designs(spec: Sequence[tuple[str, tuple[str, ...]]]
 
 
 class _Information:
-    """Information, inverse and right-hand side of every coefficient's regression.
+    """Information, inverse and estimate of every coefficient's regression, in floats.
 
     Coefficients with the same regressors and residual std (Cl and Cn of the lateral
     preset) share one information matrix: ``design[g]`` is coefficient g's, and a shared
     matrix counts once per coefficient in log det. Designs with fewer variables are padded
     with regressors that stay zero: with the prior I their entries stay decoupled
-    (information 1, no contribution to log det). One small matrix per design, updated in
-    place: at 6 x 6, numpy's call overhead is the cost, and 2-d calls are the cheapest.
+    (information 1, no contribution to log det). Each sample is a rank-one update of
+    P = M^-1 (Sherman-Morrison) and of the estimate (recursive least squares, Ljung &
+    Soderstrom 1983, which with P_0 = I and theta_0 = 0 is exactly M^-1 X^T W y).
+    Plain lists of floats: at 6 x 6 numpy's per-call overhead is most of the cost, and its
+    work between JSBSim runs slows JSBSim itself (benchmarks/gym_throughput.py).
     """
 
     def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
         design, unique = _designs(spec)
-        self.design = np.array(design)
+        self.design = design
         k = 1 + max(len(v) for _, v in spec)
-        self.inv = [np.eye(k) for _ in unique]
+        self.inv = [[[float(i == j) for j in range(k)] for i in range(k)] for _ in unique]
         self.w = [1.0 / s**2 for _, s in unique]  # per design
         self.count = [design.count(d) for d in range(len(unique))]
-        self.rhs = np.zeros((len(spec), k))
-        self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
-        self._w_coef = self.w_coef.tolist()
+        self.members = [[g for g, dg in enumerate(design) if dg == d]
+                        for d in range(len(unique))]
+        self.theta = [[0.0] * k for _ in spec]
+        self._w_coef = [1.0 / SIGMA[c] ** 2 for c, _ in spec]
         self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
         self.n = 0
 
@@ -153,32 +162,25 @@ class _Information:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
         return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w_coef)
 
-    def add(self, x: np.ndarray, y: np.ndarray) -> None:
-        """One sample: regressors x (designs x k, bias first), dependent variables y (per
+    def add(self, x: Sequence[Sequence[float]], y: Sequence[float]) -> None:
+        """One sample: regressors x (per design, bias first), dependent variables y (per
         coefficient)."""
-        for d, inv in enumerate(self.inv):
-            xd = x[d]
-            v = inv @ xd
-            wq = self.w[d] * float(xd @ v)
-            # matrix determinant lemma and Sherman-Morrison
+        theta = self.theta
+        for d, xd in enumerate(x):
+            inv = self.inv[d]
+            v = [sum(map(operator.mul, row, xd)) for row in inv]
+            wq = self.w[d] * sum(map(operator.mul, xd, v))
+            # matrix determinant lemma; Sherman-Morrison gain P x w / (1 + w x' P x)
             self.logdet_m += self.count[d] * math.log1p(wq)
-            inv -= np.outer(v, v * (self.w[d] / (1.0 + wq)))
-        self.rhs += x[self.design] * (self.w_coef * y)[:, None]
+            c = self.w[d] / (1.0 + wq)
+            gain = [c * vi for vi in v]
+            self.inv[d] = [[a - gi * vj for a, vj in zip(row, v, strict=True)]
+                           for row, gi in zip(inv, gain, strict=True)]
+            for g in self.members[d]:
+                th = theta[g]
+                e = y[g] - sum(map(operator.mul, th, xd))
+                theta[g] = [a + e * b for a, b in zip(th, gain, strict=True)]
         self.n += 1
-
-    def variances(self) -> np.ndarray:
-        """The diagonals of the designs' M^-1, one after the other."""
-        return np.concatenate([inv.diagonal() for inv in self.inv])
-
-    def estimates(self) -> np.ndarray:
-        """M^-1 X^T y of every coefficient (bias first), one after the other."""
-        if len(self.inv) == 1:  # M^-1 is symmetric: the rows of rhs M^-1
-            return (self.rhs @ self.inv[0]).ravel()
-        out = np.empty_like(self.rhs)
-        for d, inv in enumerate(self.inv):
-            members = self.design == d
-            out[members] = self.rhs[members] @ inv
-        return out.ravel()
 
 
 class ExcitationEnv(gymnasium.Env):
@@ -235,46 +237,50 @@ class ExcitationEnv(gymnasium.Env):
         groups: dict[str, list[str]] = {}
         for name in self.targets:
             coef, _, var = name.partition("_")
-            if coef not in SIGMA or var not in VARIABLE_CHANNEL:
+            if coef not in SIGMA or var not in VARIABLES:
                 raise ValueError(f"unsupported target {name!r}: use C{{l,m,n,X,Y,Z}}_"
-                                 f"{{{','.join(VARIABLE_CHANNEL)}}}")
+                                 f"{{{','.join(VARIABLES)}}}")
             groups.setdefault(coef, []).append(var)
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
-        k = width + 1  # bias first
         design, designs = _designs(self._group_spec)  # coefficient -> its design
-        # regressor vector: VARIABLE_CHANNEL order, then a slot that stays zero (padding)
-        names = list(VARIABLE_CHANNEL)
-        self._vidx = np.array([[names.index(v) for v in vs] + [len(names)] * (width - len(vs))
-                               for vs, _ in designs])
         coefs = [c for c, _ in self._group_spec]
         self._coefs = coefs
-        self._coef_values = operator.itemgetter(*coefs)
+        # what a step reads from the flight core: the observed channels, then the
+        # coefficients; with the time in front (+ noise) it is the measured vector, whose
+        # first len(OBS_CHANNELS) entries are the observation and the rest y
+        self._read = (*OBS_CHANNELS[1:], *coefs)
+        self._at = {c: 1 + i for i, c in enumerate(self._read)}
+        self._n_obs = len(OBS_CHANNELS)
         self._sigma_y = np.array([SIGMA[c] for c in coefs])
-        # target i -> indices of its variance in the designs' M^-1 diagonals and of its
-        # estimate in the coefficients' M^-1 X^T y (both k per block, the bias first)
+        # target i -> (design, slot) of its variance in M^-1, (coefficient, slot) of its
+        # estimate (slot 0 is the bias)
         where = [(coefs.index(n.partition("_")[0]),
                   1 + groups[n.partition("_")[0]].index(n.partition("_")[2]))
                  for n in self.targets]
-        self._crb_idx = np.array([design[g] * k + j for g, j in where])
-        self._est_idx = np.array([g * k + j for g, j in where])
+        self._crb_at = [(design[g], j) for g, j in where]
+        self._est_at = where
+        # regressor slots of each design: (measured entry, scaling at V = 1 m/s, scaling
+        # over V): 1 for angles and surfaces, b/2 or c/2 over V for the rates (phat, qhat,
+        # rhat); a padding slot reads the time with scaling 0
         span, chord = self.reference.span, self.reference.chord
-        self._per_v = np.array([0.0, 0.0, span / 2, chord / 2, span / 2, 0.0, 0.0, 0.0, 0.0])
-        self._fixed = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0])
-        # the padding slot reads the time channel minus itself: always zero
-        self._obs_of_var = np.array([OBS_CHANNELS.index(v) for v in VARIABLE_CHANNEL] + [0])
-        self._x = np.ones((len(designs), k))
-        self._obs_values = operator.itemgetter(*OBS_CHANNELS[1:])
-        self._truth_vec = np.array([self.truth.get(n, np.nan) for n in self.targets])
+        half = {"p": span / 2, "q": chord / 2, "r": span / 2}
+        self._slots = [[(self._at[v], float(v not in half), half.get(v, 0.0)) for v in vs]
+                       + [(0, 0.0, 0.0)] * (width - len(vs)) for vs, _ in designs]
+        at = self._at
+        self._i_alpha, self._i_phi, self._i_az, self._i_v, self._i_h = (
+            at[c] - 1 for c in ("alpha", "phi", "az", "V", "h"))
+        self._truth_vec = [self.truth.get(n, math.nan) for n in self.targets]
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         high = np.array([self.episode_s + 1.0, *OBS_BOUNDS.values()])
         low = np.array([0.0, *(-b for b in OBS_BOUNDS.values())])
         low[OBS_CHANNELS.index("V")] = 0.0
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
-        self._samples: list[dict[str, float]] = []
+        self._replay: Simulation | None = None  # flies the episode again for record()
+        self._increments: list[list[float]] = []
+        self._n_sim = 0
         self._obs_hist: list[np.ndarray] = []
-        self._trim_obs = np.zeros(len(OBS_CHANNELS))
         self._seed = 0
 
     # -- gymnasium ------------------------------------------------------------------
@@ -285,54 +291,65 @@ class ExcitationEnv(gymnasium.Env):
         if self._atmosphere.turbulence != "none":
             self.sim.atmosphere = replace(self._atmosphere, seed=sub_seed(self._seed, "jsbsim"))
         sample = self.sim.reset(self.trim)
-        self._samples = [sample]
+        self._advance = self.sim.stepper(self._read)
         self._info_state = _Information(self._group_spec)
         n = self.n_decisions + 1
-        self._obs_noise = self._sigma_obs * self.np_random.standard_normal((n, len(OBS_CHANNELS)))
-        self._y_noise = self._sigma_y * self.np_random.standard_normal((n, len(self._coefs)))
+        obs_noise = self._sigma_obs * self.np_random.standard_normal((n, self._n_obs))
+        y_noise = self._sigma_y * self.np_random.standard_normal((n, len(self._coefs)))
+        # measured = [t, *read] + noise - (0 for the observation, y at trim for y)
         self._y0 = np.array([sample[c] for c in self._coefs])
+        self._noise = np.hstack([obs_noise, y_noise - self._y0]).tolist()
         self._logdet = 0.0
         self._k = 0
         self._h0 = sample["h"]
-        self._trim_obs = np.array([0.0] + [sample[c] for c in OBS_CHANNELS[1:]])
-        self._trim_obs_var = self._trim_obs[self._obs_of_var]
-        obs = self._observe(sample, 0.0)
+        trim_measured = [0.0, *(sample[c] for c in self._read)]
+        # each slot as (entry, trim value, scaling, scaling over V)
+        self._slot_trim = [[(i, trim_measured[i], f, pv) for i, f, pv in row]
+                           for row in self._slots]
+        self._values = [sample[c] for c in self._read]
+        obs = np.add(self._noise[0][:self._n_obs], trim_measured[:self._n_obs])
         self._obs_hist = [obs]
         self._actions = [[0.0, 0.0, 0.0]]
+        self._increments = []
+        self._n_sim = 0
         return obs, self._info(None)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        a = [min(1.0, max(-1.0, v)) for v in np.asarray(action, dtype=float).tolist()]
-        inc = {}
-        for i, c in enumerate(CONTROLS):
-            ai = a[i]
-            inc[c] = ai * (self._span[i][1] if ai > 0 else self._span[i][0])
+        a = [(v if v < 1.0 else 1.0) if v > -1.0 else -1.0
+             for v in np.asarray(action, dtype=float).tolist()]
+        inc = [ai * (up if ai > 0 else down) for ai, (down, up) in zip(a, self._span, strict=True)]
         self._k += 1
         departure = None
         try:
             for _ in range(self.sim_per_decision):
-                sample = self.sim.step(inc)
-                self._samples.append(sample)
+                self._values = self._advance(inc)
+                self._n_sim += 1
         except DepartureError as exc:
             departure = exc.reason
-            sample = self._samples[-1]
-        t = self._k / self.decision_hz
-        obs = self._observe(sample, t)
-        self._obs_hist.append(obs)
+        values = self._values
+        self._increments.append(inc)
         self._actions.append(a)
+        k = self._k
+        # (past the episode's end, as a caller may step on, the last noise row repeats)
+        noise = self._noise[min(k, self.n_decisions)]
+        measured = [a + b for a, b in zip((k / self.decision_hz, *values), noise, strict=True)]
+        obs = np.array(measured[:self._n_obs])
+        self._obs_hist.append(obs)
         reward = 0.0
         if departure is None:
-            self._update(obs, sample)
+            speed = measured[1]
+            x = [[1.0, *((measured[i] - t0) * (f + pv / speed) for i, t0, f, pv in row)]
+                 for row in self._slot_trim]
+            self._info_state.add(x, measured[self._n_obs:])
             logdet = self._info_state.logdet
             reward = logdet - self._logdet
             self._logdet = logdet
-            departure = self._envelope(sample)
+            departure = self._envelope(values)
         terminated = departure is not None
         if terminated:
             reward -= self.penalty
-        truncated = not terminated and self._k >= self.n_decisions
-        info = self._info(departure)
-        return obs, float(reward), terminated, truncated, info
+        truncated = not terminated and k >= self.n_decisions
+        return obs, float(reward), terminated, truncated, self._info(departure)
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
@@ -364,59 +381,71 @@ class ExcitationEnv(gymnasium.Env):
     # -- the episode as a record ------------------------------------------------------
     def record(self, measured: bool = True) -> FlightRecord:
         """The episode so far: the truth through the sensor suite (``measured``) or the
-        truth itself, at the simulation rate, with the truth derivatives in its metadata."""
-        samples = self._samples
-        channels = {c: np.array([s[c] for s in samples]) for c in samples[0]}
-        meta = self.sim.meta({"name": "gym:flightid/Excitation-v0", "seed": self._seed})
+        truth itself, at the simulation rate, with the truth derivatives in its metadata.
+
+        A step reads only what it observes; the record is the episode flown again from
+        its actions (JSBSim restarts bit-identically: the same flight, every channel).
+        """
+        n = self._n_sim
+        if n == 0:
+            raise ValueError("record(): no step since reset, the episode has no flight yet")
+        if self._replay is None:
+            self._replay = Simulation(self.sim.model, rate_hz=self.sim.rate_hz,
+                                      atmosphere=self.sim.atmosphere)
+        self._replay.atmosphere = self.sim.atmosphere
+        inc = np.zeros((n + 1, len(CONTROLS)))
+        inc[1:] = np.repeat(np.array(self._increments), self.sim_per_decision, axis=0)[:n]
+        scenario = {"name": "gym:flightid/Excitation-v0", "seed": self._seed}
+        try:
+            truth = self._replay.fly(self.trim, dict(zip(CONTROLS, inc.T, strict=True)),
+                                     n / self.sim.rate_hz, scenario=scenario)
+        except DepartureError as exc:  # the departing sample ended the episode unread
+            assert exc.record is not None
+            truth = exc.record
+        if len(truth) > n + 1:
+            truth = FlightRecord(truth.time[:n + 1],
+                                 {c: v[:n + 1] for c, v in truth.channels.items()}, truth.meta)
+        meta = truth.meta
         meta.extra["truth"] = {"trim": self.trim.condition, "body": dict(self.truth)}
         if self.effects:
             meta.extra["injected"] = {"aircraft": self.aircraft, "augmented": self.sim.model.name,
                                       "effects": [e.to_dict() for e in self.effects]}
-        truth = FlightRecord(np.arange(len(samples)) / self.sim.rate_hz, channels, meta)
         if not measured or self.suite is None:
             return truth
         return measure(truth, self.suite, sub_seed(self._seed, "sensors"))
 
     # -- internals ------------------------------------------------------------------------
-    def _observe(self, sample: dict[str, float], t: float) -> np.ndarray:
-        obs = np.array((t, *self._obs_values(sample)))
-        return obs + self._obs_noise[min(self._k, len(self._obs_noise) - 1)]
-
-    def _update(self, obs: np.ndarray, sample: dict[str, float]) -> None:
-        # perturbations from trim; p, q, r -> phat, qhat, rhat with the measured airspeed;
-        # the last slot stays zero (padding of the smaller groups)
-        r = (obs[self._obs_of_var] - self._trim_obs_var) * (self._fixed + self._per_v / obs[1])
-        x = self._x
-        x[:, 1:] = r[self._vidx]
-        y = (np.array(self._coef_values(sample), ndmin=1) - self._y0
-             + self._y_noise[min(self._k, len(self._y_noise) - 1)])
-        self._info_state.add(x, y)
-
-    def _envelope(self, s: dict[str, float]) -> str | None:
+    def _envelope(self, values: Sequence[float]) -> str | None:
+        """Why the truth ``values`` (the flight core's, in ``self._read`` order) left the
+        safe envelope ``LIMITS``, or None."""
         lim = LIMITS
-        alpha = math.degrees(s["alpha"])
+        alpha = math.degrees(values[self._i_alpha])
         if not lim["alpha_deg"][0] <= alpha <= lim["alpha_deg"][1]:
             return f"alpha {alpha:.1f} deg outside {lim['alpha_deg']}"
-        bank = math.degrees(s["phi"])
+        bank = math.degrees(values[self._i_phi])
         if abs(bank) > lim["bank_deg"]:
             return f"bank {bank:.1f} deg beyond {lim['bank_deg']}"
-        n = -s["az"] / G0
+        n = -values[self._i_az] / G0
         if not lim["load_factor"][0] <= n <= lim["load_factor"][1]:
             return f"load factor {n:.2f} outside {lim['load_factor']}"
-        ratio = s["V"] / self.trim.speed_m_s
+        speed = values[self._i_v]
+        ratio = speed / self.trim.speed_m_s
         if not lim["speed_ratio"][0] <= ratio <= lim["speed_ratio"][1]:
-            return f"airspeed {s['V']:.1f} m/s outside {lim['speed_ratio']} x trim"
-        if self._h0 - s["h"] > lim["altitude_loss_m"]:
-            return f"altitude loss {self._h0 - s['h']:.0f} m > {lim['altitude_loss_m']} m"
+            return f"airspeed {speed:.1f} m/s outside {lim['speed_ratio']} x trim"
+        loss = self._h0 - values[self._i_h]
+        if loss > lim["altitude_loss_m"]:
+            return f"altitude loss {loss:.0f} m > {lim['altitude_loss_m']} m"
         return None
 
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
-        crb = np.sqrt(inf.variances()[self._crb_idx])
-        est = inf.estimates()[self._est_idx]
-        info: dict[str, Any] = {"crb": crb, "estimate": est, "error": est - self._truth_vec,
-                                "logdet": self._logdet, "time": self._k / self.decision_hz}
+        crb = [math.sqrt(inf.inv[d][j][j]) for d, j in self._crb_at]
+        est = [inf.theta[g][j] for g, j in self._est_at]
+        error = [e - t for e, t in zip(est, self._truth_vec, strict=True)]
+        info: dict[str, Any] = {"crb": np.array(crb), "estimate": np.array(est),
+                                "error": np.array(error), "logdet": self._logdet,
+                                "time": self._k / self.decision_hz}
         if departure is not None:
             info["departure"] = departure
         return info
