@@ -15,7 +15,10 @@ from flightid.identification.identify import identify
 from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
     doublet,
+    evaluate,
     multisine,
+    per_target,
+    plot,
     run_episode,
     three211,
     zero,
@@ -174,6 +177,18 @@ def test_information_updates_equal_the_batch_formulas():
                                    rtol=1e-7, atol=1e-15)
         logdet += np.linalg.slogdet(M)[1]
     assert info.logdet_m == pytest.approx(logdet, rel=1e-10)  # 300 updates' rounding
+
+
+def test_per_target_tables_and_plot(tmp_path):
+    e = ExcitationEnv(episode_s=10.0)  # the rudder doublet is at 6-8 s
+    results = [evaluate(e, "zero", zero, [0]), evaluate(e, "doublet", doublet, [0])]
+    lines = per_target(e, results)
+    bounds = np.array([float(v) for v in lines[3].split()[1:]])  # the doublet's row
+    assert bounds.shape == (len(e.targets),)
+    # a doublet gathers information on every target: its bounds are below the zero input's
+    assert np.all(bounds < np.array([float(v) for v in lines[2].split()[1:]]))
+    path = plot(e, results, tmp_path / "baselines.png")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_render_rgb_array(env):

@@ -21,10 +21,12 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from flightid.scenarios.gym.env import ExcitationEnv
 from flightid.scenarios.multisine import schroeder_phases
@@ -91,11 +93,16 @@ POLICIES: dict[str, Schedule] = {"zero": zero, "doublet": doublet, "3211": three
 
 @dataclass
 class Result:
+    """One policy on the held-out seeds: per seed, the return and the final bounds and
+    errors (target order)."""
+
     policy: str
     returns: list[float]
     rel_crb: list[float]
     rel_error: list[float]
     terminated: int
+    crb: list[np.ndarray] = field(default_factory=list)
+    error: list[np.ndarray] = field(default_factory=list)
 
     def line(self) -> str:
         return (f"{self.policy:<22}{np.mean(self.returns):>10.1f}{np.min(self.returns):>10.1f}"
@@ -128,6 +135,8 @@ def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[
         res.returns.append(total)
         res.rel_crb.append(float(np.mean(info["crb"] / truth)))
         res.rel_error.append(float(np.mean(np.abs(info["error"]) / truth)))
+        res.crb.append(info["crb"])
+        res.error.append(info["error"])
         res.terminated += int(term)
     return res
 
@@ -153,6 +162,50 @@ def cross_entropy(env: ExcitationEnv, seeds: Sequence[int] = TRAIN_SEEDS, iterat
     return best, history
 
 
+def per_target(env: ExcitationEnv, results: Sequence[Result]) -> list[str]:
+    """Per target and policy: the final bound relative to |truth| (mean over seeds; the
+    information the policy gathered) and the error in units of the bound (RMS over seeds;
+    about 1 when the estimate is as good as its bound says)."""
+    truth = np.abs(env._truth_vec)
+    head = f"{'policy':<22}" + "".join(f"{t:>9}" for t in env.targets)
+    lines = ["final Cramer-Rao bound / |truth| per target (mean over seeds)", head]
+    lines += [f"{r.policy:<22}" + "".join(f"{v:>9.4f}" for v in np.mean(r.crb, axis=0) / truth)
+              for r in results]
+    lines += ["", "final error / Cramer-Rao bound per target (RMS over seeds)", head]
+    lines += [f"{r.policy:<22}" + "".join(
+        f"{v:>9.2f}" for v in np.sqrt(np.mean((np.array(r.error) / r.crb) ** 2, axis=0)))
+        for r in results]
+    return lines
+
+
+def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
+    """Bars of the final bound / |truth| per target and policy (log scale), the RMS error
+    / |truth| as dots on them; written to ``path`` (PNG)."""
+    truth = np.abs(env._truth_vec)
+    fig = Figure(figsize=(11, 4.8), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    x = np.arange(len(env.targets))
+    width = 0.8 / len(results)
+    for i, r in enumerate(results):
+        offset = x - 0.4 + (i + 0.5) * width
+        bars = ax.bar(offset, np.mean(r.crb, axis=0) / truth, width, label=r.policy)
+        rms = np.sqrt(np.mean(np.square(r.error), axis=0)) / truth
+        ax.plot(offset, rms, "o", ms=3.5, color=bars.patches[0].get_facecolor(),
+                markeredgecolor="k", markeredgewidth=0.5)
+    ax.set_yscale("log")
+    ax.set_ylim(top=ax.get_ylim()[1] * 20)  # room for the legend above the bars
+    ax.set_xticks(x, env.targets, rotation=30)
+    ax.set_ylabel("bound / |truth| (bars), RMS error / |truth| (dots)")
+    ax.set_title(f"{env.aircraft}: final Cramer-Rao bounds and errors per target, "
+                 f"{env.episode_s:g} s episodes", fontsize=10)
+    ax.grid(axis="y", which="major", alpha=0.3)
+    ax.legend(fontsize=7, ncol=3)
+    fig.tight_layout()
+    fig.savefig(path)
+    return path
+
+
 def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
          search: bool = True) -> str:
     env = ExcitationEnv()
@@ -170,14 +223,17 @@ def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
             return multisine(e, s, *best)
 
         r = evaluate(env, "multisine (CE-tuned)", tuned, seeds)
+        results.append(r)
         lines += [r.line(), "",
                   f"cross-entropy on training seeds {list(TRAIN_SEEDS)}: amp_da {best[0]:.3f}, "
                   f"amp_dr {best[1]:.3f}, f_max {best[2]:.2f} Hz; best training return per "
                   f"iteration {', '.join(f'{h:.1f}' for h in history)}"]
+    lines += ["", *per_target(env, results)]
     text = "\n".join(lines) + "\n"
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(text)
+        plot(env, results, out.with_suffix(".png"))
     return text
 
 
