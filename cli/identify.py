@@ -49,8 +49,9 @@ def identify_command(
     record: Annotated[str, typer.Argument(help="flight record: .parquet, .csv or SIDPAC .mat")],
     method: Annotated[str, typer.Option(help="method id (flightid methods)")] = "oe",
     model: Annotated[str, typer.Option(
-        help="lat[eral], lon[gitudinal], short_period, 6dof, all, or 'Cn=beta+phat+rhat; ...' "
-             "(regression methods)")] = "lateral",
+        help="auto (the axis the record excites: short_period for an elevator-only record, "
+             "else the method's default), lat[eral], lon[gitudinal], short_period, 6dof, all, "
+             "or 'Cn=beta+phat+rhat; ...' (regression methods)")] = "auto",
     coefficient: Annotated[list[str] | None, typer.Option(
         help="regression methods: only this coefficient (repeatable)")] = None,
     truth: Annotated[str | None, typer.Option(
@@ -87,7 +88,8 @@ def identify_command(
     scored = score(est, truth_values, scope="all" if all_rows else "estimated") \
         if truth_values else None
     if report:
-        write_html(report, f"flightid identify {record} --method {method} --model {model}",
+        write_html(report, f"flightid identify {record} --method {method} --model "
+                           f"{est.fit.get('model', model)}",
                    [est], truth_values or None, notes=[scored.verdict] if scored else [])
     if format == "json":
         out = est.as_dict()

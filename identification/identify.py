@@ -1,7 +1,8 @@
 """``identify(record, method, model, **options)``: the one door to every method.
 
 Resolves the method (``methods.registry``), the model (``model_structure``: presets,
-``lat``/``lon``), and the options (the method's dataclass, unknown keys refused); cuts a
+``lat``/``lon``; "auto" or None: the axis the record excites, ``excited_model``), and the
+options (the method's dataclass, unknown keys refused); cuts a
 simulated record to the maneuvers on the model's inputs (``windows``); checks that the
 record has the channels the method needs; and returns the method's one Estimate with
 the window in ``fit['window']``. Channels whose magnitudes cannot be in their SI unit
@@ -13,6 +14,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
+
 from flightid.identification import identifiability as ident
 from flightid.identification import model_structure, windows
 from flightid.identification.estimate import Estimate
@@ -22,6 +25,10 @@ from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
 CONTROLS = ("de", "da", "dr")
+# an unlisted record is elevator-only when the elevator's standard deviation is this many
+# times the aileron's and the rudder's (a pilot's or autopilot's small corrections on the
+# other surfaces, or their sensor noise, stay below it)
+ELEVATOR_DOMINANCE = 3.0
 # the surfaces whose maneuvers a model is fitted to
 _MODEL_INPUTS = {"lateral": ("da", "dr"), "short_period": ("de",),
                  "longitudinal": ("de", "throttle")}
@@ -39,16 +46,41 @@ def model_inputs(model: str) -> tuple[str, ...]:
     return ()
 
 
-def identify(record: FlightRecord, method: str = "oe", model: str | None = None, *,
+def excited_model(record: FlightRecord, method: str = "oe") -> str:
+    """The model preset for the axis ``record`` excites: ``short_period`` when the elevator
+    is the only surface maneuvered (the record's listed maneuvers; else the elevator
+    excited and its standard deviation ``ELEVATOR_DOMINANCE`` times the aileron's and the
+    rudder's) and the method takes that preset; otherwise the method's default model
+    (lateral for the linear methods, 6dof for the nonlinear one)."""
+    spec = registry.get(method)
+    listed = windows.maneuvers(record)
+    if listed:
+        flown = {s for m in listed for s in m["surfaces"]}
+        elevator_only = "de" in flown and flown <= {"de", "throttle"}
+    else:
+        spread = {c: float(np.std(record[c])) for c in CONTROLS if c in record}
+        elevator_only = ("de" in spread and not ident.input_excitation(record, ["de"])
+                         and all(spread["de"] > ELEVATOR_DOMINANCE * v
+                                 for c, v in spread.items() if c != "de"))
+    if elevator_only and "short_period" in spec.models:
+        return "short_period"
+    return spec.default_model
+
+
+def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto", *,
              window: str | Sequence[float] = "auto", **options: Any) -> Estimate:
     """Estimate ``model``'s derivatives from ``record`` by ``method`` (an id of
     ``flightid methods``); ``options`` are the method's (see its Options dataclass).
 
+    model: a preset, a structure, or 'auto'/None (default): ``excited_model``, the
+    short-period model for an elevator-only record, the method's default otherwise
+    (``fit['model']`` says which).
     window: 'auto' (default) fits a record that lists its maneuvers on the window of the
     maneuvers on the model's inputs; 'none' uses the whole record; (start, end) in s.
     """
     spec = registry.get(method)
-    model = model_structure.canonical(model or spec.default_model)
+    model = (excited_model(record, method) if model in (None, "auto")
+             else model_structure.canonical(model))
     opts = spec.make_options(options)
     record, span = _windowed(record, model, window)
     missing = [c for c in spec.channels(model) if c not in record]

@@ -66,7 +66,7 @@ class ReferenceCondition:
             raise ValueError(f"flight condition thrust must be finite (N), got {self.thrust}")
 
 
-_CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
+CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
 
 
 def condition_from_record(record: FlightRecord, **override: float) -> ReferenceCondition:
@@ -76,7 +76,7 @@ def condition_from_record(record: FlightRecord, **override: float) -> ReferenceC
     when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
     """
     values: dict[str, float] = {}
-    for name in _CONDITION_CHANNELS:
+    for name in CONDITION_CHANNELS:
         if name in override:
             continue
         if name not in record:

@@ -94,9 +94,10 @@ def linear(model: str) -> str:
 
 
 def linear_channels(model: str) -> tuple[str, ...]:
-    """The record channels a linear-model preset needs: its inputs and outputs."""
+    """The record channels a linear-model preset needs: its inputs and outputs, and the
+    channels its reference condition is averaged from (``lm.condition_from_record``)."""
     preset = _PRESET_SIGNALS[linear(model)]
-    return tuple(dict.fromkeys((*preset[0], *preset[1])))
+    return tuple(dict.fromkeys((*preset[0], *preset[1], *lm.CONDITION_CHANNELS)))
 
 
 # inputs and outputs of each linear preset (checked against the models in the tests)

@@ -6,6 +6,7 @@ integer scalings) and, for resampled channels, the linear-interpolation error bo
 h^2/8 max|f''| of the signal (h = the message's sample interval).
 """
 
+import os
 import re
 import subprocess
 import sys
@@ -17,7 +18,7 @@ import pytest
 from flightid.record import FlightRecord, RecordMeta
 from flightid.sim.bridge.air import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import read_tlog
-from flightid.sim.bridge.link import LinkFaults, UdpLink, parse_hostport
+from flightid.sim.bridge.link import FdLink, LinkFaults, Transmitter, UdpLink, parse_hostport
 from flightid.sim.bridge.messages import ServoMap, resolution
 from flightid.sim.bridge.recorder import convert_tlog, decode_tlog, record_bridged
 from flightid.sim.bridge.schedule import (
@@ -336,10 +337,6 @@ def test_command_line_serve_record_convert(tmp_path):
 
 def test_uart_model_latency_jitter_and_overflow():
     """The transmitter's timing model: 10 bits per byte, latency + Gaussian jitter, FIFO."""
-    import os
-
-    from flightid.sim.bridge.link import FdLink, Transmitter
-
     sink = FdLink(os.open(os.devnull, os.O_WRONLY))
     baud, n, size = 57600, 4000, 40
     tx = Transmitter(sink, LinkFaults(latency=0.05, jitter=0.004), baud, seed=13)

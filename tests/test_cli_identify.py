@@ -7,6 +7,8 @@ import sys
 import pytest
 from conftest import TWIN_OTTER
 
+from flightid.record import read
+
 CLI = [sys.executable, "-m", "flightid.cli.app"]
 
 
@@ -22,8 +24,6 @@ def test_simulate_truth_identify_chain_scores_within_3_sigma(tmp_path, seed):
     # navion-demo: light turbulence, calibrated research sensors; the lateral window only
     _run("simulate", "navion-demo", "-o", str(flight), "--seed", seed)
     lateral = tmp_path / "lateral.parquet"
-    from flightid.record import read
-
     read(flight).slice(13.0, 45.0).write(lateral)
     truth = tmp_path / "truth.json"
     truth.write_text(_run("truth", "navion", "--altitude", "0", "--speed", "53.64",

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.linalg
 from test_output_error import (
     CONDITIONS,
     LATERAL_TRUTH,
@@ -26,7 +27,11 @@ from flightid.identification import linear_models as lm
 from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
 from flightid.identification.methods import output_error as oe
-from flightid.record import FlightRecord, RecordMeta, Reference
+from flightid.record import FlightRecord, RecordMeta, Reference, read
+from flightid.sim import disturbances as dist
+from flightid.sim import trim as trimming
+from flightid.sim import truth
+from flightid.sim.model import as_model
 
 PROCESS_NOISE = {"beta": 0.01, "p": 0.03, "r": 0.01}
 
@@ -70,8 +75,6 @@ def test_process_noise_covariance_equals_the_integral():
 
 
 def scipy_expm(m):
-    import scipy.linalg
-
     return scipy.linalg.expm(m)
 
 
@@ -179,8 +182,6 @@ def test_without_process_noise_it_agrees_with_output_error(seed):
 
 @pytest.fixture(scope="module")
 def twin_otter():
-    from flightid.record import read
-
     return read(TWIN_OTTER_FILE)
 
 
@@ -257,9 +258,6 @@ def test_bad_input_is_reported_clearly():
 
 @pytest.fixture(scope="module")
 def navion_trim():
-    from flightid.sim import trim as trimming
-    from flightid.sim import truth
-
     trim = trimming.trim("navion", 1500.0, 55.0)
     return trim, truth.derivatives("navion", trim, axes="body")
 
@@ -272,9 +270,6 @@ def test_jsbsim_navion_in_lateral_dryden_turbulence(navion_trim, seed):
     the lateral motion through the aerodynamic sideslip, so the filter carries process
     noise in the beta equation only. Sensor noise as in the synthetic flights.
     """
-    from flightid.sim import disturbances as dist
-    from flightid.sim.model import as_model
-
     trim, truth = navion_trim
     rate, duration = 50.0, 20.0
     t = np.arange(0.0, duration + 0.5 / rate, 1.0 / rate)
