@@ -10,8 +10,8 @@ best of ``--repeats``, interleaved, median beside it):
   8 runs per decision), nothing else;
 - core: the flight core's ``Simulation.step`` once per decision (controls mapped, every
   property read, the sample converted to SI, departure checks);
-- lean: the flight core's ``Simulation.stepper`` once per decision, reading the 19
-  channels the environment uses (what ``ExcitationEnv.step`` calls);
+- lean: the flight core's ``Simulation.stepper`` once per decision, reading the 17
+  channels the environment uses, 19 JSBSim properties (what ``ExcitationEnv.step`` calls);
 - env: ``ExcitationEnv.step`` (the core plus observation, information update, info);
 - make: the same through ``gymnasium.make`` (its PassiveEnvChecker and OrderEnforcing
   wrappers);

@@ -228,6 +228,15 @@ def _command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | 
     return pos[keep], cmds[keep]
 
 
+def _divide(a: float, b: float) -> float:
+    """a / b with numpy's answer for b = 0: +-inf, or nan for 0 / 0."""
+    if b:
+        return a / b
+    if a == 0 or math.isnan(a):
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)
+
+
 def hold_center(rate_hz: float) -> float:
     """Where a control given for sample k acts, relative to t_k (s).
 
@@ -284,6 +293,7 @@ class Simulation:
         self.limits = limits or Limits()
         self.trim: Trim | None = None
         self._used = False  # the private model is fresh until the first reset
+        self._resets = 0  # a stepper belongs to the flight of one reset
         self._k = 0
         self.model.fdm.set_dt(1.0 / self.internal_hz)
         model = self.model
@@ -371,6 +381,7 @@ class Simulation:
             self.model.reload()
             self._bind()
         self._used = True
+        self._resets += 1
         model, fdm = self.model, self.model.fdm
         apply(model, trim)  # the same sequence on every reset: identical flights
         if self.trim is not trim:
@@ -521,7 +532,8 @@ class Simulation:
         last substep; the same departure checks as ``fly``, raising DepartureError) and
         returns the SI values of ``channels`` in that order, reading only their JSBSim
         properties: no sample is kept. ``channels`` must be ones of ``scaled_channels``.
-        Valid until the next ``reset`` (it holds the current FGFDMExec's nodes).
+        A stepper belongs to the flight of its ``reset``: called after the next one, it
+        raises RuntimeError.
         """
         if self.trim is None:
             raise RuntimeError("call reset(trim) before stepper()")
@@ -542,8 +554,12 @@ class Simulation:
         command_for = self._command_for
         a_lo, a_hi, v_lo, v_hi = self._envelope
         h_guard = self.trim.terrain_m / FT + _NEAR_GROUND_FT
+        flight = self._resets
 
         def advance(increments: Sequence[float]) -> list[float]:
+            if self._resets != flight:
+                raise RuntimeError("this stepper belongs to the flight before the last reset; "
+                                   "take a new one with stepper()")
             for _ in substeps:
                 run()
             for c, set_cmd, trim_cmd in commands:
@@ -557,7 +573,11 @@ class Simulation:
                 reason = self._departure(row, col)
                 if reason:
                     raise DepartureError(reason, self.time)
-            return [row[i] * k if j is None else row[i] * k / row[j] for i, k, j in spec]
+            try:
+                return [row[i] * k if j is None else row[i] * k / row[j] for i, k, j in spec]
+            except ZeroDivisionError:  # qbar or V = 0 (limits allowing it): inf or nan
+                return [row[i] * k if j is None else _divide(row[i] * k, row[j])
+                        for i, k, j in spec]
 
         return advance
 
@@ -756,7 +776,7 @@ def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
     properties of the channels it is asked for.
     """
     qs = PSF * ref.area  # N per psf of dynamic pressure
-    half_v = 2.0 * FT  # 2 V = 2 FT vt
+    two_ft = 2.0 * FT  # phat = p b / 2V = p (b / 2 FT) / vt
     table: dict[str, tuple[str, float, str | None]] = {
         "u": ("velocities/u-aero-fps", FT, None), "v": ("velocities/v-aero-fps", FT, None),
         "w": ("velocities/w-aero-fps", FT, None),
@@ -795,9 +815,9 @@ def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
         "Cl": ("moments/l-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
         "Cm": ("moments/m-aero-lbsft", LBF * FT / (qs * ref.chord), "aero/qbar-psf"),
         "Cn": ("moments/n-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
-        "phat": ("velocities/p-aero-rad_sec", ref.span / half_v, "velocities/vt-fps"),
-        "qhat": ("velocities/q-aero-rad_sec", ref.chord / half_v, "velocities/vt-fps"),
-        "rhat": ("velocities/r-aero-rad_sec", ref.span / half_v, "velocities/vt-fps"),
+        "phat": ("velocities/p-aero-rad_sec", ref.span / two_ft, "velocities/vt-fps"),
+        "qhat": ("velocities/q-aero-rad_sec", ref.chord / two_ft, "velocities/vt-fps"),
+        "rhat": ("velocities/r-aero-rad_sec", ref.span / two_ft, "velocities/vt-fps"),
         "latitude": ("position/lat-geod-rad", 1.0, None),
         "longitude": ("position/long-gc-rad", 1.0, None),
     }

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from flightid.channels import CHANNELS
-from flightid.sim.flight import Atmosphere, DepartureError, Simulation, fly
+from flightid.sim.flight import Atmosphere, DepartureError, Simulation, _divide, fly
 from flightid.sim.model import load
 from flightid.sim.trim import trim
 from flightid.units import FT
@@ -172,7 +172,7 @@ def test_lean_stepper_gives_the_channels_of_step_bit_for_bit(c172p):
     model, t = c172p
     channels = ("V", "alpha", "beta", "p", "r", "ay", "da", "dr", "Cl", "Cn", "rhat", "h")
     rng = np.random.default_rng(4)
-    increments = [(0.0, *rng.uniform(-0.05, 0.05, 2)) for _ in range(200)]
+    increments = [tuple(rng.uniform(-0.02, 0.02, 3)) for _ in range(200)]
     full, lean = Simulation(model, rate_hz=50.0), Simulation(model, rate_hz=50.0)
     full.reset(t)
     lean.reset(t)
@@ -181,6 +181,15 @@ def test_lean_stepper_gives_the_channels_of_step_bit_for_bit(c172p):
         sample = full.step({"de": de, "da": da, "dr": dr})
         assert advance((de, da, dr)) == [sample[c] for c in channels]
     assert lean.time == full.time == pytest.approx(4.0)
+    lean.reset(t)  # a stepper belongs to the flight of its reset
+    with pytest.raises(RuntimeError, match="before the last reset"):
+        advance((0.0, 0.0, 0.0))
+
+
+def test_division_by_a_zero_property_gives_numpys_answer():
+    assert _divide(1.0, 0.0) == math.inf and _divide(-2.0, 0.0) == -math.inf
+    assert _divide(1.0, -0.0) == -math.inf and math.isnan(_divide(0.0, 0.0))
+    assert _divide(3.0, 2.0) == 1.5
 
 
 def test_lean_stepper_departs_and_refuses_derived_channels(c172p):

@@ -332,12 +332,12 @@ class ExcitationEnv(gymnasium.Env):
         k = self._k
         # (past the episode's end, as a caller may step on, the last noise row repeats)
         noise = self._noise[min(k, self.n_decisions)]
-        measured = [a + b for a, b in zip((k / self.decision_hz, *values), noise, strict=True)]
+        measured = [v + e for v, e in zip((k / self.decision_hz, *values), noise, strict=True)]
         obs = np.array(measured[:self._n_obs])
         self._obs_hist.append(obs)
         reward = 0.0
         if departure is None:
-            speed = measured[1]
+            speed = measured[self._at["V"]]
             x = [[1.0, *((measured[i] - t0) * (f + pv / speed) for i, t0, f, pv in row)]
                  for row in self._slot_trim]
             self._info_state.add(x, measured[self._n_obs:])
@@ -388,7 +388,8 @@ class ExcitationEnv(gymnasium.Env):
         """
         n = self._n_sim
         if n == 0:
-            raise ValueError("record(): no step since reset, the episode has no flight yet")
+            raise ValueError("record(): the episode has no flown interval yet (no step since "
+                             "reset, or it departed within its first)")
         if self._replay is None:
             self._replay = Simulation(self.sim.model, rate_hz=self.sim.rate_hz,
                                       atmosphere=self.sim.atmosphere)
@@ -399,12 +400,15 @@ class ExcitationEnv(gymnasium.Env):
         try:
             truth = self._replay.fly(self.trim, dict(zip(CONTROLS, inc.T, strict=True)),
                                      n / self.sim.rate_hz, scenario=scenario)
-        except DepartureError as exc:  # the departing sample ended the episode unread
-            assert exc.record is not None
-            truth = exc.record
-        if len(truth) > n + 1:
-            truth = FlightRecord(truth.time[:n + 1],
-                                 {c: v[:n + 1] for c, v in truth.channels.items()}, truth.meta)
+        except DepartureError as exc:  # every interval flown had passed the checks
+            raise RuntimeError(f"record(): the episode flown again departed ({exc}) where "
+                               "the stepped one did not; JSBSim did not restart "
+                               "bit-identically") from exc
+        last = [float(truth[c][-1]) for c in self._read]
+        if not all(a == b or (a != a and b != b) for a, b in zip(last, self._values,
+                                                                   strict=True)):
+            raise RuntimeError("record(): the episode flown again ends elsewhere than the "
+                               "stepped one; JSBSim did not restart bit-identically")
         meta = truth.meta
         meta.extra["truth"] = {"trim": self.trim.condition, "body": dict(self.truth)}
         if self.effects:
@@ -440,7 +444,8 @@ class ExcitationEnv(gymnasium.Env):
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
-        crb = [math.sqrt(inf.inv[d][j][j]) for d, j in self._crb_at]
+        # (rounding could make a variance that is 0 in exact arithmetic slightly negative)
+        crb = [math.sqrt(max(0.0, inf.inv[d][j][j])) for d, j in self._crb_at]
         est = [inf.theta[g][j] for g, j in self._est_at]
         error = [e - t for e, t in zip(est, self._truth_vec, strict=True)]
         info: dict[str, Any] = {"crb": np.array(crb), "estimate": np.array(est),
