@@ -14,7 +14,8 @@ ch. 4-5). One module per job:
 - ``bounds``: Cramer-Rao bounds, with the correction for colored residuals;
 - ``refit``: the loop "fit, find the unidentifiable parameters, fix them at their a priori
   values, refit";
-- ``results``: the ``Estimate`` of an output-error fit.
+- ``results``: the ``Estimate`` of an output-error fit;
+- ``threads``: one BLAS thread for work made of many small matrices.
 
 The engine knows no model: a method hands it functions of the parameter values.
 """

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.linearise import (
     AXIS_INPUTS,
@@ -170,6 +171,7 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
     return recs, names
 
 
+@one_blas_thread
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,

@@ -43,20 +43,18 @@ refitted without the parameters they find (``refit.refit_without_unidentifiable`
 
 from __future__ import annotations
 
-import contextlib
-import functools
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from threadpoolctl import threadpool_limits
 
 from flightid.identification import a_priori, model_structure
 from flightid.identification import identifiability as ident
 from flightid.identification.engine.bounds import cramer_rao_covariance, standard_errors
 from flightid.identification.engine.gauss_newton import damped_newton_step
 from flightid.identification.engine.refit import refit_without_unidentifiable
+from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.estimate import Estimate
 from flightid.identification.linear_models import LinearModel
 from flightid.identification.methods import output_error as oe
@@ -79,30 +77,6 @@ EARLY_ITERATIONS = 3
 # measured states and the method degenerates towards equation error)
 MIN_NOISE_FRACTION = 0.01
 ROUGH_NOISE_CHANGE = 0.1
-
-
-def _one_blas_thread(function: Callable) -> Callable:
-    """Run ``function`` with a single BLAS thread (see ``_single_threaded_blas``)."""
-
-    @functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        with _single_threaded_blas():
-            return function(*args, **kwargs)
-
-    return wrapper
-
-
-@contextlib.contextmanager
-def _single_threaded_blas() -> Iterator[None]:
-    """One BLAS thread while fitting.
-
-    The filter makes thousands of calls on 4 x 4 to 16 x 16 matrices (matrix
-    exponentials, Riccati solutions); a multi-threaded BLAS wakes its threads for each,
-    which costs 5 ms per call on a loaded 2-core machine (measured: a fit took 20 s of CPU
-    instead of 2 s).
-    """
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield
 
 
 def process_noise_name(state: str) -> str:
@@ -436,7 +410,7 @@ def _compensate_f(prob: _Problem, theta: np.ndarray, R_old: np.ndarray, R_new: n
 # ------------------------------------------------------------------ estimation
 
 
-@_one_blas_thread
+@one_blas_thread
 def estimate(
     record: FlightRecord,
     model: LinearModel,
