@@ -191,6 +191,15 @@ def test_per_target_tables_and_plot(tmp_path):
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_a_malformed_action_is_refused_by_name():
+    e = ExcitationEnv(episode_s=1.0)
+    e.reset(seed=0)
+    for bad in ([0.1, 0.2], [[0.0, 0.0, 0.0]], [0.0, float("nan"), 0.0], 0.5):
+        with pytest.raises(ValueError, match=r"action must be 3 numbers \(de, da, dr\)"):
+            e.step(bad)
+    e.step([2.0, -3.0, 0.0])  # out of range: clipped to the travel, as the Box says
+
+
 def test_render_rgb_array(env):
     run_episode(env, doublet(env, 0)[:50], 0)
     img = env.render()

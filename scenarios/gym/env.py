@@ -315,8 +315,12 @@ class ExcitationEnv(gymnasium.Env):
         return obs, self._info(None)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        a = [(v if v < 1.0 else 1.0) if v > -1.0 else -1.0
-             for v in np.asarray(action, dtype=float).tolist()]
+        values = np.asarray(action, dtype=float).tolist()
+        if not isinstance(values, list) or len(values) != len(CONTROLS) or any(
+                v != v for v in values):
+            raise ValueError(f"action must be {len(CONTROLS)} numbers (de, da, dr) in [-1, 1], "
+                             f"not NaN; got {action!r}")
+        a = [(v if v < 1.0 else 1.0) if v > -1.0 else -1.0 for v in values]
         inc = [ai * (up if ai > 0 else down) for ai, (down, up) in zip(a, self._span, strict=True)]
         self._k += 1
         departure = None
