@@ -229,12 +229,9 @@ def _command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | 
 
 
 def _divide(a: float, b: float) -> float:
-    """a / b with numpy's answer for b = 0: +-inf, or nan for 0 / 0."""
-    if b:
-        return a / b
-    if a == 0 or math.isnan(a):
-        return math.nan
-    return math.copysign(math.inf, a) * math.copysign(1.0, b)
+    """a / b with numpy's answer for b = 0 (+-inf, or nan for 0 / 0), as records have."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(np.float64(a) / b)
 
 
 def hold_center(rate_hz: float) -> float:
@@ -548,9 +545,8 @@ class Simulation:
         spec = [(col[p], k, col[d] if d else None) for p, k, d in map(table.get, channels)]
         get, nodes = self._get, [self.model.node(p) for p in props]
         run, substeps = self._run, range(self.substeps - 1)
-        commands = [(c, self._cmd_setters[c], self._trim_cmd[c])
-                    for c in ("de", "da", "dr") if c in self._cmd_setters]
-        slot = {"de": 0, "da": 1, "dr": 2}
+        commands = [(i, c, self._cmd_setters[c], self._trim_cmd[c])
+                    for i, c in enumerate(("de", "da", "dr")) if c in self._cmd_setters]
         command_for = self._command_for
         a_lo, a_hi, v_lo, v_hi = self._envelope
         h_guard = self.trim.terrain_m / FT + _NEAR_GROUND_FT
@@ -562,8 +558,8 @@ class Simulation:
                                    "take a new one with stepper()")
             for _ in substeps:
                 run()
-            for c, set_cmd, trim_cmd in commands:
-                inc = increments[slot[c]]
+            for i, c, set_cmd, trim_cmd in commands:
+                inc = increments[i]
                 set_cmd(command_for(c, inc) if inc else trim_cmd)
             run()
             self._k += 1

@@ -278,7 +278,6 @@ class ExcitationEnv(gymnasium.Env):
         low[OBS_CHANNELS.index("V")] = 0.0
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
         self._replay: Simulation | None = None  # flies the episode again for record()
-        self._increments: list[list[float]] = []
         self._n_sim = 0
         self._obs_hist: list[np.ndarray] = []
         self._seed = 0
@@ -310,7 +309,6 @@ class ExcitationEnv(gymnasium.Env):
         obs = np.add(self._noise[0][:self._n_obs], trim_measured[:self._n_obs])
         self._obs_hist = [obs]
         self._actions = [[0.0, 0.0, 0.0]]
-        self._increments = []
         self._n_sim = 0
         return obs, self._info(None)
 
@@ -331,7 +329,6 @@ class ExcitationEnv(gymnasium.Env):
         except DepartureError as exc:
             departure = exc.reason
         values = self._values
-        self._increments.append(inc)
         self._actions.append(a)
         k = self._k
         # (past the episode's end, as a caller may step on, the last noise row repeats)
@@ -398,8 +395,13 @@ class ExcitationEnv(gymnasium.Env):
             self._replay = Simulation(self.sim.model, rate_hz=self.sim.rate_hz,
                                       atmosphere=self.sim.atmosphere)
         self._replay.atmosphere = self.sim.atmosphere
+        # each decision's increments (the clipped actions on the travel), held over its
+        # record intervals: the same products the steps took
+        a = np.array(self._actions[1:])
+        down, up = np.array(self._span).T
+        decided = a * np.where(a > 0, up, down)
         inc = np.zeros((n + 1, len(CONTROLS)))
-        inc[1:] = np.repeat(np.array(self._increments), self.sim_per_decision, axis=0)[:n]
+        inc[1:] = np.repeat(decided, self.sim_per_decision, axis=0)[:n]
         scenario = {"name": "gym:flightid/Excitation-v0", "seed": self._seed}
         try:
             truth = self._replay.fly(self.trim, dict(zip(CONTROLS, inc.T, strict=True)),
