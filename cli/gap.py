@@ -15,7 +15,9 @@ from rich.table import Table
 from flightid.api import gap
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
+from flightid.identification.gap.diagnose import GapResult, injected
 from flightid.identification.gap.report import write_report
+from flightid.identification.gap.verdict import p_text
 from flightid.record import read
 
 
@@ -34,12 +36,17 @@ def gap_command(
     refine: Annotated[bool, typer.Option(
         "--refine", help="refit the named airframe effect with the JSBSim aircraft flown "
                          "from the record's measured surfaces (5-20 s more)")] = False,
+    axis: Annotated[str, typer.Option(
+        "--axis", help="lateral, longitudinal or both (each axis the records excite)")
+    ] = "both",
 ) -> None:
-    """Where a JSBSim model departs from flight data, which catalogue effect causes it, and
-    how far the gap shrinks on held-out data (lateral axis)."""
+    """Is there a gap between a JSBSim model and flight data; where it lies, which
+    catalogue effect causes it, and how far it shrinks on held-out data (each axis)."""
     if format not in ("table", "json"):
         raise ValueError(f"--format must be table or json, got {format!r}")
-    result = gap(records, model, validate=validate or None, refine=refine)
+    if axis not in ("both", "lateral", "longitudinal"):
+        raise ValueError(f"--axis must be lateral, longitudinal or both, got {axis!r}")
+    result = gap(records, model, validate=validate or None, refine=refine, axis=axis)
     written = write_aircraft(result, write) if write else None
     # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
     again = refly(result, [read(r) for r in records], write, written) if written else None
@@ -47,44 +54,23 @@ def gap_command(
         write_report(result, report, records, validate or None, again)
     if format == "json":
         d = result.to_json()
+        d["injected"] = injected([read(r) for r in records])
         if written:
             d["aircraft_written"] = str(written)
             d["refly"] = _finite(again)
         print(json.dumps(d, indent=2))
         return
     console = Console()
-    s = result.shrinkage()
-    t = Table(title=f"gap map: {model} (residual / measured energy, mean over windows)")
-    per = result.where.by_channel()
-    cols = list(next(iter(per.values())))
-    t.add_column("channel")
-    for c in cols:
-        t.add_column(c, justify="right")
-    for ch, d in per.items():
-        t.add_row(ch, *(f"{d[c]:.3f}" for c in cols))
-    console.print(t)
-    e = Table(title="effects (confirmed first, by delta BIC)")
-    for c in ("effect", "parameters", "delta BIC", "held-out shrink", "confirmed"):
-        e.add_column(c)
-    for r in (result.pairs + result.effects)[:10]:
-        params = "; ".join(f"{k} {v['value']:.4g} ± {v['std']:.2g}"
-                           for k, v in r.parameters.items())
-        e.add_row(r.candidate.label, params, f"{r.delta_bic:.1f}", f"{r.shrink:.1%}",
-                  "yes" if r.confirmed else "no")
-    console.print(e)
-    for k, step in enumerate(s.get("steps", [])[1:], start=2):
-        r = result.named[k - 1]
-        params = "; ".join(f"{n} {v['value']:.4g} ± {v['std']:.2g}"
-                           for n, v in r.parameters.items())
-        console.print(f"step {k} (with the effects before it fixed): {step['effect']} {params}; "
-                      f"held-out gap -> {step['after']:.3f}")
-    if result.named and s:
-        console.print(f"named: {s['effect']}; held-out gap "
-                      f"{s['overall']['before']:.3f} -> {s['overall']['after']:.3f} "
-                      f"({s['overall']['shrink']:.1%} shrink)")
-    else:
-        console.print("unexplained: no candidate shrinks the held-out gap; remaining: "
-                      + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining().items()))
+    records_read = [read(r) for r in records]
+    for axis, g in result.axes().items():
+        _print_axis(console, axis, g)
+    for axis, why in result.undiagnosed.items():
+        console.print(f"{axis}: not diagnosed: {why}")
+    shown = injected(records_read)
+    if shown:
+        console.print("injected (the record's card says): " + "; ".join(shown))
+        console.print("named: " + ("; ".join(r.candidate.label for r in result.named_all())
+                                   or "nothing"))
     if result.refined is not None:
         f = result.refined
         console.print(f"refined with JSBSim ({f.flights} flights): " + "; ".join(
@@ -92,24 +78,82 @@ def gap_command(
             for n, v in f.parameters.items()))
     elif result.refine_note:
         console.print(result.refine_note)
-    if result.partly_unexplained:
-        console.print(f"partly unexplained: the named effects leave "
-                      f"{result.unexplained_share():.0%} of the held-out gap above the noise "
-                      "floor; an effect outside the catalogue is likely (above the floor: "
-                      + ", ".join(f"{c} {v:.3f}" for c, v in result.remaining_above_floor().items())
-                      + ")")
     if written:
         console.print(f"corrected aircraft: {written}")
         o = (again or {}).get("overall")
         if o:
             console.print(f"flown again in JSBSim with the records' inputs (open loop from "
                           f"trim): gap {o['before']:.3f} (as is) -> {o['after']:.3f} "
-                          f"(corrected), {o['shrink']:.1%} shrink")
+                          f"(corrected), {shrink_text(o['shrink'])} shrink. Beside the "
+                          "linear held-out shrink: the re-fly flies the full nonlinear "
+                          "aircraft from trim with no bias or initial state refitted, so "
+                          "trim offsets, drift and nonlinearity count in it too.")
         for r in (again or {}).get("records", []):
             for key, name in (("before", "the aircraft as is"), ("after", "the corrected one")):
                 if f"{key}_departed" in r:
                     console.print(f"flown again in JSBSim, record {r['record']}: {name} "
                                   f"departed ({r[f'{key}_departed']})")
+
+
+VERDICT_TEXT = {
+    "no_gap": "no gap: the model's residual is at the null level of noise and turbulence",
+    "explained": "explained: the model with the named effects is at the null level",
+    "partly_unexplained": "partly unexplained: the named effects leave a gap above the null "
+                          "level (an effect outside the catalogue is likely)",
+    "unexplained": "unexplained: a gap above the null level that no catalogue effect closes",
+}
+
+
+def _print_axis(console: Console, axis: str, g: GapResult) -> None:
+    """One axis: its verdict, gap map, ranked effects and how far the gap shrinks."""
+    console.rule(f"{axis} axis")
+    console.print(f"verdict: {VERDICT_TEXT.get(g.verdict, g.verdict)}")
+    if g.null_before is not None:
+        tests = g.null_before.channels
+        console.print("null-level test of the model as is (p-value, held-out input-"
+                      "explained share): " + ", ".join(
+                          f"{c} {p_text(t.p_value)} {t.share:+.4f}" for c, t in tests.items()))
+    t = Table(title="gap map (residual / measured energy, mean over windows)")
+    per = {c: d for c, d in g.where.by_channel().items() if c in g.linearised.model.outputs}
+    cols = list(next(iter(per.values()))) if per else []
+    t.add_column("channel")
+    for c in cols:
+        t.add_column(c, justify="right")
+    for ch, d in per.items():
+        t.add_row(ch, *(f"{d[c]:.3f}" for c in cols))
+    console.print(t)
+    if g.verdict == "no_gap":
+        return
+    named = {r.candidate.label: k for k, r in enumerate(g.named, start=1)}
+    e = Table(title=f"effects ({g.evidence}; named first, then by delta BIC)")
+    e.add_column("effect", overflow="fold")
+    e.add_column("parameters (catalogue units)", overflow="fold")
+    e.add_column("dBIC", justify="right")
+    e.add_column("held-out shrink", justify="right")
+    e.add_column("named", justify="right")
+    rows = [*g.named, *(r for r in (g.pairs + g.effects) if r.candidate.label not in named)]
+    for r in rows[:8]:
+        params = "; ".join(f"{k} {v['value']:.4g} ± {v['std']:.2g}"
+                           for k, v in r.parameters.items())
+        e.add_row(r.candidate.label, params, f"{r.delta_bic:.0f}", shrink_text(r.shrink),
+                  str(named[r.candidate.label]) if r.candidate.label in named
+                  else ("no: " + r.note if r.note else "no"))
+    console.print(e)
+    s = g.shrinkage()
+    if g.named and s:
+        console.print(f"named: {s['effect']}; held-out gap {s['overall']['before']:.3f} -> "
+                      f"{s['overall']['after']:.3f} ({shrink_text(s['overall']['shrink'])} "
+                      "shrink)")
+    if g.null_after is not None and g.null_after.gap:
+        console.print("above the null level after the named effects: "
+                      + ", ".join(g.null_after.gap_channels()))
+
+
+def shrink_text(x: float) -> str:
+    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown."""
+    if not math.isfinite(x):
+        return "-"
+    return "worse" if x < 0 else f"{x:.0%}"
 
 
 def _finite(x: object) -> object:

@@ -75,12 +75,11 @@ def test_json_and_heat_map(injected, tmp_path):
     assert (tmp_path / "gap.png").stat().st_size > 1000
 
 
-def test_null_case_unexplained():
+def test_null_case_no_gap():
     result = diagnose([_flown(None)], "navion", try_pairs=False, axis="lateral")
-    # the plain model reproduces its own flight to a fraction of a percent: nothing named
-    assert result.unexplained
-    remaining = result.to_json()["unexplained"]
-    assert remaining["overall"] < 0.01
+    # the plain model reproduces its own flight: at the null level, nothing named
+    assert result.verdict == "no_gap" and not result.named and not result.unexplained
+    assert result.to_json()["verdict"] == "no_gap"
 
 
 @pytest.mark.skipif(not TWIN_OTTER.is_file(), reason="NASA Twin Otter record not present")

@@ -1,11 +1,15 @@
-"""The sim-to-real gap diagnosis: where the gap lies, which effect causes it, how far it
-shrinks (``diagnose``), and its result (``GapResult``: json form, heat map).
+"""The sim-to-real gap diagnosis: is there a gap, where it lies, which effect causes it,
+how far it shrinks (``diagnose``), and its result (``GapResult``: verdict, json form, heat
+map).
 
 Each axis the records excite (``linearise.excited_axes``: elevator -> longitudinal, aileron
-or rudder -> lateral) is diagnosed on its own model and windows; with both, the result is
-the axis whose named effect has the stronger evidence (the lower delta BIC), the ranking
-holds both axes' effects, the gap map both axes' channels, and ``by_axis`` each axis's
-full result."""
+or rudder -> lateral) is diagnosed on its own model and windows, and has its own verdict
+(``verdict``): first the model as is is tested against the null level of noise and
+turbulence; only where it fails are candidates ranked and named, in sequence until the
+model with the named effects passes. With both axes, ``by_axis`` holds each axis's full
+result, the verdict is the more severe one, the ranking holds both axes' effects, the gap
+map both axes' channels, and the model, ``named`` and ``pairs`` are those of the axis whose
+named effect has the stronger evidence (the lower delta BIC)."""
 
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ from matplotlib.figure import Figure
 
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.fit import fit
 from flightid.identification.gap.linearise import (
     AXIS_INPUTS,
     AXIS_NAMES,
@@ -30,9 +35,10 @@ from flightid.identification.gap.linearise import (
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
 from flightid.identification.gap.refine import NotRefined, Refined
 from flightid.identification.gap.refine import refine as refit
-from flightid.identification.gap.segments import segments
-from flightid.identification.gap.sequence import STEPS, following
+from flightid.identification.gap.segments import Segment, segments, split
+from flightid.identification.gap.sequence import STEPS, fixed, following
 from flightid.identification.gap.shrink import shrinkage
+from flightid.identification.gap.verdict import NullTest, axis_verdict, null_test, worst
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
 
@@ -64,6 +70,14 @@ class GapResult:
     # the top named airframe effect refitted with the JSBSim aircraft (``refine``), or None
     refined: Refined | None = None
     refine_note: str = ""  # why a refit asked for was not made
+    verdict: str = ""  # verdict.VERDICTS: no_gap, explained, partly_unexplained, unexplained
+    # the null-level test of the model as is, and of the model with the named effects
+    null_before: NullTest | None = None
+    null_after: NullTest | None = None
+    # how the named effects were checked: "held-out maneuvers", "validation records", or
+    # "time split" (one maneuver cut in halves: the weaker evidence of the same maneuver)
+    evidence: str = ""
+    undiagnosed: dict[str, str] = field(default_factory=dict)  # axis -> why not diagnosed
 
     def unexplained_share(self) -> float | None:
         """The share of the held-out gap above the noise floor that the named effects leave,
@@ -92,7 +106,8 @@ class GapResult:
 
     @property
     def unexplained(self) -> bool:
-        return not self.named
+        """A gap above the null level and nothing named for it."""
+        return self.verdict == "unexplained" if self.verdict else not self.named
 
     @property
     def top(self) -> Ranked | None:
@@ -115,7 +130,10 @@ class GapResult:
     def to_json(self, top: int = TOP) -> dict[str, Any]:
         return _finite({
             "aircraft": self.aircraft,
+            "verdict": self.verdict,
             "axis": self.axis,
+            "axes": {a: g.axis_json() for a, g in (self.by_axis or {self.axis: self}).items()},
+            "undiagnosed": self.undiagnosed,
             "model": {"axes": self.linearised.axes, "axis": self.axis,
                       "derivatives": self.linearised.derivatives,
                       "trim": {"altitude_m": self.linearised.trim.altitude_m,
@@ -139,6 +157,21 @@ class GapResult:
                             "shrinkage": g.shrinkage(), "unexplained": g.unexplained}
                         for a, g in self.by_axis.items()},
         })
+
+    def axis_json(self) -> dict[str, Any]:
+        """This axis's verdict, its null-level tests and what it named."""
+        return {"verdict": self.verdict, "evidence": self.evidence,
+                "null_before": self.null_before.to_json() if self.null_before else None,
+                "null_after": self.null_after.to_json() if self.null_after else None,
+                "named": [r.candidate.label for r in self.named]}
+
+    def axes(self) -> dict[str, GapResult]:
+        """Each diagnosed axis's own result (this one when a single axis was diagnosed)."""
+        return self.by_axis or {self.axis: self}
+
+    def named_all(self) -> list[Ranked]:
+        """The named effects of every diagnosed axis."""
+        return [r for g in self.axes().values() for r in g.named]
 
     def remaining_above_floor(self) -> dict[str, float]:
         """Per channel: the held-out gap left above the noise floor."""
@@ -175,16 +208,30 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
-             steps: int = STEPS, axis: str = "auto", refine: bool = False) -> GapResult:
+             steps: int = STEPS, axis: str = "both", refine: bool = False) -> GapResult:
     """Diagnose ``records`` against the JSBSim ``aircraft``.
 
-    ``axis``: "lateral", "longitudinal", or "auto" (the axes the records excite, each
-    diagnosed; see the module docstring). Held out: each maneuver window in turn (windows
-    of the records' maneuver lists, or the halves of a record without one), or the
-    ``validate`` records when given. Up to ``steps`` effects are named in sequence
-    (``sequence.following``). ``refine``: refit the top named airframe effect with the
-    JSBSim aircraft flown from the longest record (``gap.refine``; 5-20 s more): its values
-    are then the ones ``write_aircraft`` writes.
+    Parameters
+    ----------
+    records, validate : flight records (or paths) of one aircraft; ``validate`` are held
+        out of every fit when given.
+    aircraft : JSBSim aircraft (project name, stock name or XML path).
+    axis : "lateral", "longitudinal", or "both" (default; "auto" is the same): each axis
+        the records excite, each with its own verdict (module docstring); an axis they do
+        not excite is listed in ``undiagnosed`` with the reason.
+    steps : effects named at most per axis (``sequence.following``), fewer when the model
+        with the named ones reaches the null level.
+    refine : refit the top named airframe effect with the JSBSim aircraft flown from the
+        longest record (``gap.refine``; 5-20 s more): its values are then the ones
+        ``write_aircraft`` writes.
+
+    Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
+    halves of a record without one); an axis with a single window is cut in two halves in
+    time (``evidence`` says so: the weaker evidence of one maneuver).
+
+    Returns
+    -------
+    GapResult
     """
     records, found = _records(records)
     names = names or found
@@ -193,21 +240,36 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         validate_names = validate_names or [f"validate {n}" for n in found_val]
     if not records:
         raise ValueError("gap: no record to diagnose")
-    if axis == "auto":
-        axes = excited_axes(records) or ["lateral"]
+    _one_aircraft([*records, *(validate or [])], aircraft)
+    excited = excited_axes(records)
+    if axis in ("both", "auto"):
+        axes = excited or ["lateral"]
     elif axis in AXIS_NAMES:
         axes = [axis]
     else:
-        raise ValueError(f"gap: axis must be auto, {', '.join(AXIS_NAMES)}; got {axis!r}")
+        raise ValueError(f"gap: axis must be both, {', '.join(AXIS_NAMES)}; got {axis!r}")
     results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
                                  try_pairs, steps) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
+    result.undiagnosed = {
+        a: (f"not asked for (--axis {axis})" if a in excited else
+            f"the records do not excite it (no {', '.join(AXIS_INPUTS[a])} maneuver)")
+        for a in AXIS_NAMES if a not in axes}
     if refine:
         try:
             result.refined = refit(result, records)
         except NotRefined as exc:
             result.refine_note = f"not refined: {exc}"
     return result
+
+
+def _one_aircraft(records: list[FlightRecord], aircraft: str) -> None:
+    """Refuse records that say they come from different aircraft."""
+    said = {r.meta.aircraft for r in records if r.meta.aircraft}
+    if len(said) > 1:
+        raise ValueError(f"gap: the records come from different aircraft "
+                         f"({', '.join(sorted(said))}); diagnose one aircraft's records "
+                         f"against --model {aircraft} at a time")
 
 
 def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
@@ -223,11 +285,20 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     val = segments(list(validate), list(validate_names) if validate_names else
                    [f"validate {k + 1}" for k in range(len(validate))], inputs
                    ) if validate else None
+    evidence = "validation records" if val else "held-out maneuvers"
+    if not val and len(fit_windows) == 1 and len(halves := split(fit_windows[0])) == 2:
+        fit_windows, evidence = halves, "time split"
     folds = Folds.make(fit_windows, val)
     ranker = Ranker(lin, folds)
     where = gap_map(ranker.base | {k: v for k, v in ranker.base_held.items()
                                    if k not in ranker.base},
                     records={s.label: s.record for s in [*fit_windows, *(val or [])]})
+    windows = {"fit": [s.label for s in fit_windows],
+               "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
+    before = null_test(ranker.base, _by_label(fit_windows), inputs)
+    if not before.gap:  # at the null level: nothing to name
+        return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
+                         verdict="no_gap", null_before=before, evidence=evidence)
     ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
@@ -235,12 +306,26 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         named = [both[0]]
     elif ranked and ranked[0].confirmed:
         named = [ranked[0]]
+
+    def tested(current: Linearised) -> NullTest:
+        return null_test({s.label: fit(current.model, s.record) for s in fit_windows},
+                         _by_label(fit_windows), inputs)
+
+    after = None
     if named:
-        named += following(lin, folds, named[0], steps - 1)
-    windows = {"fit": [s.label for s in fit_windows],
-               "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
+        named += following(lin, folds, named[0], steps - 1,
+                           at_null=lambda current: not tested(current).gap)
+        corrected = lin
+        for effect in named:
+            corrected = fixed(corrected, effect)
+        after = tested(corrected)
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows,
-                     floor=ranker.floor)
+                     floor=ranker.floor, verdict=axis_verdict(before, bool(named), after),
+                     null_before=before, null_after=after, evidence=evidence)
+
+
+def _by_label(windows: list[Segment]) -> dict[str, FlightRecord]:
+    return {s.label: s.record for s in windows}
 
 
 def _merged(results: dict[str, GapResult]) -> GapResult:
@@ -256,4 +341,20 @@ def _merged(results: dict[str, GapResult]) -> GapResult:
     windows = {k: list(dict.fromkeys(w for g in results.values() for w in g.windows[k]))
                for k in ("fit", "held_out")}
     return GapResult(main.aircraft, main.linearised, where, effects, main.pairs, main.named,
-                     windows, dict(results), main.floor)
+                     windows, dict(results), main.floor,
+                     verdict=worst([g.verdict for g in results.values()]),
+                     null_before=main.null_before, null_after=main.null_after,
+                     evidence=main.evidence)
+
+
+def injected(records: Sequence[FlightRecord]) -> list[str]:
+    """The effects a simulated record's card injected (its metadata's ``[[effect]]`` and
+    sensor effects), as "name(options) parameters"; [] for a real record."""
+    out: list[str] = []
+    for r in records:
+        card = (r.meta.scenario or {}).get("card") or {}
+        for e in card.get("effect", []) or []:
+            e = dict(e)
+            name = e.pop("name", "?")
+            out.append(f"{name}(" + ", ".join(f"{k}={v}" for k, v in e.items()) + ")")
+    return list(dict.fromkeys(out))

@@ -65,3 +65,15 @@ def _halves(record: FlightRecord) -> list[tuple[float, float]]:
         return [(t0, t_end)]
     mid = 0.5 * (t0 + t_end)
     return [(t0, mid), (mid, t_end)]
+
+
+def split(segment: Segment) -> list[Segment]:
+    """One window cut in two halves in time (labelled "first half" and "second half"),
+    so that one can be held out of the other's fit when an axis flies a single maneuver;
+    the window itself when a half would be shorter than ``MIN_WINDOW_S``."""
+    mid = 0.5 * (segment.start + segment.end)
+    if mid - segment.start < MIN_WINDOW_S:
+        return [segment]
+    return [Segment(f"{segment.label} ({half} half)", segment.record.slice(a, b), a, b)
+            for half, (a, b) in (("first", (segment.start, mid)),
+                                 ("second", (mid, segment.end)))]

@@ -12,6 +12,7 @@ the earlier effects at their values fitted on all windows.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 from flightid.identification.gap.candidates import Candidate, catalogue_candidates
 from flightid.identification.gap.linearise import Linearised
@@ -47,13 +48,18 @@ def _open(c: Candidate, params: set[str], surfaces: set[str]) -> bool:
                 and c.options["derivative"].rpartition("_")[2] in surfaces)
 
 
-def following(lin: Linearised, folds: Folds, first: Ranked, steps: int) -> list[Ranked]:
+def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
+              at_null: Callable[[Linearised], bool] | None = None) -> list[Ranked]:
     """Up to ``steps`` more effects after ``first``, each confirmed with the ones before it
-    fixed in the model; stops at the first step that confirms nothing."""
+    fixed in the model; stops at the first step that confirms nothing, or as soon as the
+    model with the effects named so far passes ``at_null`` (its residual is at the null
+    level of noise and turbulence: ``verdict.null_test``)."""
     named = [first]
     current = fixed(lin, first)
     out: list[Ranked] = []
     for _ in range(max(steps, 0)):
+        if at_null is not None and at_null(current):
+            break
         params, surfaces = _taken(named)
         cands = [c for c in catalogue_candidates(current.model, current.axes)
                  if _open(c, params, surfaces)]
