@@ -348,13 +348,17 @@ def _merged(results: dict[str, GapResult]) -> GapResult:
 
 
 def injected(records: Sequence[FlightRecord]) -> list[str]:
-    """The effects a simulated record's card injected (its metadata's ``[[effect]]`` and
-    sensor effects), as "name(options) parameters"; [] for a real record."""
+    """The airframe and actuator effects a simulated record's card injected (its
+    metadata's ``[[effect]]``), as "name(option=value, ...)" with a derivative delta's
+    axes always said (the catalogue's default is stability axes; the lateral diagnosis
+    fits body axes); [] for a real record."""
     out: list[str] = []
     for r in records:
         card = (r.meta.scenario or {}).get("card") or {}
         for e in card.get("effect", []) or []:
             e = dict(e)
             name = e.pop("name", "?")
+            if name == "derivative_delta":  # the catalogue's default axes, said
+                e.setdefault("axes", "stability")
             out.append(f"{name}(" + ", ".join(f"{k}={v}" for k, v in e.items()) + ")")
     return list(dict.fromkeys(out))
