@@ -17,6 +17,7 @@ from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
 from flightid.identification.gap.diagnose import GapResult, injected
 from flightid.identification.gap.report import write_report
+from flightid.identification.gap.shrink import shrink_text
 from flightid.identification.gap.verdict import p_text
 from flightid.record import read
 
@@ -147,13 +148,6 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     if g.null_after is not None and g.null_after.gap:
         console.print("above the null level after the named effects: "
                       + ", ".join(g.null_after.gap_channels()))
-
-
-def shrink_text(x: float) -> str:
-    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown."""
-    if not math.isfinite(x):
-        return "-"
-    return "worse" if x < 0 else f"{x:.0%}"
 
 
 def _finite(x: object) -> object:

@@ -13,8 +13,8 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.cli.gap import shrink_text
 from flightid.identification.gap import diagnose
+from flightid.identification.gap.shrink import shrink_text
 from flightid.identification.gap.verdict import (
     ALPHA,
     MATERIAL,

@@ -20,6 +20,7 @@ from flightid.identification.gap.fit import held
 from flightid.identification.gap.linearise import AXIS_INPUTS
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed
+from flightid.identification.gap.shrink import shrink_text
 from flightid.record import FlightRecord, read
 
 MAX_WINDOWS = 3  # held-out windows drawn
@@ -98,20 +99,30 @@ def _f(x: float | None, fmt: str = ".4g") -> str:
     return "-" if x is None else format(x, fmt)
 
 
+
 def html_report(result: GapResult, records: Records | None = None,
                 validate: Records | None = None, refly: dict | None = None) -> str:
     """The report as one self-contained HTML page; with ``records`` (those diagnosed), the
     time histories of the held-out windows; with ``refly`` (``correct.refly``), the gap of
     the corrected aircraft flown again in JSBSim."""
     d = result.to_json()
+    named_labels = {r.candidate.label: k for k, r in enumerate(result.named_all(), start=1)}
     rows = []
     for i, e in enumerate(d["effects"] + d["pairs"]):
         params = "; ".join(f"{k} = {_f(v['value'])} &plusmn; {_f(v['std'])}"
                            for k, v in e["parameters"].items())
         ev = e["evidence"]
+        step = named_labels.get(e["label"])
         rows.append(f"<tr><td>{i + 1}</td><td>{html.escape(e['label'])}</td><td>{params}</td>"
-                    f"<td>{_f(ev['delta_bic'], '.1f')}</td><td>{_f(ev['heldout_shrink'], '.1%')}"
-                    f"</td><td>{'yes' if ev['confirmed'] else 'no'}</td></tr>")
+                    f"<td>{_f(ev['delta_bic'], '.1f')}</td><td>{shrink_text(ev['heldout_shrink'])}"
+                    f"</td><td>{step if step else 'no'}</td></tr>")
+    verdicts = "".join(
+        f"<tr><td>{a}</td><td><b>{html.escape(g.verdict)}</b></td><td>"
+        f"{html.escape(g.evidence)}</td><td>"
+        + html.escape(", ".join(r.candidate.label for r in g.named) or "-") + "</td></tr>"
+        for a, g in result.axes().items())
+    verdicts += "".join(f"<tr><td>{a}</td><td>not diagnosed</td><td colspan=2>"
+                        f"{html.escape(why)}</td></tr>" for a, why in result.undiagnosed.items())
     shrink = d["shrinkage"]
     srows = "".join(f"<tr><td>{c}</td><td>{_f(v['before'], '.3f')}</td><td>"
                     f"{_f(v['after'], '.3f')}</td><td>{_f(v['shrink'], '.1%')}</td></tr>"
@@ -142,12 +153,16 @@ def html_report(result: GapResult, records: Records | None = None,
 <style>body{{font-family:sans-serif;max-width:70em}}td,th{{padding:2px 8px;
 border-bottom:1px solid #ddd}}</style></head><body>
 <h1>Sim-to-real gap: {html.escape(result.aircraft)}</h1>
+<h2>Verdict</h2><table><tr><th>axis</th><th>verdict</th><th>evidence</th><th>named</th></tr>
+{verdicts}</table><p>no_gap: the model's residual is at the null level of noise and
+turbulence; explained: the named effects bring it there; partly_unexplained: they do not;
+unexplained: a gap no catalogue effect closes (docs/gap.md).</p>
 <p>Windows fitted: {html.escape(', '.join(d['windows']['fit']))}; held out:
 {html.escape(', '.join(d['windows']['held_out']) or 'none')}.</p>
 <h2>Where</h2><img src="data:image/png;base64,{_png(result.figure())}" alt="gap map">
 <h2>Which</h2><p>Named: <b>{named}</b></p>
 <table><tr><th>#</th><th>effect</th><th>parameters (catalogue units)</th><th>&Delta;BIC</th>
-<th>held-out shrink</th><th>confirmed</th></tr>{''.join(rows)}</table>{unexpl}
+<th>held-out shrink</th><th>named (step)</th></tr>{''.join(rows)}</table>{unexpl}
 <h2>How far</h2><p>Held-out gap (residual / measured energy) with
 {html.escape(shrink.get('effect', '-'))}:</p>
 <table><tr><th>channel</th><th>before</th><th>after</th><th>shrink</th></tr>{srows}</table>

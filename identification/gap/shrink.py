@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from flightid.identification.gap.rank import Ranked, overall
@@ -25,3 +26,10 @@ def shrinkage(sequence: Sequence[Ranked]) -> dict:
             "steps": [{"effect": r.candidate.label, "after": overall(r.heldout_after)}
                       for r in sequence],
             "overall": {"before": b, "after": a, "shrink": 1 - a / b if b > 0 else float("nan")}}
+
+
+def shrink_text(x: float | None) -> str:
+    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown."""
+    if x is None or not math.isfinite(x):
+        return "-"
+    return "worse" if x < 0 else f"{x:.0%}"
