@@ -3,9 +3,10 @@ ASCII export's 0.09999 and 0.10001 s at 10 Hz) is re-gridded onto its uniform gr
 gaps and reversals are left for the methods to refuse.
 
 Jitter is accepted when no step differs from the median step by more than
-``JITTER_LIMIT`` (1 %) of it: the new grid spans the same first and last time with the
-same number of samples, and every channel is interpolated linearly onto it, which moves
-a value by at most 1 % of one step's change. A larger difference is a gap or a changed
+``JITTER_LIMIT`` (1 %) of it: the new grid is the uniform one nearest the times (a
+least-squares line through sample index and time) with the same number of samples, and
+every channel is interpolated linearly onto it, which moves a value by about the jitter
+times one step's change. A larger difference is a gap or a changed
 rate, not jitter.
 """
 
@@ -46,13 +47,13 @@ def regrid_jitter(record: FlightRecord) -> FlightRecord:
     if spread <= UNIFORM_RTOL or spread > JITTER_LIMIT:
         return record
     n = len(record)
-    start, end = float(record.time[0]), float(record.time[-1])
-    grid = start + (end - start) * np.arange(n) / (n - 1)
+    index = np.arange(n)
+    step, start = np.polyfit(index, record.time, 1)  # the uniform grid nearest the times
+    grid = start + step * index
     channels = {k: np.interp(grid, record.time, v) for k, v in record.channels.items()}
-    step = (end - start) / (n - 1)
     warnings.warn(
-        f"time steps jitter by up to {100 * spread:.3g} % of the {step:.6g} s step: "
-        f"re-gridded to a uniform {step:.6g} s step ({n} samples, linear interpolation)",
+        f"time steps jitter by up to {100 * spread:.3g} % of the {step:.4g} s step: "
+        f"re-gridded to a uniform {step:.4g} s step ({n} samples, linear interpolation)",
         RegriddedWarning, stacklevel=2)
     extra = {**record.meta.extra, "regridded": {"max_jitter": spread, "step_s": step}}
     return FlightRecord(grid, channels, replace(record.meta, extra=extra))
