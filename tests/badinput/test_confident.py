@@ -293,7 +293,7 @@ def test_throttle_beyond_its_range_is_refused_or_warned(cli, tmp_path):
 def test_convert_rate_giving_too_few_samples(cli, flight, tmp_path):
     tlog = tmp_path / "short.tlog"
     record_bridged(flight.slice(0.0, 3.0), tlog, BridgeConfig(baud=115200))
-    cli(["bridge", "convert", tlog, "-o", tmp_path / "out.parquet", "--rate", "0.01"], 2,
+    cli(["convert", tlog, tmp_path / "out.parquet", "--rate", "0.01"], 2,
         "--rate", "0.01 Hz gives 1 sample(s)")
 
 
