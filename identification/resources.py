@@ -1,12 +1,12 @@
 """The resource guard: the memory a command will need, estimated from the record's sample
 count before the record is read, against the memory the system reports available.
 
-The cost per sample of each kind of work is the peak resident memory measured on a
-50,000-sample Navion record (docs/errors.md, "Resource guard"), rounded up, plus a
-fixed 400 MB for the interpreter, numpy, scipy and JSBSim. A command refuses when the
-estimate exceeds ``MARGIN`` of the available memory (Linux: ``MemAvailable`` of
-/proc/meminfo; elsewhere the physical pages os.sysconf reports), naming the sample count
-and the estimate; ``force`` overrides.
+The cost per sample of each kind of work is the peak resident memory measured on
+12,500- and 50,000-sample Navion records (``/usr/bin/time -f %M``; docs/errors.md,
+"Resource guard"), plus a fixed 300 MB for the interpreter, numpy, scipy and JSBSim.
+A command refuses when the estimate exceeds ``MARGIN`` of the available memory (Linux:
+``MemAvailable`` of /proc/meminfo; elsewhere the physical pages os.sysconf reports),
+naming the sample count and the estimate; ``force`` overrides.
 """
 
 from __future__ import annotations
@@ -16,14 +16,18 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 
-BASE_BYTES = 400e6
-# peak bytes per record sample (all channels), by method id or command
+BASE_BYTES = 300e6
+# peak bytes per record sample (a record of about 30 channels), by method id or command:
+# the slope of the peak resident memory between 12,500 and 50,000 samples (ee, oe, fr,
+# frequency-response) or the peak at 50,000 samples less the 260 MB of the interpreter
+# and libraries (the others); oe6dof and compatibility were stopped after 11 and 12
+# minutes at 1.8 GB and 2.7 GB, so theirs are lower bounds
 BYTES_PER_SAMPLE: dict[str, float] = {
-    "read": 600.0, "ee": 1400.0, "swr": 1400.0, "oe": 2500.0, "fdee": 1400.0,
-    "fdoe": 1400.0, "fr": 2500.0, "fem": 2500.0, "oe6dof": 2500.0,
-    "compatibility": 2500.0, "frequency-response": 2200.0, "gap": 2500.0,
+    "ee": 2300.0, "swr": 2800.0, "fdee": 2400.0, "fdoe": 2200.0, "fr": 2800.0,
+    "oe": 9900.0, "fem": 7700.0, "oe6dof": 31000.0, "compatibility": 50000.0,
+    "frequency-response": 3400.0, "gap": 9900.0,
 }
-DEFAULT_BYTES_PER_SAMPLE = 2500.0
+DEFAULT_BYTES_PER_SAMPLE = 9900.0  # a method not measured: as output error
 MARGIN = 0.8  # of the available memory
 _CSV_PROBE_BYTES = 1 << 16
 
