@@ -41,7 +41,7 @@ import numpy as np
 
 from flightid.atmosphere import isa_density
 from flightid.record import FlightRecord
-from flightid.units import DEG, FT, G0, KT, SLUG
+from flightid.units import DEG, FT, G0, KT, PSF, SLUG, SLUG_FT3
 
 ANGLE_LIMITS: dict[str, float] = {
     "alpha": math.pi / 2, "beta": math.pi / 2, "de": math.pi / 2, "da": math.pi / 2,
@@ -58,9 +58,9 @@ RATIO_BANDS: dict[str, tuple[float, float]] = {
 # ratio -> what it most likely means, per check
 _AIRSPEED_UNITS = {"V looks like knots": (1 / KT) ** 2, "V looks like ft/s": (1 / FT) ** 2,
                    "V looks like km/h": 3.6 ** 2, "V looks like mph": (3600 / 1609.344) ** 2,
-                   "qbar looks like lbf/ft^2 (psf)": 47.88,
+                   "qbar looks like lbf/ft^2 (psf)": PSF,
                    "qbar looks like kPa": 1000.0,
-                   "rho looks like slug/ft^3": 1 / 515.38}
+                   "rho looks like slug/ft^3": 1 / SLUG_FT3}
 _UVW_UNITS = {"V looks like knots": 1 / KT, "V looks like ft/s": 1 / FT,
               "V looks like km/h": 3.6, "u, v, w look like knots": KT, "u, v, w look like "
               "ft/s": FT}
