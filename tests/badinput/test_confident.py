@@ -106,6 +106,14 @@ def test_every_command_that_reads_a_record_checks_its_units(cli, knots_file, arg
         "V looks like knots", "0.5 rho V^2 / qbar (rho of the ISA at h) = 3.78")
 
 
+def test_gap_refuses_a_record_in_degrees(cli, sensed, tmp_path):
+    # the issue's gap run named effects with 100 % shrink on such a record
+    angles = ("alpha", "beta", "phi", "theta", "p", "q", "r", "de", "da", "dr")
+    path = _scaled(sensed, angles, 1 / DEG).write(tmp_path / "degrees.parquet")
+    cli(["gap", path, "--model", "navion"], 2, "units look wrong for gap",
+        "alpha looks like degrees")
+
+
 def test_library_flights_pass_the_unit_check():
     """One seed of every library card in light turbulence (the benchmark flies 3 seeds in
     calm air and turbulence, and the Twin Otter: 97 records, none flagged)."""
