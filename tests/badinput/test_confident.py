@@ -233,8 +233,9 @@ def test_memory_guard_refuses_before_reading(cli, tmp_path, args, work):
     need = resources.estimated_bytes(samples, work) / 1e9
     cli([str(path) if a == "{}" else a for a in args], 2, f"has {samples:,} samples",
         f"{work} would need about {need:.3g} GB", "--force")
-    # --force skips the guard: the reader then finds the file is not a record
-    cli([*[str(path) if a == "{}" else a for a in args], "--force"], 2, "huge.parquet")
+    if work == "compatibility":  # the smallest file: --force skips the guard, and the
+        # reader then finds that the file is not a record
+        cli([*[str(path) if a == "{}" else a for a in args], "--force"], 2, "huge.parquet")
 
 
 def test_memory_estimates_cover_the_issue_peaks():
