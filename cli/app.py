@@ -37,11 +37,13 @@ from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
 from flightid.cli.simulate import simulate_command
 from flightid.cli.trim_truth import trim_command, truth_command
+from flightid.identification.convergence import NotConvergedError
 from flightid.scenarios.cards import CardError
 from flightid.sim.flight import DepartureError
 from flightid.sim.trim import TrimError, TrimInputError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_PHYSICAL = 0, 1, 2, 3
+EXIT_NOT_CONVERGED = 4  # --strict and an iterative fit that did not converge
 DEBUG_ENV = "FLIGHTID_DEBUG"
 
 # OSErrors that are always about a path the user gave (other OSErrors count as bad input
@@ -60,6 +62,8 @@ def classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_BAD_INPUT, str(exc)
     if isinstance(exc, TrimError):
         return EXIT_PHYSICAL, str(exc)
+    if isinstance(exc, NotConvergedError):
+        return EXIT_NOT_CONVERGED, str(exc)
     if isinstance(exc, TimeoutError):  # a bridge link that never delivered
         return EXIT_PHYSICAL, str(exc)
     if isinstance(exc, np.linalg.LinAlgError):  # a ValueError, but a numerical failure

@@ -19,9 +19,9 @@ from typing import Annotated
 
 import typer
 
-from flightid.cli.checks import check_number, check_rate
+from flightid.cli.checks import check_number, check_rate, read_record
 from flightid.files import write_text
-from flightid.record import FlightRecord, read
+from flightid.record import FlightRecord
 from flightid.scenarios import cards
 from flightid.sim.bridge.air import (
     BridgeConfig,
@@ -124,7 +124,7 @@ def _load_source(path: str):
     if p.suffix.lower() in RECORD_SUFFIXES:
         if not p.exists():
             raise typer.BadParameter(f"{path}: no such file", param_hint="CARD_OR_RECORD")
-        return read(p)
+        return read_record(path, "bridge serve")  # resource guard, unit check, jitter
     try:
         card = cards.load_card(cards.find_card(path))
     except cards.CardError as exc:

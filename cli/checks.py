@@ -10,19 +10,27 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import typing
+import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from flightid import files
+from flightid.identification import resources, time_base
+from flightid.identification.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
+from flightid.identification.unit_sanity import check_units
+from flightid.record import FlightRecord, read
 
 # a command refuses to write more than this without --force (bytes)
 SIZE_LIMIT = 1_000_000_000
 BYTES_PER_VALUE = 8  # float64 samples
 MAX_RATE_HZ = 10_000.0  # above this no flight-test recorder or JSBSim run makes sense
 MIN_SAMPLES = 10  # an output rate must give at least this many samples
+SEED_MAX = 2**32 - 1  # numpy's seeds are 32-bit words
 BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
          921600, 1000000, 1500000, 2000000)
 _TRUE, _FALSE = ("true", "1", "yes", "on"), ("false", "0", "no", "off")
@@ -205,3 +213,38 @@ def check_aircraft_xml(aircraft: str) -> None:
     if aero is None or aero.find("axis") is None:
         raise ValueError(f"{path}: the aircraft has no <aerodynamics> section with an "
                          "<axis>: JSBSim cannot compute its forces; add the aerodynamics")
+
+
+# warnings of the data a command prints as "flightid <command>: warning: ..." lines
+DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning)
+
+
+@contextmanager
+def printed_warnings(command: str) -> Iterator[None]:
+    """Print the data warnings raised inside (``DATA_WARNINGS``) as one
+    ``flightid <command>: warning: <message>`` line each on stderr, after the work;
+    other warnings pass on."""
+    with warnings.catch_warnings(record=True) as caught:
+        for category in DATA_WARNINGS:
+            warnings.simplefilter("always", category)
+        yield
+    for w in caught:
+        if issubclass(w.category, DATA_WARNINGS):
+            print(f"flightid {command}: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def read_record(path: str, work: str, *, force: bool = False) -> FlightRecord:
+    """Read a record for ``work`` (a method id or a command) the way every command does:
+    the resource guard on its sample count before reading (``resources.check_memory``;
+    ``force`` overrides), then the reader's own checks, the unit check
+    (``unit_sanity.check_units``: "units look wrong: ...") and time jitter below 1 %
+    of the step re-gridded (``time_base``, with a warning)."""
+    samples = resources.samples_in_file(path)
+    if samples is not None:
+        resources.check_memory(samples, work, str(path), force)
+    record = read(path)
+    resources.check_memory(len(record), work, str(path), force)
+    check_units(record, None, f"{work} ({path})")
+    return time_base.regrid_jitter(record)

@@ -12,9 +12,15 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from flightid.cli.checks import check_choice, check_suffix, check_writable
+from flightid.cli.checks import (
+    check_choice,
+    check_suffix,
+    check_writable,
+    printed_warnings,
+    read_record,
+)
+from flightid.identification import convergence
 from flightid.identification.compatibility import PARAMETERS, reconstruct
-from flightid.record import read
 
 # display factors to deg, deg/s and g
 _DISPLAY = {"rad": 180 / math.pi, "rad/s": 180 / math.pi, "m/s^2": 1 / 9.80665}
@@ -25,14 +31,23 @@ def compatibility_command(
     output: Annotated[str | None, typer.Option("-o", "--output",
                                                help="write the corrected record here")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
+    strict: Annotated[bool, typer.Option(
+        "--strict", help="exit 4 when the reconstruction does not converge (default: a "
+                         "warning and 'not converged' in the verdict line, exit 0)")] = False,
+    force: Annotated[bool, typer.Option(
+        "--force", help="run even when the memory estimate exceeds what is available")
+    ] = False,
 ) -> None:
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""
     check_choice("--format", format, ("table", "json"))
     check_writable("--output", output)
     check_suffix("--output", output, (".parquet", ".csv"))
-    rec = read(record)
-    corrected, est = reconstruct(rec)
+    with printed_warnings("compatibility"):
+        rec = read_record(record, "compatibility", force=force)
+        corrected, est = reconstruct(rec)
+    if strict:
+        convergence.require(est, "compatibility")
     if output:
         corrected.write(output)
     if format == "json":
@@ -58,5 +73,7 @@ def compatibility_command(
     console.print(table)
     console.print(f"residual std: {noise}")
     console.print(f"{est.fit['notes'].get('gravity', '')}; {est.fit['reason']}")
+    if not convergence.converged(est):
+        console.print(convergence.verdict_line(est, "compatibility"), style="bold red")
     if output:
         console.print(f"corrected record written to {output}")

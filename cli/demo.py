@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import check_writable
+from flightid.cli.checks import SEED_MAX, check_count, check_writable, printed_warnings
 from flightid.cli.progress import flight_progress
 from flightid.cli.tables import estimate_table, print_score
 from flightid.scenarios import demo
@@ -20,8 +20,10 @@ def demo_command(
 ) -> None:
     """The main job: fly the built-in Navion card, identify by output error, score, report."""
     check_writable("--report", report)
+    if seed is not None:
+        check_count("--seed", seed, low=0, high=SEED_MAX)
     console = Console()
-    with flight_progress("flying the card", 1.0) as progress:
+    with printed_warnings("demo"), flight_progress("flying the card", 1.0) as progress:
         result = demo.run(card, seed, report, progress=progress)
     for est, scored in zip(result.estimates, result.scores, strict=True):
         console.print(estimate_table(est))

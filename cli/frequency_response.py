@@ -14,6 +14,8 @@ from flightid.cli.checks import (
     check_number,
     check_suffix,
     check_writable,
+    printed_warnings,
+    read_record,
 )
 from flightid.files import atomic_path
 from flightid.identification.frequency_response import (
@@ -21,7 +23,6 @@ from flightid.identification.frequency_response import (
     default_windows,
     frequency_response,
 )
-from flightid.record import read
 
 
 def frequency_response_command(
@@ -37,13 +38,17 @@ def frequency_response_command(
     f_min: Annotated[float | None, typer.Option(help="lowest frequency, Hz")] = None,
     f_max: Annotated[float | None, typer.Option(help="highest frequency, Hz")] = None,
     plot: Annotated[str | None, typer.Option(help="write a Bode/coherence PNG here")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="run even when the memory estimate exceeds what is available")
+    ] = False,
 ) -> None:
     """Frequency response output/input with coherence and random error (CIFER style)."""
     for w in window or ():
         check_number("--window", w, low=0.0, low_open=True, unit="s")
     check_writable("--plot", plot)
     check_suffix("--plot", plot, (".png", ".svg", ".pdf"))
-    rec = read(record)
+    with printed_warnings("frequency-response"):
+        rec = read_record(record, "frequency-response", force=force)
     check_frequency_band(f_min, f_max, rec.dt)
     span = float(rec.time[-1] - rec.time[0]) if len(rec) > 1 else 0.0
     for w in window or ():

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -13,13 +14,13 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import gap
+from flightid.cli.checks import read_record
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
 from flightid.identification.gap.diagnose import GapResult, injected
 from flightid.identification.gap.report import write_report
 from flightid.identification.gap.shrink import shrink_text
 from flightid.identification.gap.verdict import p_text
-from flightid.record import read
 
 
 def gap_command(
@@ -47,27 +48,31 @@ def gap_command(
         raise ValueError(f"--format must be table or json, got {format!r}")
     if axis not in ("both", "lateral", "longitudinal"):
         raise ValueError(f"--axis must be lateral, longitudinal or both, got {axis!r}")
-    result = gap(records, model, validate=validate or None, refine=refine, axis=axis)
+    # each record read once: resource guard, unit check, jitter re-gridded
+    recs = [read_record(path, "gap") for path in records]
+    vals = [read_record(path, "gap") for path in validate or []]
+    result = gap(recs, model, validate=vals or None, refine=refine, axis=axis,
+                 names=[Path(p).stem for p in records],
+                 validate_names=[f"validate {Path(p).stem}" for p in validate or []])
     written = write_aircraft(result, write) if write else None
     # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
-    again = refly(result, [read(r) for r in records], write, written) if written else None
+    again = refly(result, recs, write, written) if written else None
     if report:
         write_report(result, report, records, validate or None, again)
     if format == "json":
         d = result.to_json()
-        d["injected"] = injected([read(r) for r in records])
+        d["injected"] = injected(recs)
         if written:
             d["aircraft_written"] = str(written)
             d["refly"] = _finite(again)
         print(json.dumps(d, indent=2))
         return
     console = Console()
-    records_read = [read(r) for r in records]
     for axis, g in result.axes().items():
         _print_axis(console, axis, g)
     for axis, why in result.undiagnosed.items():
         console.print(f"{axis}: not diagnosed: {why}")
-    shown = injected(records_read)
+    shown = injected(recs)
     if shown:
         console.print("injected (the record's card says): " + "; ".join(shown))
         console.print("named: " + ("; ".join(r.candidate.label for r in result.named_all())

@@ -9,13 +9,19 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import check_choice, check_writable, read_options
+from flightid.cli.checks import (
+    check_choice,
+    check_writable,
+    printed_warnings,
+    read_options,
+    read_record,
+)
 from flightid.cli.tables import estimate_table, print_score
+from flightid.identification import convergence
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
 from flightid.identification.report import write_html
 from flightid.identification.scoring import load_truth, record_truth, score
-from flightid.record import read
 
 
 def parse_options(texts: list[str]) -> dict[str, str]:
@@ -70,27 +76,38 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
+    strict: Annotated[bool, typer.Option(
+        "--strict", help="exit 4 when the fit does not converge (default: a warning and "
+                         "'not converged' in the verdict line, exit 0)")] = False,
+    force: Annotated[bool, typer.Option(
+        "--force", help="run even when the memory estimate exceeds what is available")
+    ] = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
     check_writable("--report", report)
-    data = read(record)
-    if multistep_input and method == "oe":
-        options["multistep_inputs"] = list(multistep_input)
-    elif multistep_input:
-        data = denoise_channels(data, multistep_input)
-    if coefficient:
-        options["coefficients"] = list(coefficient)
-    est = identify(data, method, model, window=span, **options)
+    with printed_warnings("identify"):
+        data = read_record(record, method, force=force)
+        if multistep_input and method == "oe":
+            options["multistep_inputs"] = list(multistep_input)
+        elif multistep_input:
+            data = denoise_channels(data, multistep_input)
+        if coefficient:
+            options["coefficients"] = list(coefficient)
+        est = identify(data, method, model, window=span, strict=strict, **options)
+    not_converged = convergence.verdict_line(est, f"method {method}")
     truth_values = load_truth(truth) if truth else record_truth(data)
     scored = score(est, truth_values, scope="all" if all_rows else "estimated") \
         if truth_values else None
+    if scored is not None and not_converged:
+        scored.verdict = f"{convergence.NOT_CONVERGED}; {scored.verdict}"
     if report:
         write_html(report, f"flightid identify {record} --method {method} --model "
                            f"{est.fit.get('model', model)}",
-                   [est], truth_values or None, notes=[scored.verdict] if scored else [])
+                   [est], truth_values or None,
+                   notes=[n for n in (not_converged, scored.verdict if scored else "") if n])
     if format == "json":
         out = est.as_dict()
         out["fit"] = {k: v for k, v in out["fit"].items()

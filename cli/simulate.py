@@ -10,6 +10,7 @@ import typer
 
 from flightid.channels import CHANNELS
 from flightid.cli.checks import (
+    SEED_MAX,
     SIZE_LIMIT,
     check_count,
     check_rate,
@@ -50,7 +51,7 @@ def simulate_command(
         check_suffix(option, path, kinds)
         check_writable(option, path)
     if seed is not None:
-        check_count("--seed", seed, low=0, high=2**32 - 1)
+        check_count("--seed", seed, low=0, high=SEED_MAX)
     loaded = load_card(card)
     check_rate(f"card {loaded.name}: rate", loaded.rate, loaded.duration)
     samples = loaded.duration * loaded.rate + 1

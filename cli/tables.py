@@ -5,6 +5,7 @@ from __future__ import annotations
 from rich.console import Console
 from rich.table import Table
 
+from flightid.identification import convergence
 from flightid.identification.estimate import Estimate
 from flightid.identification.scoring import STATUS_ESTIMATED, Score
 
@@ -15,7 +16,8 @@ def estimate_table(est: Estimate) -> Table:
     window = est.fit.get("window")
     span = f"  window {window[0]:g}-{window[1]:g} s" if window else ""
     table = Table(title=f"{est.method} {est.fit.get('model', '')}{span}  "
-                        f"std: {est.std_kind.value}")
+                        f"std: {est.std_kind.value}",
+                  caption=convergence.verdict_line(est) or None, caption_style="bold red")
     for col in ("parameter", "value", "std", "|value|/std"):
         table.add_column(col, justify="left" if col == "parameter" else "right")
     for name, value, std in zip(est.names, est.values, est.std, strict=True):

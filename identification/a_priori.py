@@ -11,6 +11,7 @@ come from the truth being scored.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -41,6 +42,12 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
     its ``derivatives`` (default: the preset's) plus every a priori parameter the preset
     has, held at its value. ``a_priori`` None takes the record's table."""
     held_all = from_record(record) if a_priori is None else dict(a_priori)
+    for name, value in held_all.items():
+        if isinstance(value, bool) or not isinstance(value, int | float) \
+                or not math.isfinite(value):
+            where = "the record's a priori table" if a_priori is None else "option a_priori"
+            raise ValueError(f"{where}: {name} = {value!r} is not a finite number; give "
+                             "the value it is held at")
     full = _preset_derivatives(preset)
     held = {n: float(v) for n, v in held_all.items() if n in full}
     base = lm.preset_for_record(preset, record, derivatives, method)

@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.channels import CHANNELS
+from flightid.identification import convergence
 from flightid.identification import identifiability as ident
 from flightid.identification.engine.bounds import colored_residual_covariance
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
@@ -645,7 +646,10 @@ def reconstruct(
     (see ``problem_from_record``). uncertainty: how the standard errors are formed (see
     ``UNCERTAINTY``). Returns the record with the estimates applied (``correct``) and the
     Estimate (values in SI units; ``PARAMETERS[name].unit``).
+    A reconstruction that does not converge warns (``convergence.NotConvergedWarning``);
+    ``max_iterations`` below 1 is refused.
     """
+    convergence.check_limit("compatibility", "max_iterations", max_iterations)
     if uncertainty not in UNCERTAINTY:
         raise ValueError(f"uncertainty must be one of {', '.join(UNCERTAINTY)}, "
                          f"got {uncertainty!r}")
@@ -685,6 +689,7 @@ def reconstruct(
                        notes, fixed)
     applied = {**start, **fit.values}
     corrected = correct(record, applied, reconstruction=(problem, estimate))
+    convergence.warn(estimate, "compatibility")
     return corrected, estimate
 
 

@@ -263,6 +263,8 @@ def output_error(
 
     s_mat = noise_density(theta)
     history = []
+    converged, reason = False, f"noise density still changing after {max_relaxations} " \
+                               "relaxations"
     for _ in range(max_relaxations):
         chol_inv = np.linalg.inv(np.linalg.cholesky(s_mat))
         sol = least_squares(whitened, theta, args=(chol_inv,), method="lm", xtol=1e-10,
@@ -273,6 +275,9 @@ def output_error(
         s_mat = new
         history.append(float(2 * sol.cost))
         if change < 1e-3:
+            converged = bool(sol.success)
+            reason = ("noise density change below 1e-3" if converged
+                      else f"least squares stopped: {sol.message}")
             break
     chol_inv = np.linalg.inv(np.linalg.cholesky(s_mat))
     jac = central_jacobian(lambda th: whitened(th, chol_inv), theta)
@@ -291,6 +296,8 @@ def output_error(
                               for i, o in enumerate(model.outputs)},
         "std_kind": "cramer-rao",
         "relaxations": len(history),
+        "converged": converged,
+        "reason": reason,
         "model": model.name,
         "fixed": {p: float(values[p]) for p in model.parameters if p not in names},
     }
@@ -403,6 +410,8 @@ def fit_state_space(
              "cr_percent": 100 * std / np.maximum(np.abs(theta), 1e-300),
              "insensitivity_percent": 100 * insens / np.maximum(np.abs(theta), 1e-300),
              "std_kind": "cramer-rao",
+             "converged": bool(sol.success),
+             "reason": str(sol.message),
              "model": model.name},
         outputs=outputs,
     )

@@ -37,6 +37,8 @@ from matplotlib.figure import Figure
 from scipy.signal import czt
 from scipy.signal.windows import tukey
 
+from flightid.identification import identifiability as ident
+
 TAPERS = ("hann", "hamming", "rectangular")
 
 
@@ -569,13 +571,18 @@ def frequency_response(
     """Frequency response output/input of a FlightRecord (SI units per SI unit, Hz).
 
     ``other_inputs`` are inputs to condition on (their correlated contribution is
-    removed, partial coherence reported). Composite over ``windows`` (s).
+    removed, partial coherence reported). Composite over ``windows`` (s). An input that
+    is constant or noise only (``identifiability.input_excitation``) is refused.
     """
     dt = record.dt
     if len(record) > 2 and not np.allclose(np.diff(record.time), dt, rtol=1e-3):
         raise ValueError("record is not uniformly sampled; resample it first")
     names = [input, *[n for n in other_inputs if n != input]]
     inputs = {n: record[n] for n in names}
+    quiet = ident.input_excitation(record, [input])
+    if quiet:
+        raise ValueError(f"input {input} is not excited: {quiet[input]}; a frequency "
+                         "response needs a maneuver on it (a sweep or a multistep)")
     res = frequency_response_arrays(inputs, record[output], dt, output_name=output,
                                     windows=windows, frequencies=frequencies,
                                     overlap=overlap, taper=taper)

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from flightid.identification import convergence, model_structure, time_base, windows
 from flightid.identification import identifiability as ident
-from flightid.identification import model_structure, windows
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import registry
 from flightid.identification.unit_sanity import check_units
@@ -68,7 +68,8 @@ def excited_model(record: FlightRecord, method: str = "oe") -> str:
 
 
 def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto", *,
-             window: str | Sequence[float] = "auto", **options: Any) -> Estimate:
+             window: str | Sequence[float] = "auto", strict: bool = False,
+             **options: Any) -> Estimate:
     """Estimate ``model``'s derivatives from ``record`` by ``method`` (an id of
     ``flightid methods``); ``options`` are the method's (see its Options dataclass).
 
@@ -77,11 +78,18 @@ def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto
     (``fit['model']`` says which).
     window: 'auto' (default) fits a record that lists its maneuvers on the window of the
     maneuvers on the model's inputs; 'none' uses the whole record; (start, end) in s.
+    strict: an iterative fit that does not converge raises
+    ``convergence.NotConvergedError`` instead of warning (``NotConvergedWarning``).
+
+    Every method sees a uniformly sampled record: time jitter below 1 % of the step is
+    re-gridded (``time_base``, with a ``RegriddedWarning``), gaps are refused.
     """
     spec = registry.get(method)
     model = (excited_model(record, method) if model in (None, "auto")
              else model_structure.canonical(model))
     opts = spec.make_options(options)
+    record = time_base.regrid_jitter(record)
+    record.uniform_step(f"method {spec.id}", min_samples=10)
     record, span = _windowed(record, model, window)
     missing = [c for c in spec.channels(model) if c not in record]
     if missing:
@@ -98,6 +106,7 @@ def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto
             f"the record cannot determine model {model}: no input is excited{where} "
             f"({'; '.join(quiet.values())}); fly a maneuver on {', '.join(inputs)}")
     estimate = spec.run(record, model, opts)
+    (convergence.require if strict else convergence.warn)(estimate, f"method {spec.id}")
     estimate.fit.setdefault("model", model)
     if span is not None:
         estimate.fit["window"] = [float(span[0]), float(span[1])]

@@ -511,6 +511,8 @@ def fly_card(card: Card, seed: int | None = None,
     TrimError or DepartureError (with ``.record``) from the flight core.
     """
     seed = card.seed if seed is None else int(seed)
+    if not 0 <= seed <= 2**32 - 1:
+        raise ValueError(f"seed must be 0..{2**32 - 1} (a 32-bit random seed), got {seed}")
     c = card.condition
     model = load(augmented(card) if card.augmentation else card.aircraft)
     trimmed = trim(model, c)

@@ -202,6 +202,11 @@ def design_from_dict(cls: type, d: dict[str, Any], context: str = "") -> Any:
         kwargs[fields[name].name] = _convert(fields[name], value, pre + key, scale)
         if scale != 1.0 and name == "amplitude" and d.get("surface") == "throttle":
             raise ValueError(f"field {pre + key!r}: throttle is a fraction 0..1, give 'amplitude'")
+        if name == "amplitude" and d.get("surface") == "throttle" \
+                and abs(kwargs["amplitude"]) > 1:
+            raise ValueError(f"field {pre + key!r}: a throttle increment of "
+                             f"{kwargs['amplitude']:g} cannot be flown: the throttle is a "
+                             "fraction 0..1, so an increment lies within -1..1")
     try:
         return cls(**kwargs)
     except TypeError as exc:  # missing required field

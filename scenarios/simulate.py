@@ -122,7 +122,7 @@ def clipped_inputs(card: Card, truth: FlightRecord) -> dict[str, dict[str, float
     planned = total_signals(list(card.maneuvers), truth.time)
     out: dict[str, dict[str, float]] = {}
     for surface, u in planned.items():
-        if surface not in ("de", "da", "dr") or surface not in truth:
+        if surface not in ("de", "da", "dr", "throttle") or surface not in truth:
             continue
         flown = truth[surface] - truth[surface][0]
         for sign in (1.0, -1.0):
@@ -145,12 +145,13 @@ def _mark_clipped(card: Card, measured: FlightRecord, truth: FlightRecord) -> No
     for rec in {id(measured): measured, id(truth): truth}.values():
         rec.meta.extra["clipped"] = clipped
     for surface, c in clipped.items():
+        want, got = c["commanded_rad"], c["flown_rad"]
+        amounts = (f"{want:.3g} (fraction)", f"{got:.3g}") if surface == "throttle" else (
+            f"{want:.3g} rad ({want / DEG:.1f} deg)", f"{got:.3g} rad ({got / DEG:.1f} deg)")
         warnings.warn(
-            f"card {card.name}: {surface} was commanded {c['commanded_rad']:.3g} rad "
-            f"({c['commanded_rad'] / DEG:.1f} deg) from trim but reached only "
-            f"{c['flown_rad']:.3g} rad ({c['flown_rad'] / DEG:.1f} deg): clipped at its "
-            f"travel limit in {int(c['samples'])} samples (recorded in meta.extra['clipped'])",
-            ClippedInputWarning, stacklevel=3)
+            f"card {card.name}: {surface} was commanded {amounts[0]} from trim but reached "
+            f"only {amounts[1]}: clipped at its travel limit in {int(c['samples'])} samples "
+            "(recorded in meta.extra['clipped'])", ClippedInputWarning, stacklevel=3)
 
 
 def simulate(card: str | Card, output: str | Path, truth_path: str | Path | None = None,

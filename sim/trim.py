@@ -312,8 +312,8 @@ def trim(model: Model | str, altitude_m: float | FlightCondition,
     _set_condition(model, altitude_m, speed_m_s, gamma_rad, bank_rad, terrain_m)
     fdm.run_ic()
     mach = fdm["velocities/mach"]
-    if model.propeller and mach > MAX_MACH_PROPELLER:
-        raise TrimError(
+    if model.propeller and mach > MAX_MACH_PROPELLER:  # an absurd condition: bad input
+        raise TrimInputError(
             f"{model.name} cannot trim at {speed_m_s:g} m/s, {altitude_m:g} m: Mach {mach:.2f} "
             f"is absurd for a propeller aircraft (limit {MAX_MACH_PROPELLER})"
         )

@@ -352,7 +352,7 @@ def _gauss_newton(prob: _Problem, theta: np.ndarray, R: np.ndarray, x0: np.ndarr
             why = (f"parameter change below {step_tol:g} standard errors" if change < step_tol
                    else f"cost change below {cost_tol:g}")
             return _Pass(theta, final, True, why, iteration + 1, history)
-    raise AssertionError("unreachable")
+    raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
 
 
 def _measurement_noise(ev: _Evaluation, lower: np.ndarray) -> np.ndarray:

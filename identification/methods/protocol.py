@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from flightid.identification import convergence
 from flightid.identification import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
@@ -66,6 +67,9 @@ class Method:
                 f"{', '.join(known) or 'none'}")
         hints = typing.get_type_hints(self.options)
         converted = {k: convert_option(self.id, k, v, hints[k]) for k, v in values.items()}
+        for key, value in converted.items():
+            if key.startswith("max_"):  # iteration and relaxation limits
+                convergence.check_limit(self.id, key, value)
         return self.options(**converted)
 
     def describe(self) -> list[dict[str, str]]:

@@ -185,6 +185,7 @@ def estimate(
     searched. Candidates the data cannot determine (constant or collinear) are left
     out before the search and reported in ``unidentifiable``.
     """
+    check_thresholds(f_in, f_out)
     terms = [ee.parse_term(t) for t in candidates]
     y = ee.channel_values(record, coefficient)
     refs = ee.reference_values(record, terms, reference)
@@ -219,6 +220,21 @@ class Options(RegressionOptions):
     reference: str = option("mean", "regressors as perturbations from the record's 'mean', "
                                     "its 'initial' value, or 'none'")
     colored: bool = option(True, "standard errors corrected for colored residuals")
+
+    def __post_init__(self) -> None:
+        check_thresholds(self.f_in, self.f_out, "option {} of method swr")
+
+
+def check_thresholds(f_in: float, f_out: float, name: str = "{}") -> None:
+    """F_in and F_out positive with F_out <= F_in (else a regressor can enter and leave
+    in turn; Klein, Batterson & Murphy 1981): ValueError naming the one that is not
+    (``name`` formats the option's name)."""
+    for key, value in (("f_in", f_in), ("f_out", f_out)):
+        if not value > 0:
+            raise ValueError(f"{name.format(key)} must be > 0 (a partial F), got {value:g}")
+    if f_out > f_in:
+        raise ValueError(f"{name.format('f_out')} {f_out:g} must not exceed f_in {f_in:g}: a "
+                         "regressor could then enter and leave in turn")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None

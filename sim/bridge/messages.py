@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from flightid.atmosphere import RHO0, isa
 from flightid.units import DEG, G0
 
 NAN = float("nan")
@@ -54,18 +55,8 @@ _IMU_BITS = {
     "p_static": 9, "qbar": 10, "h": 11, "temperature": 12,
 }
 
-# ISA sea-level constants (ICAO Doc 7488 / ISO 2533), troposphere
-_P0, _T0, _RHO0, _LAPSE, _R_AIR = 101325.0, 288.15, 1.225, 0.0065, 287.05287
-_EXP = G0 / (_LAPSE * _R_AIR)  # 5.2559
 # WGS-84 radii for the flat-earth north/east -> latitude/longitude step
 _WGS_A, _WGS_E2 = 6378137.0, 6.69437999014e-3
-
-
-def isa(h: float) -> tuple[float, float, float]:
-    """ISA troposphere at altitude h (m): static pressure (Pa), temperature (K), density."""
-    temp = _T0 - _LAPSE * h
-    p = _P0 * (temp / _T0) ** _EXP
-    return p, temp, p / (_R_AIR * temp)
 
 
 def frame_size(name: str) -> int:
@@ -199,7 +190,7 @@ class TelemetryState:
         rho = g("rho", rho_isa)
         V = g("V", NAN)
         s.setdefault("qbar", 0.5 * rho * V * V)
-        s["ias"] = V * math.sqrt(rho / _RHO0)  # equivalent airspeed as the IAS
+        s["ias"] = V * math.sqrt(rho / RHO0)  # equivalent airspeed as the IAS
         north, east = g("north", NAN), g("east", NAN)
         if "latitude" not in s and math.isfinite(north) and math.isfinite(east):
             lat0 = self.origin.latitude

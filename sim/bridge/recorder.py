@@ -525,6 +525,7 @@ class Gap:
 
 #: default longest run of missing samples of a channel interpolated over (its own samples)
 MAX_GAP_SAMPLES = 5
+MIN_RECORD_SAMPLES = 10  # an output rate must give a record at least this long (samples)
 
 
 def long_gaps(chosen: dict[str, np.ndarray], intervals: dict[str, float], start: float,
@@ -625,6 +626,10 @@ def convert_tlog(
             "stretch without them (--segment longest)")
     lo, hi = longest_stretch(*span, gaps_found) if gaps_found else span
     n = int(np.floor((hi - lo) * fs + 1e-6)) + 1
+    if rate is not None and n < MIN_RECORD_SAMPLES:
+        raise ValueError(
+            f"{path}: output rate (--rate) {fs:g} Hz gives {n} sample(s) over the "
+            f"{hi - lo:.3g} s of the log; use at least {MIN_RECORD_SAMPLES / (hi - lo):.3g} Hz")
     if n < 2:
         raise ValueError(
             f"{path}: no stretch of two samples at {fs:g} Hz without a gap of more than "

@@ -1,0 +1,26 @@
+"""The ISA standard atmosphere (ICAO Doc 7488 / ISO 2533), troposphere: what a record
+without a density channel is assumed to have flown in."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flightid.units import G0
+
+# sea-level constants and the troposphere's temperature lapse
+P0, T0, RHO0, LAPSE, R_AIR = 101325.0, 288.15, 1.225, 0.0065, 287.05287
+_EXP = G0 / (LAPSE * R_AIR)  # 5.2559
+
+
+def isa(h: float) -> tuple[float, float, float]:
+    """ISA troposphere at altitude h (m): static pressure (Pa), temperature (K), density
+    (kg/m^3)."""
+    temp = T0 - LAPSE * h
+    p = P0 * (temp / T0) ** _EXP
+    return p, temp, p / (R_AIR * temp)
+
+
+def isa_density(h: np.ndarray | float) -> np.ndarray:
+    """ISA density (kg/m^3) at altitudes h (m), troposphere (0-11 km; clipped to it)."""
+    temp = T0 - LAPSE * np.clip(np.asarray(h, dtype=float), -1000.0, 11000.0)
+    return P0 * (temp / T0) ** _EXP / (R_AIR * temp)
