@@ -175,7 +175,8 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
-             steps: int = STEPS, axis: str = "auto", refine: bool = False) -> GapResult:
+             steps: int = STEPS, axis: str = "auto", refine: bool = False,
+             surfaces: str | None = None) -> GapResult:
     """Diagnose ``records`` against the JSBSim ``aircraft``.
 
     ``axis``: "lateral", "longitudinal", or "auto" (the axes the records excite, each
@@ -184,7 +185,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     ``validate`` records when given. Up to ``steps`` effects are named in sequence
     (``sequence.following``). ``refine``: refit the top named airframe effect with the
     JSBSim aircraft flown from the longest record (``gap.refine``; 5-20 s more): its values
-    are then the ones ``write_aircraft`` writes.
+    are then the ones ``write_aircraft`` writes. ``surfaces``: what the records' surface
+    channels hold, "position" or "command" (None: their ``meta.extra["surfaces"]``,
+    default "position"); on commands the actuator lags are candidates too.
     """
     records, found = _records(records)
     names = names or found
@@ -200,7 +203,7 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     else:
         raise ValueError(f"gap: axis must be auto, {', '.join(AXIS_NAMES)}; got {axis!r}")
     results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
-                                 try_pairs, steps) for a in axes}
+                                 try_pairs, steps, surfaces) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     if refine:
         try:
@@ -213,9 +216,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
 def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                    validate: list[FlightRecord] | None, names: Sequence[str] | None,
                    validate_names: Sequence[str] | None, try_pairs: bool,
-                   steps: int) -> GapResult:
+                   steps: int, surfaces: str | None = None) -> GapResult:
     inputs = AXIS_INPUTS[axis]
-    lin = linearise(aircraft, records, axis)
+    lin = linearise(aircraft, records, axis, surfaces)
     fit_windows = segments(records, list(names) if names else None, inputs)
     if not fit_windows:
         raise ValueError(f"gap: the records have no {axis} maneuver window "
@@ -228,7 +231,7 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     where = gap_map(ranker.base | {k: v for k, v in ranker.base_held.items()
                                    if k not in ranker.base},
                     records={s.label: s.record for s in [*fit_windows, *(val or [])]})
-    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes))
+    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
     if both and both[0].confirmed:
