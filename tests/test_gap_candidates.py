@@ -128,6 +128,14 @@ def test_every_catalogue_entry_is_a_candidate_or_not_identifiable(hobby, axis, s
     assert "command" in listed.get("actuator_lag", "command")
     assert "bias" in listed and "CL_0" in listed["bias"]
     assert ("tail_ice" in named) == (axis == "longitudinal")
+    # derivative deltas and control effectiveness on both axes
+    labels = {c.label for c in cands}
+    if axis == "longitudinal":
+        assert {"derivative_delta(Cm_alpha,stability)", "derivative_delta(CL_alpha,stability)",
+                "derivative_delta(CD_alpha,stability)", "control_effectiveness(de)"} <= labels
+    else:
+        assert {"derivative_delta(Cn_beta,body)", "control_effectiveness(da)",
+                "control_effectiveness(dr)", "misalignment(y)"} <= labels
 
 
 # -- physical ranges ------------------------------------------------------------------------
@@ -272,17 +280,38 @@ def test_actuator_lag_named_on_commands_only():
     assert "actuator_lag" not in {c.entry for c in catalogue_candidates(lin.model)}
 
 
+def test_cg_offset_named_in_its_class():
+    """A CG 0.1 m forward on the Navion's elevator card. A CG shift and a Cm_alpha delta
+    are one class (``gap.classes``): Cm_alpha moves by -CL_alpha x/cbar, the other Cm
+    terms by under 1 %. The delta is named unless the CG shift is better on held-out data
+    by the 10 % margin; here it is (it leaves 2.1 % of the held-out gap, the delta 2.7 %):
+    measured x 0.1036 m, the delta -0.249 second. Either member counts, its magnitude as
+    the shift it means. 15 % of the shift: the linearised model leaves changes 7-10 %
+    short (docs/gap.md)."""
+    result = _diagnosed(_elevator([{"name": "cg_offset", "x": 0.1}]), axis="longitudinal")
+    top = result.named[0]
+    labels = [r.candidate.label for r in result.effects[:3]]
+    assert top.candidate.entry == "cg_offset" or top.candidate.options.get(
+        "derivative") == "Cm_alpha", labels
+    lin = result.linearised
+    by = {r.candidate.entry: r for r in result.effects}
+    delta = next(r for r in result.effects
+                 if r.candidate.options.get("derivative") == "Cm_alpha")
+    x_of_delta = -delta.parameters["delta"]["value"] * lin.model.condition.chord / \
+        lin.derivatives["CL_alpha"]
+    for x in (by["cg_offset"].parameters["x"]["value"], x_of_delta):
+        assert abs(x - 0.1) < 0.15 * 0.1
+
+
 @pytest.mark.parametrize(("entry", "values", "parameter", "injected"), [
-    ("cg_offset", {"x": 0.1}, "x", 0.1),
     ("mass_scale", {"factor": 1.2}, "factor", 1.2),
     ("inertia_scale", {"ixx": 1.0, "iyy": 1.2, "izz": 1.0}, "iyy", 1.2),
 ])
 def test_mass_properties_named(entry, values, parameter, injected):
-    """On the Navion's elevator card. Measured: cg x 0.1036 m (a Cm_alpha delta of -0.249,
-    its equivalent, second), mass factor 1.189, iyy 1.180 (tail ice with all three factors
-    near 1/1.2, its equivalent, not confirmed by the nested rule). 15 % of the change:
-    the linearised model leaves changes 7-10 % short (docs/gap.md)."""
+    """On the Navion's elevator card. Measured: mass factor 1.189 (a CL_alpha delta
+    second), iyy 1.180 (tail ice with all three factors near 1/1.2, its equivalent, not
+    confirmed by the nested rule). 15 % of the change: the linearised model leaves
+    changes 7-10 % short (docs/gap.md)."""
     result = _diagnosed(_elevator([{"name": entry, **values}]), axis="longitudinal")
     top = _first(result, entry)
-    change = injected - (0.0 if entry == "cg_offset" else 1.0)
-    assert abs(top.parameters[parameter]["value"] - injected) < 0.15 * abs(change)
+    assert abs(top.parameters[parameter]["value"] - injected) < 0.15 * abs(injected - 1.0)

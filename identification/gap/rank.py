@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.gap.candidates import Candidate, pair
+from flightid.identification.gap.classes import prefer_model_terms
 from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
 from flightid.identification.gap.linearise import Linearised
 from flightid.identification.gap.ranges import out_of_range
@@ -206,6 +207,7 @@ def rank(ranker: Ranker, candidates: list[Candidate]) -> list[Ranked]:
     held-out Occam rule of ``nested``."""
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
     nested(out)
+    prefer_model_terms(out, MIN_SHRINK)
     return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))
 
 
