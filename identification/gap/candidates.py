@@ -1,14 +1,15 @@
 """Candidate effects: entries of the effect catalogue, expressed in the linearised model.
 
-Each candidate names its catalogue entry (``flightid.sim.effects.catalogue``) and options,
-and says how it changes the linear model (a wrapped ``LinearModel`` with the effect's
-parameter) and which parameters a fit frees:
+Each candidate (``effect_model.Candidate``) names its catalogue entry
+(``flightid.sim.effects.catalogue``) and options, says how it changes the linear model (a
+wrapped ``LinearModel`` with the effect's parameters) and which parameters a fit frees;
+``Candidate.parameters`` gives them in the catalogue's units. The airframe families here:
 
 - ``derivative_delta`` (airframe): one derivative of the model freed; the delta is the
-  fitted value minus the model's (body axes, per rad or per unit nondimensional rate);
+  fitted value minus the model's (the axis's axes: body lateral, stability longitudinal;
+  per rad or per unit nondimensional rate), on both axes;
 - ``control_effectiveness`` (airframe): every derivative of one surface scaled by
-  ``factor`` (1: the model);
-- ``scale`` (sensor): one measured output scaled by ``factor`` (1: none);
+  ``factor`` (1: the model), on both axes (da, dr lateral; de longitudinal);
 - ``tail_ice`` (airframe, longitudinal): ice on the horizontal tail. The tail's lift slope
   and its elevator effectiveness fall together, so the tail's share of every
   pitching-moment derivative falls with them (Etkin & Reid 1996 ch. 2:
@@ -18,78 +19,37 @@ parameter) and which parameters a fit frees:
   entry's three factors: ``elevator`` scales Cm_de, ``stability`` Cm_alpha, ``damping``
   Cm_q (and Cm_alphadot); lift and drag are left as they are.
 
-Sensor biases are not candidates: the model's output and state biases (nuisance
-parameters fitted on every window) absorb them.
+The other families have their own modules: ``sensor_candidates`` (scale, delay, lag,
+misalignment, lever arm, vanes), ``actuator_candidates`` (actuator lag, on records of
+commands) and ``mass_candidates`` (cg offset, mass, inertia, thrust moment). Entries that
+are not candidates for a record are listed with the reason by
+``identifiable.not_identifiable``; parameters outside the catalogue's physical range are
+named by ``ranges.out_of_range``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
 
-import numpy as np
-
+from flightid.identification.gap.actuator_candidates import actuator_candidates, surfaces_of
+from flightid.identification.gap.effect_model import Candidate, extended, identity
 from flightid.identification.gap.linearise import AXIS_DERIVATIVES, TRIM_TERMS
+from flightid.identification.gap.mass_candidates import mass_candidates
+from flightid.identification.gap.sensor_candidates import sensor_candidates
 from flightid.identification.linear_models import LinearModel
+from flightid.record import FlightRecord
 
 SURFACES = ("da", "dr", "de")
 OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the lateral model's
 LONGITUDINAL_OUTPUTS = ("V", "alpha", "q", "theta", "az")
 
 
-@dataclass(frozen=True)
-class Candidate:
-    """One catalogue effect as the gap fits it."""
-
-    entry: str  # catalogue name ("pair": a group of ``parts``)
-    options: dict[str, str]
-    free: tuple[str, ...]  # linear-model parameters the fit frees
-    wrap: Callable[[LinearModel], LinearModel] = field(compare=False, repr=False)
-    parts: tuple[Candidate, ...] = ()  # the single effects of a pair
-
-    @property
-    def label(self) -> str:
-        if self.parts:
-            inner = " + ".join(p.label for p in self.parts)
-            return inner if self.entry == "pair" else f"{self.entry}[{inner}]"
-        opts = ",".join(f"{v}" for v in self.options.values())
-        return f"{self.entry}({opts})"
-
-    def parameters(self, values: Mapping[str, float], std: Mapping[str, float],
-                   base: LinearModel) -> dict[str, dict[str, float]]:
-        """The effect's parameters in catalogue units: {name: {"value", "std"}}."""
-        if self.parts:
-            out: dict[str, dict[str, float]] = {}
-            for p in self.parts:
-                for k, v in p.parameters(values, std, base).items():
-                    out[f"{p.label}.{k}"] = v
-            return out
-        if self.entry == "tail_ice":
-            return {k: {"value": float(values[f"tail_{k}"]), "std": float(std[f"tail_{k}"])}
-                    for k in TAIL_ICE}
-        (name,) = self.free
-        value, s = float(values[name]), float(std[name])
-        if self.entry == "derivative_delta":
-            return {"delta": {"value": value - base.start[name], "std": s}}
-        return {"factor": {"value": value, "std": s}}
-
-
-def _identity(model: LinearModel) -> LinearModel:
-    return model
-
-
-def _extended(model: LinearModel, name: str, start: float,
-              build: Callable[[Mapping[str, complex]], tuple]) -> LinearModel:
-    return LinearModel(model.name, model.states, model.inputs, model.outputs,
-                       (*model.parameters, name), {**model.start, name: start}, build,
-                       model.condition, model.description, dict(model.state_channels))
-
-
 def _effectiveness(surface: str) -> Callable[[LinearModel], LinearModel]:
     name = f"factor_{surface}"
 
     def wrap(model: LinearModel) -> LinearModel:
-        scaled = [d for d in model.parameters if d.endswith(f"_{surface}")]
+        scaled = [d for d in model.parameters
+                  if d.startswith("C") and d.endswith(f"_{surface}")]
 
         def build(v: Mapping[str, complex]) -> tuple:
             w = dict(v)
@@ -97,34 +57,14 @@ def _effectiveness(surface: str) -> Callable[[LinearModel], LinearModel]:
                 w[d] = v[d] * v[name]
             return model.build(w)
 
-        return _extended(model, name, 1.0, build)
-
-    return wrap
-
-
-def _output_scale(channel: str) -> Callable[[LinearModel], LinearModel]:
-    name = f"scale_{channel}"
-
-    def wrap(model: LinearModel) -> LinearModel:
-        row = model.outputs.index(channel)
-
-        def build(v: Mapping[str, complex]) -> tuple:
-            A, B, C, D = model.build(v)
-            k = v[name]
-            dtype = np.result_type(C.dtype, type(k))
-            C, D = C.astype(dtype), D.astype(dtype)
-            C[row] *= k
-            D[row, :-1] *= k
-            return A, B, C, D
-
-        return _extended(model, name, 1.0, build)
+        return extended(model, {name: 1.0}, build)
 
     return wrap
 
 
 def _derivative(name: str, axes: str) -> Candidate:
     return Candidate("derivative_delta", {"derivative": name, "axes": axes}, (name,),
-                     _identity)
+                     identity)
 
 
 def _surface(surface: str) -> Candidate:
@@ -132,16 +72,22 @@ def _surface(surface: str) -> Candidate:
                      _effectiveness(surface))
 
 
-def catalogue_candidates(model: LinearModel, axes: str = "body") -> list[Candidate]:
+def catalogue_candidates(model: LinearModel, axes: str = "body", *,
+                         surfaces: str | None = None,
+                         records: Sequence[FlightRecord] = ()) -> list[Candidate]:
     """Every single-effect candidate for ``model`` (the linearised aircraft, its
-    derivatives in ``axes``), and tail ice when the model is longitudinal."""
+    derivatives in ``axes``): derivative deltas and control effectiveness, tail ice (a
+    longitudinal model), the sensor and mounting candidates of its outputs, the mass
+    properties, and the actuator lags when ``surfaces`` (None: from the ``records``'
+    metadata, ``actuator_candidates.surfaces_of``) is "command"."""
     known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
     out = [_derivative(d, axes) for d in model.parameters if d in known]
     out += [_surface(s) for s in SURFACES if s in model.inputs]
-    out += [Candidate("scale", {"channel": c}, (f"scale_{c}",), _output_scale(c))
-            for c in model.outputs]
     tail = tail_candidate(model)
-    return out + ([tail] if tail else [])
+    out += [tail] if tail else []
+    out += sensor_candidates(model)
+    out += mass_candidates(model)
+    return out + actuator_candidates(model, surfaces_of(records, surfaces))
 
 
 TAIL_ICE = {"elevator": ("Cm_de",), "stability": ("Cm_alpha",),
@@ -159,9 +105,7 @@ def _tail_ice(model: LinearModel) -> LinearModel:
                 w[d] = v[d] * v[factor]
         return model.build(w)
 
-    return LinearModel(model.name, model.states, model.inputs, model.outputs,
-                       (*model.parameters, *names), {**model.start, **dict.fromkeys(names, 1.0)},
-                       build, model.condition, model.description, dict(model.state_channels))
+    return extended(model, dict.fromkeys(names, 1.0), build)
 
 
 def tail_candidate(model: LinearModel) -> Candidate | None:
@@ -169,7 +113,8 @@ def tail_candidate(model: LinearModel) -> Candidate | None:
     or no pitching-moment derivatives."""
     if "de" not in model.inputs or not {"Cm_de", "Cm_alpha", "Cm_q"} <= set(model.parameters):
         return None
-    return Candidate("tail_ice", {}, tuple(f"tail_{k}" for k in TAIL_ICE), _tail_ice)
+    return Candidate("tail_ice", {}, tuple(f"tail_{k}" for k in TAIL_ICE), _tail_ice,
+                     catalogue=tuple(TAIL_ICE))
 
 
 def group(entry: str, parts: list[Candidate]) -> Candidate | None:

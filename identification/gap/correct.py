@@ -16,9 +16,13 @@ from flightid.record import FlightRecord
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
     AugmentEffect,
+    CgOffset,
     ControlEffectiveness,
     DerivativeDelta,
+    InertiaScale,
+    MassScale,
     TailIce,
+    ThrustMoment,
 )
 from flightid.sim.flight import DepartureError, fly
 from flightid.sim.model import load
@@ -28,6 +32,11 @@ from flightid.sim.trim import trim
 OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
            "longitudinal": ("V", "alpha", "q", "theta", "az")}
 INPUTS = ("da", "dr", "de")  # the record's surfaces flown (increments on their first value)
+# the mass-property candidates' effects and their parameters' neutral values
+MASS_PROPERTIES = {"cg_offset": (CgOffset, {"x": 0.0, "z": 0.0}),
+                   "mass_scale": (MassScale, {"factor": 1.0}),
+                   "inertia_scale": (InertiaScale, {"ixx": 1.0, "iyy": 1.0, "izz": 1.0}),
+                   "thrust_moment": (ThrustMoment, {"arm": 0.0})}
 
 
 def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
@@ -48,6 +57,9 @@ def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
             elif c.entry == "tail_ice":
                 out.append(TailIce(elevator=p["elevator"], stability=p["stability"],
                                    damping=p["damping"], source="flightid gap"))
+            elif c.entry in MASS_PROPERTIES:  # the parameters not fitted at their neutral
+                cls, neutral = MASS_PROPERTIES[c.entry]
+                out.append(cls(**{**neutral, **p}, source="flightid gap"))
     return out
 
 

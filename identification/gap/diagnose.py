@@ -208,7 +208,8 @@ def _records(x: Records) -> tuple[list[FlightRecord], list[str]]:
 def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              names: Sequence[str] | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
-             steps: int = STEPS, axis: str = "both", refine: bool = False) -> GapResult:
+             steps: int = STEPS, axis: str = "both", refine: bool = False,
+             surfaces: str | None = None) -> GapResult:
     """Diagnose ``records`` against the JSBSim ``aircraft``.
 
     Parameters
@@ -224,6 +225,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     refine : refit the top named airframe effect with the JSBSim aircraft flown from the
         longest record (``gap.refine``; 5-20 s more): its values are then the ones
         ``write_aircraft`` writes.
+    surfaces : what the records' surface channels hold, "position" or "command" (None:
+        their ``meta.extra["surfaces"]``, default "position"); on commands the actuator
+        lags are candidates too.
 
     Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
     halves of a record without one); an axis with a single window is cut in two halves in
@@ -249,7 +253,7 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     else:
         raise ValueError(f"gap: axis must be both, {', '.join(AXIS_NAMES)}; got {axis!r}")
     results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
-                                 try_pairs, steps) for a in axes}
+                                 try_pairs, steps, surfaces) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     result.undiagnosed = {
         a: (f"not asked for (--axis {axis})" if a in excited else
@@ -275,9 +279,9 @@ def _one_aircraft(records: list[FlightRecord], aircraft: str) -> None:
 def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                    validate: list[FlightRecord] | None, names: Sequence[str] | None,
                    validate_names: Sequence[str] | None, try_pairs: bool,
-                   steps: int) -> GapResult:
+                   steps: int, surfaces: str | None = None) -> GapResult:
     inputs = AXIS_INPUTS[axis]
-    lin = linearise(aircraft, records, axis)
+    lin = linearise(aircraft, records, axis, surfaces)
     fit_windows = segments(records, list(names) if names else None, inputs)
     if not fit_windows:
         raise ValueError(f"gap: the records have no {axis} maneuver window "
@@ -299,7 +303,7 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     if not before.gap:  # at the null level: nothing to name
         return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
                          verdict="no_gap", null_before=before, evidence=evidence)
-    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes))
+    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
     if both and both[0].confirmed:

@@ -20,19 +20,28 @@ Navion's CD at 46 m/s) takes the mean of its two one-sided slopes.
 
 The biases of the model (trim offsets) and its initial state are nuisance parameters
 fitted on every window; the derivatives are the model.
+
+Records with fewer channels (a hobby suite without attitudes, a record without vanes) are
+diagnosed on the outputs they carry (``carried_outputs``): the model keeps every state
+(phi still drives beta through gravity) and drops the output rows, and the output bias of
+a dropped accelerometer. At least two outputs are needed. On records of surface commands
+(``meta.extra["surfaces"] = "command"``, docs/record.md) the model's inputs pass through the
+aircraft's own actuator lags (``sim.actuators.actuator_lags``), as in the JSBSim aircraft.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from flightid.identification import windows
+from flightid.identification.gap.actuator_candidates import surfaces_of, with_actuators
 from flightid.identification.linear_models import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
+    LONGITUDINAL_BIASES,
     LONGITUDINAL_DERIVATIVES,
     LinearModel,
     ReferenceCondition,
@@ -40,6 +49,7 @@ from flightid.identification.linear_models import (
     longitudinal,
 )
 from flightid.record import FlightRecord
+from flightid.sim.actuators import actuator_lags
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
@@ -68,6 +78,7 @@ class Linearised:
     trim: Trim
     axes: str = AXES
     axis: str = "lateral"
+    surfaces: str = "position"  # what the records' surface channels hold (or "command")
 
 
 def nuisance(model: LinearModel) -> tuple[str, ...]:
@@ -120,9 +131,45 @@ def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
     return [a for a in AXIS_NAMES if a in found]
 
 
-def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral") -> Linearised:
+AXIS_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
+                "longitudinal": ("V", "alpha", "q", "theta", "az")}
+OUTPUT_BIASES = {"ay": "bias_ay", "az": "bias_az"}  # output biases of the models
+MIN_OUTPUTS = 2
+
+
+def carried_outputs(records: Sequence[FlightRecord], axis: str) -> tuple[str, ...]:
+    """The outputs of ``axis``'s model that every record carries (in the model's order);
+    raises naming the missing ones when fewer than ``MIN_OUTPUTS`` are left."""
+    outs = tuple(c for c in AXIS_OUTPUTS[axis] if all(c in r for r in records))
+    if len(outs) < MIN_OUTPUTS:
+        missing = [c for c in AXIS_OUTPUTS[axis] if c not in outs]
+        raise ValueError(f"gap: the records carry {len(outs)} of the {axis} outputs "
+                         f"({', '.join(outs) or 'none'}; missing {', '.join(missing)}); "
+                         f"at least {MIN_OUTPUTS} are needed")
+    return outs
+
+
+def restricted(model: LinearModel, outputs: Sequence[str]) -> LinearModel:
+    """``model`` with only the output rows ``outputs`` (every state kept)."""
+    if tuple(outputs) == model.outputs:
+        return model
+    rows = [model.outputs.index(c) for c in outputs]
+
+    def build(v: Mapping[str, complex]) -> tuple:
+        A, B, C, D = model.build(v)
+        return A, B, C[rows], D[rows]
+
+    return LinearModel(model.name, model.states, model.inputs, tuple(outputs),
+                       model.parameters, dict(model.start), build, model.condition,
+                       model.description, dict(model.state_channels))
+
+
+def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
+              surfaces: str | None = None) -> Linearised:
     """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
-    ``axis`` ("lateral" or "longitudinal")."""
+    ``axis`` ("lateral" or "longitudinal"), with the outputs the records carry
+    (``carried_outputs``). ``surfaces``: what the records' surface channels hold
+    ("position" or "command"; None: their metadata, ``actuator_candidates.surfaces_of``)."""
     if axis not in AXIS_NAMES:
         raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])
@@ -142,12 +189,22 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral")
         span=ref.span, chord=ref.chord, thrust=thrust)
     names = AXIS_DERIVATIVES[axis]
     known = {**{k: 0.5 * (f.minus + f.plus) for k, f in truth.flags.items()}, **truth.values}
+    outputs = carried_outputs(records, axis)
+    dropped = {OUTPUT_BIASES[c] for c in AXIS_OUTPUTS[axis]
+               if c not in outputs and c in OUTPUT_BIASES}
     if axis == "lateral":
         values = {d: float(known.get(d, 0.0)) for d in names}
-        linear = lateral(condition, names, start=values)
+        biases = tuple(b for b in LATERAL_BIASES if b not in dropped)
+        linear = lateral(condition, names, start=values, biases=biases)
     else:
         values = {d: float(known.get(d, 0.0)) for d in names
                   if d not in TRIM_TERMS or not thrust_input}
-        linear = longitudinal(condition, names, start=values, thrust_input=thrust_input)
+        biases = tuple(b for b in LONGITUDINAL_BIASES if b not in dropped)
+        linear = longitudinal(condition, names, start=values, thrust_input=thrust_input,
+                              biases=biases)
         values = {d: float(linear.start[d]) for d in names}
-    return Linearised(aircraft, linear, values, trimmed, frame, axis)
+    kind = surfaces_of(records, surfaces)
+    linear = restricted(linear, outputs)
+    if kind == "command":  # the commands pass through the aircraft's own actuators
+        linear = with_actuators(linear, actuator_lags(aircraft))
+    return Linearised(aircraft, linear, values, trimmed, frame, axis, kind)

@@ -22,8 +22,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.gap.candidates import Candidate, pair
+from flightid.identification.gap.classes import prefer_model_terms
 from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
 from flightid.identification.gap.linearise import Linearised
+from flightid.identification.gap.ranges import out_of_range
 from flightid.identification.gap.segments import Segment
 
 MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect
@@ -81,6 +83,8 @@ class Ranked:
     heldout_windows: list[str] = field(default_factory=list)
     confirmed: bool = False
     note: str = ""
+    # outside the catalogue's physical range: the family that fits (``ranges.out_of_range``)
+    family: str = ""
 
     @property
     def shrink(self) -> float:
@@ -97,7 +101,7 @@ class Ranked:
                              "heldout_shrink": self.shrink, "confirmed": self.confirmed,
                              "heldout_windows": self.heldout_windows},
                 "heldout_before": self.heldout_before, "heldout_after": self.heldout_after,
-                "note": self.note}
+                "note": self.note, "family": self.family or None}
 
 
 def combine(fits: list[WindowFit], names: tuple[str, ...]
@@ -192,6 +196,9 @@ class Ranker:
                                and gain >= MIN_GAIN)
         else:
             r.note = "no held-out window: not confirmed"
+        if family := out_of_range(cand, r.parameters, self.lin.model):
+            r.confirmed, r.family = False, family
+            r.note = f"outside its physical range: {family}"
         return r
 
 
@@ -200,6 +207,7 @@ def rank(ranker: Ranker, candidates: list[Candidate]) -> list[Ranked]:
     held-out Occam rule of ``nested``."""
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
     nested(out)
+    prefer_model_terms(out, MIN_SHRINK)
     return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))
 
 

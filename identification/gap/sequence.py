@@ -61,7 +61,8 @@ def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
         if at_null is not None and at_null(current):
             break
         params, surfaces = _taken(named)
-        cands = [c for c in catalogue_candidates(current.model, current.axes)
+        cands = [c for c in catalogue_candidates(current.model, current.axes,
+                                                 surfaces=current.surfaces)
                  if _open(c, params, surfaces)]
         ranked = rank(Ranker(current, folds), cands)
         if not ranked or not ranked[0].confirmed:

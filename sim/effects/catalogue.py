@@ -57,7 +57,7 @@ from flightid.sim.effects.base import NamedEffect, Reference
 from flightid.sim.effects.clock import RECORDER_CLOCK
 from flightid.sim.effects.disturbance import INTENSITIES, TURBULENCE_MODELS, Gust, Turbulence, Wind
 from flightid.sim.effects.link import link_fault
-from flightid.sim.effects.mounting import LeverArm, Vanes
+from flightid.sim.effects.mounting import MISALIGNMENT_AXES, LeverArm, Misalignment, Vanes
 from flightid.sim.effects.sensor import (
     Bias,
     Delay,
@@ -448,7 +448,10 @@ CATALOGUE = Catalogue((
             _p("sigma", f"{CH}/sqrt(s)", "increments N(0, sigma^2 dt)", 0.002, 0.0)),
     _sensor("scale", ScaleFactor, "multiplicative scale-factor error (a vane's K, a gain "
             "error)",
-            _p("factor", "1", "measured = factor x true", 1.05, neutral=1.0)),
+            # (0, 2]: a gain error doubling the signal, or a sign or unit error, is no
+            # scale factor (a vane's K is 1.0-1.3, Morelli & Klein 2016 §10.2)
+            _p("factor", "1", "measured = factor x true", 1.05, 0.0, 2.0, neutral=1.0,
+               low_open=True)),
     _sensor("quantize", Quantization, "rounding to whole counts of the converter",
             _p("resolution", CH, "one count (0: none)", 0.002, 0.0)),
     _sensor("saturate", Saturation, "clipping at the sensor's range",
@@ -489,6 +492,14 @@ CATALOGUE = Catalogue((
            _p("sidewash", "1", "beta measured = (1 + sidewash) x local beta", 0.05, -1.0,
               low_open=True)),
           Vanes, ("alpha", "beta")),
+    Entry("misalignment", ActsOn.MOUNTING, "IMU triad (gyros and accelerometers) rotated "
+          "about one body axis (mounting error)",
+          # |angle| <= 0.1 rad (5.7 deg): a triad mounted visibly crooked; a bench
+          # alignment leaves a few tenths of a degree (Jategaonkar 2015, ch. 10)
+          (_p("angle", "rad", "rotation about the axis, right-handed", 0.02, -0.1, 0.1),),
+          Misalignment, ("p", "r", "ax", "az"),
+          options=(Option("axis", MISALIGNMENT_AXES, "y",
+                          "body axis of the rotation (y: p and r, ax and az mixed)"),)),
     # -- vibration -------------------------------------------------------------------------
     Entry("engine_vibration", ActsOn.VIBRATION, "narrowband engine/propeller vibration "
           "lines on the IMU, following the rpm (aliases without an anti-alias filter)",
@@ -561,29 +572,37 @@ CATALOGUE = Catalogue((
           (_p("factor", "1", "scale of the surface's terms", 0.8, 0.0, neutral=1.0),),
           ControlEffectiveness, ("de", "q"), options=(_SURFACE,)),
     Entry("cg_offset", ActsOn.AIRFRAME, "CG moved (every mass item: CG, point masses, tanks)",
-          (_p("x", "m", "CG shift, body x (forward)", 0.05),
-           _p("z", "m", "CG shift, body z (down)", 0.0)),
+          # |shift| <= 0.5 m: a CG envelope spans some 15-20 % of the mean chord, 0.3-0.4 m
+          # on the Twin Otter's 1.98 m chord (a judgement, wide for the project's aircraft)
+          (_p("x", "m", "CG shift, body x (forward)", 0.05, -0.5, 0.5),
+           _p("z", "m", "CG shift, body z (down)", 0.0, -0.5, 0.5)),
           CgOffset, ("de", "q")),
     Entry("mass_scale", ActsOn.AIRFRAME, "empty weight and point masses scaled (mass error)",
-          (_p("factor", "1", "mass scale factor", 1.1, 0.0, neutral=1.0, low_open=True),),
+          # [0.5, 2]: an empty weight known to better than a factor of two (weighed)
+          (_p("factor", "1", "mass scale factor", 1.1, 0.5, 2.0, neutral=1.0),),
           MassScale, ("alpha", "de")),
     Entry("inertia_scale", ActsOn.AIRFRAME, "moments of inertia scaled (Ixz by sqrt(ixx izz))",
-          (_p("ixx", "1", "Ixx scale factor", 1.1, 0.0, neutral=1.0, low_open=True),
-           _p("iyy", "1", "Iyy scale factor", 1.1, 0.0, neutral=1.0, low_open=True),
-           _p("izz", "1", "Izz scale factor", 1.1, 0.0, neutral=1.0, low_open=True)),
+          # [0.5, 2]: inertias estimated from radii of gyration are good to some 20-30 %;
+          # a factor of two is no inertia error (a judgement)
+          (_p("ixx", "1", "Ixx scale factor", 1.1, 0.5, 2.0, neutral=1.0),
+           _p("iyy", "1", "Iyy scale factor", 1.1, 0.5, 2.0, neutral=1.0),
+           _p("izz", "1", "Izz scale factor", 1.1, 0.5, 2.0, neutral=1.0)),
           InertiaScale, ("q", "p")),
     Entry("thrust_moment", ActsOn.AIRFRAME, "pitching moment proportional to thrust (thrust "
           "line, propwash)",
-          (_p("arm", "m", "N m per N of thrust, nose up positive", 0.1),),
+          # |arm| <= 1 m: a thrust line within a metre of the CG (nacelles, pylons)
+          (_p("arm", "m", "N m per N of thrust, nose up positive", 0.1, -1.0, 1.0),),
           ThrustMoment, ("de",)),
     Entry("tail_ice", ActsOn.AIRFRAME, "horizontal-tail ice: pitching-moment terms reading the "
           "elevator, alpha, the pitch rate scaled (as twinotter-iced)",
+          # (0, 1]: ice only takes effectiveness away (Batterson & O'Mara, NASA TM-4099,
+          # 1989: elevator effectiveness, static stability and pitch damping all fall)
           (_p("elevator", "1", "scale of the pitching-moment terms reading the elevator "
-              "(Cm_de)", 0.85, 0.0, neutral=1.0),
+              "(Cm_de)", 0.85, 0.0, 1.0, neutral=1.0, low_open=True),
            _p("stability", "1", "scale of the pitching-moment terms reading alpha (Cm_alpha)",
-              0.9, 0.0, neutral=1.0),
+              0.9, 0.0, 1.0, neutral=1.0, low_open=True),
            _p("damping", "1", "scale of the pitching-moment terms reading q or alphadot "
-              "(Cm_q, Cm_alphadot)", 0.9, 0.0, neutral=1.0)),
+              "(Cm_q, Cm_alphadot)", 0.9, 0.0, 1.0, neutral=1.0, low_open=True)),
           TailIce, ("q", "de")),
     # -- actuator: JSBSim <actuator> components (flightid.sim.augment) -------------------------
     _actuator("actuator_lag", ActuatorLag, "first-order lag 1/(tau s + 1) in series with the "
@@ -622,6 +641,28 @@ CATALOGUE = Catalogue((
               low_open=True)),
           RECORDER_CLOCK, (TIME_STAMPS,)),
 ))
+
+# What an airframe can have: the range of each derivative (per rad; per unit
+# nondimensional rate for p q r alphadot; project control signs, body or stability axes) a
+# ``derivative_delta`` may move the model's value to. A judgement with wide margins: the
+# bounds enclose the project's aircraft and the stock JSBSim DHC6 and c172p at their test
+# conditions (measured with flightid.sim.truth.derivatives; e.g. Cm_alphadot -8.0 to 0,
+# Cm_q -34.8 to -9.96, CL_alpha 4.01 to 5.62) and the light-aircraft to jet-transport
+# values compiled by Heffley & Jewell (NASA CR-2144, 1972); a lift slope above 7.5 per
+# rad exceeds thin-aerofoil theory's 2 pi of an infinite wing (Anderson 2017, §4.7) plus
+# what fuselage and tail add. A derivative not listed is unbounded.
+DERIVATIVE_RANGES: dict[str, tuple[float, float]] = {
+    "CL_alpha": (0.0, 7.5), "CL_q": (-10.0, 40.0), "CL_alphadot": (-10.0, 20.0),
+    "CL_de": (0.0, 1.5), "CD_alpha": (-1.0, 2.0), "CD_q": (-5.0, 5.0), "CD_de": (-0.3, 0.3),
+    "Cm_alpha": (-4.0, 0.5), "Cm_q": (-80.0, 0.0), "Cm_alphadot": (-30.0, 5.0),
+    "Cm_de": (-5.0, 0.0),
+    "CY_beta": (-2.0, 0.0), "CY_p": (-1.0, 1.0), "CY_r": (-1.0, 2.0), "CY_da": (-0.5, 0.5),
+    "CY_dr": (-0.1, 1.0),
+    "Cl_beta": (-0.5, 0.1), "Cl_p": (-1.5, 0.0), "Cl_r": (-0.3, 0.8), "Cl_da": (-0.6, 0.05),
+    "Cl_dr": (-0.15, 0.15),
+    "Cn_beta": (-0.1, 0.8), "Cn_p": (-0.5, 0.3), "Cn_r": (-1.5, 0.05), "Cn_da": (-0.15, 0.15),
+    "Cn_dr": (-0.5, 0.05),
+}
 
 # the card sections' views of the catalogue (name -> class)
 EFFECTS: dict[str, type] = CATALOGUE.classes(ActsOn.SENSOR)
@@ -681,6 +722,6 @@ def _json(x: float | None) -> float | str | None:
     return "inf" if x > 0 else "-inf"
 
 
-__all__ = ["ARRIVAL_TIMES", "CATALOGUE", "CH", "EFFECTS", "PACKET_BYTES", "RESERVED",
-           "SECTIONS", "TIME_STAMPS", "WHERE", "ActsOn", "Catalogue", "Entry", "Option",
+__all__ = ["ARRIVAL_TIMES", "CATALOGUE", "CH", "DERIVATIVE_RANGES", "EFFECTS", "PACKET_BYTES",
+           "RESERVED", "SECTIONS", "TIME_STAMPS", "WHERE", "ActsOn", "Catalogue", "Entry", "Option",
            "Parameter", "Section", "effect_from_dict", "listing", "markdown_table"]

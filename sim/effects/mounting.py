@@ -110,3 +110,43 @@ class Vanes(MountingEffect):
         alpha_v = np.arctan2(wa, ua)
         beta_v = np.arcsin(np.clip(vb / np.sqrt(ub**2 + vb**2 + wb**2), -1.0, 1.0))
         return {"alpha": (1 + self.upwash) * alpha_v, "beta": (1 + self.sidewash) * beta_v}
+
+
+MISALIGNMENT_AXES = ("x", "y", "z")
+# which triad components a rotation about each body axis mixes: (first, second) of the
+# gyros and of the accelerometers (the third component is unchanged)
+_MIXED = {"x": (("q", "r"), ("ay", "az")), "y": (("r", "p"), ("az", "ax")),
+          "z": (("p", "q"), ("ax", "ay"))}
+
+
+@dataclass(kw_only=True)
+class Misalignment(MountingEffect):
+    """The IMU triad (rate gyros and accelerometers, one rigid block) rotated by ``angle``
+    (rad, right-handed) about the body ``axis``: each measured vector is the true one in
+    the rotated axes, v_s = C v_b with C the direction cosine matrix of a single rotation
+    (Stevens, Lewis & Johnson 2016, eq. 1.3-18; Etkin & Reid 1996 §4.4): about y,
+    p_s = cos(a) p - sin(a) r, r_s = sin(a) p + cos(a) r, and ax, az alike. The flow
+    angles, attitudes and air data are unchanged."""
+
+    name: ClassVar[str] = "misalignment"
+    requires: ClassVar[tuple[str, ...]] = ("p", "q", "r", "ax", "ay", "az")
+    angle: float = 0.0
+    axis: str = "y"
+
+    def __post_init__(self) -> None:
+        if self.axis not in MISALIGNMENT_AXES:
+            raise ValueError(f"{self.name}: field 'axis' must be one of "
+                             f"{', '.join(MISALIGNMENT_AXES)}, got {self.axis!r}")
+        if not np.isfinite(self.angle):
+            raise ValueError(f"{self.name}: field 'angle' must be finite, got {self.angle}")
+
+    def apply_record(self, t, channels, rng):
+        self.check(channels)
+        c, s = np.cos(self.angle), np.sin(self.angle)
+        out = {}
+        # C about the axis, for the cyclic order (axis, first, second):
+        # first_s = c first + s second, second_s = -s first + c second
+        for first, second in _MIXED[self.axis]:
+            a, b = channels[first], channels[second]
+            out[first], out[second] = c * a + s * b, -s * a + c * b
+        return out

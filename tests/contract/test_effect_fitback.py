@@ -102,6 +102,8 @@ NOT_YET: dict[str, str] = {
     "vanes": "compatibility estimates it (upwash_alpha, sidewash_beta, vane_*), but the "
              "research suite the card uses has its vanes dropped; not yet in this contract",
     "engine_vibration": "narrowband vibration lines: no fit models them",
+    "misalignment": "a mounting effect, which this contract's cards do not inject; the gap "
+                    "diagnosis fits it back from a flown record (tests/test_gap_candidates.py)",
     "wind": "compatibility estimates a constant wind (wind_*) only from position outputs "
             "(north, east), which the research suite does not record",
     "gust": "a disturbance: output error treats the response as model error (docs/gap.md)",
