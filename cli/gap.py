@@ -139,7 +139,7 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     e.add_column("named", justify="right")
     rows = [*g.named, *(r for r in (g.pairs + g.effects) if r.candidate.label not in named)]
     for r in rows[:8]:
-        params = "; ".join(f"{k} {v['value']:.4g} ± {v['std']:.2g}"
+        params = "; ".join(f"{_short(k)} {v['value']:.4g} ± {v['std']:.2g}"
                            for k, v in r.parameters.items())
         e.add_row(r.candidate.label, params, f"{r.delta_bic:.0f}", shrink_text(r.shrink),
                   str(named[r.candidate.label]) if r.candidate.label in named
@@ -153,6 +153,17 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     if g.null_after is not None and g.null_after.gap:
         console.print("above the null level after the named effects: "
                       + ", ".join(g.null_after.gap_channels()))
+
+
+def _short(key: str) -> str:
+    """A pair's parameter key without the repeated entry name:
+    "derivative_delta(Cn_beta,body).delta" -> "Cn_beta.delta"."""
+    label, dot, name = key.rpartition(".")
+    if not dot or "(" not in label:
+        return key
+    entry, _, opts = label.partition("(")
+    first = opts.rstrip(")").split(",")[0]
+    return f"{first or entry}.{name}"
 
 
 def _finite(x: object) -> object:

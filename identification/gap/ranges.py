@@ -24,6 +24,13 @@ TAIL_FAMILY = {"elevator": "horizontal-tail effectiveness (Cm_de)",
                "stability": "horizontal-tail stability contribution (Cm_alpha)",
                "damping": "pitch damping (Cm_q, Cm_alphadot)"}
 RATE_TERMS = ("_p", "_q", "_r", "_alphadot")
+# an inertial sensor's scale (rate gyros, attitude, accelerometers) within this range; the
+# catalogue's (0, 2] is for flow angles, whose vane K with upwash is 1.0-1.3 (Morelli &
+# Klein 2016 sec. 10.2). A gyro calibrated to a few per cent that reads 1.5 times the rate
+# is a mapping or unit error, or the model's dynamics: on the NASA record against the stock
+# DHC6, scale(p) 1.49 and scale(phi) 1.40 together are the roll response, not two sensors
+INERTIAL = ("p", "q", "r", "phi", "theta", "psi", "ax", "ay", "az")
+INERTIAL_SCALE = (0.75, 1.33)
 
 
 def _percent(factor: float) -> str:
@@ -92,6 +99,13 @@ def out_of_range(candidate: Candidate, parameters: Mapping[str, Mapping[str, flo
     if candidate.entry == "derivative_delta":
         return _derivative(candidate, float(parameters["delta"]["value"]), model)
     entry = CATALOGUE[candidate.entry]
+    if candidate.entry == "scale" and candidate.options.get("channel") in INERTIAL:
+        value = float(parameters["factor"]["value"])
+        lo, hi = INERTIAL_SCALE
+        if not lo <= value <= hi:
+            return (f"{candidate.options['channel']} x{value:.3g} is outside the "
+                    f"[{lo:g}, {hi:g}] of a calibrated inertial sensor: the model's "
+                    "response, or a unit or mapping error")
     found = []
     for name, v in parameters.items():
         value = float(v["value"])
