@@ -3,8 +3,11 @@ of the catalogue causes it, and how far the gap shrinks on held-out data.
 
 ``linearise`` (the model at the record's condition), ``segments`` (maneuver windows),
 ``fit`` (output error on one window), ``where`` (gap map), ``candidates`` and ``rank``
-(which effect), ``shrink`` (how far), ``correct`` (the corrected aircraft), ``diagnose``
-(all of it), ``report`` (HTML).
+(which effect; the families in ``sensor_candidates``, ``actuator_candidates`` and
+``mass_candidates`` on ``effect_model``; ``identifiable`` the entries that are not
+candidates, ``ranges`` the physical ranges, ``classes`` the equivalence classes),
+``shrink`` (how far), ``correct`` (the corrected aircraft), ``diagnose`` (all of it),
+``report`` (HTML).
 """
 
 from flightid.identification.gap.correct import write_aircraft

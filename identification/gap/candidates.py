@@ -33,15 +33,15 @@ from collections.abc import Callable, Mapping, Sequence
 
 from flightid.identification.gap.actuator_candidates import actuator_candidates, surfaces_of
 from flightid.identification.gap.effect_model import Candidate, extended, identity
-from flightid.identification.gap.linearise import AXIS_DERIVATIVES, TRIM_TERMS
+from flightid.identification.gap.linearise import AXIS_DERIVATIVES, AXIS_OUTPUTS, TRIM_TERMS
 from flightid.identification.gap.mass_candidates import mass_candidates
 from flightid.identification.gap.sensor_candidates import sensor_candidates
 from flightid.identification.linear_models import LinearModel
 from flightid.record import FlightRecord
 
 SURFACES = ("da", "dr", "de")
-OUTPUTS = ("beta", "p", "r", "phi", "ay")  # the lateral model's
-LONGITUDINAL_OUTPUTS = ("V", "alpha", "q", "theta", "az")
+OUTPUTS = AXIS_OUTPUTS["lateral"]  # the lateral model's
+LONGITUDINAL_OUTPUTS = AXIS_OUTPUTS["longitudinal"]
 
 
 def _effectiveness(surface: str) -> Callable[[LinearModel], LinearModel]:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.effect_fit import CACHE
-from flightid.identification.gap.linearise import start_condition
+from flightid.identification.gap.linearise import AXIS_OUTPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
@@ -28,9 +28,7 @@ from flightid.sim.flight import DepartureError, fly
 from flightid.sim.model import load
 from flightid.sim.trim import trim
 
-# the channels compared, by the axis diagnosed
-OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
-           "longitudinal": ("V", "alpha", "q", "theta", "az")}
+OUTPUTS = AXIS_OUTPUTS  # the channels compared, by the axis diagnosed
 INPUTS = ("da", "dr", "de")  # the record's surfaces flown (increments on their first value)
 # the mass-property candidates' effects and their parameters' neutral values
 MASS_PROPERTIES = {"cg_offset": (CgOffset, {"x": 0.0, "z": 0.0}),
