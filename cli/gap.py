@@ -41,6 +41,10 @@ def gap_command(
     axis: Annotated[str, typer.Option(
         "--axis", help="lateral, longitudinal or both (each axis the records excite)")
     ] = "both",
+    surfaces: Annotated[str | None, typer.Option(
+        "--surfaces", help="what the records' surface channels hold: position or command "
+                           "(default: their metadata, else position); on commands the "
+                           "actuator effects are candidates")] = None,
 ) -> None:
     """Is there a gap between a JSBSim model and flight data; where it lies, which
     catalogue effect causes it, and how far it shrinks on held-out data (each axis)."""
@@ -48,10 +52,12 @@ def gap_command(
         raise ValueError(f"--format must be table or json, got {format!r}")
     if axis not in ("both", "lateral", "longitudinal"):
         raise ValueError(f"--axis must be lateral, longitudinal or both, got {axis!r}")
+    if surfaces not in (None, "position", "command"):
+        raise ValueError(f"--surfaces must be position or command, got {surfaces!r}")
     # each record read once: resource guard, unit check, jitter re-gridded
     recs = [read_record(path, "gap") for path in records]
     vals = [read_record(path, "gap") for path in validate or []]
-    result = gap(recs, model, validate=vals or None, refine=refine, axis=axis,
+    result = gap(recs, model, validate=vals or None, refine=refine, axis=axis, surfaces=surfaces,
                  names=[Path(p).stem for p in records],
                  validate_names=[f"validate {Path(p).stem}" for p in validate or []])
     written = write_aircraft(result, write) if write else None
@@ -153,6 +159,10 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     if g.null_after is not None and g.null_after.gap:
         console.print("above the null level after the named effects: "
                       + ", ".join(g.null_after.gap_channels()))
+    if g.not_identifiable:
+        console.print(f"not identifiable from this record ({len(g.not_identifiable)} "
+                      "catalogue entries; the reasons in --format json, 'not_identifiable'): "
+                      + ", ".join(g.not_identifiable))
 
 
 def _short(key: str) -> str:

@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.fit import fit
+from flightid.identification.gap.identifiable import not_identifiable
 from flightid.identification.gap.linearise import (
     AXIS_INPUTS,
     AXIS_NAMES,
@@ -78,6 +79,9 @@ class GapResult:
     # "time split" (one maneuver cut in halves: the weaker evidence of the same maneuver)
     evidence: str = ""
     undiagnosed: dict[str, str] = field(default_factory=dict)  # axis -> why not diagnosed
+    # catalogue entries that are no candidate for this record: entry -> why, and what
+    # would make it identifiable (``identifiable.not_identifiable``)
+    not_identifiable: dict[str, str] = field(default_factory=dict)
 
     def unexplained_share(self) -> float | None:
         """The share of the held-out gap above the noise floor that the named effects leave,
@@ -161,6 +165,7 @@ class GapResult:
     def axis_json(self) -> dict[str, Any]:
         """This axis's verdict, its null-level tests and what it named."""
         return {"verdict": self.verdict, "evidence": self.evidence,
+                "not_identifiable": self.not_identifiable,
                 "null_before": self.null_before.to_json() if self.null_before else None,
                 "null_after": self.null_after.to_json() if self.null_after else None,
                 "named": [r.candidate.label for r in self.named]}
@@ -300,9 +305,11 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     before = null_test(ranker.base, _by_label(fit_windows), inputs)
+    unseen = not_identifiable(lin.model, records, surfaces=lin.surfaces)
     if not before.gap:  # at the null level: nothing to name
         return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
-                         verdict="no_gap", null_before=before, evidence=evidence)
+                         verdict="no_gap", null_before=before, evidence=evidence,
+                         not_identifiable=unseen)
     ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
@@ -325,7 +332,8 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         after = tested(corrected)
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows,
                      floor=ranker.floor, verdict=axis_verdict(before, bool(named), after),
-                     null_before=before, null_after=after, evidence=evidence)
+                     null_before=before, null_after=after, evidence=evidence,
+                     not_identifiable=unseen)
 
 
 def _by_label(windows: list[Segment]) -> dict[str, FlightRecord]:
