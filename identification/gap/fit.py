@@ -60,11 +60,13 @@ def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
     return float(np.sum(residual**2) / spread) if spread > 0 else float("nan")
 
 
-def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = ()) -> WindowFit:
-    """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``."""
+def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
+        max_iterations: int = MAX_ITERATIONS) -> WindowFit:
+    """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``, in at most
+    ``max_iterations`` Gauss-Newton steps."""
     est = output_error.estimate(
         record, model, free=[*free, *nuisance(model)], initial_state="estimate", hold="foh",
-        colored=True, check_identifiability=True, max_iterations=MAX_ITERATIONS)
+        colored=True, check_identifiability=True, max_iterations=max_iterations)
     values = {n: float(est.values[est.names.index(n)]) if n in est.names else model.start[n]
               for n in free}
     std = {n: float(est.std[est.names.index(n)]) if n in est.names else float("nan")

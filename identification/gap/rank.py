@@ -34,6 +34,10 @@ MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect
 # 0.0013 for Cn_beta on navion-demo without turbulence, below 0 on the blind check's cards
 # (docs/gap_benchmark.md); 0.005 before 2026-11-27 missed four right effects of 0.002-0.005
 MIN_GAIN = 0.002
+# screening: every candidate fitted with this many Gauss-Newton steps, the best SCREEN_KEEP
+# by delta BIC then fitted to convergence and checked on held-out data
+SCREEN_ITERATIONS = 2
+SCREEN_KEEP = 12
 PAIR_LEVEL = 0.05  # held-out gap (mean fraction) above which pairs of effects are tried
 PAIR_TOP = 4  # pairs: the top effect with the next ones of the ranking
 
@@ -152,6 +156,21 @@ class Ranker:
         # slowly varying misfit)
         self.floor = pooled_noise(list(self.base_held.values())) if self.base_held else {}
 
+    def screen(self, cand: Candidate) -> float:
+        """The candidate's delta BIC on the fitted windows after ``SCREEN_ITERATIONS``
+        Gauss-Newton steps from the model's values, no held-out check: the cheap first
+        look at the whole catalogue (inf when no window can be fitted)."""
+        model = cand.wrap(self.lin.model)
+        dbic, fitted = 0.0, False
+        for s in self.folds.fit:
+            try:
+                f = fit(model, s.record, cand.free, SCREEN_ITERATIONS)
+            except (ValueError, np.linalg.LinAlgError):
+                continue
+            fitted = True
+            dbic += 2 * (f.cost - self.base[s.label].cost) + len(cand.free) * math.log(f.samples)
+        return dbic if fitted else math.inf
+
     def evaluate(self, cand: Candidate) -> Ranked | None:
         model = cand.wrap(self.lin.model)
         fits = []
@@ -202,9 +221,16 @@ class Ranker:
         return r
 
 
-def rank(ranker: Ranker, candidates: list[Candidate]) -> list[Ranked]:
-    """Every candidate evaluated; confirmed first, each group by delta BIC, after the
-    held-out Occam rule of ``nested``."""
+def rank(ranker: Ranker, candidates: list[Candidate],
+         keep: int | None = SCREEN_KEEP) -> list[Ranked]:
+    """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
+    the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
+    check, the physical range; all of them when ``keep`` is None); confirmed first, each
+    group by delta BIC, after the held-out Occam rule of ``nested``."""
+    if keep is not None and len(candidates) > keep:
+        scores = [ranker.screen(c) for c in candidates]
+        order = sorted(range(len(candidates)), key=scores.__getitem__)
+        candidates = [candidates[i] for i in order[:keep]]
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
     nested(out)
     prefer_model_terms(out, MIN_SHRINK)
