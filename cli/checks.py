@@ -13,6 +13,7 @@ import os
 import typing
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
@@ -205,3 +206,108 @@ def check_aircraft_xml(aircraft: str) -> None:
     if aero is None or aero.find("axis") is None:
         raise ValueError(f"{path}: the aircraft has no <aerodynamics> section with an "
                          "<axis>: JSBSim cannot compute its forces; add the aerodynamics")
+
+
+PathText = str | os.PathLike[str]
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output of a command: the option that names it, its path (None: not asked for),
+    the kind of file it writes (``flightid.files.SUFFIX_KINDS`` values; None: judged by
+    the suffix) or ``folder=True`` for a folder the command fills."""
+
+    option: str
+    path: PathText | None
+    kind: str | None = None
+    folder: bool = False
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Whether two paths name one file: equal once resolved, or the same inode (a hard
+    link, a bind mount)."""
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _inputs(inputs: Mapping[str, PathText | Sequence[PathText] | None]
+            ) -> list[tuple[str, Path]]:
+    out = []
+    for option, value in inputs.items():
+        values = [value] if isinstance(value, str | os.PathLike) else list(value or [])
+        out += [(option, Path(v)) for v in values  # (a name that is not a file: no input)
+                if v is not None and str(v).strip() and os.path.exists(v)]
+    return out
+
+
+def check_paths(inputs: Mapping[str, PathText | Sequence[PathText] | None],
+                outputs: Sequence[Output], force: bool | None = None) -> None:
+    """Every output of a command, checked once before its work: it can be written
+    (:func:`check_writable`; a folder output: an existing folder or a new one in a
+    writable folder), it is none of the ``inputs`` ({option or argument: path or paths}),
+    no two outputs share a path (paths compared resolved, hard links included), and it
+    does not replace an existing file of another kind (judged by the content:
+    ``flightid.files.content_kind``) unless ``force`` (None: the command has no
+    --force). Raises ValueError or the OSError of :func:`check_writable` (exit 2),
+    naming the option and the path."""
+    given = [o for o in outputs if o.path is not None]
+    read = _inputs(inputs)
+    for k, out in enumerate(given):
+        path = Path(out.path)  # type: ignore[arg-type]
+        if str(out.path).strip() == "":
+            raise ValueError(f"{out.option}: an empty path; give a "
+                             f"{'folder' if out.folder else 'file'} name")
+        for option, source in read:
+            if _same(path, source):
+                raise ValueError(f"{out.option} {path} is the input {option} {source}: an "
+                                 "output never replaces an input; write it elsewhere")
+        for other in given[:k]:
+            if _same(path, Path(other.path)):  # type: ignore[arg-type]
+                raise ValueError(f"{out.option} {path} and {other.option} {other.path} are "
+                                 "one file: give each output its own path")
+        if out.folder:
+            _check_folder(out.option, path)
+            continue
+        check_writable(out.option, path)
+        _check_kind(out, path, force)
+
+
+def _check_folder(option: str, path: Path) -> None:
+    """A folder output: an existing folder that takes new files, or a new one whose parent
+    does."""
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{option} {path}: a file is there, not a folder; give a "
+                                 "folder for the study (it is created when missing)")
+    if path.is_dir():
+        files.check_writable(path / ".flightid-check")
+        return
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise NotADirectoryError(f"cannot write {path}: a part of the path is not a folder")
+    files.check_writable(parent / f".{path.name}.flightid-check")
+
+
+def _check_kind(out: Output, path: Path, force: bool | None) -> None:
+    """Refuse an output that would replace an existing file of another kind."""
+    if not path.is_file() or force:
+        return
+    writes = out.kind or files.suffix_kind(path)
+    there = files.content_kind(path)
+    if writes is None or there in (None, "empty", writes):
+        return
+    how = "add --force to replace it" if force is not None else "remove it first to replace it"
+    raise ValueError(f"{out.option} {path}: the file there is {_A.get(there, there)}, and this "
+                     f"would write {_A.get(writes, writes)} over it; give another path, or "
+                     f"{how}")
+
+
+_A = {"parquet": "a Parquet record", "csv": "a CSV table", "html": "an HTML page",
+      "tlog": "a MAVLink tlog", "json": "a JSON file", "png": "a PNG image",
+      "pdf": "a PDF document", "svg": "an SVG image", "xml": "an XML file",
+      "mat": "a MATLAB .mat file"}

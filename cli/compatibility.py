@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from flightid.cli.checks import check_choice, check_suffix, check_writable
+from flightid.cli.checks import Output, check_choice, check_paths, check_suffix
 from flightid.identification.compatibility import PARAMETERS, reconstruct
 from flightid.record import read
 
@@ -25,12 +25,14 @@ def compatibility_command(
     output: Annotated[str | None, typer.Option("-o", "--output",
                                                help="write the corrected record here")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
+    force: Annotated[bool, typer.Option(
+        "--force", help="write -o over an existing file of another kind")] = False,
 ) -> None:
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""
     check_choice("--format", format, ("table", "json"))
-    check_writable("--output", output)
     check_suffix("--output", output, (".parquet", ".csv"))
+    check_paths({"RECORD": record}, [Output("--output", output)], force)
     rec = read(record)
     corrected, est = reconstruct(rec)
     if output:

@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import check_writable
+from flightid.cli.checks import Output, check_paths
 from flightid.cli.progress import flight_progress
 from flightid.cli.tables import estimate_table, print_score
 from flightid.scenarios import demo
@@ -17,9 +17,11 @@ def demo_command(
     card: Annotated[str, typer.Option(help="library card name or TOML path")] = "navion-demo",
     seed: Annotated[int | None, typer.Option(help="random seed (default: the card's)")] = None,
     report: Annotated[str, typer.Option(help="HTML report to write")] = "flightid-demo.html",
+    force: Annotated[bool, typer.Option(
+        "--force", help="write --report over an existing file of another kind")] = False,
 ) -> None:
     """The main job: fly the built-in Navion card, identify by output error, score, report."""
-    check_writable("--report", report)
+    check_paths({"--card": card}, [Output("--report", report, "html")], force)
     console = Console()
     with flight_progress("flying the card", 1.0) as progress:
         result = demo.run(card, seed, report, progress=progress)

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import check_choice, check_writable, read_options
+from flightid.cli.checks import Output, check_choice, check_paths, read_options
 from flightid.cli.tables import estimate_table, print_score
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
@@ -70,12 +70,15 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="write --report over an existing file of another kind")] = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
-    check_writable("--report", report)
+    check_paths({"RECORD": record, "--truth": truth}, [Output("--report", report, "html")],
+                force)
     data = read(record)
     if multistep_input and method == "oe":
         options["multistep_inputs"] = list(multistep_input)
