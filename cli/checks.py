@@ -151,6 +151,34 @@ def check_size(what: str, n_bytes: float, force: bool, limit: float = SIZE_LIMIT
                          "--force")
 
 
+MAX_SEED = 2**32 - 1
+MAX_WORKERS = 1024
+
+
+def check_model(option: str, method: str, model: str) -> str:
+    """--model against the models --method takes (``registry.check_model``); the canonical
+    name."""
+    try:
+        return registry.check_model(method, model)
+    except ValueError as exc:
+        raise ValueError(f"{option}: {exc}") from None
+
+
+def check_study(n: int, method: str, model: str, options: Mapping[str, str],
+                seed: int | None, workers: int | None) -> dict[str, object]:
+    """The options of a Monte Carlo study (``montecarlo``, ``design-compare``), each named:
+    -n, --method, --model, --option, --seed, --workers; the options read as the method
+    takes them. (The study's own dry run, one trim, follows in the library.)"""
+    check_count("-n", n, low=1)
+    if seed is not None:
+        check_count("--seed", seed, low=0, high=MAX_SEED)
+    if workers is not None:
+        check_count("--workers", workers, low=1, high=MAX_WORKERS)
+    check_choice("--method", method, list(registry.methods()))
+    check_model("--model", method, model)
+    return read_options(method, options)
+
+
 def check_method_options(method: str, texts: Mapping[str, str]) -> None:
     """--method and --option KEY=VALUE against the method's declared options: unknown
     methods and keys are refused naming the valid ones, a value that does not read as the
@@ -162,7 +190,11 @@ def check_method_options(method: str, texts: Mapping[str, str]) -> None:
         if hint is bool and str(text).strip().lower() not in _TRUE + _FALSE:
             raise ValueError(f"--option {key}={text}: option {key} of method {spec.id} is a "
                              f"switch; accepted values: true or false")
-    spec.make_options(_read_switches(hints, texts))
+    try:
+        spec.make_options(_read_switches(hints, texts))
+    except ValueError as exc:
+        text = str(exc)
+        raise ValueError(text if text.startswith("--option") else f"--option: {text}") from None
 
 
 def _read_switches(hints: Mapping[str, object], texts: Mapping[str, str]) -> dict[str, object]:

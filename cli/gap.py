@@ -13,6 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import gap
+from flightid.cli.checks import Output, check_paths
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
 from flightid.identification.gap.report import write_report
@@ -39,6 +40,9 @@ def gap_command(
     how far the gap shrinks on held-out data (lateral axis)."""
     if format not in ("table", "json"):
         raise ValueError(f"--format must be table or json, got {format!r}")
+    check_paths({"RECORDS": records, "--validate": validate, "--model": model},
+                [Output("--report", report, "html"),
+                 Output("--write-aircraft", write, folder=True)])
     result = gap(records, model, validate=validate or None, refine=refine)
     written = write_aircraft(result, write) if write else None
     # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
