@@ -11,7 +11,6 @@ ground station answers raises TimeoutError, exit 3.
 from __future__ import annotations
 
 import json
-import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -19,7 +18,18 @@ from typing import Annotated
 
 import typer
 
-from flightid.cli.checks import Output, check_number, check_paths, check_rate, check_suffix
+from flightid.channels import CHANNELS
+from flightid.cli.checks import (
+    Output,
+    check_choice,
+    check_count,
+    check_number,
+    check_paths,
+    check_rate,
+    check_size,
+    check_suffix,
+    estimated_bytes,
+)
 from flightid.files import write_text
 from flightid.record import FlightRecord, read
 from flightid.scenarios import cards
@@ -70,9 +80,12 @@ def _config(baud: int | None, faults: str, seed: int, realtime: bool, profile: s
                         realtime=realtime)
 
 
-def _positive(option: str, value: float, unit: str = "") -> float:
-    """A finite value > 0, else a ValueError naming the option (exit 2)."""
-    return check_number(option, value, low=0.0, low_open=True, unit=unit)
+MAX_WAIT_S = 86_400.0  # a timeout, a duration or a delay beyond a day is a typing error
+
+
+def _positive(option: str, value: float, unit: str = "s", high: float = MAX_WAIT_S) -> float:
+    """A finite value in (0, high], else a ValueError naming the option (exit 2)."""
+    return check_number(option, value, low=0.0, low_open=True, high=high, unit=unit)
 
 
 def _check_link(serial: str | None, udp: str | None, baud: int, *,
@@ -155,8 +168,7 @@ def serve(
 ) -> None:
     """Stream a flight as MAVLink 2 over a serial port, a pty or loopback UDP."""
     _check_link(serial, udp, baud, unlimited_baud=True)
-    if start_delay < 0 or not math.isfinite(start_delay):
-        raise ValueError(f"--start-delay must be >= 0 s, got {start_delay:g}")
+    check_number("--start-delay", start_delay, low=0.0, high=MAX_WAIT_S, unit="s")
     config = _config(baud if baud > 0 else None, faults, seed, realtime, profile)
     check_paths({"CARD_OR_RECORD": source, "--serial": serial},
                 [Output("--report", report, "json")], force)
@@ -217,6 +229,15 @@ def record(
     typer.echo(rep.summary())
 
 
+ALIGNMENTS = ("auto", "timesync", "xcorr", "none")
+
+
+def _is_source(text: str) -> bool:
+    """'SYSID/COMPID' with both in 0..255."""
+    parts = text.split("/")
+    return len(parts) == 2 and all(p.isdigit() and int(p) <= 255 for p in parts)
+
+
 def convert_command(
     tlog: Annotated[str, typer.Argument(help="MAVLink .tlog")],
     output: Annotated[str, typer.Argument(help="flight record to write (.parquet or .csv)")],
@@ -236,6 +257,10 @@ def convert_command(
     """Convert a MAVLink .tlog to a flight record (SI channels, aligned, uniform time)."""
     if Path(output).suffix.lower() not in (".parquet", ".csv"):
         raise typer.BadParameter(f"{output}: write .parquet or .csv", param_hint="OUTPUT")
+    check_choice("--align", align, ALIGNMENTS)
+    if reference is not None and not _is_source(reference):
+        raise ValueError(f"--reference {reference!r} must be SYSID/COMPID, two numbers in "
+                         "0..255 (e.g. 1/1)")
     if rate is not None:
         check_rate("--rate", rate)
     if max_gap < 0:
@@ -248,8 +273,11 @@ def convert_command(
     check_paths({"TLOG": tlog, "--aircraft": aircraft or None}, [Output("OUTPUT", output)],
                 force)
     # a damaged or unusable tlog raises ValueError: the error policy's one line, exit 2
-    rec = convert_tlog(tlog, align=align, reference=reference, rate=rate, aircraft=aircraft,
-                       max_gap=max_gap, segment=segment)
+    try:
+        rec = convert_tlog(tlog, align=align, reference=reference, rate=rate,
+                           aircraft=aircraft, max_gap=max_gap, segment=segment)
+    except ValueError as exc:  # the message names the tlog it is about
+        raise ValueError(str(exc) if str(tlog) in str(exc) else f"{tlog}: {exc}") from None
     rec.write(output)
     b = rec.meta.extra["bridge"]
     typer.echo(f"{output}: {len(rec)} samples at {rec.meta.sample_rate:g} Hz, "
@@ -307,10 +335,14 @@ def fly(
     SET_ACTUATOR_CONTROL_TARGET, MANUAL_CONTROL or RC_CHANNELS_OVERRIDE) from the ground
     station only (its ids; with a signing key, correctly signed packets only)."""
     _check_link(serial, udp, baud, unlimited_baud=True)
+    check_count("--ground-system", ground_system, low=1, high=255)
+    if ground_component is not None:
+        check_count("--ground-component", ground_component, low=0, high=255)
     key = read_key(signing_key) if signing_key is not None else None
-    SenderFilter(ground_system, ground_component, key)  # checks the ids
-    _positive("--rate", rate, "Hz")
+    check_rate("--rate", rate)
     _positive("--duration", duration, "s")
+    check_size(f"--duration {duration:g} s at --rate {rate:g} Hz",
+               estimated_bytes(duration * rate + 1, len(CHANNELS)), force)
     _positive("--timeout", timeout, "s")
     if duration * rate < 1:
         raise ValueError(f"--duration {duration:g} s at {rate:g} Hz is not one step")

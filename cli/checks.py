@@ -153,6 +153,7 @@ def check_size(what: str, n_bytes: float, force: bool, limit: float = SIZE_LIMIT
 
 MAX_SEED = 2**32 - 1
 MAX_WORKERS = 1024
+MAX_REALIZATIONS = 1_000_000  # a study's -n (docs/montecarlo.md measures 10,000)
 
 
 def check_model(option: str, method: str, model: str) -> str:
@@ -169,7 +170,7 @@ def check_study(n: int, method: str, model: str, options: Mapping[str, str],
     """The options of a Monte Carlo study (``montecarlo``, ``design-compare``), each named:
     -n, --method, --model, --option, --seed, --workers; the options read as the method
     takes them. (The study's own dry run, one trim, follows in the library.)"""
-    check_count("-n", n, low=1)
+    check_count("-n", n, low=1, high=MAX_REALIZATIONS)
     if seed is not None:
         check_count("--seed", seed, low=0, high=MAX_SEED)
     if workers is not None:
@@ -183,7 +184,8 @@ def check_method_options(method: str, texts: Mapping[str, str]) -> None:
     """--method and --option KEY=VALUE against the method's declared options: unknown
     methods and keys are refused naming the valid ones, a value that does not read as the
     option's type names the accepted values (true or false for a switch)."""
-    spec = registry.get(method)  # unknown method: ValueError naming the known ones
+    check_choice("--method", method, list(registry.methods()))
+    spec = registry.get(method)
     hints = typing.get_type_hints(spec.options)
     for key, text in texts.items():
         hint = hints.get(key)

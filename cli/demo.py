@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import Output, check_paths
+from flightid.cli.checks import MAX_SEED, Output, check_count, check_paths
 from flightid.cli.progress import flight_progress
 from flightid.cli.tables import estimate_table, print_score
 from flightid.scenarios import demo
@@ -21,7 +22,11 @@ def demo_command(
         "--force", help="write --report over an existing file of another kind")] = False,
 ) -> None:
     """The main job: fly the built-in Navion card, identify by output error, score, report."""
-    check_paths({"--card": card}, [Output("--report", report, "html")], force)
+    if seed is not None:
+        check_count("--seed", seed, low=0, high=MAX_SEED)
+    plot = Path(report).with_suffix(".flight.png") if report.strip() else None
+    check_paths({"--card": card}, [Output("--report", report, "html"),
+                                   Output("--report (its plot)", plot, "png")], force)
     console = Console()
     with flight_progress("flying the card", 1.0) as progress:
         result = demo.run(card, seed, report, progress=progress)

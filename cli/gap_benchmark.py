@@ -48,6 +48,9 @@ def _print(bench: Benchmark) -> None:
                   f"reported partly unexplained {_pct(s['false_partly_unexplained'])}")
 
 
+MAX_CASES = 10_000  # each case is a flight and a diagnosis (seconds each)
+
+
 def gap_benchmark_command(
     n: Annotated[int, typer.Option("--n", "-n", help="number of cases")] = 10,
     seed: Annotated[int, typer.Option(help="seed of the draw")] = 0,
@@ -61,7 +64,7 @@ def gap_benchmark_command(
     catalogue, a moderate magnitude) flown, diagnosed without being told, and scored: top-1
     and top-3 attribution, held-out shrink, magnitude error, unexplained when outside."""
     check_choice("--format", format, ("table", "json"))
-    check_count("--n", n, low=1)
+    check_count("--n", n, low=1, high=MAX_CASES)
     check_count("--seed", seed, low=0, high=MAX_SEED)
     check_paths({}, [Output("--output", output, folder=True)])
     with count_progress("gap blind check", show=not quiet) as update:

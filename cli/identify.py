@@ -9,7 +9,13 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
-from flightid.cli.checks import Output, check_choice, check_paths, read_options
+from flightid.cli.checks import (
+    Output,
+    check_choice,
+    check_model,
+    check_paths,
+    read_options,
+)
 from flightid.cli.tables import estimate_table, print_score
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
@@ -24,7 +30,7 @@ def parse_options(texts: list[str]) -> dict[str, str]:
     for text in texts:
         key, sep, value = text.partition("=")
         if not sep or not key.strip():
-            raise ValueError(f"option {text!r}: expected KEY=VALUE")
+            raise ValueError(f"--option {text!r}: expected KEY=VALUE")
         out[key.strip()] = value
     return out
 
@@ -77,9 +83,13 @@ def identify_command(
     check_choice("--format", format, ("table", "json"))
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
+    check_model("--model", method, model)
     check_paths({"RECORD": record, "--truth": truth}, [Output("--report", report, "html")],
                 force)
     data = read(record)
+    if isinstance(span, tuple) and (span[1] <= data.time[0] or span[0] >= data.time[-1]):
+        raise ValueError(f"--window {window}: outside the record ({data.time[0]:g} .. "
+                         f"{data.time[-1]:g} s)")
     if multistep_input and method == "oe":
         options["multistep_inputs"] = list(multistep_input)
     elif multistep_input:

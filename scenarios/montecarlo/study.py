@@ -9,7 +9,9 @@ process (local or on a Dask cluster) needs nothing else.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -23,6 +25,7 @@ from flightid.identification.scoring import record_truth, score
 from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed, trim_card
 from flightid.scenarios.montecarlo.disperse import COLUMN_PREFIX, dispersed_card, draw, parse_all
 from flightid.sim.flight import DepartureError
+from flightid.sim.model import quiet
 from flightid.sim.trim import TrimError
 
 # the columns of a result row, in order
@@ -101,7 +104,10 @@ def dry_run(description: Study) -> Card:
     spec.make_options(dict(description.options))
     card = load_card(description.card)
     dispersions = parse_all(description.disperse)
-    trim_card(dispersed_card(card, dispersions, {d.key: d.neutral for d in dispersions}))
+    # JSBSim's console notes (on the process's stdout and through Python's) would mix into
+    # a --format json output
+    with quiet(), contextlib.redirect_stdout(io.StringIO()):
+        trim_card(dispersed_card(card, dispersions, {d.key: d.neutral for d in dispersions}))
     return card
 
 
