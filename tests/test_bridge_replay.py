@@ -162,3 +162,33 @@ def test_damaged_state_file_is_named(tmp_path):
     state.write_text("{not json")
     with pytest.raises(ValueError, match="k.timestamps.json: not a signing timestamp file"):
         SenderFilter(255, None, KEY, state=state)
+
+
+def test_nan_controls_are_refused_and_counted_not_flown_as_trim(tmp_path):
+    """HIL_ACTUATOR_CONTROLS carrying NaN (unsigned link): refused and counted as 'not
+    finite'; the flight is the trim held, as without commands."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as ground:
+        ground.bind(("127.0.0.1", 0))
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "flightid.cli.app", "bridge", "fly", "navion",
+             "--altitude", str(ALTITUDE), "--speed", str(SPEED), "--udp",
+             f"127.0.0.1:{ground.getsockname()[1]}", "--rate", str(RATE), "--duration",
+             str(DURATION), "--no-lockstep", "--timeout", "60", "--output",
+             str(tmp_path / "nan.parquet")],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+        bridge = _bridge_address(ground)
+        mav = mavlink2.MAVLink(None, 255, 190)
+        ground.sendto(_heartbeat(mav), bridge)
+        nan = float("nan")
+        for k in range(30):
+            controls = [nan, 0.5, 0.0, 0.5] if k % 2 else [0.0, nan, nan, nan]
+            ground.sendto(_pack(mav, mavlink2.MAVLink_hil_actuator_controls_message(
+                k, controls + [0.0] * 12, 0, 0)), bridge)
+            time.sleep(0.01)
+        out = _finish(proc)
+    assert "refused 30 packet(s) that may not fly the aircraft: 30 not finite" in out, out
+    held = fly("navion", trim("navion", ALTITUDE, SPEED), {}, duration_s=DURATION,
+               rate_hz=RATE)
+    flown = read(tmp_path / "nan.parquet")
+    for name in ("q", "theta", "de", "da", "dr", "throttle", "p"):
+        np.testing.assert_allclose(flown[name], held[name], atol=1e-7, rtol=0, err_msg=name)
