@@ -6,6 +6,9 @@ failure (an exception, a full disk, a crash) therefore never leaves a half-writt
 never damages a file that was already there. A folder that cannot be written raises an
 ``OSError`` of the usual type (``PermissionError``, ``FileNotFoundError``,
 ``NotADirectoryError``, ...) whose message reads ``cannot write <path>: <reason>``.
+
+:func:`content_kind` tells what an existing file holds from its first bytes, so that a
+command never writes a file of another kind over it unasked (``flightid.cli.checks``).
 """
 
 from __future__ import annotations
