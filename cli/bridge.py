@@ -11,7 +11,6 @@ ground station answers raises TimeoutError, exit 3.
 from __future__ import annotations
 
 import json
-import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -19,7 +18,19 @@ from typing import Annotated
 
 import typer
 
-from flightid.cli.checks import check_number, check_rate, read_record
+from flightid.channels import CHANNELS
+from flightid.cli.checks import (
+    Output,
+    check_choice,
+    check_count,
+    check_number,
+    check_paths,
+    check_rate,
+    check_size,
+    check_suffix,
+    estimated_bytes,
+    read_record,
+)
 from flightid.files import write_text
 from flightid.record import FlightRecord
 from flightid.scenarios import cards
@@ -44,7 +55,7 @@ from flightid.sim.bridge.recorder import (
     record_stream,
 )
 from flightid.sim.bridge.schedule import PROFILES
-from flightid.sim.bridge.signing import SenderFilter, read_key
+from flightid.sim.bridge.signing import SenderFilter, read_key, state_path
 from flightid.sim.flight import Simulation
 from flightid.sim.trim import trim
 
@@ -70,9 +81,12 @@ def _config(baud: int | None, faults: str, seed: int, realtime: bool, profile: s
                         realtime=realtime)
 
 
-def _positive(option: str, value: float, unit: str = "") -> float:
-    """A finite value > 0, else a ValueError naming the option (exit 2)."""
-    return check_number(option, value, low=0.0, low_open=True, unit=unit)
+MAX_WAIT_S = 86_400.0  # a timeout, a duration or a delay beyond a day is a typing error
+
+
+def _positive(option: str, value: float, unit: str = "s", high: float = MAX_WAIT_S) -> float:
+    """A finite value in (0, high], else a ValueError naming the option (exit 2)."""
+    return check_number(option, value, low=0.0, low_open=True, high=high, unit=unit)
 
 
 def _check_link(serial: str | None, udp: str | None, baud: int, *,
@@ -150,12 +164,15 @@ def serve(
     profile: Annotated[str, typer.Option(help="recorders: single or boomerang")] = "single",
     start_delay: Annotated[float, typer.Option(help="s to wait after creating a pty")] = 3.0,
     report: Annotated[str | None, typer.Option(help="write the air-side report (JSON)")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="write the output over an existing file of another kind")] = False,
 ) -> None:
     """Stream a flight as MAVLink 2 over a serial port, a pty or loopback UDP."""
     _check_link(serial, udp, baud, unlimited_baud=True)
-    if start_delay < 0 or not math.isfinite(start_delay):
-        raise ValueError(f"--start-delay must be >= 0 s, got {start_delay:g}")
+    check_number("--start-delay", start_delay, low=0.0, high=MAX_WAIT_S, unit="s")
     config = _config(baud if baud > 0 else None, faults, seed, realtime, profile)
+    check_paths({"CARD_OR_RECORD": source, "--serial": serial},
+                [Output("--report", report, "json")], force)
     record = _load_source(source)
     link, close = _air_link(serial, udp, baud, start_delay)
     try:
@@ -174,8 +191,8 @@ def _ground_link(serial: str | None, udp: str | None, baud: int) -> Link:
         if udp is not None:
             return UdpLink(parse_hostport(udp), listen=True)
         return SerialLink(serial, baud)
-    except (OSError, ValueError) as exc:
-        raise typer.BadParameter(str(exc)) from None
+    except (OSError, ValueError) as exc:  # e.g. "port 14550 on 127.0.0.1 is in use"
+        raise ValueError(f"{'--udp' if udp is not None else '--serial'}: {exc}") from None
 
 
 @app.command("record")
@@ -188,6 +205,8 @@ def record(
     idle_timeout: Annotated[float, typer.Option(help="stop after this many s without data")] = 10.0,
     first_timeout: Annotated[float, typer.Option(
         help="give up (exit 3) if nothing arrives within this many s")] = 30.0,
+    force: Annotated[bool, typer.Option(
+        "--force", help="write the output over an existing file of another kind")] = False,
 ) -> None:
     """Record a MAVLink stream into a .tlog (every intact packet; report in <tlog>.json)."""
     _check_link(serial, udp, baud, unlimited_baud=False)
@@ -195,6 +214,9 @@ def record(
         _positive("--duration", duration, "s")
     _positive("--idle-timeout", idle_timeout, "s")
     _positive("--first-timeout", first_timeout, "s")
+    check_paths({"--serial": serial}, [Output("--output", output, "tlog"),
+                                       Output("--output (its report)", f"{output}.json",
+                                              "json")], force)
     link = _ground_link(serial, udp, baud)
     typer.echo(f"recording {link.name} to {output}")
     try:
@@ -206,6 +228,15 @@ def record(
     finally:
         link.close()
     typer.echo(rep.summary())
+
+
+ALIGNMENTS = ("auto", "timesync", "xcorr", "none")
+
+
+def _is_source(text: str) -> bool:
+    """'SYSID/COMPID' with both in 0..255."""
+    parts = text.split("/")
+    return len(parts) == 2 and all(p.isdigit() and int(p) <= 255 for p in parts)
 
 
 def convert_command(
@@ -221,10 +252,16 @@ def convert_command(
     segment: Annotated[str, typer.Option(
         help="all (refuse a longer gap) or longest (keep the longest stretch without one)")
     ] = "all",
+    force: Annotated[bool, typer.Option(
+        "--force", help="write the output over an existing file of another kind")] = False,
 ) -> None:
     """Convert a MAVLink .tlog to a flight record (SI channels, aligned, uniform time)."""
     if Path(output).suffix.lower() not in (".parquet", ".csv"):
         raise typer.BadParameter(f"{output}: write .parquet or .csv", param_hint="OUTPUT")
+    check_choice("--align", align, ALIGNMENTS)
+    if reference is not None and not _is_source(reference):
+        raise ValueError(f"--reference {reference!r} must be SYSID/COMPID, two numbers in "
+                         "0..255 (e.g. 1/1)")
     if rate is not None:
         check_rate("--rate", rate)
     if max_gap < 0:
@@ -234,9 +271,14 @@ def convert_command(
                          f"{', '.join(SEGMENTS)}")
     if not Path(tlog).is_file():
         raise FileNotFoundError(f"{tlog}: no such file")
+    check_paths({"TLOG": tlog, "--aircraft": aircraft or None}, [Output("OUTPUT", output)],
+                force)
     # a damaged or unusable tlog raises ValueError: the error policy's one line, exit 2
-    rec = convert_tlog(tlog, align=align, reference=reference, rate=rate, aircraft=aircraft,
-                       max_gap=max_gap, segment=segment)
+    try:
+        rec = convert_tlog(tlog, align=align, reference=reference, rate=rate,
+                           aircraft=aircraft, max_gap=max_gap, segment=segment)
+    except ValueError as exc:  # the message names the tlog it is about
+        raise ValueError(str(exc) if str(tlog) in str(exc) else f"{tlog}: {exc}") from None
     rec.write(output)
     b = rec.meta.extra["bridge"]
     typer.echo(f"{output}: {len(rec)} samples at {rec.meta.sample_rate:g} Hz, "
@@ -287,27 +329,40 @@ def fly(
     signing_key: Annotated[str | None, typer.Option(
         help="file with the 32-byte MAVLink 2 signing key (raw or 64 hex digits): "
              "telemetry is signed, controls must be")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="write the output over an existing file of another kind")] = False,
 ) -> None:
     """Fly the JSBSim aircraft with controls received over the link (HIL_ACTUATOR_CONTROLS,
     SET_ACTUATOR_CONTROL_TARGET, MANUAL_CONTROL or RC_CHANNELS_OVERRIDE) from the ground
     station only (its ids; with a signing key, correctly signed packets only)."""
     _check_link(serial, udp, baud, unlimited_baud=True)
+    check_count("--ground-system", ground_system, low=1, high=255)
+    if ground_component is not None:
+        check_count("--ground-component", ground_component, low=0, high=255)
     key = read_key(signing_key) if signing_key is not None else None
-    SenderFilter(ground_system, ground_component, key)  # checks the ids
-    _positive("--rate", rate, "Hz")
+    check_rate("--rate", rate)
     _positive("--duration", duration, "s")
+    check_size(f"--duration {duration:g} s at --rate {rate:g} Hz",
+               estimated_bytes(duration * rate + 1, len(CHANNELS)), force)
     _positive("--timeout", timeout, "s")
     if duration * rate < 1:
         raise ValueError(f"--duration {duration:g} s at {rate:g} Hz is not one step")
     if profile not in PROFILES:
         raise ValueError(f"--profile {profile!r} is not known; use {', '.join(PROFILES)}")
+    state = state_path(signing_key) if signing_key is not None else None
+    check_suffix("--output", output, (".parquet", ".csv"))
+    check_paths({"AIRCRAFT": aircraft, "--signing-key": signing_key, "--serial": serial},
+                [Output("--output", output),
+                 Output("--signing-key (its timestamp file)", state, "json")], force)
+    # a damaged timestamp file is refused here, before the trim
+    SenderFilter(ground_system, ground_component, key, state=state)
     tr = trim(aircraft, altitude, speed)
     sim = FlightCoreAdapter(Simulation(aircraft, rate_hz=rate), tr)
     held = {"de": tr.elevator, "da": tr.aileron, "dr": tr.rudder, "throttle": tr.throttle}
     initial = sim.reset(held)
     config = _config(baud if baud > 0 else None, "", 0, not lockstep, profile)
     config = replace(config, ground_system=ground_system, ground_component=ground_component,
-                     signing_key=key)
+                     signing_key=key, signing_state=state)
     link, close = _air_link(serial, udp, baud, 0.0)
     typer.echo(f"trimmed {aircraft} at {altitude:g} m, {speed:g} m/s: de {tr.elevator:+.5f}, "
                f"da {tr.aileron:+.5f}, dr {tr.rudder:+.5f} rad, throttle {tr.throttle:.4f}; "

@@ -16,6 +16,7 @@ import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
@@ -30,7 +31,7 @@ SIZE_LIMIT = 1_000_000_000
 BYTES_PER_VALUE = 8  # float64 samples
 MAX_RATE_HZ = 10_000.0  # above this no flight-test recorder or JSBSim run makes sense
 MIN_SAMPLES = 10  # an output rate must give at least this many samples
-SEED_MAX = 2**32 - 1  # numpy's seeds are 32-bit words
+MAX_SEED = 2**32 - 1  # numpy's seeds are 32-bit words
 BAUDS = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
          921600, 1000000, 1500000, 2000000)
 _TRUE, _FALSE = ("true", "1", "yes", "on"), ("false", "0", "no", "off")
@@ -158,18 +159,51 @@ def check_size(what: str, n_bytes: float, force: bool, limit: float = SIZE_LIMIT
                          "--force")
 
 
+MAX_WORKERS = 1024
+MAX_REALIZATIONS = 1_000_000  # a study's -n (docs/montecarlo.md measures 10,000)
+
+
+def check_model(option: str, method: str, model: str) -> str:
+    """--model against the models --method takes (``registry.check_model``); the canonical
+    name."""
+    try:
+        return registry.check_model(method, model)
+    except ValueError as exc:
+        raise ValueError(f"{option}: {exc}") from None
+
+
+def check_study(n: int, method: str, model: str, options: Mapping[str, str],
+                seed: int | None, workers: int | None) -> dict[str, object]:
+    """The options of a Monte Carlo study (``montecarlo``, ``design-compare``), each named:
+    -n, --method, --model, --option, --seed, --workers; the options read as the method
+    takes them. (The study's own dry run, one trim, follows in the library.)"""
+    check_count("-n", n, low=1, high=MAX_REALIZATIONS)
+    if seed is not None:
+        check_count("--seed", seed, low=0, high=MAX_SEED)
+    if workers is not None:
+        check_count("--workers", workers, low=1, high=MAX_WORKERS)
+    check_choice("--method", method, list(registry.methods()))
+    check_model("--model", method, model)
+    return read_options(method, options)
+
+
 def check_method_options(method: str, texts: Mapping[str, str]) -> None:
     """--method and --option KEY=VALUE against the method's declared options: unknown
     methods and keys are refused naming the valid ones, a value that does not read as the
     option's type names the accepted values (true or false for a switch)."""
-    spec = registry.get(method)  # unknown method: ValueError naming the known ones
+    check_choice("--method", method, list(registry.methods()))
+    spec = registry.get(method)
     hints = typing.get_type_hints(spec.options)
     for key, text in texts.items():
         hint = hints.get(key)
         if hint is bool and str(text).strip().lower() not in _TRUE + _FALSE:
             raise ValueError(f"--option {key}={text}: option {key} of method {spec.id} is a "
                              f"switch; accepted values: true or false")
-    spec.make_options(_read_switches(hints, texts))
+    try:
+        spec.make_options(_read_switches(hints, texts))
+    except ValueError as exc:
+        text = str(exc)
+        raise ValueError(text if text.startswith("--option") else f"--option: {text}") from None
 
 
 def _read_switches(hints: Mapping[str, object], texts: Mapping[str, str]) -> dict[str, object]:
@@ -248,3 +282,106 @@ def read_record(path: str, work: str, *, force: bool = False) -> FlightRecord:
     resources.check_memory(len(record), work, str(path), force)
     check_units(record, None, f"{work} ({path})")
     return time_base.regrid_jitter(record)
+PathText = str | os.PathLike[str]
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output of a command: the option that names it, its path (None: not asked for),
+    the kind of file it writes (``flightid.files.SUFFIX_KINDS`` values; None: judged by
+    the suffix) or ``folder=True`` for a folder the command fills."""
+
+    option: str
+    path: PathText | None
+    kind: str | None = None
+    folder: bool = False
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Whether two paths name one file: equal once resolved, or the same inode (a hard
+    link, a bind mount)."""
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _inputs(inputs: Mapping[str, PathText | Sequence[PathText] | None]
+            ) -> list[tuple[str, Path]]:
+    out = []
+    for option, value in inputs.items():
+        values = [value] if isinstance(value, str | os.PathLike) else list(value or [])
+        out += [(option, Path(v)) for v in values  # (a name that is not a file: no input)
+                if v is not None and str(v).strip() and os.path.exists(v)]
+    return out
+
+
+def check_paths(inputs: Mapping[str, PathText | Sequence[PathText] | None],
+                outputs: Sequence[Output], force: bool | None = None) -> None:
+    """Every output of a command, checked once before its work: it can be written
+    (:func:`check_writable`; a folder output: an existing folder or a new one in a
+    writable folder), it is none of the ``inputs`` ({option or argument: path or paths}),
+    no two outputs share a path (paths compared resolved, hard links included), and it
+    does not replace an existing file of another kind (judged by the content:
+    ``flightid.files.content_kind``) unless ``force`` (None: the command has no
+    --force). Raises ValueError or the OSError of :func:`check_writable` (exit 2),
+    naming the option and the path."""
+    given = [o for o in outputs if o.path is not None]
+    read = _inputs(inputs)
+    for k, out in enumerate(given):
+        path = Path(out.path)  # type: ignore[arg-type]
+        if str(out.path).strip() == "":
+            raise ValueError(f"{out.option}: an empty path; give a "
+                             f"{'folder' if out.folder else 'file'} name")
+        for option, source in read:
+            if _same(path, source):
+                raise ValueError(f"{out.option} {path} is the input {option} {source}: an "
+                                 "output never replaces an input; write it elsewhere")
+        for other in given[:k]:
+            if _same(path, Path(other.path)):  # type: ignore[arg-type]
+                raise ValueError(f"{out.option} {path} and {other.option} {other.path} are "
+                                 "one file: give each output its own path")
+        if out.folder:
+            _check_folder(out.option, path)
+            continue
+        check_writable(out.option, path)
+        _check_kind(out, path, force)
+
+
+def _check_folder(option: str, path: Path) -> None:
+    """A folder output: an existing folder that takes new files, or a new one whose parent
+    does."""
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{option} {path}: a file is there, not a folder; give a "
+                                 "folder for the study (it is created when missing)")
+    if path.is_dir():
+        files.check_writable(path / ".flightid-check")
+        return
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise NotADirectoryError(f"cannot write {path}: a part of the path is not a folder")
+    files.check_writable(parent / f".{path.name}.flightid-check")
+
+
+def _check_kind(out: Output, path: Path, force: bool | None) -> None:
+    """Refuse an output that would replace an existing file of another kind."""
+    if not path.is_file() or force:
+        return
+    writes = out.kind or files.suffix_kind(path)
+    there = files.content_kind(path)
+    if writes is None or there in (None, "empty", writes):
+        return
+    how = "add --force to replace it" if force is not None else "remove it first to replace it"
+    raise ValueError(f"{out.option} {path}: the file there is {_A.get(there, there)}, and this "
+                     f"would write {_A.get(writes, writes)} over it; give another path, or "
+                     f"{how}")
+
+
+_A = {"parquet": "a Parquet record", "csv": "a CSV table", "html": "an HTML page",
+      "tlog": "a MAVLink tlog", "json": "a JSON file", "png": "a PNG image",
+      "pdf": "a PDF document", "svg": "an SVG image", "xml": "an XML file",
+      "mat": "a MATLAB .mat file"}

@@ -13,9 +13,10 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.cli.checks import (
+    Output,
     check_choice,
+    check_paths,
     check_suffix,
-    check_writable,
     printed_warnings,
     read_record,
 )
@@ -35,14 +36,14 @@ def compatibility_command(
         "--strict", help="exit 4 when the reconstruction does not converge (default: a "
                          "warning and 'not converged' in the verdict line, exit 0)")] = False,
     force: Annotated[bool, typer.Option(
-        "--force", help="run even when the memory estimate exceeds what is available")
-    ] = False,
+        "--force", help="run when the memory estimate exceeds what is available, and "
+                        "write -o over an existing file of another kind")] = False,
 ) -> None:
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""
     check_choice("--format", format, ("table", "json"))
-    check_writable("--output", output)
     check_suffix("--output", output, (".parquet", ".csv"))
+    check_paths({"RECORD": record}, [Output("--output", output)], force)
     with printed_warnings("compatibility"):
         rec = read_record(record, "compatibility", force=force)
         corrected, est = reconstruct(rec)

@@ -14,12 +14,16 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import design_compare
+from flightid.channels import CONTROLS
 from flightid.cli import study_options as opts
+from flightid.cli.checks import Output, check_choice, check_number, check_paths, check_study
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
 from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
 from flightid.units import DEG
+
+SURFACES = tuple(c for c in CONTROLS if c != "throttle")  # the designs move a surface (rad)
 
 
 def _tables(comparison: Comparison) -> list[Table]:
@@ -75,19 +79,23 @@ def design_compare_command(
 ) -> None:
     """Compare input designs by the scatter of the derivatives they give over a Monte
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
-    if equal not in EQUAL:
-        raise ValueError(f"--equal must be amplitude or energy, got {equal!r}")
-    if not (math.isfinite(amplitude_deg) and amplitude_deg > 0):
-        raise ValueError(f"--amplitude-deg must be > 0, got {amplitude_deg}")
-    if not (math.isfinite(base) and base > 0):
-        raise ValueError(f"--base must be > 0 s, got {base}")
+    check_choice("--format", format, ("table", "json"))
+    check_choice("--equal", equal, EQUAL)
+    check_choice("--reference", reference, DESIGNS)
+    for d in design or ():
+        check_choice("--design", d, DESIGNS)
+    check_choice("--surface", surface, SURFACES)
+    check_number("--amplitude-deg", amplitude_deg, low=0.0, low_open=True, high=90.0,
+                 unit="deg")
+    check_number("--base", base, low=0.0, low_open=True, high=60.0, unit="s")
+    options = parse_options(option or [])
+    check_study(n, method, model, options, seed, workers)
+    check_paths({"--card": card}, [Output("--output", output, folder=True)])
     settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
     kwargs = dict(card=card, n=n, method=method, model=model,
                   designs=tuple(design or DESIGNS), equal=equal, settings=settings,
                   reference=reference, workers=workers, dask_address=dask, seed=seed,
-                  options=parse_options(option or []))
+                  options=options)
     with count_progress("design-compare", show=not quiet) as update:
         progress = ((lambda kind, done, total: update(done, total, f"design-compare {kind}"))
                     if update else None)

@@ -10,10 +10,11 @@ import numpy as np
 import typer
 
 from flightid.cli.checks import (
+    Output,
     check_frequency_band,
     check_number,
+    check_paths,
     check_suffix,
-    check_writable,
     printed_warnings,
     read_record,
 )
@@ -39,14 +40,14 @@ def frequency_response_command(
     f_max: Annotated[float | None, typer.Option(help="highest frequency, Hz")] = None,
     plot: Annotated[str | None, typer.Option(help="write a Bode/coherence PNG here")] = None,
     force: Annotated[bool, typer.Option(
-        "--force", help="run even when the memory estimate exceeds what is available")
-    ] = False,
+        "--force", help="run when the memory estimate exceeds what is available, and "
+                        "write --plot over an existing file of another kind")] = False,
 ) -> None:
     """Frequency response output/input with coherence and random error (CIFER style)."""
     for w in window or ():
         check_number("--window", w, low=0.0, low_open=True, unit="s")
-    check_writable("--plot", plot)
     check_suffix("--plot", plot, (".png", ".svg", ".pdf"))
+    check_paths({"RECORD": record}, [Output("--plot", plot)], force)
     with printed_warnings("frequency-response"):
         rec = read_record(record, "frequency-response", force=force)
     check_frequency_band(f_min, f_max, rec.dt)

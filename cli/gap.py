@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import gap
-from flightid.cli.checks import read_record
+from flightid.cli.checks import Output, check_paths, read_record
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
 from flightid.identification.gap.diagnose import GapResult, injected
@@ -45,6 +45,9 @@ def gap_command(
         "--surfaces", help="what the records' surface channels hold: position or command "
                            "(default: their metadata, else position); on commands the "
                            "actuator effects are candidates")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="run when the memory estimate exceeds what is available, and write "
+                        "--report over an existing file of another kind")] = False,
 ) -> None:
     """Is there a gap between a JSBSim model and flight data; where it lies, which
     catalogue effect causes it, and how far it shrinks on held-out data (each axis)."""
@@ -54,9 +57,12 @@ def gap_command(
         raise ValueError(f"--axis must be lateral, longitudinal or both, got {axis!r}")
     if surfaces not in (None, "position", "command"):
         raise ValueError(f"--surfaces must be position or command, got {surfaces!r}")
+    check_paths({"RECORDS": records, "--validate": validate, "--model": model},
+                [Output("--report", report, "html"),
+                 Output("--write-aircraft", write, folder=True)], force)
     # each record read once: resource guard, unit check, jitter re-gridded
-    recs = [read_record(path, "gap") for path in records]
-    vals = [read_record(path, "gap") for path in validate or []]
+    recs = [read_record(path, "gap", force=force) for path in records]
+    vals = [read_record(path, "gap", force=force) for path in validate or []]
     result = gap(recs, model, validate=vals or None, refine=refine, axis=axis, surfaces=surfaces,
                  names=[Path(p).stem for p in records],
                  validate_names=[f"validate {Path(p).stem}" for p in validate or []])

@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import gap_benchmark
+from flightid.cli.checks import MAX_SEED, Output, check_choice, check_count, check_paths
 from flightid.cli.progress import count_progress
 from flightid.scenarios.gap_benchmark import Benchmark
 
@@ -47,6 +48,9 @@ def _print(bench: Benchmark) -> None:
                   f"reported partly unexplained {_pct(s['false_partly_unexplained'])}")
 
 
+MAX_CASES = 10_000  # each case is a flight and a diagnosis (seconds each)
+
+
 def gap_benchmark_command(
     n: Annotated[int, typer.Option("--n", "-n", help="number of cases")] = 10,
     seed: Annotated[int, typer.Option(help="seed of the draw")] = 0,
@@ -59,10 +63,10 @@ def gap_benchmark_command(
     """The gap diagnosis's blind check: N cases (an aircraft, an effect in or outside the
     catalogue, a moderate magnitude) flown, diagnosed without being told, and scored: top-1
     and top-3 attribution, held-out shrink, magnitude error, unexplained when outside."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
-    if n < 1:
-        raise ValueError(f"--n must be at least 1, got {n}")
+    check_choice("--format", format, ("table", "json"))
+    check_count("--n", n, low=1, high=MAX_CASES)
+    check_count("--seed", seed, low=0, high=MAX_SEED)
+    check_paths({}, [Output("--output", output, folder=True)])
     with count_progress("gap blind check", show=not quiet) as update:
         bench = gap_benchmark(n, seed, output, update)
     if format == "json":

@@ -10,8 +10,10 @@ import typer
 from rich.console import Console
 
 from flightid.cli.checks import (
+    Output,
     check_choice,
-    check_writable,
+    check_model,
+    check_paths,
     printed_warnings,
     read_options,
     read_record,
@@ -30,7 +32,7 @@ def parse_options(texts: list[str]) -> dict[str, str]:
     for text in texts:
         key, sep, value = text.partition("=")
         if not sep or not key.strip():
-            raise ValueError(f"option {text!r}: expected KEY=VALUE")
+            raise ValueError(f"--option {text!r}: expected KEY=VALUE")
         out[key.strip()] = value
     return out
 
@@ -80,16 +82,21 @@ def identify_command(
         "--strict", help="exit 4 when the fit does not converge (default: a warning and "
                          "'not converged' in the verdict line, exit 0)")] = False,
     force: Annotated[bool, typer.Option(
-        "--force", help="run even when the memory estimate exceeds what is available")
-    ] = False,
+        "--force", help="run when the memory estimate exceeds what is available, and write "
+                        "--report over an existing file of another kind")] = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
-    check_writable("--report", report)
+    check_model("--model", method, model)
+    check_paths({"RECORD": record, "--truth": truth}, [Output("--report", report, "html")],
+                force)
     with printed_warnings("identify"):
         data = read_record(record, method, force=force)
+        if isinstance(span, tuple) and (span[1] <= data.time[0] or span[0] >= data.time[-1]):
+            raise ValueError(f"--window {window}: outside the record ({data.time[0]:g} .. "
+                             f"{data.time[-1]:g} s)")
         if multistep_input and method == "oe":
             options["multistep_inputs"] = list(multistep_input)
         elif multistep_input:

@@ -13,6 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.cli import study_options as opts
+from flightid.cli.checks import Output, check_choice, check_paths, check_study
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.scenarios import montecarlo
@@ -76,11 +77,14 @@ def montecarlo_command(
 ) -> None:
     """Fly a card N times, identify each flight, and summarize bias, scatter and the
     coverage of the reported bounds; a rerun continues the study in -o."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
     if dask and dask_scheduler_file:
         raise ValueError("give --dask or --dask-scheduler-file, not both")
     options = parse_options(option or [])
+    check_study(n, method, model, options, seed, workers)
+    check_paths({"CARD": card, "--disperse-file": disperse_file,
+                 "--dask-scheduler-file": dask_scheduler_file},
+                [Output("--output", output, folder=True)])
     specs = [*(read_dispersions(disperse_file) if disperse_file else []), *(disperse or [])]
     kwargs = dict(method=method, model=model, options=options, study_dir=output,
                   workers=workers, dask_address=dask, seed=seed,
@@ -98,8 +102,8 @@ def montecarlo_report_command(
     format: Annotated[str, typer.Option(help="table or json")] = "table",
 ) -> None:
     """Rebuild STUDY/report.html from the stored results and print the summary."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
+    check_paths({}, [Output("STUDY", study, folder=True)])
     path, summary = montecarlo.rebuild_report(study)
     _print(summary, format)
     if format == "table":

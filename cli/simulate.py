@@ -10,13 +10,14 @@ import typer
 
 from flightid.channels import CHANNELS
 from flightid.cli.checks import (
-    SEED_MAX,
+    MAX_SEED,
     SIZE_LIMIT,
+    Output,
     check_count,
+    check_paths,
     check_rate,
     check_size,
     check_suffix,
-    check_writable,
     estimated_bytes,
 )
 from flightid.cli.progress import flight_progress
@@ -35,7 +36,8 @@ def simulate_command(
     seed: Annotated[int | None, typer.Option(help="random seed (default: the card's)")] = None,
     list_cards_: Annotated[bool, typer.Option("--list", help="list the library cards")] = False,
     force: Annotated[bool, typer.Option(
-        "--force", help=f"write even above {SIZE_LIMIT / 1e9:g} GB")] = False,
+        "--force", help=f"write even above {SIZE_LIMIT / 1e9:g} GB, and over an existing "
+                        "file of another kind")] = False,
 ) -> None:
     """Fly a flight card (file or library name) and write the measured record."""
     if list_cards_:
@@ -49,9 +51,10 @@ def simulate_command(
                                 ("--truth", truth, RECORD_SUFFIXES),
                                 ("--plot", plot, (".png", ".svg", ".pdf"))):
         check_suffix(option, path, kinds)
-        check_writable(option, path)
+    check_paths({"CARD": card}, [Output("--output", output), Output("--truth", truth),
+                                 Output("--plot", plot)], force)
     if seed is not None:
-        check_count("--seed", seed, low=0, high=SEED_MAX)
+        check_count("--seed", seed, low=0, high=MAX_SEED)
     loaded = load_card(card)
     check_rate(f"card {loaded.name}: rate", loaded.rate, loaded.duration)
     samples = loaded.duration * loaded.rate + 1

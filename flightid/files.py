@@ -6,12 +6,16 @@ failure (an exception, a full disk, a crash) therefore never leaves a half-writt
 never damages a file that was already there. A folder that cannot be written raises an
 ``OSError`` of the usual type (``PermissionError``, ``FileNotFoundError``,
 ``NotADirectoryError``, ...) whose message reads ``cannot write <path>: <reason>``.
+
+:func:`content_kind` tells what an existing file holds from its first bytes, so that a
+command never writes a file of another kind over it unasked (``flightid.cli.checks``).
 """
 
 from __future__ import annotations
 
 import errno
 import os
+import re
 import secrets
 import stat
 from collections.abc import Callable, Iterator
@@ -112,3 +116,74 @@ def check_writable(path: str | Path) -> None:
     tmp.unlink(missing_ok=True)
     if path.exists() and not os.access(path, os.W_OK):
         raise _cannot_write(path, PermissionError(errno.EACCES, "permission denied"))
+
+
+# -- what a file holds, judged by its content ---------------------------------------------
+
+#: the kind of file each output suffix writes
+SUFFIX_KINDS = {".parquet": "parquet", ".csv": "csv", ".html": "html", ".htm": "html",
+                ".tlog": "tlog", ".json": "json", ".png": "png", ".pdf": "pdf", ".svg": "svg",
+                ".xml": "xml", ".mat": "mat"}
+_MAGIC = ((b"PAR1", "parquet"), (b"\x89PNG\r\n\x1a\n", "png"), (b"%PDF", "pdf"),
+          (b"MATLAB", "mat"))
+_MAVLINK_V1, _MAVLINK_V2 = 0xFE, 0xFD
+
+
+def suffix_kind(path: str | os.PathLike[str]) -> str | None:
+    """The kind of file a path's suffix stands for (``SUFFIX_KINDS``), or None."""
+    return SUFFIX_KINDS.get(Path(path).suffix.lower())
+
+
+def _tlog_frame_length(data: bytes, at: int) -> int | None:
+    """Length of the tlog entry (8-byte time stamp + MAVLink frame) at ``at``, or None."""
+    if len(data) < at + 10:
+        return None
+    magic = data[at + 8]
+    if magic == _MAVLINK_V2:
+        signed = 13 if len(data) > at + 10 and data[at + 10] & 0x01 else 0
+        return 8 + 12 + data[at + 9] + signed
+    if magic == _MAVLINK_V1:
+        return 8 + 8 + data[at + 9]
+    return None
+
+
+def content_kind(path: str | os.PathLike[str]) -> str | None:
+    """What a file holds, judged by its first bytes: ``parquet``, ``png``, ``pdf``,
+    ``mat`` (MATLAB), ``tlog`` (8-byte time stamps, each followed by a MAVLink frame),
+    ``html``, ``svg``, ``xml``, ``json``, ``csv`` (a flightid CSV record or a text table
+    with a comma in its first line), ``empty``; None when it cannot be told (or the path is
+    not a readable file)."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(4096)
+    except OSError:
+        return None
+    if not data:
+        return "empty"
+    for magic, kind in _MAGIC:
+        if data.startswith(magic):
+            return kind
+    first = _tlog_frame_length(data, 0)
+    if first is not None and (len(data) < first + 9
+                              or _tlog_frame_length(data, first) is not None):
+        return "tlog"
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:  # binary, or a character cut at the 4096th byte
+        if exc.start < len(data) - 4:
+            return None
+        text = data[:exc.start].decode("utf-8")
+    text = text.lstrip("\ufeff \t\r\n")
+    low = text[:1024].lower()
+    if low.startswith(("<!doctype html", "<html")):
+        return "html"
+    if "<svg" in low and low.startswith(("<svg", "<?xml")):
+        return "svg"
+    if low.startswith("<?xml") or low.startswith("<"):
+        return "xml"
+    if low.startswith("{") or re.match(r"\[\s*[\[{\"\d\-\]tfn]", low):
+        return "json"  # (a TOML table "[name]" is not JSON)
+    line = text.split("\n", 1)[0]
+    if line.startswith("# flightid-record") or "," in line:
+        return "csv"
+    return None

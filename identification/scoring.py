@@ -144,6 +144,8 @@ def load_truth(path: str | Path) -> dict[str, float]:
         data = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg})") from exc
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a JSON text file (its bytes are not UTF-8)") from None
     if isinstance(data, dict) and isinstance(data.get("truth"), dict):
         data = data["truth"]
     if not isinstance(data, dict):

@@ -500,6 +500,14 @@ def _flown_designs(card: Card, seed: int) -> list[InputDesign]:
     return out
 
 
+def trim_card(card: Card):
+    """The card's aircraft (augmented when the card says so) and its trim at the card's
+    condition: ``(model, trimmed)``. Raises TrimError (a condition that cannot be flown)
+    or TrimInputError (one that is not a condition)."""
+    model = load(augmented(card) if card.augmentation else card.aircraft)
+    return model, trim(model, card.condition)
+
+
 def fly_card(card: Card, seed: int | None = None,
              progress: Callable[[int, int], None] | None = None
              ) -> tuple[FlightRecord, FlightRecord]:
@@ -513,9 +521,7 @@ def fly_card(card: Card, seed: int | None = None,
     seed = card.seed if seed is None else int(seed)
     if not 0 <= seed <= 2**32 - 1:
         raise ValueError(f"seed must be 0..{2**32 - 1} (a 32-bit random seed), got {seed}")
-    c = card.condition
-    model = load(augmented(card) if card.augmentation else card.aircraft)
-    trimmed = trim(model, c)
+    model, trimmed = trim_card(card)
     n = int(round(card.duration * card.rate)) + 1
     t = np.arange(n) / card.rate
     designs = _flown_designs(card, seed)

@@ -26,6 +26,7 @@ from flightid.units import DEG, FT, LBF
 
 CLEARANCE_M = 300.0
 MAX_ALTITUDE_M = 25_000.0
+MAX_SPEED_M_S = 1_500.0  # m/s: Mach 4.4 at sea level, beyond any aircraft JSBSim models here
 MAX_MACH_PROPELLER = 0.9
 # converged-trim check (JSBSim's own tolerances are 1e-3 ft/s^2 and 1e-4 rad/s^2)
 MAX_LINEAR_ACCEL = 0.01  # m/s^2
@@ -132,12 +133,16 @@ def _settle_surfaces(model: Model) -> None:
 
 
 def _check_inputs(model: Model, altitude_m: float, speed_m_s: float, gamma: float,
-                  bank: float) -> None:
+                  bank: float, flaps: float = 0.0) -> None:
     where = f"{model.name} at {speed_m_s:g} m/s, {altitude_m:g} m"
-    if not all(map(math.isfinite, (altitude_m, speed_m_s, gamma, bank))):
-        raise TrimInputError(f"{where}: altitude, speed, gamma and bank must be finite numbers")
+    if not all(map(math.isfinite, (altitude_m, speed_m_s, gamma, bank, flaps))):
+        raise TrimInputError(f"{where}: altitude, speed, gamma, bank and flaps must be finite "
+                             "numbers")
     if speed_m_s <= 0:
         raise TrimInputError(f"{model.name}: speed must be positive, got {speed_m_s:g} m/s")
+    if speed_m_s > MAX_SPEED_M_S:
+        raise TrimInputError(
+            f"{model.name}: speed {speed_m_s:g} m/s is absurd (above {MAX_SPEED_M_S:g} m/s)")
     if altitude_m < 0:
         raise TrimInputError(f"{model.name}: altitude must be >= 0 m, got {altitude_m:g} m")
     if altitude_m > MAX_ALTITUDE_M:
@@ -145,7 +150,8 @@ def _check_inputs(model: Model, altitude_m: float, speed_m_s: float, gamma: floa
             f"{model.name}: altitude {altitude_m:g} m is absurd (above {MAX_ALTITUDE_M:g} m)"
         )
     if abs(gamma) >= math.radians(60):
-        raise TrimInputError(f"{where}: flight-path angle {math.degrees(gamma):g} deg is absurd")
+        raise TrimInputError(f"{where}: flight-path angle (gamma) {math.degrees(gamma):g} deg is "
+                             "absurd")
     if abs(bank) >= math.radians(80):
         raise TrimInputError(f"{where}: bank {math.degrees(bank):g} deg is absurd (>= 80 deg)")
 
@@ -305,7 +311,7 @@ def trim(model: Model | str, altitude_m: float | FlightCondition,
     if speed_m_s is None:
         raise TrimInputError("trim needs a speed (m/s) or a FlightCondition")
     model = as_model(model)
-    _check_inputs(model, altitude_m, speed_m_s, gamma_rad, bank_rad)
+    _check_inputs(model, altitude_m, speed_m_s, gamma_rad, bank_rad, flaps_rad)
     fdm = model.fdm
     terrain_m = min(0.0, altitude_m - CLEARANCE_M)
     # Mach limit for propeller aircraft, from the speed of sound at that altitude

@@ -9,7 +9,7 @@ from conftest import TWIN_OTTER
 
 @pytest.mark.parametrize("args, expected", [
     (["identify", "no/such/flight.parquet"], "no/such/flight.parquet: no such file"),
-    (["identify", str(TWIN_OTTER), "--method", "xx"], "unknown method 'xx'"),
+    (["identify", str(TWIN_OTTER), "--method", "xx"], "--method 'xx' is not accepted"),
     (["identify", str(TWIN_OTTER), "--method", "oe", "--option", "foo=1"],
      "unknown option(s) foo for method oe; valid: derivatives"),
     (["frequency-response", str(TWIN_OTTER), "--input", "zz", "--output", "q"],

@@ -121,9 +121,9 @@ def test_draw_keeps_near_zero_stability_derivatives_stable():
 def test_command_rejects_bad_input():
     runner = CliRunner()
     r = runner.invoke(app, ["gap-benchmark", "--n", "0"])
-    assert r.exit_code == 2 and "--n must be at least 1" in r.output
+    assert r.exit_code == 2 and "--n must be 1..10000, got 0" in r.output
     r = runner.invoke(app, ["gap-benchmark", "--format", "xml"])
-    assert r.exit_code == 2 and "table or json" in r.output
+    assert r.exit_code == 2 and "use one of table, json" in r.output
 
 
 def test_json_shape(results, tmp_path):

@@ -80,8 +80,8 @@ def test_rerun_continues_and_extends(base, tmp_path):
 
 def test_another_description_is_refused(base):
     folder, _, _ = base
-    with pytest.raises(montecarlo.StudyMismatch, match="method: stored 'oe', asked 'ls'"):
-        montecarlo.run(CARD, 6, "ls", MODEL, study_dir=folder, workers=1)
+    with pytest.raises(montecarlo.StudyMismatch, match="method: stored 'oe', asked 'ee'"):
+        montecarlo.run(CARD, 6, "ee", MODEL, study_dir=folder, workers=1)
     with pytest.raises(montecarlo.StudyMismatch, match="seed"):
         montecarlo.run(CARD, 6, METHOD, MODEL, study_dir=folder, workers=1, seed=12345)
 

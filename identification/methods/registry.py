@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from importlib.metadata import entry_points
 
+from flightid.identification import model_structure
 from flightid.identification.methods import (
     equation_error,
     filter_error,
@@ -83,3 +84,22 @@ def get(method_id: str) -> Method:
     if method_id not in found:
         raise ValueError(f"unknown method {method_id!r}; known: {', '.join(found)}")
     return found[method_id]
+
+
+def check_model(method_id: str, model: str) -> str:
+    """``model`` (a preset, its alias, 'auto', or for the regression methods a structure
+    'Coef=term+term; ...') in its canonical spelling if method ``method_id`` takes it;
+    else a ValueError naming the models the method takes."""
+    spec = get(method_id)
+    name = model_structure.canonical(str(model))
+    if name == "auto" or name in spec.models and name != "structure":
+        return name
+    if "structure" in spec.models and "=" in name:
+        model_structure.regression(name)  # a malformed structure: ValueError naming the part
+        return name
+    aliases = {v: k for k, v in model_structure.ALIASES.items()}
+    accepted = [f"{m} ({aliases[m]})" if m in aliases else m
+                for m in spec.models if m != "structure"]
+    extra = " or a structure 'Coef=term+term; ...'" if "structure" in spec.models else ""
+    raise ValueError(f"model {model!r} is not a model of method {spec.id}; use auto, "
+                     f"{', '.join(accepted)}{extra}")

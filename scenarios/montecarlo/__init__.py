@@ -16,17 +16,16 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from flightid.scenarios.cards import load_card
 from flightid.scenarios.montecarlo import store
-from flightid.scenarios.montecarlo.disperse import dispersed_card, parse_all
+from flightid.scenarios.montecarlo.disperse import parse_all
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
 from flightid.scenarios.montecarlo.report import write_report
 from flightid.scenarios.montecarlo.store import SUMMARY_COLUMNS, StudyMismatch, done, load
-from flightid.scenarios.montecarlo.study import Study, run_realization
+from flightid.scenarios.montecarlo.study import Study, dry_run, run_realization
 from flightid.scenarios.montecarlo.summary import Summary, summarize
 
-__all__ = ["Study", "StudyMismatch", "Summary", "done", "load", "rebuild_report", "run",
-           "run_realization", "summarize"]
+__all__ = ["Study", "StudyMismatch", "Summary", "done", "dry_run", "load", "rebuild_report",
+           "run", "run_realization", "summarize"]
 
 
 def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
@@ -46,26 +45,25 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
     anew for each realization; their values are stored in its rows and its truth is the
     dispersed aircraft's.
     """
-    if int(n) < 1:
-        raise ValueError(f"n must be at least 1, got {n}")
-    loaded = load_card(card)  # a bad card fails here, not once per realization
     dispersions = parse_all(disperse)  # a bad spec fails here, not once per realization
-    dispersed_card(loaded, dispersions, {d.key: d.neutral for d in dispersions})
     description = Study(str(card), int(n), method, model, dict(options or {}), seed,
                         tuple(d.text() for d in dispersions))
+    loaded = dry_run(description)  # method, model, options, seed, trim: before any write
     folder = Path(study_dir) if study_dir is not None else \
         Path("montecarlo") / f"{loaded.name}-{method}-{model}"
-    store.open_study(folder, description)
-    todo = sorted(set(range(int(n))) - done(folder))
 
     def keep(index: int, rows: list[dict[str, Any]]) -> None:
         store.write_realization(folder, index, rows)
 
     if dask_address is not None or dask_scheduler_file is not None:
         with dask_client(dask_address, None if dask_scheduler_file is None
-                         else str(dask_scheduler_file)) as client:
-            run_dask(description, todo, keep, client, progress)
+                         else str(dask_scheduler_file)) as client:  # fails fast, unwritten
+            store.open_study(folder, description)
+            run_dask(description, sorted(set(range(int(n))) - done(folder)), keep, client,
+                     progress)
     else:
+        store.open_study(folder, description)
+        todo = sorted(set(range(int(n))) - done(folder))
         run_local(description, todo, keep, workers, progress, store_in=folder)  # workers store
     df = load(folder, SUMMARY_COLUMNS)
     df = df[df["index"] < int(n)]

@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import select
+import threading
+import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
@@ -23,6 +26,7 @@ from flightid.scenarios.montecarlo.store import write_realization
 from flightid.scenarios.montecarlo.study import Study, run_realization
 
 Rows = list[dict[str, Any]]
+DASK_CONNECT_S = 5.0  # an unreachable scheduler is reported after this many s
 OnResult = Callable[[int, Rows], None]
 Progress = Callable[[int, int], None]
 
@@ -37,6 +41,43 @@ def _run_and_store(description: Study, index: int, folder: str) -> None:
     (the Parquet write costs this process's CPU, which on a machine with one core per
     worker would be taken from the workers); no rows go back."""
     write_realization(folder, index, run_realization(description, index))
+
+
+def _exit_with(parent: int) -> None:
+    """In a worker: end this process as soon as the study's process ``parent`` ends
+    (killed by SIGKILL, SIGTERM or SIGINT included), so that no worker outlives it; the
+    forkserver and the resource tracker then end by themselves (their pipes close). A
+    pidfd (Linux 5.3+) is waited on in a daemon thread; elsewhere the thread polls
+    whether ``parent`` still exists every 0.5 s."""
+
+    def watch() -> None:
+        try:
+            fd = os.pidfd_open(parent)
+        except (AttributeError, OSError):
+            fd = None
+        if fd is not None:
+            select.select([fd], [], [])
+        else:
+            while True:
+                try:
+                    os.kill(parent, 0)
+                except ProcessLookupError:
+                    break
+                except PermissionError:
+                    pass
+                time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="flightid-parent-watch", daemon=True).start()
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes now (an interrupted study: a realization in
+    flight is not waited for)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
@@ -55,13 +96,16 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
         return
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if context.get_start_method() == "forkserver":  # workers start with this module imported,
+        context.set_forkserver_preload([__name__])  # so their parent watch starts at once
 
     def submit(index: int) -> Future:
         if store_in is not None:
             return pool.submit(_run_and_store, description, index, str(store_in))
         return pool.submit(run_realization, description, index)
 
-    with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context) as pool:
+    with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context,
+                             initializer=_exit_with, initargs=(os.getpid(),)) as pool:
         pending: dict[Future, int] = {}
         queue = iter(todo)
         try:
@@ -85,6 +129,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
         except BaseException:
             for fut in pending:
                 fut.cancel()
+            _stop_workers(pool)
             raise
 
 
@@ -94,9 +139,23 @@ def dask_client(address: str | None = None, scheduler_file: str | None = None
     by ``scheduler_file`` (as written by ``dask scheduler --scheduler-file``)."""
     if (address is None) == (scheduler_file is None):
         raise ValueError("give a Dask scheduler address or a scheduler file (one of them)")
-    if scheduler_file is not None:
-        return distributed.Client(scheduler_file=str(scheduler_file))
-    return distributed.Client(address)
+    where = f"--dask-scheduler-file {scheduler_file}" if scheduler_file is not None \
+        else f"--dask {address}"
+    try:
+        if scheduler_file is not None:
+            if not Path(scheduler_file).is_file():
+                raise FileNotFoundError(f"{scheduler_file}: no such Dask scheduler file")
+            return distributed.Client(scheduler_file=str(scheduler_file),
+                                      timeout=DASK_CONNECT_S)
+        return distributed.Client(address, timeout=DASK_CONNECT_S)
+    except FileNotFoundError:
+        raise
+    except OSError as exc:  # unreachable (refused, timed out, no such host)
+        raise ValueError(f"{where}: no Dask scheduler answered within {DASK_CONNECT_S:g} s "
+                         f"({exc})") from None
+    except (ValueError, TypeError, KeyError) as exc:  # not an address, a damaged file
+        raise ValueError(f"{where}: not a usable Dask scheduler address "
+                         f"({type(exc).__name__}: {exc})") from None
 
 
 def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,

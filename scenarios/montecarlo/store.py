@@ -56,8 +56,8 @@ def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
     path = root / DESCRIPTION
     identity = description.identity()
     if path.exists():
-        stored = json.loads(path.read_text())
-        old = stored.get("identity", {})
+        stored = _read_json(path)
+        old = stored["identity"]
         diffs = [f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}"
                  for k in sorted(set(old) | set(identity)) if old.get(k) != identity.get(k)]
         if diffs:
@@ -79,7 +79,22 @@ def read_description(study_dir: str | Path) -> dict[str, Any]:
     path = Path(study_dir) / DESCRIPTION
     if not path.exists():
         raise FileNotFoundError(f"{study_dir}: not a Monte Carlo study (no {DESCRIPTION})")
-    return json.loads(path.read_text())
+    return _read_json(path)
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    """A study.json with its description and identity; a damaged one raises ValueError
+    naming it."""
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if not (isinstance(stored, dict) and isinstance(stored.get("identity"), dict)
+                and isinstance(stored.get("description"), dict)):
+            raise ValueError("no 'identity' and 'description' objects")
+        int(stored["description"]["n"])
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: a damaged study description ({type(exc).__name__}: "
+                         f"{exc}); restore it, or start the study in another folder") from None
+    return stored
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
@@ -114,7 +129,14 @@ def done(study_dir: str | Path) -> set[int]:
     folder = Path(study_dir) / RESULTS
     if not folder.is_dir():
         return set()
-    return {int(p.name[len(_PREFIX):-len(_SUFFIX)]) for p in folder.glob(f"{_PREFIX}*{_SUFFIX}")}
+    out = set()
+    for p in folder.glob(f"{_PREFIX}*{_SUFFIX}"):
+        index = p.name[len(_PREFIX):-len(_SUFFIX)]
+        if not index.isdigit():
+            raise ValueError(f"{p}: not a realization result of this study (expected "
+                             f"{_PREFIX}NNNNNN{_SUFFIX}); move it out of {folder}")
+        out.add(int(index))
+    return out
 
 
 def load(study_dir: str | Path, columns: Sequence[str] | None = None) -> pd.DataFrame:
@@ -131,9 +153,14 @@ def load(study_dir: str | Path, columns: Sequence[str] | None = None) -> pd.Data
         return empty[list(columns)] if columns is not None else empty
     tables = []
     for f in files:  # ParquetFile.read: the cheapest whole-file read of pyarrow
-        with pq.ParquetFile(f) as handle:
-            tables.append(handle.read(columns=list(columns) if columns is not None else None,
-                                      use_threads=False))
+        try:
+            with pq.ParquetFile(f) as handle:
+                tables.append(handle.read(
+                    columns=list(columns) if columns is not None else None,
+                    use_threads=False))
+        except (OSError, pa.ArrowException, ValueError) as exc:
+            raise ValueError(f"{f}: a damaged realization result ({exc}); remove it and "
+                             "rerun the study to compute it again") from None
     # (a failed realization has no dispersion columns: they are null there)
     table = pa.concat_tables(tables, promote_options="default")
     df = table.to_pandas(strings_to_categorical=columns is not None)

@@ -9,7 +9,9 @@ process (local or on a Dask cluster) needs nothing else.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -18,10 +20,12 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from flightid.identification.identify import identify
+from flightid.identification.methods import registry
 from flightid.identification.scoring import record_truth, score
-from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed
+from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed, trim_card
 from flightid.scenarios.montecarlo.disperse import COLUMN_PREFIX, dispersed_card, draw, parse_all
 from flightid.sim.flight import DepartureError
+from flightid.sim.model import quiet
 from flightid.sim.trim import TrimError
 
 # the columns of a result row, in order
@@ -80,6 +84,31 @@ class Study:
         out["options"] = {k: _plain(v) for k, v in self.options.items()}
         out["disperse"] = list(self.disperse)
         return out
+
+
+MAX_SEED = 2**32 - 1
+
+
+def dry_run(description: Study) -> Card:
+    """Check a study before any realization flies, and return its card: n at least 1, the
+    seed in 0..2**32-1, the method, model and options (``registry``), the dispersions,
+    and one realization's trim (the card with every dispersion at its neutral value at the
+    card's condition). Raises ValueError (CardError) for a bad description, TrimError when
+    the card cannot be trimmed: nothing of the study is written before."""
+    if isinstance(description.n, bool) or int(description.n) < 1:
+        raise ValueError(f"n must be at least 1, got {description.n}")
+    if description.seed is not None and not 0 <= int(description.seed) <= MAX_SEED:
+        raise ValueError(f"seed must be 0..{MAX_SEED}, got {description.seed}")
+    spec = registry.get(description.method)
+    registry.check_model(description.method, description.model)
+    spec.make_options(dict(description.options))
+    card = load_card(description.card)
+    dispersions = parse_all(description.disperse)
+    # JSBSim's console notes (on the process's stdout and through Python's) would mix into
+    # a --format json output
+    with quiet(), contextlib.redirect_stdout(io.StringIO()):
+        trim_card(dispersed_card(card, dispersions, {d.key: d.neutral for d in dispersions}))
+    return card
 
 
 def _plain(value: Any) -> Any:

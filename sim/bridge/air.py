@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -68,10 +69,13 @@ class BridgeConfig:
     ground_system: int = 255  # who may send controls (the ground station's system id)
     ground_component: int | None = None  # its component id; None = any component
     signing_key: bytes | None = None  # 32 bytes: sign telemetry, accept signed controls only
+    # file keeping the last signing timestamp of each stream across runs (signing.state_path)
+    signing_state: str | Path | None = None
 
     def sender_filter(self) -> SenderFilter:
         """The check every received packet passes before it may move a surface."""
-        return SenderFilter(self.ground_system, self.ground_component, self.signing_key)
+        return SenderFilter(self.ground_system, self.ground_component, self.signing_key,
+                            state=self.signing_state)
 
 
 @dataclass
@@ -290,7 +294,9 @@ class _ControlReader:
         self.heard = self.heard or bool(frames)
         for fr in frames:
             c = controls_from_message(fr.msg, self.servo_map)
-            if c is not None:
+            if c is not None and not all(math.isfinite(v) for v in c.values()):
+                self.senders.refuse("not finite")  # NaN is not "hold the trim"
+            elif c is not None:
                 out.append(c)
         self.received += len(out)
         return out
@@ -369,6 +375,18 @@ def serve_simulation(
         raise ValueError(f"simulation step must be > 0 s, got {sim.dt}")
     air = AirSide(config, 1.0 / sim.dt, link)
     reader = _ControlReader(link, config.servo_map, config.sender_filter())
+    try:
+        return _fly(sim, initial, link, config, air, reader, steps=steps, lockstep=lockstep,
+                    timeout=timeout, controls=controls)
+    finally:
+        reader.senders.save()  # the signing timestamps seen, for the next run
+
+
+def _fly(sim: SteppingSimulation, initial: dict[str, float], link: Link,
+         config: BridgeConfig, air: AirSide, reader: _ControlReader, *, steps: int,
+         lockstep: bool, timeout: float, controls: dict[str, float] | None,
+         ) -> tuple[BridgeReport, list[dict[str, float]]]:
+    """The flight of :func:`serve_simulation`, after its checks."""
     held = dict(controls or {})
     history = [dict(initial)]
     t = 0.0

@@ -17,6 +17,7 @@ A UART model sends n bytes in 10 n / baud seconds; a packet that would wait for 
 
 from __future__ import annotations
 
+import errno
 import ipaddress
 import os
 import select
@@ -216,7 +217,17 @@ class UdpLink(Link):
         self.peer: tuple[str, int] | None = None
         host, port = address
         if listen:
-            self.sock.bind((_loopback(host), port))
+            try:
+                self.sock.bind((_loopback(host), port))
+            except OSError as exc:
+                self.sock.close()
+                why = (f"port {port} on {_loopback(host)} is in use (another recorder or "
+                       "ground station listens there)" if exc.errno == errno.EADDRINUSE
+                       else f"cannot listen on port {port} of {_loopback(host)}: "
+                            f"{(exc.strerror or str(exc)).lower()}")
+                new = OSError(why)
+                new.errno = exc.errno
+                raise new from None
         else:
             self.sock.bind(("127.0.0.1", 0))
             self.peer = (_loopback(host), port)

@@ -40,7 +40,7 @@ def test_frequency_response_arguments(cli, flight_file, extra, expected):
     (["--method", "oe", "--option", "max_iterations=abc"], "max_iterations"),
     (["--option", "colored"], "expected KEY=VALUE"),
     (["--format", "xml"], "--format 'xml' is not accepted; use one of table, json"),
-    (["--method", "xx"], "unknown method 'xx'"),
+    (["--method", "xx"], "--method 'xx' is not accepted; use one of ee"),
     (["--window", "5,2"], "START < END"),
     (["--window", "nan,3"], "must be finite"),
     (["--window", "abc"], "--window must be auto, none or START,END"),
@@ -69,7 +69,7 @@ def test_identify_arguments(cli, flight_file, extra, expected):
     (["simulate", "navion-demo", "-o", "out.parquet", "--plot", "p.txt"],
      "unknown format '.txt'"),
     (["simulate", "navion-demo", "-o", "out.parquet", "--seed", "-1"], "--seed must be"),
-    (["montecarlo", "navion-demo", "-n", "-3", "-o", "mc"], "n must be at least 1"),
+    (["montecarlo", "navion-demo", "-n", "-3", "-o", "mc"], "-n must be 1..1000000, got -3"),
 ])
 def test_other_command_arguments(cli, tmp_path, monkeypatch, args, expected):
     monkeypatch.chdir(tmp_path)
