@@ -1,0 +1,92 @@
+"""``flightid import``: flight data from elsewhere (delimited text) into a flight record,
+through a column map and the aircraft's constants, then the unit check and the time-base
+re-grid that every command applies when it reads a record (``flightid.cli.checks``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flightid.cli.checks import check_suffix, check_writable, printed_warnings
+from flightid.identification import time_base
+from flightid.identification.unit_sanity import check_units
+from flightid.importers.ascii import read_delimited
+from flightid.importers.constants import AircraftConstants, read_constants
+from flightid.importers.mapping import ColumnMap, parse_map, read_map
+from flightid.record import FlightRecord
+from flightid.sim.model import load
+
+RECORD_SUFFIXES = (".parquet", ".csv")
+
+
+def aircraft_constants(aircraft: str) -> AircraftConstants:
+    """Constants from a TOML file (``flightid.importers.constants``) or from a project or
+    JSBSim aircraft (name or XML path): its mass, inertias and reference geometry as
+    loaded (no sensor positions: JSBSim's are not the data system's)."""
+    if aircraft.lower().endswith(".toml"):
+        return read_constants(aircraft)
+    model = load(aircraft)  # an unknown name: ValueError naming the known ones
+    return AircraftConstants(name=aircraft, mass_properties=model.mass_properties(),
+                             reference=model.reference,
+                             source=f"mass properties and reference geometry of {aircraft!r}")
+
+
+def column_map(mapping: str | None, maps: list[str], units: list[str]) -> ColumnMap:
+    """The TOML mapping file's entries with the ``--map`` and ``--unit`` ones over them."""
+    base = read_map(mapping) if mapping else ColumnMap()
+    return base.merged(parse_map(maps, units))
+
+
+def finish(record: FlightRecord, source: str, constants: AircraftConstants | None
+           ) -> FlightRecord:
+    """The aircraft's constants added, the unit check (units look wrong: exit 2) and a
+    jittered time base re-gridded (a warning says so)."""
+    if constants is not None:
+        record = constants.apply(record)
+    check_units(record, None, f"import ({source})")
+    return time_base.regrid_jitter(record)
+
+
+def import_command(
+    file: Annotated[str, typer.Argument(help="flight data: delimited text (.csv, .txt, .dat, "
+                                             "...)")],
+    output: Annotated[str, typer.Option("-o", "--output",
+                                        help="flight record to write (.parquet or .csv)")],
+    map_: Annotated[list[str] | None, typer.Option(
+        "--map", help="COLUMN=channel,... (repeatable; 'time' for the time column)")] = None,
+    mapping: Annotated[str | None, typer.Option(
+        help="TOML mapping file: a columns table (COLUMN = channel) and a units table "
+             "(COLUMN = unit); docs/import.md")
+    ] = None,
+    unit: Annotated[list[str] | None, typer.Option(
+        "--unit", help="COLUMN=unit,... over the file's units row (deg, kt, ft, g, psf, ...)")
+    ] = None,
+    aircraft: Annotated[str | None, typer.Option(
+        help="aircraft constants: a TOML file, or a project or JSBSim aircraft name")] = None,
+) -> None:
+    """Import flight data from elsewhere into a flight record (SI units, canonical names)."""
+    check_suffix("--output", output, RECORD_SUFFIXES)
+    check_writable("--output", output)
+    if Path(output).resolve() == Path(file).resolve():
+        raise ValueError(f"--output {output} is the input file; an output never replaces "
+                         "an input: write elsewhere")
+    cmap = column_map(mapping, map_ or [], unit or [])
+    if not Path(file).is_file():
+        raise FileNotFoundError(f"{file}: no such file")
+    constants = aircraft_constants(aircraft) if aircraft else None
+    with printed_warnings("import"):
+        record = finish(read_delimited(file, cmap), file, constants)
+        record.write(output)
+    info = record.meta.extra["import"]
+    mapped = [f"{c}->{v['channel']}" for c, v in info["columns"].items() if v["channel"]]
+    typer.echo(f"{output}: {len(record)} samples at {record.meta.sample_rate:.6g} Hz, "
+               f"{len(mapped)} mapped column(s): {', '.join(mapped)}")
+    if info["kept"]:
+        typer.echo(f"  kept under their own names: {', '.join(info['kept'])}")
+    if constants is not None:
+        typer.echo(f"  constants: {constants.source}")
+    for line in (*info["dropped"], *info["notes"]):
+        typer.echo(f"  note: {line}")
+    typer.echo("  units checked against physics (unit_sanity): plausible")
