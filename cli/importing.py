@@ -1,6 +1,7 @@
-"""``flightid import``: flight data from elsewhere (delimited text) into a flight record,
-through a column map and the aircraft's constants, then the unit check and the time-base
-re-grid that every command applies when it reads a record (``flightid.cli.checks``)."""
+"""``flightid import``: flight data from elsewhere (delimited text, ArduPilot DataFlash
+``.bin``) into a flight record, through a column or servo map and the aircraft's
+constants, then the unit check and the time-base re-grid that every command applies when
+it reads a record (``flightid.cli.checks``)."""
 
 from __future__ import annotations
 
@@ -14,11 +15,14 @@ from flightid.identification import time_base
 from flightid.identification.unit_sanity import check_units
 from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import AircraftConstants, read_constants
+from flightid.importers.dataflash import read_dataflash
 from flightid.importers.mapping import ColumnMap, parse_map, read_map
+from flightid.importers.servos import ServoMapping, read_servo_map
 from flightid.record import FlightRecord
 from flightid.sim.model import load
 
 RECORD_SUFFIXES = (".parquet", ".csv")
+DATAFLASH_SUFFIXES = (".bin",)
 
 
 def aircraft_constants(aircraft: str) -> AircraftConstants:
@@ -50,8 +54,8 @@ def finish(record: FlightRecord, source: str, constants: AircraftConstants | Non
 
 
 def import_command(
-    file: Annotated[str, typer.Argument(help="flight data: delimited text (.csv, .txt, .dat, "
-                                             "...)")],
+    file: Annotated[str, typer.Argument(help="flight data: ArduPilot DataFlash .bin, or "
+                                             "delimited text (.csv, .txt, .dat, ...)")],
     output: Annotated[str, typer.Option("-o", "--output",
                                         help="flight record to write (.parquet or .csv)")],
     map_: Annotated[list[str] | None, typer.Option(
@@ -65,6 +69,9 @@ def import_command(
     ] = None,
     aircraft: Annotated[str | None, typer.Option(
         help="aircraft constants: a TOML file, or a project or JSBSim aircraft name")] = None,
+    servos: Annotated[str | None, typer.Option(
+        help="DataFlash: TOML servo mapping (output, trim, throws per surface; default "
+             "ArduPlane's order with 30 deg throws); docs/import.md")] = None,
 ) -> None:
     """Import flight data from elsewhere into a flight record (SI units, canonical names)."""
     check_suffix("--output", output, RECORD_SUFFIXES)
@@ -72,13 +79,24 @@ def import_command(
     if Path(output).resolve() == Path(file).resolve():
         raise ValueError(f"--output {output} is the input file; an output never replaces "
                          "an input: write elsewhere")
+    dataflash = Path(file).suffix.lower() in DATAFLASH_SUFFIXES
+    if dataflash and (map_ or mapping or unit):
+        raise ValueError("--map, --mapping and --unit are for delimited text; a DataFlash "
+                         "log takes --servos")
+    if servos and not dataflash:
+        raise ValueError("--servos is for a DataFlash log (.bin)")
     cmap = column_map(mapping, map_ or [], unit or [])
+    servo_map = read_servo_map(servos) if servos else ServoMapping()
     if not Path(file).is_file():
         raise FileNotFoundError(f"{file}: no such file")
     constants = aircraft_constants(aircraft) if aircraft else None
     with printed_warnings("import"):
-        record = finish(read_delimited(file, cmap), file, constants)
+        raw = read_dataflash(file, servo_map) if dataflash else read_delimited(file, cmap)
+        record = finish(raw, file, constants)
         record.write(output)
+    if dataflash:
+        _report_dataflash(output, record, constants)
+        return
     info = record.meta.extra["import"]
     mapped = [f"{c}->{v['channel']}" for c, v in info["columns"].items() if v["channel"]]
     typer.echo(f"{output}: {len(record)} samples at {record.meta.sample_rate:.6g} Hz, "
@@ -88,5 +106,24 @@ def import_command(
     if constants is not None:
         typer.echo(f"  constants: {constants.source}")
     for line in (*info["dropped"], *info["notes"]):
+        typer.echo(f"  note: {line}")
+    typer.echo("  units checked against physics (unit_sanity): plausible")
+
+
+def _report_dataflash(output: str, record: FlightRecord,
+                      constants: AircraftConstants | None) -> None:
+    info = record.meta.extra["dataflash"]
+    typer.echo(f"{output}: {len(record)} samples at {record.meta.sample_rate:.6g} Hz from "
+               f"{info['span_s'][0]:.3f} to {info['span_s'][1]:.3f} s after boot, channels "
+               f"{', '.join(sorted(record.channels))}")
+    used = ("IMU", "ATT", "RCOU", "ARSP", "CTUN", "AOA", "BARO", "GPS")
+    counts = info["counts"]
+    typer.echo("  messages: " + ", ".join(f"{k} {counts[k]}" for k in used if k in counts))
+    outputs = ", ".join(f"{name} C{v['channel']}" for name, v in info["servos"].items())
+    typer.echo(f"  surfaces and throttle are servo commands (RCOU: {outputs}), not surface "
+               "positions (meta.extra surfaces = command)")
+    if constants is not None:
+        typer.echo(f"  constants: {constants.source}")
+    for line in info["notes"]:
         typer.echo(f"  note: {line}")
     typer.echo("  units checked against physics (unit_sanity): plausible")

@@ -1,0 +1,225 @@
+"""ArduPilot DataFlash logs (``.bin``) into a FlightRecord, read with pymavlink's
+``DFReader`` (the loader of MAVExplorer and mavlogdump).
+
+Messages used (ArduPlane names, ``dataflash_formats``):
+
+* IMU (instance 0): body rates p, q, r (rad/s) and specific force ax, ay, az (m/s^2);
+* ATT: phi, theta (centidegrees) and psi (0-360 deg, unwrapped);
+* ARSP (instance 0) or, without it, CTUN: airspeed. ArduPilot logs the equivalent
+  airspeed; it becomes true airspeed V with the ISA density at the barometric pressure
+  altitude (EAS * sqrt(rho0 / rho), Anderson, Introduction to Flight, sec. 4.12); ARSP's
+  differential pressure is qbar (Pa);
+* RCOU: servo outputs (PWM, us) mapped to de, da, dr, throttle through a
+  :class:`~flightid.importers.servos.ServoMapping`: these are COMMANDS, not surface
+  positions, and the record says so (``meta.extra['surfaces'] = 'command'``);
+* AOA (alpha, beta in deg), BARO (static pressure, pressure altitude h), GPS (latitude,
+  longitude) when the log has them.
+
+Every message carries TimeUS on the autopilot's one clock; each channel is interpolated
+linearly from its own message times onto one uniform grid at the IMU's rate (or a given
+rate) over the span the needed messages share. Other instances (a second IMU), messages
+not listed and the PARM/MSG texts are not kept; the counts are in
+``meta.extra['dataflash']``. A log cut in the middle of a message keeps every whole
+message before the cut and says how many bytes were dropped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pymavlink import DFReader
+
+from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
+from flightid.flight_record import FlightRecord, RecordMeta, check_samples
+from flightid.importers.servos import ServoMapping
+from flightid.units import DEG
+
+REQUIRED = ("IMU", "ATT", "RCOU")
+AIRSPEED = ("ARSP", "CTUN")  # one of them
+OPTIONAL = ("AOA", "BARO", "GPS")
+# message -> fields read (TimeUS always)
+FIELDS: dict[str, tuple[str, ...]] = {
+    "IMU": ("GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ"),
+    "ATT": ("Roll", "Pitch", "Yaw"),
+    "ARSP": ("Airspeed", "DiffPress"),
+    "CTUN": ("Aspd",),
+    "RCOU": tuple(f"C{i}" for i in range(1, 15)),
+    "AOA": ("AOA", "SSA"),
+    "BARO": ("Press",),
+    "GPS": ("Lat", "Lng", "Alt"),
+}
+CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "mass")
+
+
+def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], int,
+                                  list[str]]:
+    """Per message: TimeUS (s) and fields of instance 0; counts of every message type;
+    bytes after the last whole message; what DFReader complained about."""
+    noise = io.StringIO()
+    rows: dict[str, list[list[float]]] = {k: [] for k in FIELDS}
+    counts: dict[str, int] = {}
+    other_instances: dict[str, int] = {}
+    with contextlib.redirect_stderr(noise), contextlib.redirect_stdout(noise):
+        try:
+            log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+        except Exception as exc:  # DFReader raises assorted types on a foreign file
+            raise ValueError(f"{path}: not a readable DataFlash log ({type(exc).__name__}: "
+                             f"{exc})") from None
+        end = 0
+        while True:
+            msg = log.recv_msg()
+            if msg is None:
+                break
+            end = log.offset
+            kind = msg.get_type()
+            counts[kind] = counts.get(kind, 0) + 1
+            if kind not in FIELDS or "TimeUS" not in msg.get_fieldnames():
+                continue
+            if "I" in msg.get_fieldnames() and getattr(msg, "I", 0) != 0:
+                other_instances[kind] = other_instances.get(kind, 0) + 1
+                continue
+            rows[kind].append([msg.TimeUS * 1e-6, *(float(getattr(msg, f)) for f in
+                                                    FIELDS[kind])])
+        size = log.data_len
+    notes = [line.strip() for line in noise.getvalue().splitlines() if line.strip()][:5]
+    notes += [f"{n} {k} message(s) of other instances not kept" for k, n in
+              other_instances.items()]
+    series = {}
+    for kind, values in rows.items():
+        if values:
+            arr = np.array(values)
+            series[kind] = {"t": arr[:, 0], **{f: arr[:, i + 1] for i, f in
+                                               enumerate(FIELDS[kind])}}
+    return series, counts, size - end, notes
+
+
+def _increasing(kind: str, s: dict[str, np.ndarray], notes: list[str]) -> dict[str, np.ndarray]:
+    """The messages of one type whose time increases (a repeated or earlier TimeUS is
+    dropped and counted)."""
+    t = s["t"]
+    keep = np.concatenate([[True], np.diff(t) > 0])
+    keep &= t >= np.maximum.accumulate(t)
+    if not keep.all():
+        notes.append(f"{int((~keep).sum())} {kind} message(s) with a repeated or earlier "
+                     "TimeUS dropped")
+    return {k: v[keep] for k, v in s.items()}
+
+
+def read_dataflash(path: str | Path, servos: ServoMapping | None = None,
+                   rate: float | None = None) -> FlightRecord:
+    """Read an ArduPilot DataFlash log into a FlightRecord in SI units (module docstring).
+
+    Parameters
+    ----------
+    path : the ``.bin`` log.
+    servos : servo outputs to surfaces (default: ArduPlane's order, 1500 us trims, 30 deg
+        throws).
+    rate : output rate (Hz); default the IMU's.
+
+    Returns
+    -------
+    FlightRecord with time in s since the autopilot booted, ``meta.extra['surfaces'] =
+    'command'`` and ``meta.extra['dataflash']`` (message counts, rate, servo mapping, what
+    was dropped).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    servos = servos or ServoMapping()
+    series, counts, cut_bytes, notes = _collect(path)
+    missing = [k for k in REQUIRED if k not in series]
+    if not any(k in series for k in AIRSPEED):
+        missing.append(" or ".join(AIRSPEED))
+    if missing:
+        present = ", ".join(sorted(counts)) or "none"
+        raise ValueError(f"{path}: the log lacks the message(s) {', '.join(missing)} that a "
+                         f"flight record needs (IMU, ATT, RCOU, and ARSP or CTUN); it has: "
+                         f"{present}")
+    series = {k: _increasing(k, s, notes) for k, s in series.items()}
+    if cut_bytes:
+        notes.append(f"the log ends in a cut message: {cut_bytes} byte(s) after the last "
+                     "whole message dropped")
+    imu = series["IMU"]
+    if imu["t"].size < 2:
+        raise ValueError(f"{path}: fewer than two IMU messages")
+    step = 1.0 / rate if rate else float(np.median(np.diff(imu["t"])))
+    used = [k for k in (*REQUIRED, "ARSP" if "ARSP" in series else "CTUN") if k in series]
+    lo = max(series[k]["t"][0] for k in used)
+    hi = min(series[k]["t"][-1] for k in used)
+    n = int(np.floor((hi - lo) / step + 1e-6)) + 1
+    if n < 2:
+        raise ValueError(f"{path}: the messages {', '.join(used)} share less than two "
+                         f"samples of time ({lo:.3f} to {hi:.3f} s)")
+    grid = lo + step * np.arange(n)
+
+    def at(kind: str, name: str) -> np.ndarray:
+        return np.interp(grid, series[kind]["t"], series[kind][name])
+
+    ch: dict[str, np.ndarray] = {
+        "p": at("IMU", "GyrX"), "q": at("IMU", "GyrY"), "r": at("IMU", "GyrZ"),
+        "ax": at("IMU", "AccX"), "ay": at("IMU", "AccY"), "az": at("IMU", "AccZ"),
+        "phi": at("ATT", "Roll") * DEG, "theta": at("ATT", "Pitch") * DEG,
+    }
+    att = series["ATT"]
+    yaw = np.unwrap(att["Yaw"] * DEG)  # ArduPilot's 0-360 deg, started in (-pi, pi]
+    ch["psi"] = np.interp(grid, att["t"], yaw - 2 * np.pi * np.round(yaw[0] / (2 * np.pi)))
+    if "BARO" in series:
+        ch["p_static"] = at("BARO", "Press")
+        ch["h"] = isa_pressure_altitude(ch["p_static"])
+    elif "GPS" in series:
+        ch["h"] = at("GPS", "Alt")
+    if "ARSP" in series:
+        eas = at("ARSP", "Airspeed")
+        ch["qbar"] = at("ARSP", "DiffPress")
+    else:
+        eas = at("CTUN", "Aspd")
+        notes.append("no ARSP: airspeed from CTUN (no dynamic pressure)")
+    if "h" in ch:
+        ch["V"] = eas * np.sqrt(RHO0 / isa_density(ch["h"]))
+    else:
+        ch["V"] = eas
+        notes.append("no BARO or GPS: V is ArduPilot's equivalent airspeed (no altitude "
+                     "for the density)")
+    if "AOA" in series:
+        ch["alpha"], ch["beta"] = at("AOA", "AOA") * DEG, at("AOA", "SSA") * DEG
+    if "GPS" in series:
+        ch["latitude"], ch["longitude"] = at("GPS", "Lat") * DEG, at("GPS", "Lng") * DEG
+    ch.update(_commands(path, series["RCOU"], grid, servos))
+    check_samples(str(path), grid, ch)
+    condition: dict[str, Any] = {k: float(np.mean(ch[k])) for k in CONDITION_CHANNELS
+                                 if k in ch}
+    condition["note"] = "means over the record (SI units), the reference of perturbation models"
+    extra = {
+        "surfaces": "command",
+        "dataflash": {
+            "file": path.name, "counts": counts, "rate_hz": 1.0 / step,
+            "span_s": [float(lo), float(hi)], "servos": servos.as_dict(),
+            "dropped_bytes": int(cut_bytes), "notes": notes,
+            "time": "s since the autopilot booted (TimeUS); every channel interpolated "
+                    "linearly from its own message times onto this grid",
+        },
+    }
+    meta = RecordMeta(condition=condition, sample_rate=1.0 / step, extra=extra,
+                      provenance=f"ArduPilot DataFlash log {path.name} read by "
+                                 "flightid.importers.dataflash (pymavlink DFReader)")
+    return FlightRecord(grid, ch, meta)
+
+
+def _commands(path: Path, rcou: dict[str, np.ndarray], grid: np.ndarray,
+              servos: ServoMapping) -> dict[str, np.ndarray]:
+    out = {}
+    for name, output in servos.outputs().items():
+        pwm = rcou[f"C{output}"]
+        if not np.any(pwm):
+            raise ValueError(f"{path}: servo output {output} (mapped to {name}) is 0 in every "
+                             "RCOU message: the output is not in use; fix the servo mapping")
+        if name == "throttle":
+            values = servos.throttle.value(pwm)
+        else:
+            values = servos.surfaces[name].deflection(pwm)
+        out[name] = np.interp(grid, rcou["t"], values)
+    return out
