@@ -18,11 +18,12 @@ from flightid.importers.constants import AircraftConstants, read_constants
 from flightid.importers.dataflash import read_dataflash
 from flightid.importers.mapping import ColumnMap, parse_map, read_map
 from flightid.importers.servos import ServoMapping, read_servo_map
+from flightid.importers.ulog import read_ulog
 from flightid.record import FlightRecord
 from flightid.sim.model import load
 
 RECORD_SUFFIXES = (".parquet", ".csv")
-DATAFLASH_SUFFIXES = (".bin",)
+LOG_READERS = {".bin": (read_dataflash, "dataflash"), ".ulg": (read_ulog, "ulog")}
 
 
 def aircraft_constants(aircraft: str) -> AircraftConstants:
@@ -54,8 +55,9 @@ def finish(record: FlightRecord, source: str, constants: AircraftConstants | Non
 
 
 def import_command(
-    file: Annotated[str, typer.Argument(help="flight data: ArduPilot DataFlash .bin, or "
-                                             "delimited text (.csv, .txt, .dat, ...)")],
+    file: Annotated[str, typer.Argument(
+        help="flight data: ArduPilot DataFlash .bin, PX4 ULog .ulg, or delimited text "
+             "(.csv, .txt, .dat, ...)")],
     output: Annotated[str, typer.Option("-o", "--output",
                                         help="flight record to write (.parquet or .csv)")],
     map_: Annotated[list[str] | None, typer.Option(
@@ -70,8 +72,8 @@ def import_command(
     aircraft: Annotated[str | None, typer.Option(
         help="aircraft constants: a TOML file, or a project or JSBSim aircraft name")] = None,
     servos: Annotated[str | None, typer.Option(
-        help="DataFlash: TOML servo mapping (output, trim, throws per surface; default "
-             "ArduPlane's order with 30 deg throws); docs/import.md")] = None,
+        help="DataFlash and ULog: TOML servo mapping (output, trim, throws per surface; "
+             "default ArduPlane's order with 30 deg throws); docs/import.md")] = None,
 ) -> None:
     """Import flight data from elsewhere into a flight record (SI units, canonical names)."""
     check_suffix("--output", output, RECORD_SUFFIXES)
@@ -79,23 +81,23 @@ def import_command(
     if Path(output).resolve() == Path(file).resolve():
         raise ValueError(f"--output {output} is the input file; an output never replaces "
                          "an input: write elsewhere")
-    dataflash = Path(file).suffix.lower() in DATAFLASH_SUFFIXES
-    if dataflash and (map_ or mapping or unit):
+    log_reader = LOG_READERS.get(Path(file).suffix.lower())
+    if log_reader and (map_ or mapping or unit):
         raise ValueError("--map, --mapping and --unit are for delimited text; a DataFlash "
-                         "log takes --servos")
-    if servos and not dataflash:
-        raise ValueError("--servos is for a DataFlash log (.bin)")
+                         "or ULog log takes --servos")
+    if servos and not log_reader:
+        raise ValueError("--servos is for a DataFlash (.bin) or ULog (.ulg) log")
     cmap = column_map(mapping, map_ or [], unit or [])
     servo_map = read_servo_map(servos) if servos else ServoMapping()
     if not Path(file).is_file():
         raise FileNotFoundError(f"{file}: no such file")
     constants = aircraft_constants(aircraft) if aircraft else None
     with printed_warnings("import"):
-        raw = read_dataflash(file, servo_map) if dataflash else read_delimited(file, cmap)
+        raw = log_reader[0](file, servo_map) if log_reader else read_delimited(file, cmap)
         record = finish(raw, file, constants)
         record.write(output)
-    if dataflash:
-        _report_dataflash(output, record, constants)
+    if log_reader:
+        _report_log(output, record, constants, log_reader[1])
         return
     info = record.meta.extra["import"]
     mapped = [f"{c}->{v['channel']}" for c, v in info["columns"].items() if v["channel"]]
@@ -110,18 +112,20 @@ def import_command(
     typer.echo("  units checked against physics (unit_sanity): plausible")
 
 
-def _report_dataflash(output: str, record: FlightRecord,
-                      constants: AircraftConstants | None) -> None:
-    info = record.meta.extra["dataflash"]
+def _report_log(output: str, record: FlightRecord, constants: AircraftConstants | None,
+                key: str) -> None:
+    info = record.meta.extra[key]
     typer.echo(f"{output}: {len(record)} samples at {record.meta.sample_rate:.6g} Hz from "
                f"{info['span_s'][0]:.3f} to {info['span_s'][1]:.3f} s after boot, channels "
                f"{', '.join(sorted(record.channels))}")
     used = ("IMU", "ATT", "RCOU", "ARSP", "CTUN", "AOA", "BARO", "GPS")
     counts = info["counts"]
-    typer.echo("  messages: " + ", ".join(f"{k} {counts[k]}" for k in used if k in counts))
-    outputs = ", ".join(f"{name} C{v['channel']}" for name, v in info["servos"].items())
-    typer.echo(f"  surfaces and throttle are servo commands (RCOU: {outputs}), not surface "
-               "positions (meta.extra surfaces = command)")
+    kept = [f"{k} {n}" for k, n in counts.items() if key == "ulog" or k in used]
+    typer.echo(f"  {'messages' if key == 'dataflash' else 'topics'}: {', '.join(kept)}")
+    source = "RCOU" if key == "dataflash" else info["commands_from"]
+    outputs = ", ".join(f"{name} output {v['channel']}" for name, v in info["servos"].items())
+    typer.echo(f"  surfaces and throttle are servo commands ({source}: {outputs}), not "
+               "surface positions (meta.extra surfaces = command)")
     if constants is not None:
         typer.echo(f"  constants: {constants.source}")
     for line in info["notes"]:

@@ -96,13 +96,16 @@ def _header(servos: ServoMapping) -> list[bytes]:
     return out
 
 
-def _times(record: FlightRecord, rate: float) -> np.ndarray:
+def message_times(record: FlightRecord, rate: float) -> np.ndarray:
+    """Times (s) of a message sent at ``rate`` (Hz) over the record, from its start."""
     t0, t1 = float(record.time[0]), float(record.time[-1])
     return t0 + np.arange(int(math.floor((t1 - t0) * rate + 1e-6)) + 1) / rate
 
 
-def _values(record: FlightRecord, t: np.ndarray, name: str, default: float = math.nan
+def sampled(record: FlightRecord, t: np.ndarray, name: str, default: float = math.nan
             ) -> np.ndarray:
+    """Channel ``name`` at times ``t`` (s; linear interpolation), or ``default`` when the
+    record lacks it."""
     if name not in record:
         return np.full(t.size, default)
     return np.interp(t, record.time, record[name])
@@ -144,52 +147,52 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
         rate = rates.get(name, 0.0)
         if not rate > 0:
             return
-        t = _times(record, rate)
+        t = message_times(record, rate)
         us = np.round((t - record.time[0] + BOOT_S) * 1e6).astype(np.int64)
         order = list(RATES).index(name)
         for k, message in enumerate(build(t, us)):
             rows.append((int(us[k]), order, message))
 
-    h = _values(record, record.time, "h", 0.0)
+    h = sampled(record, record.time, "h", 0.0)
     h0 = float(h[0])
 
     def imu(t, us):
-        v = [_values(record, t, c) for c in ("p", "q", "r", "ax", "ay", "az")]
+        v = [sampled(record, t, c) for c in ("p", "q", "r", "ax", "ay", "az")]
         f = BY_NAME["IMU"]
         return [_pack(f, us[k], 0, *(x[k] for x in v), 0, 0, 25.0, 1, 1,
                       int(rates["IMU"]), int(rates["IMU"])) for k in range(t.size)]
 
     def att(t, us):
-        roll, pitch = _cd(_values(record, t, "phi")), _cd(_values(record, t, "theta"))
-        yaw = np.round((_values(record, t, "psi") / DEG % 360.0) * 100.0).astype(int) % 36000
+        roll, pitch = _cd(sampled(record, t, "phi")), _cd(sampled(record, t, "theta"))
+        yaw = np.round((sampled(record, t, "psi") / DEG % 360.0) * 100.0).astype(int) % 36000
         f = BY_NAME["ATT"]
         return [_pack(f, us[k], roll[k], roll[k], pitch[k], pitch[k], yaw[k], yaw[k], 0, 0, 3)
                 for k in range(t.size)]
 
     def aoa(t, us):
-        a, b = _values(record, t, "alpha") / DEG, _values(record, t, "beta") / DEG
+        a, b = sampled(record, t, "alpha") / DEG, sampled(record, t, "beta") / DEG
         return [_pack(BY_NAME["AOA"], us[k], a[k], b[k]) for k in range(t.size)]
 
     def eas(t):
-        rho = isa_density(_values(record, t, "h", 0.0))
-        return _values(record, t, "V") * np.sqrt(rho / RHO0)
+        rho = isa_density(sampled(record, t, "h", 0.0))
+        return sampled(record, t, "V") * np.sqrt(rho / RHO0)
 
     def temperature_cdeg(t):
-        return np.round((T0 - 0.0065 * _values(record, t, "h", 0.0) - 273.15) * 100).astype(int)
+        return np.round((T0 - 0.0065 * sampled(record, t, "h", 0.0) - 273.15) * 100).astype(int)
 
     def arsp(t, us):
         speed, temp = eas(t), temperature_cdeg(t)
-        qbar = _values(record, t, "qbar", math.nan)
+        qbar = sampled(record, t, "qbar", math.nan)
         qbar = np.where(np.isfinite(qbar), qbar, 0.5 * RHO0 * speed**2)
         return [_pack(BY_NAME["ARSP"], us[k], 0, speed[k], qbar[k], temp[k], qbar[k], 0.0)
                 for k in range(t.size)]
 
     def ctun(t, us):
-        roll, pitch = _cd(_values(record, t, "phi")), _cd(_values(record, t, "theta"))
-        throttle = np.round(100 * _values(record, t, "throttle", 0.0)).astype(int)
+        roll, pitch = _cd(sampled(record, t, "phi")), _cd(sampled(record, t, "theta"))
+        throttle = np.round(100 * sampled(record, t, "throttle", 0.0)).astype(int)
         rudder = np.zeros(t.size, dtype=int)
         if "dr" in servos.surfaces:
-            rudder = np.round(4500 * _values(record, t, "dr", 0.0) /
+            rudder = np.round(4500 * sampled(record, t, "dr", 0.0) /
                               servos.surfaces["dr"].throw).astype(int)
         speed = eas(t)
         return [_pack(BY_NAME["CTUN"], us[k], roll[k], roll[k], pitch[k], pitch[k],
@@ -198,16 +201,16 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
     def rcou(t, us):
         pwm = np.zeros((t.size, RCOU_OUTPUTS), dtype=int)
         for name, servo in servos.surfaces.items():
-            pwm[:, servo.channel - 1] = servo.pwm(_values(record, t, name))
+            pwm[:, servo.channel - 1] = servo.pwm(sampled(record, t, name))
         if servos.throttle is not None:
             pwm[:, servos.throttle.channel - 1] = servos.throttle.pwm(
-                _values(record, t, "throttle"))
+                sampled(record, t, "throttle"))
         pwm = np.clip(pwm, 0, 65535)
         return [_pack(BY_NAME["RCOU"], us[k], *map(int, pwm[k])) for k in range(t.size)]
 
     def baro(t, us):
-        alt = _values(record, t, "h", 0.0)
-        press = _values(record, t, "p_static")
+        alt = sampled(record, t, "h", 0.0)
+        press = sampled(record, t, "p_static")
         isa_p = P0 * ((T0 - 0.0065 * alt) / T0) ** 5.2558774324716
         press = np.where(np.isfinite(press), press, isa_p)
         climb = np.gradient(alt, t) if t.size > 1 else np.zeros(t.size)
@@ -217,11 +220,11 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
                       int(sms[k]), 0.0, 15.0, 1) for k in range(t.size)]
 
     def gps(t, us):
-        lat = np.round(_values(record, t, "latitude", 0.0) / DEG * 1e7).astype(np.int64)
-        lng = np.round(_values(record, t, "longitude", 0.0) / DEG * 1e7).astype(np.int64)
-        alt = np.round(_values(record, t, "h", 0.0) * 100).astype(np.int64)
-        speed = _values(record, t, "V")
-        course = (_values(record, t, "psi", 0.0) / DEG) % 360.0
+        lat = np.round(sampled(record, t, "latitude", 0.0) / DEG * 1e7).astype(np.int64)
+        lng = np.round(sampled(record, t, "longitude", 0.0) / DEG * 1e7).astype(np.int64)
+        alt = np.round(sampled(record, t, "h", 0.0) * 100).astype(np.int64)
+        speed = sampled(record, t, "V")
+        course = (sampled(record, t, "psi", 0.0) / DEG) % 360.0
         gps_s = START_UNIX - GPS_EPOCH_UNIX + GPS_LEAP_S + (t - record.time[0])
         week = (gps_s // WEEK_S).astype(int)
         ms = np.round((gps_s - week * WEEK_S) * 1000).astype(np.int64)
