@@ -186,3 +186,21 @@ def test_degrees_taken_as_radians_are_refused_by_the_unit_check(flight, tmp_path
                                       "--unit", "P=deg/s,Q=deg/s,R=deg/s"])
     assert result.exit_code == 2
     assert "units look wrong" in result.output and not out.exists()
+
+
+def test_an_output_never_replaces_the_input(flight, tmp_path):
+    data = tmp_path / "f.csv"
+    write_dlr(flight, data)
+    before = data.read_bytes()
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(data), "--map", "T=time"])
+    assert result.exit_code == 2 and "an output never replaces an input" in result.output
+    assert data.read_bytes() == before
+
+
+def test_a_map_naming_a_column_the_file_lacks_is_refused_naming_its_columns(flight, tmp_path):
+    data, out = tmp_path / "f.asc", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--map",
+                                      "T=time,ALPHA=alpha"])
+    assert result.exit_code == 2
+    assert "does not have; its columns: T, DELV, PDYN" in result.output
