@@ -11,10 +11,11 @@ from typer.testing import CliRunner
 
 from flightid.api import fly
 from flightid.cli.app import app
+from flightid.identification.windows import window
 from flightid.importers.dataflash import read_dataflash
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.record import read
-from flightid.sim.bridge.dataflash import BOOT_S, RATES, write_dataflash
+from flightid.sim.bridge.dataflash import BOOT_S, RATES, SysIdRun, write_dataflash
 from flightid.units import DEG
 
 F32 = 2.0**-24  # float32 relative rounding
@@ -153,3 +154,23 @@ def test_a_servo_map_to_an_unknown_channel_is_refused_naming_the_valid_ones(log,
     assert result.exit_code == 2
     assert "'elevator' is not a control channel; valid: de, da, dr, df, throttle" in \
         result.output
+
+
+def test_system_identification_chirps_become_maneuver_windows(flight, tmp_path):
+    # the elevator maneuver at 1.0-1.9 s and the rudder one at 8.0-9.0 s logged as
+    # SID_AXIS 11 (pitch mixer) and 12 (yaw mixer) runs
+    runs = [SysIdRun(11, 1.0, 0.9, 0.5, 5.0), SysIdRun(12, 8.0, 0.8, 0.5, 5.0,
+                                                       fade_out_s=0.2)]
+    path = write_dataflash(flight, tmp_path / "sysid.bin", servos=SERVOS, sysid=runs)
+    back = read_dataflash(path, SERVOS)
+    found = back.meta.extra["maneuvers"]
+    assert [m["surfaces"] for m in found] == [["de"], ["dr"]]
+    assert [m["kind"] for m in found] == ["chirp", "chirp"]
+    for m, run in zip(found, runs, strict=True):
+        assert m["start"] == pytest.approx(run.start + BOOT_S, abs=1e-6)
+        # SIDD at the IMU's 50 Hz: the last one TR + TFout after the start
+        assert m["end"] == pytest.approx(run.start + BOOT_S + run.record_s + run.fade_out_s,
+                                         abs=1e-6)
+        assert m["f_start_hz"] == run.f_start_hz and m["f_stop_hz"] == run.f_stop_hz
+    # the methods' window on the elevator: 1 s before the chirp, up to the next maneuver
+    assert window(back, ["de"]) == pytest.approx((BOOT_S, 8.0 + BOOT_S))

@@ -13,7 +13,11 @@ Messages used (ArduPlane names, ``dataflash_formats``):
   :class:`~flightid.importers.servos.ServoMapping`: these are COMMANDS, not surface
   positions, and the record says so (``meta.extra['surfaces'] = 'command'``);
 * AOA (alpha, beta in deg), BARO (static pressure, pressure altitude h), GPS (latitude,
-  longitude) when the log has them.
+  longitude) when the log has them;
+* SIDS and SIDD (ArduPilot's system-identification mode): each chirp becomes a maneuver
+  window in ``meta.extra['maneuvers']`` (the key the methods' windows read), on the
+  control its axis (SID_AXIS) excites, from its SIDS message to its last SIDD message
+  (without SIDD: to SIDS time + TR + TFout).
 
 Every message carries TimeUS on the autopilot's one clock; each channel is interpolated
 linearly from its own message times onto one uniform grid at the IMU's rate (or a given
@@ -35,6 +39,7 @@ from pymavlink import DFReader
 
 from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
+from flightid.importers.dataflash_formats import SYSID_AXES
 from flightid.importers.servos import ServoMapping
 from flightid.units import DEG
 
@@ -51,6 +56,8 @@ FIELDS: dict[str, tuple[str, ...]] = {
     "AOA": ("AOA", "SSA"),
     "BARO": ("Press",),
     "GPS": ("Lat", "Lng", "Alt"),
+    "SIDS": ("Ax", "Mag", "FSt", "FSp", "TR", "TFout"),
+    "SIDD": ("Time",),
 }
 CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "mass")
 
@@ -193,7 +200,7 @@ def read_dataflash(path: str | Path, servos: ServoMapping | None = None,
     condition: dict[str, Any] = {k: float(np.mean(ch[k])) for k in CONDITION_CHANNELS
                                  if k in ch}
     condition["note"] = "means over the record (SI units), the reference of perturbation models"
-    extra = {
+    extra: dict[str, Any] = {
         "surfaces": "command",
         "dataflash": {
             "file": path.name, "counts": counts, "rate_hz": 1.0 / step,
@@ -203,6 +210,8 @@ def read_dataflash(path: str | Path, servos: ServoMapping | None = None,
                     "linearly from its own message times onto this grid",
         },
     }
+    if "SIDS" in series:
+        extra["maneuvers"] = _chirps(series["SIDS"], series.get("SIDD"), grid, notes)
     meta = RecordMeta(condition=condition, sample_rate=1.0 / step, extra=extra,
                       provenance=f"ArduPilot DataFlash log {path.name} read by "
                                  "flightid.importers.dataflash (pymavlink DFReader)")
@@ -222,4 +231,34 @@ def _commands(path: Path, rcou: dict[str, np.ndarray], grid: np.ndarray,
         else:
             values = servos.surfaces[name].deflection(pwm)
         out[name] = np.interp(grid, rcou["t"], values)
+    return out
+
+
+def _chirps(sids: dict[str, np.ndarray], sidd: dict[str, np.ndarray] | None,
+            grid: np.ndarray, notes: list[str]) -> list[dict[str, Any]]:
+    """Maneuver windows [{"kind", "surfaces", "start", "end", ...}] (s) of the chirps of
+    ArduPilot's system-identification mode, within the record's span."""
+    out = []
+    starts = sids["t"]
+    for k, start in enumerate(starts):
+        axis = int(sids["Ax"][k])
+        surface = SYSID_AXES.get(axis)
+        if surface is None:
+            notes.append(f"SIDS at {start:.3f} s excites axis {axis}, not a control "
+                         "surface or the throttle: no maneuver window")
+            continue
+        end = start + float(sids["TR"][k]) + float(sids["TFout"][k])
+        if sidd is not None:
+            following = starts[k + 1] if k + 1 < starts.size else np.inf
+            mine = sidd["t"][(sidd["t"] >= start) & (sidd["t"] < following)]
+            if mine.size:
+                end = float(mine[-1])
+        if end < grid[0] or start > grid[-1]:
+            notes.append(f"chirp on {surface} at {start:.3f} s lies outside the record")
+            continue
+        out.append({"kind": "chirp", "surfaces": [surface],
+                    "start": float(max(start, grid[0])), "end": float(min(end, grid[-1])),
+                    "source": "ArduPilot SIDS/SIDD", "axis": axis,
+                    "f_start_hz": float(sids["FSt"][k]), "f_stop_hz": float(sids["FSp"][k]),
+                    "magnitude": float(sids["Mag"][k])})
     return out

@@ -54,6 +54,12 @@ FORMATS: tuple[LogFormat, ...] = (
     LogFormat(141, "BARO", "QBffcfIffB",
               "TimeUS,I,Alt,Press,Temp,CRt,SMS,Offset,GndTemp,Health",
               "s#mPOnsmO-", "F-00B0C00-"),
+    # ArduPilot's system-identification mode: SIDS once when a chirp starts, SIDD each
+    # logged sample during it
+    LogFormat(142, "SIDS", "QBfffffff", "TimeUS,Ax,Mag,FSt,FSp,TFin,TC,TR,TFout",
+              "s--zzssss", "F--------"),
+    LogFormat(143, "SIDD", "Qfffffffff", "TimeUS,Time,Targ,F,Gx,Gy,Gz,Ax,Ay,Az",
+              "ss-zkkkooo", "F---------"),
 )
 BY_NAME = {f.name: f for f in FORMATS}
 
@@ -67,3 +73,11 @@ MULTS: dict[str, float] = {"-": 0.0, "0": 1.0, "B": 1e-2, "C": 1e-3, "F": 1e-6, 
 
 # ArduPilot SERVOn_FUNCTION values of the controls (SRV_Channel.h)
 SERVO_FUNCTIONS: dict[str, int] = {"da": 4, "de": 19, "throttle": 70, "dr": 21, "df": 3}
+
+# ArduPilot's SystemId AxisType (SID_AXIS) -> the control it excites
+SYSID_AXES: dict[int, str] = {
+    1: "da", 4: "da", 7: "da", 10: "da", 20: "da", 22: "da",  # roll
+    2: "de", 5: "de", 8: "de", 11: "de", 21: "de", 23: "de",  # pitch
+    3: "dr", 6: "dr", 9: "dr", 12: "dr",  # yaw
+    13: "throttle",
+}

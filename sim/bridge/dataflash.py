@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +52,23 @@ GPS_EPOCH_UNIX = 315_964_800  # 1980-01-06 00:00:00 UTC
 GPS_LEAP_S = 18  # GPS - UTC since 2017
 START_UNIX = 1_780_315_200  # the log's first sample: 2026-06-01 12:00:00 UTC
 WEEK_S = 604_800
+
+
+@dataclass(frozen=True)
+class SysIdRun:
+    """One chirp of ArduPilot's system-identification mode as its SIDS message states it:
+    the axis (SID_AXIS, e.g. 11 pitch mixer), the start (s, record time), the chirp's
+    duration TR (s), its start and stop frequencies (Hz), magnitude, fade-in and fade-out
+    times (s). SIDD is logged at the IMU's rate from the start to TR + TFout after it."""
+
+    axis: int
+    start: float
+    record_s: float
+    f_start_hz: float
+    f_stop_hz: float
+    magnitude: float = 1.0
+    fade_in_s: float = 0.0
+    fade_out_s: float = 0.0
 
 
 def _struct(fmt: str) -> struct.Struct:
@@ -118,7 +137,8 @@ def _cd(rad: np.ndarray) -> np.ndarray:
 
 def write_dataflash(record: FlightRecord, path: str | Path, *,
                     servos: ServoMapping | None = None,
-                    rates: dict[str, float] | None = None) -> Path:
+                    rates: dict[str, float] | None = None,
+                    sysid: Sequence[SysIdRun] = ()) -> Path:
     """Write ``record`` (SI, canonical channels) as an ArduPlane-style DataFlash log.
 
     Parameters
@@ -128,6 +148,8 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
     path : the ``.bin`` file (written atomically).
     servos : surfaces and throttle to servo outputs (default ArduPlane's order).
     rates : message -> rate (Hz) over :data:`RATES`; a message at rate 0 is left out.
+    sysid : chirps of ArduPilot's system-identification mode to log as SIDS and SIDD
+        (the flight itself is not changed: the record's inputs are what was flown).
 
     Returns
     -------
@@ -240,6 +262,8 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
         if name == "GPS" and "latitude" not in record:
             continue
         add(name, build)
+    for run in sysid:
+        rows.extend(_sysid_rows(record, run, rates["IMU"]))
     rows.sort(key=lambda r: (r[0], r[1]))
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
@@ -248,3 +272,27 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
         for _, _, message in rows:
             fh.write(message)
     return path
+
+
+def _sysid_rows(record: FlightRecord, run: SysIdRun, rate: float) -> list[tuple[int, int,
+                                                                                  bytes]]:
+    """SIDS at the run's start and SIDD at ``rate`` (Hz) until TR + TFout after it: the
+    chirp's time, the frequency of an exponential sweep from FSt to FSp over TR, body rates
+    (deg/s) and specific force (m/s^2) of the record."""
+    us0 = round((run.start - record.time[0] + BOOT_S) * 1e6)
+    order = len(RATES)
+    rows = [(us0, order, _pack(BY_NAME["SIDS"], us0, run.axis, run.magnitude, run.f_start_hz,
+                               run.f_stop_hz, run.fade_in_s, 0.0, run.record_s,
+                               run.fade_out_s))]
+    n = int(math.floor((run.record_s + run.fade_out_s) * rate + 1e-6)) + 1
+    tau = np.arange(n) / rate
+    t = run.start + tau
+    ratio = run.f_stop_hz / run.f_start_hz if run.f_start_hz > 0 else 1.0
+    freq = run.f_start_hz * ratio ** np.clip(tau / max(run.record_s, 1e-9), 0.0, 1.0)
+    rates_deg = [sampled(record, t, c) / DEG for c in ("p", "q", "r")]
+    force = [sampled(record, t, c) for c in ("ax", "ay", "az")]
+    for k in range(n):
+        us = us0 + round(tau[k] * 1e6)
+        rows.append((us, order + 1, _pack(BY_NAME["SIDD"], us, tau[k], 0.0, freq[k],
+                                          *(x[k] for x in rates_deg), *(x[k] for x in force))))
+    return rows
