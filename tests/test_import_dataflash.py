@@ -174,3 +174,22 @@ def test_system_identification_chirps_become_maneuver_windows(flight, tmp_path):
         assert m["f_start_hz"] == run.f_start_hz and m["f_stop_hz"] == run.f_stop_hz
     # the methods' window on the elevator: 1 s before the chirp, up to the next maneuver
     assert window(back, ["de"]) == pytest.approx((BOOT_S, 8.0 + BOOT_S))
+
+
+def test_damage_inside_a_log_is_skipped_and_counted(log, tmp_path):
+    data = log.read_bytes()
+    k = len(data) // 2
+    junk = bytes(np.random.default_rng(0).integers(0, 256, 100, dtype=np.uint8))
+    damaged = tmp_path / "damaged.bin"
+    damaged.write_bytes(data[:k] + junk + data[k:])
+    back, whole = read_dataflash(damaged, SERVOS), read_dataflash(log, SERVOS)
+    assert len(back) == len(whole)
+    notes = back.meta.extra["dataflash"]["notes"]
+    assert any("unreadable byte(s) skipped" in n for n in notes), notes
+
+
+def test_a_file_that_is_not_a_dataflash_log_is_refused(tmp_path):
+    path = tmp_path / "photo.bin"
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
+    with pytest.raises(ValueError, match="not a DataFlash log: it does not start with"):
+        read_dataflash(path)

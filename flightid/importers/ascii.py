@@ -102,7 +102,7 @@ def read_delimited(path: str | Path, column_map: ColumnMap | None = None) -> Fli
                              f"fields, the header {len(names)}")
         units_row = dict(zip(names, first, strict=True))
         body = body[1:]
-    missing = sorted(set(cmap.columns) - set(names) - set(cmap.columns.values()))
+    missing = sorted((set(cmap.columns) | set(cmap.units)) - set(names))
     if missing:
         raise ValueError(f"{path}: the map names column(s) {', '.join(missing)} that the file "
                          f"does not have; its columns: {', '.join(names)}")

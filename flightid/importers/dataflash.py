@@ -29,8 +29,6 @@ message before the cut and says how many bytes were dropped.
 
 from __future__ import annotations
 
-import contextlib
-import io
 from pathlib import Path
 from typing import Any
 
@@ -38,11 +36,13 @@ import numpy as np
 from pymavlink import DFReader
 
 from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
+from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
 from flightid.importers.dataflash_formats import SYSID_AXES
 from flightid.importers.servos import ServoMapping
 from flightid.units import DEG
 
+HEAD = bytes([0xA3, 0x95])  # every DataFlash message starts with these
 REQUIRED = ("IMU", "ATT", "RCOU")
 AIRSPEED = ("ARSP", "CTUN")  # one of them
 OPTIONAL = ("AOA", "BARO", "GPS")
@@ -66,11 +66,15 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
                                   list[str]]:
     """Per message: TimeUS (s) and fields of instance 0; counts of every message type;
     bytes after the last whole message; what DFReader complained about."""
-    noise = io.StringIO()
     rows: dict[str, list[list[float]]] = {k: [] for k in FIELDS}
     counts: dict[str, int] = {}
     other_instances: dict[str, int] = {}
-    with contextlib.redirect_stderr(noise), contextlib.redirect_stdout(noise):
+    with open(path, "rb") as fh:
+        head = fh.read(3)
+    if head[:2] != HEAD:
+        raise ValueError(f"{path}: not a DataFlash log: it does not start with a DataFlash "
+                         f"message (bytes A3 95; it starts with {head.hex(' ') or 'nothing'})")
+    with captured_output() as said:  # DFReader's indexer prints to the process's stderr
         try:
             log = DFReader.DFReader_binary(str(path), zero_time_base=True)
         except Exception as exc:  # DFReader raises assorted types on a foreign file
@@ -92,7 +96,13 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
             rows[kind].append([msg.TimeUS * 1e-6, *(float(getattr(msg, f)) for f in
                                                     FIELDS[kind])])
         size = log.data_len
-    notes = [line.strip() for line in noise.getvalue().splitlines() if line.strip()][:5]
+    skipped = sum(line.startswith("bad header") for line in said)
+    notes = [f"{skipped} unreadable byte(s) skipped (damage inside the log); the whole "
+             "messages around them kept"] if skipped else []
+    others = [line for line in said if not line.startswith("bad header")]
+    notes += [f"pymavlink: {line}" for line in others[:3]]
+    if len(others) > 3:
+        notes.append(f"pymavlink: {len(others) - 3} more line(s)")
     notes += [f"{n} {k} message(s) of other instances not kept" for k, n in
               other_instances.items()]
     series = {}

@@ -23,14 +23,13 @@ pyulog finds damaged keeps what pyulog could read and says so.
 
 from __future__ import annotations
 
-import contextlib
-import io
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from pyulog import ULog
 
+from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
 from flightid.importers.servos import HALF_RANGE_US, ServoMapping
 from flightid.importers.ulog_topics import TOPICS
@@ -51,8 +50,7 @@ def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str]]:
-    noise = io.StringIO()
-    with contextlib.redirect_stdout(noise), contextlib.redirect_stderr(noise):
+    with captured_output():
         try:
             log = ULog(str(path), list(TOPICS))
         except Exception as exc:  # pyulog raises assorted types on a foreign file
