@@ -17,7 +17,7 @@ from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import AircraftConstants, read_constants
 from flightid.importers.dataflash import read_dataflash
 from flightid.importers.mapping import ColumnMap, parse_map, read_map
-from flightid.importers.servos import ServoMapping, read_servo_map
+from flightid.importers.servos import read_servo_map
 from flightid.importers.ulog import read_ulog
 from flightid.record import FlightRecord
 from flightid.sim.model import load
@@ -73,7 +73,8 @@ def import_command(
         help="aircraft constants: a TOML file, or a project or JSBSim aircraft name")] = None,
     servos: Annotated[str | None, typer.Option(
         help="DataFlash and ULog: TOML servo mapping (output, trim, throws per surface; "
-             "default ArduPlane's order with 30 deg throws); docs/import.md")] = None,
+             "default: a DataFlash log's SERVOn_ parameters, else ArduPlane's order; 30 deg "
+             "throws); docs/import.md")] = None,
 ) -> None:
     """Import flight data from elsewhere into a flight record (SI units, canonical names)."""
     check_suffix("--output", output, RECORD_SUFFIXES)
@@ -88,7 +89,7 @@ def import_command(
     if servos and not log_reader:
         raise ValueError("--servos is for a DataFlash (.bin) or ULog (.ulg) log")
     cmap = column_map(mapping, map_ or [], unit or [])
-    servo_map = read_servo_map(servos) if servos else ServoMapping()
+    servo_map = read_servo_map(servos) if servos else None
     if not Path(file).is_file():
         raise FileNotFoundError(f"{file}: no such file")
     constants = aircraft_constants(aircraft) if aircraft else None

@@ -193,3 +193,16 @@ def test_a_file_that_is_not_a_dataflash_log_is_refused(tmp_path):
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
     with pytest.raises(ValueError, match="not a DataFlash log: it does not start with"):
         read_dataflash(path)
+
+
+def test_without_a_mapping_the_logs_servo_parameters_give_outputs_and_trims(flight, tmp_path):
+    # outputs moved off ArduPlane's default order, offset trims, a reversed elevator, a
+    # 1100-1900 us throttle; throws of 30 deg, the value assumed without a mapping
+    servos = ServoMapping({"da": Servo(5, 1490), "de": Servo(6, 1520, -30 * DEG),
+                           "dr": Servo(7, 1505)}, Throttle(8, 1100, 1900))
+    path = write_dataflash(flight, tmp_path / "params.bin", servos=servos)
+    back, given = read_dataflash(path), read_dataflash(path, servos)
+    for name in ("da", "de", "dr", "throttle"):
+        np.testing.assert_allclose(back[name], given[name], rtol=0, atol=1e-12)
+    assert back.meta.extra["dataflash"]["servos"]["de"]["channel"] == 6
+    assert any("30 deg assumed" in n for n in back.meta.extra["dataflash"]["notes"])

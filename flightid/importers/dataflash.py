@@ -11,7 +11,10 @@ Messages used (ArduPlane names, ``dataflash_formats``):
   differential pressure is qbar (Pa);
 * RCOU: servo outputs (PWM, us) mapped to de, da, dr, throttle through a
   :class:`~flightid.importers.servos.ServoMapping`: these are COMMANDS, not surface
-  positions, and the record says so (``meta.extra['surfaces'] = 'command'``);
+  positions, and the record says so (``meta.extra['surfaces'] = 'command'``). Without a
+  mapping, the log's own parameters give the outputs (SERVOn_FUNCTION), the trims
+  (SERVOn_TRIM), the reversals (SERVOn_REVERSED) and the throttle's range (SERVOn_MIN,
+  SERVOn_MAX); the throws, which no parameter holds, are then 30 deg, and a note says so;
 * AOA (alpha, beta in deg), BARO (static pressure, pressure altitude h), GPS (latitude,
   longitude) when the log has them;
 * SIDS and SIDD (ArduPilot's system-identification mode): each chirp becomes a maneuver
@@ -38,8 +41,8 @@ from pymavlink import DFReader
 from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
 from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
-from flightid.importers.dataflash_formats import SYSID_AXES
-from flightid.importers.servos import ServoMapping
+from flightid.importers.dataflash_formats import SERVO_FUNCTIONS, SYSID_AXES
+from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.units import DEG
 
 HEAD = bytes([0xA3, 0x95])  # every DataFlash message starts with these
@@ -59,15 +62,18 @@ FIELDS: dict[str, tuple[str, ...]] = {
     "SIDS": ("Ax", "Mag", "FSt", "FSp", "TR", "TFout"),
     "SIDD": ("Time",),
 }
+DEFAULT_THROW = 30 * DEG  # rad per 500 us when the throws are not given
 CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "mass")
 
 
 def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], int,
-                                  list[str]]:
+                                  list[str], dict[str, float]]:
     """Per message: TimeUS (s) and fields of instance 0; counts of every message type;
-    bytes after the last whole message; what DFReader complained about."""
+    bytes after the last whole message; what DFReader complained about; the parameters
+    (PARM, last value of each)."""
     rows: dict[str, list[list[float]]] = {k: [] for k in FIELDS}
     counts: dict[str, int] = {}
+    params: dict[str, float] = {}
     other_instances: dict[str, int] = {}
     with open(path, "rb") as fh:
         head = fh.read(3)
@@ -88,6 +94,8 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
             end = log.offset
             kind = msg.get_type()
             counts[kind] = counts.get(kind, 0) + 1
+            if kind == "PARM":
+                params[str(msg.Name)] = float(msg.Value)
             if kind not in FIELDS or "TimeUS" not in msg.get_fieldnames():
                 continue
             if "I" in msg.get_fieldnames() and getattr(msg, "I", 0) != 0:
@@ -111,7 +119,29 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
             arr = np.array(values)
             series[kind] = {"t": arr[:, 0], **{f: arr[:, i + 1] for i, f in
                                                enumerate(FIELDS[kind])}}
-    return series, counts, size - end, notes
+    return series, counts, size - end, notes, params
+
+
+def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
+    """The servo mapping the log's ArduPilot parameters give (module docstring), with
+    :data:`DEFAULT_THROW`; None when no SERVOn_FUNCTION names a control."""
+    functions = {int(v): k for k, v in SERVO_FUNCTIONS.items()}
+    surfaces: dict[str, Servo] = {}
+    throttle = None
+    for n in range(1, 17):
+        name = functions.get(int(params.get(f"SERVO{n}_FUNCTION", 0)))
+        if name is None or n > 14:
+            continue
+        sign = -1.0 if params.get(f"SERVO{n}_REVERSED", 0) else 1.0
+        if name == "throttle":
+            low, high = params.get(f"SERVO{n}_MIN", 1000.0), params.get(f"SERVO{n}_MAX", 2000.0)
+            throttle = Throttle(n, high, low) if sign < 0 else Throttle(n, low, high)
+        elif name not in surfaces:
+            surfaces[name] = Servo(n, params.get(f"SERVO{n}_TRIM", 1500.0),
+                                   sign * DEFAULT_THROW)
+    if not surfaces and throttle is None:
+        return None
+    return ServoMapping(surfaces, throttle)
 
 
 def _increasing(kind: str, s: dict[str, np.ndarray], notes: list[str]) -> dict[str, np.ndarray]:
@@ -133,8 +163,8 @@ def read_dataflash(path: str | Path, servos: ServoMapping | None = None,
     Parameters
     ----------
     path : the ``.bin`` log.
-    servos : servo outputs to surfaces (default: ArduPlane's order, 1500 us trims, 30 deg
-        throws).
+    servos : servo outputs to surfaces (default: the log's SERVOn_ parameters with 30 deg
+        throws, else ArduPlane's order, 1500 us trims, 30 deg throws).
     rate : output rate (Hz); default the IMU's.
 
     Returns
@@ -146,8 +176,17 @@ def read_dataflash(path: str | Path, servos: ServoMapping | None = None,
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
-    servos = servos or ServoMapping()
-    series, counts, cut_bytes, notes = _collect(path)
+    series, counts, cut_bytes, notes, params = _collect(path)
+    if servos is None:
+        servos = servos_from_params(params)
+        if servos is None:
+            servos = ServoMapping()
+            notes.append("no servo mapping given and no SERVOn_FUNCTION parameter in the "
+                         "log: ArduPlane's output order with 30 deg throws assumed")
+        else:
+            notes.append("servo outputs, trims and throttle range from the log's SERVOn_ "
+                         "parameters; throws are in no parameter: 30 deg assumed (give a "
+                         "servo mapping for the real ones)")
     missing = [k for k in REQUIRED if k not in series]
     if not any(k in series for k in AIRSPEED):
         missing.append(" or ".join(AIRSPEED))

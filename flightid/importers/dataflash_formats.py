@@ -71,8 +71,9 @@ UNITS: dict[str, str] = {
 }
 MULTS: dict[str, float] = {"-": 0.0, "0": 1.0, "B": 1e-2, "C": 1e-3, "F": 1e-6, "G": 1e-7}
 
-# ArduPilot SERVOn_FUNCTION values of the controls (SRV_Channel.h)
-SERVO_FUNCTIONS: dict[str, int] = {"da": 4, "de": 19, "throttle": 70, "dr": 21, "df": 3}
+# ArduPilot SERVOn_FUNCTION values of the controls (SRV_Channel.h: k_flap 2, k_aileron 4,
+# k_elevator 19, k_rudder 21, k_throttle 70)
+SERVO_FUNCTIONS: dict[str, int] = {"da": 4, "de": 19, "throttle": 70, "dr": 21, "df": 2}
 
 # ArduPilot's SystemId AxisType (SID_AXIS) -> the control it excites
 SYSID_AXES: dict[int, str] = {

@@ -114,8 +114,12 @@ def read_ulog(path: str | Path, servos: ServoMapping | None = None,
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
-    servos = servos or ServoMapping()
     topics, counts, notes = _topics(path)
+    if servos is None:
+        servos = ServoMapping()
+        notes.append("no servo mapping given: ArduPlane's output order (1 aileron, 2 "
+                     "elevator, 3 throttle, 4 rudder) with 1500 us trims and 30 deg throws "
+                     "assumed")
     missing = [k for k in REQUIRED if k not in topics]
     if not any(k in topics for k in COMMANDS):
         missing.append(" or ".join(COMMANDS))

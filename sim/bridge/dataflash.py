@@ -105,7 +105,8 @@ def _header(servos: ServoMapping) -> list[bytes]:
     params: list[tuple[str, float]] = []
     for name, servo in servos.surfaces.items():
         params += [(f"SERVO{servo.channel}_FUNCTION", SERVO_FUNCTIONS[name]),
-                   (f"SERVO{servo.channel}_TRIM", servo.trim)]
+                   (f"SERVO{servo.channel}_TRIM", servo.trim),
+                   (f"SERVO{servo.channel}_REVERSED", 1.0 if servo.throw < 0 else 0.0)]
     if servos.throttle is not None:
         c = servos.throttle.channel
         params += [(f"SERVO{c}_FUNCTION", SERVO_FUNCTIONS["throttle"]),
