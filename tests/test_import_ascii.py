@@ -17,7 +17,7 @@ from flightid.importers.constants import read_constants
 from flightid.importers.mapping import ColumnMap
 from flightid.record import read
 from flightid.sim.model import load
-from flightid.units import DEG, FT, G0, LBM, SLUG_FT2
+from flightid.units import DEG, FT, G0, KT, LBM, SLUG_FT2
 
 # DLR-style columns: (name, unit in the file, flightid channel, factor SI -> file unit)
 COLUMNS = (
@@ -204,3 +204,16 @@ def test_a_map_naming_a_column_the_file_lacks_is_refused_naming_its_columns(flig
                                       "T=time,ALPHA=alpha"])
     assert result.exit_code == 2
     assert "does not have; its columns: T, DELV, PDYN" in result.output
+
+
+def test_a_csv_with_units_in_its_names_needs_no_map(tmp_path):
+    # flightid names with units in brackets: converted, nothing to map; a comment line first
+    path = tmp_path / "flight.csv"
+    path.write_text("# exported by a logger\ntime,alpha [deg],V (kt),q [deg/s],OAT [degC]\n"
+                    "0.0,2.0,100,0.5,15\n0.1,2.5,101,1.0,15\n0.2,3.0,102,-0.5,15\n")
+    rec = read_delimited(path)
+    np.testing.assert_allclose(rec["alpha"], np.array([2.0, 2.5, 3.0]) * DEG)
+    np.testing.assert_allclose(rec["V"], np.array([100, 101, 102]) * KT)
+    np.testing.assert_allclose(rec["q"], np.array([0.5, 1.0, -0.5]) * DEG)
+    assert rec.unit("OAT") == "degC" and list(rec["OAT"]) == [15.0] * 3
+    assert rec.meta.extra["import"]["kept"] == ["OAT"]
