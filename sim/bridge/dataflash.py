@@ -146,6 +146,9 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
     ----------
     record : the flight; needs p, q, r, ax, ay, az, phi, theta, psi, V and the controls of
         ``servos``; alpha, beta, qbar, h, latitude, longitude are logged when present.
+        The servo outputs (RCOU and CTUN) carry its ``de da dr throttle``: to log
+        commands that differ from the surface positions (ahead of a servo lag), pass
+        ``record.with_channels(de=commanded, ...)``; no other message reads them.
     path : the ``.bin`` file (written atomically).
     servos : surfaces and throttle to servo outputs (default ArduPlane's order).
     rates : message -> rate (Hz) over :data:`RATES`; a message at rate 0 is left out.

@@ -72,6 +72,9 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
     ----------
     record : the flight; needs p, q, r, ax, ay, az, phi, theta, psi, V and the controls of
         ``servos``; qbar, alpha, beta, h, latitude, longitude are logged when present.
+        The servo outputs (actuator_outputs) carry its ``de da dr throttle``: to log
+        commands that differ from the surface positions (ahead of a servo lag), pass
+        ``record.with_channels(de=commanded, ...)``; no other message reads them.
     path : the ``.ulg`` file (written atomically).
     servos : surfaces and throttle to actuator outputs (1-based).
     rates : topic -> rate (Hz) over :data:`RATES`; a topic at rate 0 is left out.
