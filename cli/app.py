@@ -33,6 +33,7 @@ from flightid.cli.frequency_response import frequency_response_command
 from flightid.cli.gap import gap_command
 from flightid.cli.gap_benchmark import gap_benchmark_command
 from flightid.cli.identify import identify_command
+from flightid.cli.importing import import_command
 from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
 from flightid.cli.simulate import simulate_command
@@ -165,6 +166,7 @@ app.command("trim")(trim_command)
 app.command("truth")(truth_command)
 app.add_typer(bridge.app, name="bridge")
 app.command("convert")(bridge.convert_command)
+app.command("import")(import_command)
 app.command("simulate")(simulate_command)
 app.command("compatibility")(compatibility_command)
 app.command("effects")(effects_command)

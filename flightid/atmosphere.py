@@ -24,3 +24,9 @@ def isa_density(h: np.ndarray | float) -> np.ndarray:
     """ISA density (kg/m^3) at altitudes h (m), troposphere (0-11 km; clipped to it)."""
     temp = T0 - LAPSE * np.clip(np.asarray(h, dtype=float), -1000.0, 11000.0)
     return P0 * (temp / T0) ** _EXP / (R_AIR * temp)
+
+
+def isa_pressure_altitude(p: np.ndarray | float) -> np.ndarray:
+    """Altitude (m) of the ISA troposphere at static pressure p (Pa): the inverse of
+    :func:`isa`'s pressure (what an altimeter set to 1013.25 hPa reads)."""
+    return T0 / LAPSE * (1.0 - (np.asarray(p, dtype=float) / P0) ** (1.0 / _EXP))

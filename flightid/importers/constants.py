@@ -1,0 +1,132 @@
+"""An aircraft's constants for an imported record: mass and inertias, reference geometry,
+sensor positions, as a weight-and-balance sheet gives them. A TOML file::
+
+    name = "DLR ATTAS"
+    [mass_properties]          # numbers in SI (kg, kg*m^2) or "VALUE UNIT" text
+    mass = "9800 kg"
+    Ixx = "45000 slug*ft^2"
+    Iyy = 58000.0
+    Izz = 98000.0
+    Ixz = 0.0                  # positive as in Etkin
+    [reference]                # m^2 and m, or "VALUE UNIT"
+    area = "420 ft^2"
+    span = 21.5
+    chord = 2.15
+    [sensors]                  # body axes from the CG (x forward, y right, z down), m
+    alpha_vane = [4.6, 0.0, -0.3]
+    accelerometer = ["1.2 ft", "0 ft", "0 ft"]
+
+The same constants from a project or JSBSim aircraft name are the command line's
+(``flightid.sim.model``, a layer above this one).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flightid.flight_record import FlightRecord, Reference
+from flightid.units import to_si
+
+MASS_PROPERTIES = {"mass": "kg", "Ixx": "kg*m^2", "Iyy": "kg*m^2", "Izz": "kg*m^2",
+                   "Ixz": "kg*m^2"}
+REFERENCE = {"area": "m^2", "span": "m", "chord": "m"}
+
+
+@dataclass
+class AircraftConstants:
+    """Mass (kg), inertias (kg m^2, Ixz positive as in Etkin), reference geometry and
+    sensor positions (m, body axes from the CG) of an aircraft, and where they came from."""
+
+    name: str = ""
+    mass_properties: dict[str, float] = field(default_factory=dict)
+    reference: Reference | None = None
+    sensors: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    source: str = ""
+
+    def apply(self, record: FlightRecord) -> FlightRecord:
+        """``record`` with the mass properties as constant channels (a channel the record
+        already has is kept), the reference geometry, the aircraft name and the sensor
+        positions (``meta.extra['sensor_positions']``, m) in its metadata."""
+        n = len(record)
+        added = {k: np.full(n, v) for k, v in self.mass_properties.items()
+                 if k not in record}
+        extra = dict(record.meta.extra)
+        if self.sensors:
+            extra["sensor_positions"] = {k: list(v) for k, v in self.sensors.items()}
+        if self.source:
+            extra["constants"] = self.source
+        meta = replace(record.meta, aircraft=record.meta.aircraft or self.name,
+                       reference=self.reference or record.meta.reference, extra=extra)
+        return FlightRecord(record.time, {**record.channels, **added}, meta)
+
+
+def quantity(value: Any, si_unit: str, where: str) -> float:
+    """A number (already SI) or 'VALUE UNIT' text converted to ``si_unit``."""
+    if isinstance(value, bool):
+        raise ValueError(f"{where}: {value!r} is not a number")
+    if isinstance(value, int | float):
+        number, factor = float(value), 1.0
+    elif isinstance(value, str):
+        text, _, unit = value.strip().partition(" ")
+        try:
+            number = float(text)
+        except ValueError:
+            raise ValueError(f"{where}: {value!r} must be a number or 'VALUE UNIT' "
+                             f"(e.g. '12.5 {si_unit}')") from None
+        try:
+            factor = to_si(unit, si_unit)[1] if unit.strip() else 1.0
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"{where}: {exc.args[0]}") from None
+    else:
+        raise ValueError(f"{where}: {value!r} must be a number or 'VALUE UNIT'")
+    if not math.isfinite(number):
+        raise ValueError(f"{where}: {value!r} is not finite")
+    return number * factor
+
+
+def read_constants(path: str | Path) -> AircraftConstants:
+    """Aircraft constants from a TOML file (module docstring); values in SI after it."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such aircraft constants file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable TOML file ({exc})") from None
+    unknown = sorted(set(data) - {"name", "mass_properties", "reference", "sensors"})
+    if unknown:
+        raise ValueError(f"{path}: unknown entries {', '.join(unknown)}; an aircraft "
+                         "constants file has name, [mass_properties], [reference], [sensors]")
+    out = AircraftConstants(name=str(data.get("name", "")), source=f"constants file {path}")
+    for key, value in data.get("mass_properties", {}).items():
+        if key not in MASS_PROPERTIES:
+            raise ValueError(f"{path} [mass_properties] {key}: unknown; use "
+                             f"{', '.join(MASS_PROPERTIES)}")
+        out.mass_properties[key] = quantity(value, MASS_PROPERTIES[key],
+                                            f"{path} [mass_properties] {key}")
+    if "mass" in out.mass_properties and not out.mass_properties["mass"] > 0:
+        raise ValueError(f"{path} [mass_properties] mass must be > 0 kg")
+    ref = data.get("reference")
+    if ref is not None:
+        missing = [k for k in REFERENCE if k not in ref]
+        if missing or set(ref) - set(REFERENCE):
+            raise ValueError(f"{path} [reference] needs exactly area, span and chord "
+                             f"(missing: {', '.join(missing) or 'none'})")
+        values = {k: quantity(ref[k], u, f"{path} [reference] {k}") for k, u in
+                  REFERENCE.items()}
+        if not all(v > 0 for v in values.values()):
+            raise ValueError(f"{path} [reference]: area, span and chord must be > 0")
+        out.reference = Reference(**values)
+    for name, position in data.get("sensors", {}).items():
+        if not isinstance(position, list) or len(position) != 3:
+            raise ValueError(f"{path} [sensors] {name}: give [x, y, z] (m, body axes "
+                             "from the CG)")
+        x, y, z = (quantity(v, "m", f"{path} [sensors] {name}") for v in position)
+        out.sensors[name] = (x, y, z)
+    return out

@@ -1,0 +1,210 @@
+"""PX4 ULog files (``.ulg``) into a FlightRecord, read with pyulog.
+
+Topics used (``ulog_topics``):
+
+* ``vehicle_angular_velocity`` (else ``sensor_combined``'s gyro): p, q, r (rad/s);
+  ``sensor_combined``: specific force ax, ay, az (m/s^2);
+* ``vehicle_attitude``: the quaternion (body FRD to NED), as phi, theta, psi (rad);
+* ``airspeed``: true airspeed V (m/s); ``differential_pressure``: qbar (Pa);
+* ``actuator_outputs`` (instance 0): servo outputs (PWM, us) mapped to de, da, dr and
+  throttle through a :class:`~flightid.importers.servos.ServoMapping`; without it,
+  ``actuator_servos``' normalised controls (-1..1, as trim +- 500 us) give the surfaces.
+  These are COMMANDS (``meta.extra['surfaces'] = 'command'``);
+* ``airflow_aoa``, ``airflow_slip`` (vanes), ``vehicle_air_data`` (h, static pressure,
+  density), ``vehicle_global_position`` (latitude, longitude) when logged.
+
+Every topic is stamped in microseconds since boot on one clock; each channel is
+interpolated linearly from its own times onto one uniform grid at the rate of the rate
+topic (or a given rate), over the span the needed topics share. Other topics, other
+instances, parameters and log texts are not kept. A file cut in the middle of a message
+keeps every whole message before the cut and says how many bytes were dropped; one that
+pyulog finds damaged keeps what pyulog could read and says so.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pyulog import ULog
+
+from flightid.console import captured_output
+from flightid.flight_record import FlightRecord, RecordMeta, check_samples
+from flightid.importers.servos import HALF_RANGE_US, ServoMapping
+from flightid.importers.ulog_topics import TOPICS
+
+REQUIRED = ("vehicle_attitude", "sensor_combined", "airspeed")
+COMMANDS = ("actuator_outputs", "actuator_servos")  # one of them
+CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "rho", "mass")
+
+
+def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """phi, theta, psi (rad; ZYX Euler angles) of unit quaternions q = (w, x, y, z), N x 4,
+    rotating body axes to NED (Stevens, Lewis & Johnson 2016, sec. 1.8)."""
+    w, x, y, z = (q[:, i] for i in range(4))
+    phi = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    theta = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    psi = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return phi, theta, psi
+
+
+def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str]]:
+    with captured_output():
+        try:
+            log = ULog(str(path), list(TOPICS))
+        except Exception as exc:  # pyulog raises assorted types on a foreign file
+            raise ValueError(f"{path}: not a readable ULog file ({type(exc).__name__}: "
+                             f"{exc})") from None
+    topics, counts, notes = {}, {}, []
+    for data in log.data_list:
+        counts[f"{data.name}/{data.multi_id}"] = len(data.data["timestamp"])
+        if data.multi_id == 0:
+            topics[data.name] = {k: np.asarray(v, dtype=float) for k, v in data.data.items()}
+        else:
+            notes.append(f"{data.name} instance {data.multi_id} not kept")
+    if log.file_corruption:
+        notes.append("pyulog found the file damaged: the whole messages it could read are "
+                     "kept, the damaged ones dropped")
+    cut = cut_bytes(path)
+    if cut:
+        notes.append(f"the file ends in a cut message: {cut} byte(s) after the last whole "
+                     "message dropped")
+    return topics, counts, notes
+
+
+HEADER_BYTES = 16  # ULog file header: magic, version, timestamp
+MESSAGE_HEADER = 3  # uint16 size, uint8 type
+
+
+def cut_bytes(path: Path) -> int:
+    """Bytes at the end of a ULog file that do not make a whole message (0 for a whole
+    file): the messages' own sizes walked from the file header on."""
+    data = path.read_bytes()
+    offset = HEADER_BYTES
+    while offset + MESSAGE_HEADER <= len(data):
+        size = int.from_bytes(data[offset:offset + 2], "little")
+        if offset + MESSAGE_HEADER + size > len(data):
+            break
+        offset += MESSAGE_HEADER + size
+    return max(len(data) - offset, 0)
+
+
+def _vector(topic: dict[str, np.ndarray], name: str, n: int) -> np.ndarray:
+    return np.column_stack([topic[f"{name}[{i}]"] for i in range(n)])
+
+
+def read_ulog(path: str | Path, servos: ServoMapping | None = None,
+              rate: float | None = None) -> FlightRecord:
+    """Read a PX4 ULog file into a FlightRecord in SI units (module docstring).
+
+    Parameters
+    ----------
+    path : the ``.ulg`` file.
+    servos : servo outputs to surfaces (actuator_outputs index = channel; default
+        ArduPlane's order with 30 deg throws, as for DataFlash).
+    rate : output rate (Hz); default the rate topic's (vehicle_angular_velocity, else
+        sensor_combined).
+
+    Returns
+    -------
+    FlightRecord with time in s since boot, ``meta.extra['surfaces'] = 'command'`` and
+    ``meta.extra['ulog']`` (topic counts, rate, servo mapping, notes).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    topics, counts, notes = _topics(path)
+    if servos is None:
+        servos = ServoMapping()
+        notes.append("no servo mapping given: ArduPlane's output order (1 aileron, 2 "
+                     "elevator, 3 throttle, 4 rudder) with 1500 us trims and 30 deg throws "
+                     "assumed")
+    missing = [k for k in REQUIRED if k not in topics]
+    if not any(k in topics for k in COMMANDS):
+        missing.append(" or ".join(COMMANDS))
+    if missing:
+        present = ", ".join(sorted({k.split("/")[0] for k in counts})) or "none"
+        raise ValueError(f"{path}: the log lacks the topic(s) {', '.join(missing)} that a "
+                         f"flight record needs; it has: {present}")
+    t = {k: v["timestamp"] * 1e-6 for k, v in topics.items()}
+    rates_topic = "vehicle_angular_velocity" if "vehicle_angular_velocity" in topics \
+        else "sensor_combined"
+    step = 1.0 / rate if rate else float(np.median(np.diff(t[rates_topic])))
+    command = "actuator_outputs" if "actuator_outputs" in topics else "actuator_servos"
+    used = [*REQUIRED, rates_topic, command]
+    lo, hi = max(t[k][0] for k in used), min(t[k][-1] for k in used)
+    n = int(np.floor((hi - lo) / step + 1e-6)) + 1
+    if n < 2:
+        raise ValueError(f"{path}: the topics {', '.join(used)} share less than two samples "
+                         f"of time ({lo:.3f} to {hi:.3f} s)")
+    grid = lo + step * np.arange(n)
+
+    def at(topic: str, values: np.ndarray) -> np.ndarray:
+        return np.interp(grid, t[topic], values)
+
+    rates = _vector(topics[rates_topic], "xyz" if rates_topic != "sensor_combined"
+                    else "gyro_rad", 3)
+    acc = _vector(topics["sensor_combined"], "accelerometer_m_s2", 3)
+    ch: dict[str, np.ndarray] = {name: at(rates_topic, rates[:, i]) for i, name in
+                                 enumerate(("p", "q", "r"))}
+    ch.update({name: at("sensor_combined", acc[:, i]) for i, name in
+               enumerate(("ax", "ay", "az"))})
+    phi, theta, psi = euler_from_quaternion(_vector(topics["vehicle_attitude"], "q", 4))
+    ch["phi"], ch["theta"] = at("vehicle_attitude", phi), at("vehicle_attitude", theta)
+    psi = np.unwrap(psi)
+    ch["psi"] = at("vehicle_attitude", psi - 2 * np.pi * np.round(psi[0] / (2 * np.pi)))
+    ch["V"] = at("airspeed", topics["airspeed"]["true_airspeed_m_s"])
+    optional = {"differential_pressure": ("differential_pressure_pa", "qbar"),
+                "airflow_aoa": ("aoa_rad", "alpha"), "airflow_slip": ("slip_rad", "beta")}
+    for topic, (field, name) in optional.items():
+        if topic in topics:
+            ch[name] = at(topic, topics[topic][field])
+    if "vehicle_air_data" in topics:
+        air = topics["vehicle_air_data"]
+        ch["h"] = at("vehicle_air_data", air["baro_alt_meter"])
+        ch["p_static"] = at("vehicle_air_data", air["baro_pressure_pa"])
+        ch["rho"] = at("vehicle_air_data", air["rho"])
+    if "vehicle_global_position" in topics:
+        pos = topics["vehicle_global_position"]
+        ch["latitude"] = at("vehicle_global_position", np.radians(pos["lat"]))
+        ch["longitude"] = at("vehicle_global_position", np.radians(pos["lon"]))
+    ch.update(_commands(path, topics[command], command, grid, t[command], servos, notes))
+    check_samples(str(path), grid, ch)
+    condition: dict[str, Any] = {k: float(np.mean(ch[k])) for k in CONDITION_CHANNELS
+                                 if k in ch}
+    condition["note"] = "means over the record (SI units), the reference of perturbation models"
+    extra = {"surfaces": "command",
+             "ulog": {"file": path.name, "counts": counts, "rate_hz": 1.0 / step,
+                      "span_s": [float(lo), float(hi)], "servos": servos.as_dict(),
+                      "commands_from": command, "notes": notes,
+                      "time": "s since boot (timestamp); every channel interpolated "
+                              "linearly from its own topic's times onto this grid"}}
+    meta = RecordMeta(condition=condition, sample_rate=1.0 / step, extra=extra,
+                      provenance=f"PX4 ULog file {path.name} read by "
+                                 "flightid.importers.ulog (pyulog)")
+    return FlightRecord(grid, ch, meta)
+
+
+def _commands(path: Path, topic: dict[str, np.ndarray], name: str, grid: np.ndarray,
+              t: np.ndarray, servos: ServoMapping, notes: list[str]) -> dict[str, np.ndarray]:
+    out = {}
+    width = 16 if name == "actuator_outputs" else 8
+    for channel, output in servos.outputs().items():
+        if output > width:
+            raise ValueError(f"{path}: {name} has {width} outputs; {channel} is mapped to "
+                             f"output {output}")
+        values = topic[f"{'output' if width == 16 else 'control'}[{output - 1}]"]
+        if channel == "throttle":
+            if name == "actuator_servos":
+                notes.append("throttle not read: actuator_servos carries the servos only")
+                continue
+            out[channel] = np.interp(grid, t, servos.throttle.value(values))
+            continue
+        servo = servos.surfaces[channel]
+        pwm = values if name == "actuator_outputs" else servo.trim + HALF_RANGE_US * values
+        if not np.any(np.isfinite(pwm) & (pwm != 0)):
+            raise ValueError(f"{path}: {name} output {output} (mapped to {channel}) is never "
+                             "set: the output is not in use; fix the servo mapping")
+        out[channel] = np.interp(grid, t, servo.deflection(pwm))
+    return out

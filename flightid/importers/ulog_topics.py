@@ -1,0 +1,44 @@
+"""The PX4 uORB topics flightid writes to and reads from ULog files, with the fields it
+uses, as PX4's ``msg/*.msg`` define them (ULog types; the first field is always
+``uint64_t timestamp``, microseconds since boot). Units are PX4's: rad, rad/s, m/s^2,
+m/s, Pa, deg (latitude, longitude), m.
+"""
+
+from __future__ import annotations
+
+TOPICS: dict[str, tuple[tuple[str, str], ...]] = {
+    "sensor_combined": (
+        ("uint64_t", "timestamp"), ("float[3]", "gyro_rad"), ("uint32_t", "gyro_integral_dt"),
+        ("int32_t", "accelerometer_timestamp_relative"), ("float[3]", "accelerometer_m_s2"),
+        ("uint32_t", "accelerometer_integral_dt"), ("uint8_t", "accelerometer_clipping"),
+        ("uint8_t", "gyro_clipping"), ("uint8_t", "accel_calibration_count"),
+        ("uint8_t", "gyro_calibration_count")),
+    "vehicle_angular_velocity": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("float[3]", "xyz"),
+        ("float[3]", "xyz_derivative")),
+    "vehicle_attitude": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("float[4]", "q"),
+        ("float[4]", "delta_q_reset"), ("uint8_t", "quat_reset_counter")),
+    "airspeed": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"),
+        ("float", "indicated_airspeed_m_s"), ("float", "true_airspeed_m_s"),
+        ("float", "air_temperature_celsius"), ("float", "confidence")),
+    "differential_pressure": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("uint32_t", "device_id"),
+        ("float", "differential_pressure_pa"), ("float", "temperature"),
+        ("uint32_t", "error_count")),
+    "airflow_aoa": (("uint64_t", "timestamp"), ("float", "aoa_rad"), ("bool", "valid")),
+    "airflow_slip": (("uint64_t", "timestamp"), ("float", "slip_rad"), ("bool", "valid")),
+    "actuator_outputs": (
+        ("uint64_t", "timestamp"), ("uint32_t", "noutputs"), ("float[16]", "output")),
+    "actuator_servos": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("float[8]", "control")),
+    "vehicle_air_data": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"),
+        ("uint32_t", "baro_device_id"), ("float", "baro_alt_meter"),
+        ("float", "baro_temp_celcius"), ("float", "baro_pressure_pa"), ("float", "rho"),
+        ("float", "eas2tas"), ("uint8_t", "calibration_count")),
+    "vehicle_global_position": (
+        ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("double", "lat"),
+        ("double", "lon"), ("float", "alt")),
+}

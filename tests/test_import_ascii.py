@@ -1,0 +1,219 @@
+"""``flightid import`` of delimited text: a DLR-style ASCII export (header row, units row,
+time with rounding jitter) of a real JSBSim flight, imported with a mapping file and the
+aircraft's constants, equals the flight and identifies as it does."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from flightid.api import fly, identify, score
+from flightid.cli.app import app
+from flightid.importers.ascii import read_delimited
+from flightid.importers.constants import read_constants
+from flightid.importers.mapping import ColumnMap
+from flightid.record import read
+from flightid.sim.model import load
+from flightid.units import DEG, FT, G0, KT, LBM, SLUG_FT2
+
+# DLR-style columns: (name, unit in the file, flightid channel, factor SI -> file unit)
+COLUMNS = (
+    ("DELV", "RAD", "de", 1.0), ("PDYN", "PA", "qbar", 1.0), ("THRUST", "N", "thrust", 1.0),
+    ("TASCG", "M/S", "V", 1.0), ("ALFCG", "RAD", "alpha", 1.0), ("THE", "RAD", "theta", 1.0),
+    ("Q", "RAD/S", "q", 1.0), ("BETCG", "DEG", "beta", 1 / DEG), ("PHI", "RAD", "phi", 1.0),
+    ("P", "RAD/S", "p", 1.0), ("R", "RAD/S", "r", 1.0), ("AXCG", "M/S2", "ax", 1.0),
+    ("AYCG", "M/S2", "ay", 1.0), ("AZCG", "M/S2", "az", 1.0), ("HP", "FT", "h", 1 / FT),
+    ("DELA", "RAD", "da", 1.0), ("DELR", "RAD", "dr", 1.0), ("PLA", "-", "throttle", 1.0),
+)
+JITTER_S = 1e-5  # the time column's rounding jitter, as in the issue's real file
+DIGITS = 7  # significant digits of the export
+WINDOW = "1.0,11.5"  # the 2-1 doublet at 2 s and the response after it (the card's window)
+
+
+@pytest.fixture(scope="module")
+def flight():
+    return fly("twinotter-21-elevator", seed=3)
+
+
+def write_dlr(flight, path, *, cut_last: bool = False) -> None:
+    """The measured record as a DLR-style whitespace ASCII file (no mass, no geometry)."""
+    rec = flight.measured
+    t = rec.time + np.random.default_rng(0).uniform(-JITTER_S, JITTER_S, len(rec))
+    lines = [" ".join(["T", *(c[0] for c in COLUMNS), "NZ", "TAT"]),
+             " ".join(["S", *(c[1] for c in COLUMNS), "G", "K"])]
+    for i in range(len(rec)):
+        fields = [f"{t[i]:.5f}", *(f"{rec[ch][i] * k:.{DIGITS}g}" for _, _, ch, k in COLUMNS),
+                  f"{-rec['az'][i] / G0:.{DIGITS}g}", "288.15"]
+        lines.append(" ".join(fields))
+    if cut_last:
+        lines[-1] = lines[-1][: len(lines[-1]) // 2]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def write_mapping(path) -> None:
+    entries = ['T = "time"', *(f'{c} = "{ch}"' for c, _, ch, _ in COLUMNS)]
+    path.write_text("[columns]\n" + "\n".join(entries) + "\n")
+
+
+@pytest.fixture(scope="module")
+def imported(flight, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("dlr")
+    data, mapping, out = folder / "flight.asc", folder / "map.toml", folder / "flight.parquet"
+    write_dlr(flight, data)
+    write_mapping(mapping)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--aircraft", "twinotter"])
+    return result, out
+
+
+def test_the_file_imports_with_one_command_and_says_it_regridded(imported):
+    result, out = imported
+    assert result.exit_code == 0, result.output
+    assert "re-gridded to a uniform 0.05 s step" in result.output
+    assert "kept under their own names: NZ, TAT" in result.output
+    rec = read(out)
+    assert rec.meta.extra["regridded"]["max_jitter"] < 0.01
+    assert rec.unit("NZ") == "m/s^2" and rec.unit("TAT") == "K"
+
+
+def test_the_imported_record_equals_the_flight(flight, imported):
+    rec, truth = read(imported[1]), flight.measured
+    assert len(rec) == len(truth)
+    assert np.max(np.abs(rec.time - truth.time)) < 2 * JITTER_S
+    for name, x in ((ch, truth[ch]) for _, _, ch, _ in COLUMNS):
+        assert np.max(np.abs(rec[name] - x)) < _tolerance(x, truth.dt), name
+    assert np.max(np.abs(rec["NZ"] + truth["az"])) < _tolerance(truth["az"], truth.dt)
+    # constants of the aircraft (the file has none)
+    model = load("twinotter")
+    for name, value in model.mass_properties().items():
+        assert rec[name] == pytest.approx(np.full(len(rec), value)), name
+    assert rec.meta.reference == model.reference
+    assert rec.meta.condition["V"] == pytest.approx(np.mean(truth["V"]), rel=1e-6)
+
+
+def _tolerance(x: np.ndarray, dt: float) -> float:
+    """The export's 7 digits, plus the re-grid: a value moves by about the jitter (the
+    grid's distance from the true times, < 2e-5 s) times the channel's rate of change."""
+    rate = np.max(np.abs(np.diff(x))) / dt
+    return 10 ** -(DIGITS - 1) * np.max(np.abs(x)) + 2 * JITTER_S * rate + 1e-12
+
+
+def test_identify_runs_on_it_and_recovers_the_flight(flight, imported):
+    out = imported[1]
+    result = CliRunner().invoke(app, ["identify", str(out), "--window", WINDOW,
+                                      "--format", "json", "--truth", _truth_file(flight, out)])
+    assert result.exit_code == 0, result.output
+    rec = read(out)
+    window = tuple(float(x) for x in WINDOW.split(","))
+    est, original = identify(rec, "oe", window=window), identify(flight.measured, "oe",
+                                                                 window=window)
+    assert est.names == original.names
+    # the import changes the estimates by a small fraction of their bounds (measured: 0.01)
+    assert np.all(np.abs(est.values - original.values) < 0.1 * original.std)
+    rows = {r.name: r for r in score(est, flight.truth).rows}
+    for name in ("Cm_alpha", "Cm_q", "Cm_de"):  # measured: +1.8, -0.5, +0.3 sigma
+        assert abs(rows[name].sigmas) < 3.0, name
+
+
+def _truth_file(flight, out) -> str:
+    path = out.with_name("truth.json")
+    path.write_text(json.dumps(flight.truth))
+    return str(path)
+
+
+def test_constants_from_a_toml_file_in_imperial_units(tmp_path):
+    model = load("twinotter")
+    mp, ref = model.mass_properties(), model.reference
+    path = tmp_path / "aircraft.toml"
+    path.write_text(f"""name = "Twin Otter"
+[mass_properties]
+mass = "{mp['mass'] / LBM!r} lb"
+Ixx = "{mp['Ixx'] / SLUG_FT2!r} slug*ft^2"
+Iyy = "{mp['Iyy'] / SLUG_FT2!r} slug ft2"
+Izz = {mp['Izz']!r}
+Ixz = {mp['Ixz']!r}
+[reference]
+area = "{ref.area / FT**2!r} ft^2"
+span = "{ref.span / FT!r} ft"
+chord = {ref.chord!r}
+[sensors]
+alpha_vane = ["15 ft", 0, "-1 ft"]
+""")
+    got = read_constants(path)
+    for name, value in mp.items():
+        assert got.mass_properties[name] == pytest.approx(value, rel=1e-12), name
+    for key in ("area", "span", "chord"):
+        assert getattr(got.reference, key) == pytest.approx(getattr(ref, key), rel=1e-12)
+    assert got.sensors["alpha_vane"] == pytest.approx((15 * FT, 0.0, -FT))
+
+
+def test_a_cut_last_row_is_dropped_and_said(flight, tmp_path):
+    data = tmp_path / "cut.asc"
+    write_dlr(flight, data, cut_last=True)
+    mapping = ColumnMap({"T": "time", **{c: ch for c, _, ch, _ in COLUMNS}})
+    rec = read_delimited(data, mapping)
+    assert len(rec) == len(flight.measured) - 1
+    assert "the last row has" in rec.meta.extra["import"]["dropped"][0]
+
+
+def test_a_map_to_an_unknown_channel_is_refused_naming_the_valid_ones(flight, tmp_path):
+    data, out = tmp_path / "f.asc", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out),
+                                      "--map", "T=time,ALFCG=aoa"])
+    assert result.exit_code == 2
+    assert "'aoa' is not a flightid channel; valid channels: time, V, alpha" in result.output
+    assert "Traceback" not in result.output and not out.exists()
+
+
+def test_a_column_in_the_wrong_unit_is_refused(flight, tmp_path):
+    data, out = tmp_path / "f.asc", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out),
+                                      "--map", "T=time,TASCG=V,HP=alpha"])
+    assert result.exit_code == 2
+    assert "column HP (alpha): unit 'FT' is a unit of m, not of rad" in result.output
+
+
+def test_degrees_taken_as_radians_are_refused_by_the_unit_check(flight, tmp_path):
+    data, out = tmp_path / "f.asc", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--map",
+                                      "T=time,TASCG=V,PDYN=qbar,P=p,Q=q,R=r,PHI=phi,THE=theta",
+                                      "--unit", "P=deg/s,Q=deg/s,R=deg/s"])
+    assert result.exit_code == 2
+    assert "units look wrong" in result.output and not out.exists()
+
+
+def test_an_output_never_replaces_the_input(flight, tmp_path):
+    data = tmp_path / "f.csv"
+    write_dlr(flight, data)
+    before = data.read_bytes()
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(data), "--map", "T=time"])
+    assert result.exit_code == 2 and "an output never replaces an input" in result.output
+    assert data.read_bytes() == before
+
+
+def test_a_map_naming_a_column_the_file_lacks_is_refused_naming_its_columns(flight, tmp_path):
+    data, out = tmp_path / "f.asc", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--map",
+                                      "T=time,ALPHA=alpha"])
+    assert result.exit_code == 2
+    assert "does not have; its columns: T, DELV, PDYN" in result.output
+
+
+def test_a_csv_with_units_in_its_names_needs_no_map(tmp_path):
+    # flightid names with units in brackets: converted, nothing to map; a comment line first
+    path = tmp_path / "flight.csv"
+    path.write_text("# exported by a logger\ntime,alpha [deg],V (kt),q [deg/s],OAT [degC]\n"
+                    "0.0,2.0,100,0.5,15\n0.1,2.5,101,1.0,15\n0.2,3.0,102,-0.5,15\n")
+    rec = read_delimited(path)
+    np.testing.assert_allclose(rec["alpha"], np.array([2.0, 2.5, 3.0]) * DEG)
+    np.testing.assert_allclose(rec["V"], np.array([100, 101, 102]) * KT)
+    np.testing.assert_allclose(rec["q"], np.array([0.5, 1.0, -0.5]) * DEG)
+    assert rec.unit("OAT") == "degC" and list(rec["OAT"]) == [15.0] * 3
+    assert rec.meta.extra["import"]["kept"] == ["OAT"]
