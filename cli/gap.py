@@ -150,13 +150,21 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     e.add_column("held-out shrink", justify="right")
     e.add_column("named", justify="right")
     rows = [*g.named, *(r for r in (g.pairs + g.effects) if r.candidate.label not in named)]
+    notes: list[str] = []
     for r in rows[:8]:
         params = "; ".join(f"{_short(k)} {v['value']:.4g} ± {v['std']:.2g}"
                            for k, v in r.parameters.items())
-        e.add_row(r.candidate.label, params, f"{r.delta_bic:.0f}", shrink_text(r.shrink),
-                  str(named[r.candidate.label]) if r.candidate.label in named
-                  else ("no: " + r.note if r.note else "no"))
+        if r.candidate.label in named:
+            mark = str(named[r.candidate.label])
+        elif r.note:
+            notes.append(f"[{len(notes) + 1}] {r.candidate.label}: {r.note}")
+            mark = f"no [{len(notes)}]"
+        else:
+            mark = "no"
+        e.add_row(r.candidate.label, params, f"{r.delta_bic:.0f}", shrink_text(r.shrink), mark)
     console.print(e)
+    for line in notes:
+        console.print(line)
     s = g.shrinkage()
     if g.named and s:
         console.print(f"named: {s['effect']}; held-out gap {s['overall']['before']:.3f} -> "
