@@ -25,6 +25,9 @@ from flightid.scenarios.montecarlo.study import Study, run_realization
 Rows = list[dict[str, Any]]
 OnResult = Callable[[int, Rows], None]
 Progress = Callable[[int, int], None]
+# one unit of work: task(description, index) -> rows, a module-level function of picklable
+# arguments (a worker process or a Dask worker needs nothing else); default: a realization
+Task = Callable[[Any, int], Rows]
 
 
 def _report(progress: Progress | None, finished: int, total: int) -> None:
@@ -39,13 +42,15 @@ def _run_and_store(description: Study, index: int, folder: str) -> None:
     write_realization(folder, index, run_realization(description, index))
 
 
-def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
+def run_local(description: Any, indices: Iterable[int], on_result: OnResult,
               workers: int | None = None, progress: Progress | None = None,
-              window: int | None = None, store_in: str | Path | None = None) -> None:
+              window: int | None = None, store_in: str | Path | None = None,
+              task: Task = run_realization) -> None:
     """Run the realizations ``indices`` in ``workers`` local processes (default: one per
     CPU). Workers start from a clean process (forkserver), never a fork of this one.
     ``store_in``: each worker writes its realizations to this study folder
-    (``store.write_realization``) and ``on_result`` is not called."""
+    (``store.write_realization``) and ``on_result`` is not called (Monte Carlo studies
+    only). ``task``: what each index runs (default ``run_realization`` of a ``Study``)."""
     todo = list(indices)
     workers = max(1, int(workers or os.cpu_count() or 1))
     window = max(1, int(window or 2 * workers))
@@ -59,7 +64,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
     def submit(index: int) -> Future:
         if store_in is not None:
             return pool.submit(_run_and_store, description, index, str(store_in))
-        return pool.submit(run_realization, description, index)
+        return pool.submit(task, description, index)
 
     with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context) as pool:
         pending: dict[Future, int] = {}
@@ -99,12 +104,14 @@ def dask_client(address: str | None = None, scheduler_file: str | None = None
     return distributed.Client(address)
 
 
-def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,
+def run_dask(description: Any, indices: Iterable[int], on_result: OnResult,
              client: distributed.Client, progress: Progress | None = None,
-             window: int | None = None) -> None:
+             window: int | None = None, task: Task = run_realization,
+             key: str | None = None) -> None:
     """Run the realizations ``indices`` on the workers of a Dask ``client`` (flightid
     must be installed on them); at most ``window`` (default: twice the worker threads)
-    are submitted at a time."""
+    are submitted at a time. ``task`` as for ``run_local``; ``key``: the prefix of the
+    Dask task keys (default: from a ``Study``'s card)."""
     todo = list(indices)
     total, finished = len(todo), 0
     _report(progress, 0, total)
@@ -115,11 +122,11 @@ def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,
         window = 2 * threads
     window = max(1, int(window))
     queue = iter(todo)
-    ident = description.identity()["card_sha256"][:12]
+    prefix = key or f"flightid-montecarlo-{description.identity()['card_sha256'][:12]}"
 
     def submit(index: int) -> distributed.Future:
-        return client.submit(run_realization, description, index, pure=False,
-                             key=f"flightid-montecarlo-{ident}-{index}-{os.getpid()}")
+        return client.submit(task, description, index, pure=False,
+                             key=f"{prefix}-{index}-{os.getpid()}")
 
     first = []
     for index in queue:
