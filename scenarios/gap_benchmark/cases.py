@@ -27,6 +27,8 @@ How an effect reaches the record (``INJECT``):
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -158,11 +160,13 @@ def _kinds() -> tuple[Kind, ...]:
         # the IMU's rates and accelerations on both axes, at the defaults' ratios
         Kind("engine_vibration", BOTH, "disturbance", {}, ("ax", "ay", "az", "p", "q", "r")),
     ]
-    # a misalignment of the IMU (a mounting entry, where the catalogue has it): its
-    # parameters are whatever the entry declares, each 0.5-1.5 times its default
-    if "misalignment" in CATALOGUE:
-        sized = tuple(p.name for p in CATALOGUE["misalignment"].parameters if p.sizes)
-        rows.append(Kind("misalignment", BOTH, "mounting", {}, sized))
+    # a misalignment of the IMU, a mounting entry: its parameters are whatever the entry
+    # declares, each 0.5-1.5 times its default. The row is drawn whether or not this
+    # catalogue has the entry yet (the draw of every other case stays the same when it
+    # lands); without it, its cases fail to fly, named as unknown, and are listed
+    sized = tuple(p.name for p in CATALOGUE["misalignment"].parameters if p.sizes) \
+        if "misalignment" in CATALOGUE else ()
+    rows.append(Kind("misalignment", BOTH, "mounting", {}, sized))
     return tuple(rows)
 
 
@@ -236,6 +240,16 @@ class Case:
     def from_json(cls, d: dict[str, Any]) -> Case:
         return cls(d["index"], d["seed"], d["aircraft"], d["category"],
                    tuple(Effect.from_json(e) for e in d["effects"]))
+
+
+def fingerprint() -> str:
+    """A hash of everything the draw draws from (kinds, outside kinds, pattern, ranges,
+    the aircraft's flights): a stored study continues only under the same draw."""
+    text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
+                       DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
+                       THRUST_ARM_M, {a: asdict(f) for a, f in AIRCRAFT.items()}],
+                      sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def draw(n: int, seed: int, truths: dict[str, dict[str, float]], nulls: int = 0,
@@ -314,6 +328,8 @@ def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
     elif kind.one_of:
         which = str(rng.choice(kind.sized))
         mag = {which: _scaled(kind.entry, which, k)}
+    elif kind.entry not in CATALOGUE:  # (misalignment, until the catalogue has it)
+        mag = {}
     else:
         signed = {p.name for p in CATALOGUE[kind.entry].parameters
                   if p.low < 0 and p.neutral == 0.0}

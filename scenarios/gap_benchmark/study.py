@@ -15,7 +15,14 @@ from pathlib import Path
 from typing import Any
 
 from flightid.files import check_writable
-from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, NULL_INDEX, TURBULENCE, Case, draw
+from flightid.scenarios.gap_benchmark.cases import (
+    AIRCRAFT,
+    NULL_INDEX,
+    TURBULENCE,
+    Case,
+    draw,
+    fingerprint,
+)
 from flightid.scenarios.gap_benchmark.run import CaseResult, run_case, truths
 from flightid.scenarios.gap_benchmark.summary import summary
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
@@ -110,9 +117,10 @@ def check(n: int, seed: int, nulls: int, turbulence: str, aircraft: tuple[str, .
 
 def identity(seed: int, turbulence: str, aircraft: tuple[str, ...],
              options: dict[str, Any]) -> dict[str, Any]:
-    """What makes two runs the same study (n and nulls may grow)."""
+    """What makes two runs the same study (n and nulls may grow): the seed, turbulence,
+    aircraft, diagnosis options and the draw's ``fingerprint``."""
     return {"seed": int(seed), "turbulence": turbulence, "aircraft": list(aircraft),
-            "options": {k: options[k] for k in sorted(options)}}
+            "options": {k: options[k] for k in sorted(options)}, "draw": fingerprint()}
 
 
 def _open(folder: Path, ident: dict[str, Any]) -> dict[int, CaseResult]:
