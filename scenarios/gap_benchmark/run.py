@@ -230,6 +230,7 @@ def axis_result(result: GapResult, axis: str) -> GapResult:
     by_axis = getattr(result, "by_axis", None) or {}
     if axis in by_axis:
         return by_axis[axis]
+    # until the verdict lands (by_axis is then filled for every diagnosed axis)
     return result if result.axis == axis else None
 
 
