@@ -8,7 +8,8 @@ lever-arm effects dropped (air data and accelerations corrected to the CG, as af
 compatibility check: the diagnosis's models do not carry them); light turbulence by
 default. The record's surface channels hold the commands (``commands``): the positions of
 the plain aircraft's surfaces (the flight core maps commands statically), ahead of an
-actuator lag or rate limit.
+actuator lag or rate limit; its mass-property channels hold the plain aircraft's values
+(the weight-and-balance sheet's), whatever mass, inertia or CG was injected.
 
 The diagnosis (``identification.gap.diagnose``, both axes) sees the blinded record
 (``blind``: what was injected removed from its metadata) and the plain aircraft's name.
@@ -68,6 +69,12 @@ SURFACES_META = ("surfaces", "commands")
 # actuator effects the surface positions show (in series after the position's writer,
 # ``sim.augment``): a record of commands does not
 BEHIND_POSITION = ("actuator_lag", "rate_limit")
+# effects on the mass properties, which the record's mass channels must not reveal: a
+# research record carries the weight-and-balance sheet's values, those of the model
+MASS_EFFECTS = ("mass_scale", "inertia_scale", "cg_offset")
+MASS_CHANNELS = ("mass", "Ixx", "Iyy", "Izz", "Ixz")
+# the record metadata a blinded record keeps (``blind``)
+KEPT = ("inputs", "maneuvers", "measurement", SURFACES_META[0])
 
 
 def _maneuver(kind: str, surface: str, start: float, name: str) -> dict[str, Any]:
@@ -149,15 +156,18 @@ def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | 
 
 
 def blind(record: FlightRecord, aircraft: str) -> FlightRecord:
-    """``record`` without what was injected in its metadata (the card's effects, the
-    augmented aircraft): what a diagnosis of a real record would have."""
-    extra = {k: v for k, v in record.meta.extra.items() if k != "injected"}
+    """``record`` as a diagnosis of a real record would have it: the plain ``aircraft``'s
+    name, the metadata of ``KEPT`` only (the maneuvers and inputs flown, how it was
+    measured, what its surface channels hold), the card without its effects and
+    disturbances. Gone: what was injected, the augmented aircraft's file and exact truth,
+    the turbulence."""
+    extra = {k: v for k, v in record.meta.extra.items() if k in KEPT}
     scenario = dict(record.meta.scenario)
     if "card" in scenario:
         scenario["card"] = {k: v for k, v in scenario["card"].items()
                             if k not in ("effect", "disturbance")} | {"aircraft": aircraft}
     out = record.with_channels()
-    out.meta = replace(out.meta, extra=extra, scenario=scenario)
+    out.meta = replace(out.meta, aircraft=aircraft, extra=extra, scenario=scenario)
     return out
 
 
@@ -189,9 +199,14 @@ def fly_case(case: Case, turbulence: str = "light",
     flown = card(case.aircraft, case.seed, effects, turbulence, mounting, disturbances, xml)
     measured, truth_record = fly_card(flown)
     plain = None
-    if any(e.entry in BEHIND_POSITION for e in case.effects):
+    if any(e.entry in (*BEHIND_POSITION, *MASS_EFFECTS) for e in case.effects):
         plain = fly_card(card(case.aircraft, case.seed, turbulence="calm"))[1]
-    record = commands(measured, truth_record, plain)
+    record = commands(measured, truth_record,
+                      plain if any(e.entry in BEHIND_POSITION for e in case.effects) else None)
+    if plain is not None:  # the weight-and-balance sheet's values: the plain aircraft's
+        record = record.with_channels(**{
+            c: np.interp(record.time, plain.time, plain[c]) for c in MASS_CHANNELS
+            if c in record and c in plain})
     rng = np.random.default_rng([case.seed, 7])
     for e in case.effects:
         if e.inject != "measured":
