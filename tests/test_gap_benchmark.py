@@ -27,6 +27,7 @@ from flightid.scenarios.gap_benchmark import (
     benchmark,
     classes,
     draw,
+    fly_case,
     run_case,
     summary,
 )
@@ -45,7 +46,7 @@ from flightid.scenarios.gap_benchmark.cases import (
     STABLE_SIGN,
     THRUST_ARM_M,
 )
-from flightid.scenarios.gap_benchmark.run import truths
+from flightid.scenarios.gap_benchmark.run import KEPT, truths
 from flightid.scenarios.gap_benchmark.study import CASES_FILE
 from flightid.sim.effects.catalogue import CATALOGUE
 
@@ -161,6 +162,27 @@ def test_classes_accept_what_the_data_cannot_tell_apart():
     assert not classes.same(izz, _named("inertia_scale", {}, {"ixx": {"value": 1.1},
                                                               "izz": {"value": 1.0}}))
     assert classes.class_of(cg) == "pitch stiffness"
+
+
+def test_blinded_record_shows_commands_and_the_sheet_not_the_effect():
+    """The record the diagnosis sees names the plain aircraft and keeps no trace of what
+    was injected; an actuator lag leaves its surface channel holding the command (the
+    plain flight's surface, to the quantization), an Izz scale leaves the Izz channel at
+    the weight-and-balance sheet's value, while both change the flight."""
+    plain = fly_case(Case(NULL_INDEX, 3, "navion", NULL), "calm")
+    lag = fly_case(Case(0, 3, "navion", SINGLE, (Effect(
+        "actuator_lag", "lateral", "card", {"surface": "da"}, {"tau": 0.1}),)), "calm")
+    izz = fly_case(Case(1, 3, "navion", SINGLE, (Effect(
+        "inertia_scale", "lateral", "card", {}, {"izz": 1.1}),)), "calm")
+    for rec in (lag, izz):
+        assert rec.meta.aircraft == "navion"
+        assert set(rec.meta.extra) <= set(KEPT) and rec.meta.extra["surfaces"] == "commands"
+        assert "effect" not in rec.meta.scenario["card"]
+    quantum = 0.005 * np.pi / 180  # the research suite's aileron quantization
+    assert np.max(np.abs(lag["da"] - plain["da"])) <= 2 * quantum
+    assert np.max(np.abs(lag["p"] - plain["p"])) > 0.01  # rad/s: the lag is flown
+    assert np.array_equal(izz["Izz"], plain["Izz"])
+    assert np.max(np.abs(izz["r"] - plain["r"])) > 0.005
 
 
 @pytest.fixture(scope="module")

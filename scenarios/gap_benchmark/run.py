@@ -33,7 +33,7 @@ from flightid.identification.gap.linearise import AXIS_FRAME, AXIS_INPUTS, linea
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
-from flightid.scenarios.cards import AUGMENT_CACHE, Card, card_from_dict, fly_card
+from flightid.scenarios.cards import AUGMENT_CACHE, Card, card_from_dict, fly_card, sub_seed
 from flightid.scenarios.gap_benchmark import classes
 from flightid.scenarios.gap_benchmark.cases import (
     AIRCRAFT,
@@ -49,6 +49,7 @@ from flightid.scenarios.gap_benchmark.outside import RECORD, cm_alpha_break
 from flightid.sim.condition import FlightCondition
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.model import load
+from flightid.sim.sensors import measure
 from flightid.sim.trim import trim
 from flightid.sim.truth import derivatives
 from flightid.units import DEG
@@ -138,19 +139,22 @@ def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, f
     return out
 
 
-def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | None
-             ) -> FlightRecord:
+def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | None,
+             flown: Card) -> FlightRecord:
     """``measured`` marked as holding the surface commands (``SURFACES_META``); with
     ``plain`` (the truth of the same card on the plain aircraft, whose positions are its
     commands: the flight core maps commands to positions statically), each surface channel
-    holds the command, trim position plus the plain flight's increments, with the
-    position's sensor noise: what an actuator lag or rate limit hides from the positions."""
-    changed = {}
-    for s in ("de", "da", "dr"):
-        if plain is not None and s in measured and s in truth and s in plain:
-            command = truth[s][0] + (plain[s] - plain[s][0])
-            changed[s] = measured[s] + np.interp(measured.time, truth.time, command - truth[s])
-    out = measured.with_channels(**changed)
+    is the command (trim position plus the plain flight's increments) measured by the
+    card's sensors with the same seed: what an actuator lag or rate limit hides from the
+    positions."""
+    out = measured
+    if plain is not None:
+        surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
+        commanded = truth.with_channels(**{
+            s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
+            for s in surfaces})
+        again = measure(commanded, flown.sensors, sub_seed(flown.seed, "sensors"))
+        out = measured.with_channels(**{s: again[s] for s in surfaces})
     out.meta = replace(out.meta, extra={**out.meta.extra, SURFACES_META[0]: SURFACES_META[1]})
     return out
 
@@ -201,8 +205,8 @@ def fly_case(case: Case, turbulence: str = "light",
     plain = None
     if any(e.entry in (*BEHIND_POSITION, *MASS_EFFECTS) for e in case.effects):
         plain = fly_card(card(case.aircraft, case.seed, turbulence="calm"))[1]
-    record = commands(measured, truth_record,
-                      plain if any(e.entry in BEHIND_POSITION for e in case.effects) else None)
+    record = commands(measured, truth_record, plain if any(
+        e.entry in BEHIND_POSITION for e in case.effects) else None, flown)
     if plain is not None:  # the weight-and-balance sheet's values: the plain aircraft's
         record = record.with_channels(**{
             c: np.interp(record.time, plain.time, plain[c]) for c in MASS_CHANNELS
