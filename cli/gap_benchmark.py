@@ -60,7 +60,8 @@ def _print(bench: Benchmark) -> None:
     s = bench.summary()
     console.print(kind_table(s, f"gap blind check: seed {bench.seed}, {s['single']} single, "
                                 f"{s['pair']} pairs, {s['outside']} outside, {s['null']} null; "
-                                f"{bench.turbulence} turbulence"))
+                                + ("calm air" if bench.turbulence == "calm"
+                                   else f"{bench.turbulence} turbulence")))
     console.print("n: cases flown (failed ones listed below); right: the first named effect "
                   "on its axis is in the injected one's class; mag: median relative "
                   "magnitude error; both: both effects of a pair named; unexp: outside the "
