@@ -15,7 +15,8 @@ Applied to the measured record (``RECORD``):
   the vane's pivot friction); the catalogue's backlash acts on a surface, not on a sensor.
 
 Written into the aircraft (``cm_alpha_break``): a pitch break. Above the trim alpha plus
-``above`` (rad), the pitching moment gains ``delta`` per rad of alpha beyond it,
+``above`` (rad; drawn 0.3-0.7 deg), the pitching moment gains ``delta`` per rad of alpha
+beyond it (drawn 50-80 % of the aircraft's abs(Cm_alpha)),
 dCm = delta max(alpha - alpha_b, 0) (a tail that starts to stall: static stability lost
 above a kink); below, the aircraft is the plain one, so its trim is unchanged and the
 elevator maneuvers cross the kink. An aircraft-level change, flown in JSBSim: no
