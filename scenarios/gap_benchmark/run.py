@@ -97,7 +97,7 @@ def card(aircraft: str, seed: int, effects: list[dict[str, Any]] | None = None,
     if f.flaps_deg:
         cond["flaps_deg"] = f.flaps_deg
     sensors: dict[str, Any] = {"suite": "research", "drop": list(DROPPED)}
-    if mounting:
+    if mounting:  # replaces the suite's mounting list: DROPPED gone all the same
         sensors = {"suite": "research", "mounting": mounting}
     dist = list(disturbances or [])
     if turbulence != "calm":
@@ -132,8 +132,8 @@ def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, f
             values.update(truth.values)
             # a kink at trim (the c172p's Cn_beta: 0.0593 and 0.0604 either side): the
             # mean of the one-sided slopes, as the diagnosis's linearisation takes it
-            values.update({k: 0.5 * (f.minus + f.plus) for k, f in truth.flags.items()
-                           if k not in truth.values and hasattr(f, "minus")})
+            values.update({k: 0.5 * (kink.minus + kink.plus) for k, kink in truth.flags.items()
+                           if k not in truth.values and hasattr(kink, "minus")})
         values["trim_alpha"] = float(trimmed.alpha)
         out[name] = values
     return out
@@ -244,8 +244,9 @@ def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
 # -- the diagnosis as scored --------------------------------------------------------------
 
 
-def axis_result(result: GapResult, axis: str) -> GapResult:
-    """The diagnosis of one axis (``by_axis``; the result itself when it has one axis)."""
+def axis_result(result: GapResult, axis: str) -> GapResult | None:
+    """The diagnosis of one axis (``by_axis``; the result itself when it has one axis;
+    None when the axis was not diagnosed)."""
     by_axis = getattr(result, "by_axis", None) or {}
     if axis in by_axis:
         return by_axis[axis]
