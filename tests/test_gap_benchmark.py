@@ -1,134 +1,289 @@
-"""The gap diagnosis's blind check (scenarios/gap_benchmark): a small fixed set of cases
-flown, diagnosed without being told, and scored; the draw; the command line."""
+"""The gap diagnosis's blind check (scenarios/gap_benchmark): the draw (shares, kinds,
+magnitudes, fixed by the seed), the equivalence classes, one flown and scored case per
+class of outcome (null, in the catalogue, outside it), the study on local processes and
+a Dask cluster, resumed, and the command line (bad input, the 80-column table)."""
 
 from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 
 import numpy as np
 import pytest
+from dask import distributed
+from rich.console import Console
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.scenarios.gap_benchmark import AIRCRAFT, Case, draw, run_case, summary
-from flightid.scenarios.gap_benchmark.cases import DELTA_SCALE, STABLE_SIGN
-from flightid.scenarios.gap_benchmark.run import truths
-from flightid.scenarios.gap_benchmark.study import Benchmark
+from flightid.cli.gap_benchmark import kind_table
+from flightid.identification.gap.candidates import Candidate, pair
+from flightid.identification.gap.rank import Ranked
+from flightid.scenarios.gap_benchmark import (
+    KINDS,
+    Case,
+    Effect,
+    benchmark,
+    classes,
+    draw,
+    fly_case,
+    run_case,
+    summary,
+)
+from flightid.scenarios.gap_benchmark.cases import (
+    AIRCRAFT,
+    CG_CHORDS,
+    DELTA_FRACTION,
+    DELTA_SCALE,
+    K_RANGE,
+    NULL,
+    NULL_INDEX,
+    OUT,
+    OUTSIDE,
+    PAIR,
+    SINGLE,
+    STABLE_SIGN,
+    THRUST_ARM_M,
+)
+from flightid.scenarios.gap_benchmark.run import KEPT, truths
+from flightid.scenarios.gap_benchmark.study import CASES_FILE
+from flightid.sim.effects.catalogue import CATALOGUE
 
-# the diagnosis with one step and no pairs: the test's cases are single effects, and the
-# full search (pairs, three steps) is what the 50-case benchmark runs
+# the diagnosis with one step and no pairs: each flown case here is a single effect or none
 FAST = {"try_pairs": False, "steps": 1}
+NULL_VERDICT = "no_gap"
 
 
 @pytest.fixture(scope="module")
-def results():
-    cases = [
-        Case(0, 11, "navion", "derivative_delta", {"derivative": "Cl_beta", "axes": "body"},
-             {"delta": -0.025}),
-        Case(1, 12, "twinotter", "control_effectiveness", {"surface": "dr"}, {"factor": 0.7}),
-        Case(2, 13, "navion", "structural_mode", {},
-             {"frequency_hz": 4.0, "damping": 0.03, "gain": 0.8}, in_catalogue=False),
-        Case(3, 14, "twinotter", "vane_nonlinearity", {"channel": "beta"}, {"k": 7.0},
-             in_catalogue=False),
-    ]
-    return [run_case(c, floor=False, **FAST) for c in cases]
+def t():
+    return truths()
 
 
-def test_derivative_delta_attributed(results):
-    r = results[0]
-    assert r.top1 and r.top3 and not r.unexplained
-    # measured: -0.0200 +- 0.0005 for the -0.025 flown (20 % short, 11 bounds): the gap
-    # between the linearised model and JSBSim, not noise (docs/gap_benchmark.md); the
-    # test holds the estimate to the right sign and within 30 % of the change
-    assert r.estimate["delta"]["value"] < 0
-    assert r.magnitude_error < 0.3
-    assert r.shrink > 0.7
+@pytest.fixture(scope="module")
+def big(t):
+    return draw(400, 0, t, nulls=100)
 
 
-def test_control_effectiveness_attributed(results):
-    r = results[1]
-    assert r.top1, r.named
-    assert r.magnitude_error < 0.2  # factor 0.7: within 0.06 of it
-    assert r.shrink > 0.7
+def test_draw_shares_every_kind_and_the_nulls(big):
+    drawn = [c for c in big if c.category != NULL]
+    shares = Counter(c.category for c in drawn)
+    assert shares[PAIR] / len(drawn) >= 0.15  # 20 % by the block pattern
+    assert {c.kind for c in drawn if c.category == SINGLE} == {k.name for k in KINDS}
+    outside = {c.effects[0].entry for c in drawn if c.category == OUT}
+    assert outside == set(OUTSIDE) and len(outside) >= 4
+    assert {c.aircraft for c in drawn} == set(AIRCRAFT)
+    nulls = [c for c in big if c.category == NULL]
+    assert len(nulls) == 100 and all(not c.effects for c in nulls)
+    assert [c.index for c in nulls] == list(range(NULL_INDEX, NULL_INDEX + 100))
+    for c in drawn:
+        if c.category == PAIR:
+            a, b = c.effects
+            assert a.entry != b.entry
 
 
-def test_small_gyro_scale_named():
-    """A 16 % rate-gyro scale on the telemaster (case 44 of the seed-0 draw): held-out gain
-    0.0037 of the measured energy, relative shrink 49 %. The absolute threshold of 0.005
-    left it unexplained; at 0.002 (above the 0.0013 the linearisation's misfit gives on a
-    null flight) it is named, within 2 % of the factor flown."""
-    case = draw(50, 0, truths())[44]
-    assert (case.aircraft, case.entry, case.options) == ("telemaster", "scale", {"channel": "r"})
-    r = run_case(case, floor=False, **FAST)
-    assert r.top1 and not r.unexplained, r.named
-    assert r.magnitude_error < 0.02
+def test_draw_is_fixed_by_the_seed_and_independent_of_n(t, big):
+    again = draw(400, 0, t, nulls=100)
+    assert [c.to_json() for c in again] == [c.to_json() for c in big]
+    small = draw(30, 0, t, nulls=5)
+    assert [c.to_json() for c in small[:30]] == [c.to_json() for c in big[:30]]
+    assert [c.to_json() for c in small[30:]] == [c.to_json() for c in big[400:405]]
+    assert [c.to_json() for c in draw(30, 1, t)] != [c.to_json() for c in small[:30]]
+    assert all(Case.from_json(json.loads(json.dumps(c.to_json()))) == c for c in big)
 
 
-def test_structural_mode_unexplained(results):
-    r = results[2]
-    assert not r.case.in_catalogue
-    assert r.unexplained, f"a 4 Hz structural mode was named {r.named}"
-    assert not r.top1 and not r.top3
+def _neutral(entry: str, name: str) -> float:
+    return CATALOGUE[entry].parameter(name).zero
 
 
-def test_vane_nonlinearity_partly_unexplained(results):
-    """A quadratic sideslip vane is mostly a beta scale at these sideslips: the closest
-    catalogue entry is named, and the diagnosis says it leaves part of the gap above the
-    noise floor (measured shares 0.21-0.46 on the blind check's vane cases, threshold 0.2;
-    a right attribution, results[1], leaves 0.04 at most: docs/gap_benchmark.md)."""
-    r = results[3]
-    assert r.partly or r.unexplained, r.named
-    assert not results[1].partly
+def test_magnitudes_in_their_ranges(t, big):
+    lo, hi = K_RANGE
+    for c in big:
+        for e in c.effects:
+            if not e.in_catalogue or e.entry not in CATALOGUE:  # (misalignment, until it lands)
+                continue
+            CATALOGUE[e.entry].check(e.magnitude)  # inside the catalogue's allowed range
+            for name, value in e.magnitude.items():
+                p = CATALOGUE[e.entry].parameter(name)
+                if e.entry == "derivative_delta":
+                    d = e.options["derivative"]
+                    size = max(abs(t[c.aircraft][d]), DELTA_SCALE[d])
+                    assert DELTA_FRACTION[0] * size - 1e-12 <= abs(value) \
+                        <= DELTA_FRACTION[1] * size + 1e-12, c.label
+                    continue
+                if e.entry == "cg_offset":
+                    k = abs(value) / (CG_CHORDS * AIRCRAFT[c.aircraft].chord_m)
+                elif e.entry == "thrust_moment":
+                    k = abs(value) / THRUST_ARM_M
+                elif e.entry == "scale":
+                    k = (value - 1.0) / 0.2
+                elif math.isfinite(p.zero):
+                    k = abs(value - p.zero) / abs(p.default - p.zero)
+                else:  # a rate limit: neutral at infinity, drawn as a multiple of the default
+                    k = value / p.default
+                assert lo - 1e-9 <= k <= hi + 1e-9, (c.label, name, k)
 
 
-def test_summary_fractions(results):
-    s = summary(results)
-    assert s["in_catalogue"] == 2 and s["outside"] == 2
-    assert s["top1"] == 1.0 and s["unexplained_correct"] == 1.0
-    assert s["false_unexplained"] == 0.0
-    assert s["shrinkage"] > 0.7
-
-
-def test_draw_is_fixed_by_seed_and_covers_the_aircraft():
-    t = truths()
-    a, b = draw(40, 3, t), draw(40, 3, t)
-    assert [c.to_json() for c in a] == [c.to_json() for c in b]
-    assert {c.aircraft for c in a} == set(AIRCRAFT)
-    assert any(not c.in_catalogue for c in a) and any(c.in_catalogue for c in a)
-    for c in a:
-        if c.entry == "derivative_delta":  # moderate: at most half, at least 0.3 of a scale
-            d = c.options["derivative"]
-            assert abs(c.magnitude["delta"]) <= 0.5 * max(abs(t[c.aircraft][d]), 0.1) + 1e-12
-        if c.entry in ("control_effectiveness",):
-            assert 0.6 <= c.magnitude["factor"] <= 0.8
-    assert draw(40, 4, t) != a
-
-
-def test_draw_keeps_near_zero_stability_derivatives_stable():
+def test_near_zero_stability_derivatives_stay_stable(t, big):
     """A delta larger than half a near-zero derivative points the stable way: the
-    telemaster's Cn_beta (-0.003) drawn -0.012 and -0.014 departed on the seeds 0 and 1."""
-    t = truths()
-    cases = [c for seed in range(6) for c in draw(50, seed, t)
-             if c.entry == "derivative_delta" and c.options["derivative"] in STABLE_SIGN
-             and abs(t[c.aircraft][c.options["derivative"]])
-             < DELTA_SCALE[c.options["derivative"]]]
-    assert cases  # the telemaster's Cn_beta is among them
-    for c in cases:
-        assert np.sign(c.magnitude["delta"]) == STABLE_SIGN[c.options["derivative"]], c.label
+    telemaster's Cn_beta (-0.003) made -0.012 departed."""
+    seen = 0
+    for c in big:
+        for e in c.effects:
+            d = e.options.get("derivative")
+            if e.entry == "derivative_delta" and d in STABLE_SIGN \
+                    and abs(t[c.aircraft][d]) < DELTA_SCALE[d]:
+                assert np.sign(e.magnitude["delta"]) == STABLE_SIGN[d], c.label
+                seen += 1
+    assert seen
 
 
-def test_command_rejects_bad_input():
-    runner = CliRunner()
-    r = runner.invoke(app, ["gap-benchmark", "--n", "0"])
-    assert r.exit_code == 2 and "--n must be 1..10000, got 0" in r.output
-    r = runner.invoke(app, ["gap-benchmark", "--format", "xml"])
-    assert r.exit_code == 2 and "use one of table, json" in r.output
+def _named(entry: str, options: dict[str, str], parameters: dict | None = None) -> Ranked:
+    cand = Candidate(entry, options, ("x",), lambda m: m)
+    return Ranked(cand, {}, {}, parameters or {}, -1.0, -1.0)
 
 
-def test_json_shape(results, tmp_path):
-    d = json.loads(json.dumps(Benchmark(4, 0, results).to_json()))
-    for key in ("top1", "top3", "shrinkage", "unexplained_correct", "cases"):
-        assert key in d
-    assert len(d["cases"]) == 4
-    assert d["cases"][2]["shrink"] is None or math.isfinite(d["cases"][2]["shrink"])
+def test_classes_accept_what_the_data_cannot_tell_apart():
+    cg = Effect("cg_offset", "longitudinal", "card", {}, {"x": 0.05})
+    assert classes.same(cg, _named("derivative_delta", {"derivative": "Cm_alpha",
+                                                        "axes": "stability"}))
+    assert not classes.same(cg, _named("derivative_delta", {"derivative": "Cm_q"}))
+    delay = Effect("delay", "lateral", "measured", {"channel": "p"}, {"tau": 0.05})
+    assert classes.same(delay, _named("lag", {"channel": "p"}))
+    assert not classes.same(delay, _named("lag", {"channel": "r"}))
+    izz = Effect("inertia_scale", "lateral", "card", {}, {"izz": 1.1})
+    cn = [Candidate("derivative_delta", {"derivative": d, "axes": "body"}, (d,), lambda m: m)
+          for d in ("Cn_beta", "Cn_r")]
+    group = Ranked(pair(*cn), {}, {}, {}, -1.0, -1.0)
+    assert classes.same(izz, group)
+    assert not classes.same(izz, _named("derivative_delta", {"derivative": "Cn_beta"}))
+    assert classes.same(izz, _named("inertia_scale", {}, {"izz": {"value": 1.1}}))
+    assert not classes.same(izz, _named("inertia_scale", {}, {"ixx": {"value": 1.1},
+                                                              "izz": {"value": 1.0}}))
+    assert classes.class_of(cg) == "pitch stiffness"
+
+
+def test_blinded_record_shows_commands_and_the_sheet_not_the_effect():
+    """The record the diagnosis sees names the plain aircraft and keeps no trace of what
+    was injected; an actuator lag leaves its surface channel holding the command (the
+    plain flight's surface, to the quantization), an Izz scale leaves the Izz channel at
+    the weight-and-balance sheet's value, while both change the flight."""
+    plain = fly_case(Case(NULL_INDEX, 3, "navion", NULL), "calm")
+    lag = fly_case(Case(0, 3, "navion", SINGLE, (Effect(
+        "actuator_lag", "lateral", "card", {"surface": "da"}, {"tau": 0.1}),)), "calm")
+    izz = fly_case(Case(1, 3, "navion", SINGLE, (Effect(
+        "inertia_scale", "lateral", "card", {}, {"izz": 1.1}),)), "calm")
+    for rec in (lag, izz):
+        assert rec.meta.aircraft == "navion"
+        assert set(rec.meta.extra) <= set(KEPT) and rec.meta.extra["surfaces"] == "command"
+        assert "effect" not in rec.meta.scenario["card"]
+    quantum = 0.005 * np.pi / 180  # the research suite's aileron quantization
+    assert np.max(np.abs(lag["da"] - plain["da"])) <= 2 * quantum
+    assert np.max(np.abs(lag["p"] - plain["p"])) > 0.01  # rad/s: the lag is flown
+    assert np.array_equal(izz["Izz"], plain["Izz"])
+    assert np.max(np.abs(izz["r"] - plain["r"])) > 0.005
+
+
+@pytest.fixture(scope="module")
+def flown(t):
+    """One case per class of outcome, flown and diagnosed: a Twin Otter rudder at 0.7 in
+    calm air (in the catalogue), a 4 Hz structural mode on the Navion and a null Twin Otter
+    flight, both in light turbulence."""
+    rudder = Case(0, 12, "twinotter", SINGLE, (Effect(
+        "control_effectiveness", "lateral", "card", {"surface": "dr"}, {"factor": 0.7}),))
+    mode = Case(1, 13, "navion", OUT, (Effect(
+        "structural_mode", "lateral", "measured", {},
+        {"frequency_hz": 4.0, "damping": 0.03, "gain": 0.8}, in_catalogue=False),))
+    null = Case(NULL_INDEX, 14, "twinotter", NULL)
+    return [run_case(rudder, "calm", t["twinotter"], **FAST),
+            run_case(mode, "light", t["navion"], **FAST),
+            run_case(null, "light", t["twinotter"], **FAST)]
+
+
+def test_in_catalogue_case_named_and_sized(flown):
+    r = flown[0]
+    assert r.verdicts["lateral"] == "explained", r.named
+    assert r.right and r.named["lateral"][0] == "control_effectiveness(dr)"
+    # measured 0.705 for the 0.7 flown: 1.7 % of the 0.3 change (the linearised model's
+    # misfit of JSBSim; the bound is 0.001), held to the 5 % target
+    assert r.magnitude_error < 0.05
+    # the null level (the plain Twin Otter on the same seed) is 0.0008 of the energy and
+    # the rudder's gap 0.083: the named effect closes it to the null level
+    assert r.null["lateral"] < 0.01 < r.before["lateral"]
+    assert r.excess_shrink > 0.9
+
+
+def test_outside_case_unexplained(flown):
+    r = flown[1]
+    assert r.verdicts["lateral"] in ("unexplained", "partly_unexplained"), r.named
+    assert r.right is None and math.isnan(r.magnitude_error)
+
+
+def test_null_case_names_nothing(flown):
+    r = flown[2]
+    assert r.named == {"lateral": [], "longitudinal": []}
+    assert set(r.verdicts.values()) == {NULL_VERDICT}
+
+
+def test_summary_per_kind(flown):
+    s = summary(flown)
+    assert (s["single"], s["outside"], s["null"]) == (1, 1, 1)
+    assert s["right_first"] == 1.0 and s["unexplained"] == 1.0
+    assert s["no_gap"] == (1.0 if NULL_VERDICT == "no_gap" else 0.0)
+    assert s["magnitude_error"] < 0.05 and s["met"]["magnitude_error"]
+    assert set(s["by_kind"]) == {"control_effectiveness/lateral", "structural_mode/lateral",
+                                 "null"}
+    assert s["by_kind"]["null"]["cases"] == 1
+
+
+def test_kind_table_fits_80_columns(flown):
+    console = Console(width=80, record=True)
+    console.print(kind_table(summary(flown), "gap blind check"))
+    text = console.export_text()
+    assert max(len(line.rstrip()) for line in text.splitlines()) <= 80
+    assert "control_effectiveness/lat" in text and "…" not in text
+
+
+def test_study_on_local_processes_and_dask_resumes(tmp_path):
+    """Two cases on two local processes, written as they finish; the same study again
+    runs nothing; one more null case runs on a Dask cluster only that case; another seed
+    in the same folder is refused naming --output."""
+    kw = dict(turbulence="calm", aircraft=("twinotter",), options=FAST, output=tmp_path)
+    first = benchmark(1, 0, nulls=1, workers=2, **kw)
+    lines = (tmp_path / CASES_FILE).read_text().splitlines()
+    assert len(lines) == 2 and not any(r.error for r in first.results)
+    assert {json.loads(x)["case"]["index"] for x in lines} == {0, NULL_INDEX}
+    again = benchmark(1, 0, nulls=1, workers=1, **kw)
+    assert [r.to_json() for r in again.results] == [r.to_json() for r in first.results]
+    assert len((tmp_path / CASES_FILE).read_text().splitlines()) == 2
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        more = benchmark(1, 0, nulls=2, dask_address=cluster.scheduler_address, **kw)
+    assert len(more.results) == 3
+    assert len((tmp_path / CASES_FILE).read_text().splitlines()) == 3
+    assert json.loads((tmp_path / "summary.json").read_text())["null"] == 2
+    with pytest.raises(ValueError, match="--output .* holds another study"):
+        benchmark(1, 1, nulls=1, **kw)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--n", "0"], "--n must be at least 1"),
+    (["--seed", "-1"], "--seed must be 0 or more"),
+    (["--nulls", "-1"], "--nulls must be 0 or more"),
+    (["--aircraft", "navion,b747"], "--aircraft b747"),
+    (["--turbulence", "heavy"], "--turbulence must be one of calm, light, moderate"),
+    (["--workers", "0"], "--workers must be at least 1"),
+    (["--format", "xml"], "table or json"),
+])
+def test_command_rejects_bad_input(args, message):
+    r = CliRunner().invoke(app, ["gap-benchmark", *args])
+    assert r.exit_code == 2 and message in r.output, r.output
+
+
+def test_command_rejects_an_unwritable_output(tmp_path):
+    afile = tmp_path / "notes.txt"
+    afile.write_text("keep me")
+    r = CliRunner().invoke(app, ["gap-benchmark", "-o", str(afile)])
+    assert r.exit_code == 2 and "--output" in r.output and "not a folder" in r.output
+    assert afile.read_text() == "keep me"
+    r = CliRunner().invoke(app, ["gap-benchmark", "-o", str(afile / "sub")])
+    assert r.exit_code == 2 and "--output" in r.output, r.output

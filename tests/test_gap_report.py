@@ -13,19 +13,21 @@ from flightid.identification.gap import diagnose
 from flightid.identification.gap.correct import fly_record, gap_fractions, refly
 from flightid.identification.gap.report import held_out_windows, html_report, time_histories
 from flightid.scenarios.cards import fly_card
-from flightid.scenarios.gap_benchmark import Case, fly_case
+from flightid.scenarios.gap_benchmark import Case, Effect, fly_case
+from flightid.scenarios.gap_benchmark.cases import SINGLE
 from flightid.scenarios.gap_benchmark.run import card
 
 # a Cn_beta delta of 40 % of the navion's 0.071 (body axes), flown through the augmented
-# aircraft on the blind check's lateral card (research sensors, calm air)
-CASE = Case(0, 21, "navion", "derivative_delta", {"derivative": "Cn_beta", "axes": "body"},
-            {"delta": -0.03})
+# aircraft on the blind check's card (research sensors, calm air), its lateral axis
+CASE = Case(0, 21, "navion", SINGLE, (Effect(
+    "derivative_delta", "lateral", "card", {"derivative": "Cn_beta", "axes": "body"},
+    {"delta": -0.03}),))
 
 
 @pytest.fixture(scope="module")
 def diagnosed():
-    record = fly_case(CASE)
-    return record, diagnose([record], "navion", try_pairs=False, steps=1)
+    record = fly_case(CASE, turbulence="calm")
+    return record, diagnose([record], "navion", try_pairs=False, steps=1, axis="lateral")
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +73,7 @@ def test_refly_closes_the_jsbsim_gap(reflown):
 def test_fly_record_reproduces_its_own_aircraft():
     """The plain aircraft's own flight, flown again from trim with its recorded surfaces:
     the same trajectory up to the sensor noise (a check of the re-fly itself)."""
-    plain, _ = fly_card(card("navion", 22))
+    plain, _ = fly_card(card("navion", 22, turbulence="calm"))
     fractions = gap_fractions(plain, fly_record("navion", plain))
     # measured 0.1-1.0 % per channel with the surfaces driven past the actuators (1.0-2.1 %
     # when they were fed as commands and lagged again): the research sensors' noise, on the

@@ -1,14 +1,17 @@
-"""The gap diagnosis's blind check: cases drawn (aircraft, effect, magnitude, including
-effects outside the catalogue), flown, diagnosed without being told, and scored.
+"""The gap diagnosis's blind check: cases drawn (an aircraft and an effect of the catalogue,
+a pair, an effect outside it, or nothing), flown, diagnosed without being told, and scored
+per kind.
 
 ``cases`` (what is drawn), ``outside`` (the effects the catalogue cannot express),
-``run`` (fly, diagnose, score one case; the summary of many), ``study`` (many cases,
-written as they finish).
+``classes`` (effects the data cannot tell apart), ``run`` (fly, diagnose, score one case),
+``summary`` (the figures, overall and per kind), ``study`` (many cases on the Monte Carlo
+executors, resumable).
 """
 
-from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, Case, draw
-from flightid.scenarios.gap_benchmark.run import CaseResult, fly_case, run_case, summary
-from flightid.scenarios.gap_benchmark.study import Benchmark, benchmark
+from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, KINDS, Case, Effect, draw
+from flightid.scenarios.gap_benchmark.run import CaseResult, fly_case, run_case
+from flightid.scenarios.gap_benchmark.study import Benchmark, benchmark, check
+from flightid.scenarios.gap_benchmark.summary import TARGETS, summary
 
-__all__ = ["AIRCRAFT", "Benchmark", "Case", "CaseResult", "benchmark", "draw", "fly_case",
-           "run_case", "summary"]
+__all__ = ["AIRCRAFT", "KINDS", "TARGETS", "Benchmark", "Case", "CaseResult", "Effect",
+           "benchmark", "check", "draw", "fly_case", "run_case", "summary"]

@@ -1,243 +1,392 @@
-"""One blind case flown, diagnosed without being told and scored; the summary of many.
+"""One blind case flown, diagnosed without being told, and scored.
 
-Each aircraft flies the same kind of lateral test (``cases.Flight``, ``SCHEDULE``: an
-aileron doublet, a rudder 2-1-1, an aileron doublet and a rudder doublet, 44 s at 50 Hz,
-research sensors corrected
-to the CG (``DROPPED``), calm air: output error under turbulence is biased, docs/gap.md) with the
-case's effect: airframe effects through
-the card's ``[[effect]]`` (the augmented aircraft), a sensor ``scale`` and the effects
-outside the catalogue applied to the measured record. The diagnosis
-(``identification.gap.diagnose``) sees the record and the plain aircraft only.
+Each aircraft flies one card (``card``): its condition (``cases.Flight``), the lateral
+inputs (an aileron doublet, a rudder 2-1-1, an aileron doublet, a rudder doublet) then an
+elevator doublet and a 3211 (``SCHEDULE``, 64 s at 50 Hz), so both axes have two windows
+that can be held out; the research sensor suite with the vane-position and accelerometer
+lever-arm effects dropped (air data and accelerations corrected to the CG, as after a
+compatibility check: the diagnosis's models do not carry them); light turbulence by
+default. The record's surface channels hold the commands (``commands``): the positions of
+the plain aircraft's surfaces (the flight core maps commands statically), ahead of an
+actuator lag or rate limit; its mass-property channels hold the plain aircraft's values
+(the weight-and-balance sheet's), whatever mass, inertia or CG was injected.
+
+The diagnosis (``identification.gap.diagnose``, both axes) sees the blinded record
+(``blind``: what was injected removed from its metadata) and the plain aircraft's name.
+Scoring per axis (``score``): the verdict, whether the first named effect is in the
+injected one's class (``classes``), its magnitude error, and the held-out gap above the
+null level (the plain model's held-out gap on the plain flight of the same seed: the same
+turbulence and sensor noise, ``null_level``).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from flightid.identification.gap import GapResult, diagnose
-from flightid.identification.gap.linearise import linearise
+from flightid.identification.gap.actuator_candidates import SURFACES_KEY
+from flightid.identification.gap.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
-from flightid.scenarios.cards import Card, card_from_dict, fly_card
-from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, Case, Flight
-from flightid.scenarios.gap_benchmark.outside import OUTSIDE
+from flightid.scenarios.cards import AUGMENT_CACHE, Card, card_from_dict, fly_card, sub_seed
+from flightid.scenarios.gap_benchmark import classes
+from flightid.scenarios.gap_benchmark.cases import (
+    AIRCRAFT,
+    AXES,
+    BOTH,
+    NULL,
+    OUT,
+    PAIR,
+    Case,
+    Effect,
+)
+from flightid.scenarios.gap_benchmark.outside import RECORD, cm_alpha_break
 from flightid.sim.condition import FlightCondition
+from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.model import load
+from flightid.sim.sensors import measure
 from flightid.sim.trim import trim
 from flightid.sim.truth import derivatives
 from flightid.units import DEG
 
-# (kind, surface, start s): each surface twice, 10-12 s apart (one window each)
-# (an aileron 3211 banked the navion and the twin otter past 40 deg and changed their
-# airspeed by 8 m/s: outside the lateral perturbation model; doublets leave 11-15 deg)
+# (kind, surface, start s): the lateral surfaces twice each, 10 s apart, then the elevator
+# twice (an aileron 3211 banked the navion and the twin otter past 40 deg: outside the
+# perturbation model; doublets leave 11-15 deg)
 SCHEDULE = (("doublet", "da", 2.0), ("211", "dr", 12.0), ("doublet", "da", 22.0),
-            ("doublet", "dr", 32.0))
-DURATION_S = 44.0
+            ("doublet", "dr", 32.0), ("doublet", "de", 42.0), ("3211", "de", 52.0))
+DURATION_S = 64.0
 RATE_HZ = 50.0
-AIRFRAME = ("derivative_delta", "control_effectiveness")
-TOP = 3  # top-k attribution
-# sensor effects of the research suite the lateral model does not carry (vane position and
-# upwash, accelerometer lever arm): air data and accelerations corrected to the CG first,
-# as in a flight test's compatibility step and the navion-demo card
+# effects of the research suite the diagnosis's models do not carry (vane position and
+# upwash, accelerometer lever arm): air data and accelerations corrected to the CG first
 DROPPED = ("vanes", "lever_arm")
+# the record metadata saying its surface channels hold commands, not positions (the key
+# the diagnosis reads for actuator candidates; rename here if it lands under another one)
+SURFACES_META = (SURFACES_KEY, "command")
+# actuator effects the surface positions show (in series after the position's writer,
+# ``sim.augment``): a record of commands does not
+BEHIND_POSITION = ("actuator_lag", "rate_limit")
+# effects on the mass properties, which the record's mass channels must not reveal: a
+# research record carries the weight-and-balance sheet's values, those of the model
+MASS_EFFECTS = ("mass_scale", "inertia_scale", "cg_offset")
+MASS_CHANNELS = ("mass", "Ixx", "Iyy", "Izz", "Ixz")
+# the record metadata a blinded record keeps (``blind``)
+KEPT = ("inputs", "maneuvers", "measurement", SURFACES_META[0])
 
 
-def _maneuver(kind: str, surface: str, start: float, f: Flight) -> dict[str, Any]:
-    amplitude = f.aileron_deg if surface == "da" else f.rudder_deg
-    return {"kind": kind, "surface": surface, "start": start, "base": f.base_s,
+def _maneuver(kind: str, surface: str, start: float, name: str) -> dict[str, Any]:
+    f = AIRCRAFT[name]
+    amplitude = {"da": f.aileron_deg, "dr": f.rudder_deg, "de": f.elevator_deg}[surface]
+    base = f.elevator_base_s if surface == "de" else f.base_s
+    return {"kind": kind, "surface": surface, "start": start, "base": base,
             "amplitude_deg": amplitude}
 
 
-def card(aircraft: str, seed: int, effects: list[dict[str, Any]] | None = None) -> Card:
-    """The lateral test card of ``aircraft`` with airframe ``effects``."""
+def card(aircraft: str, seed: int, effects: list[dict[str, Any]] | None = None,
+         turbulence: str = "light", mounting: list[dict[str, Any]] | None = None,
+         disturbances: list[dict[str, Any]] | None = None, xml: str | None = None) -> Card:
+    """The test card of ``aircraft`` (module note) with airframe or actuator ``effects``
+    (``[[effect]]`` tables), a sensor ``mounting`` list, extra ``disturbances``; ``xml``:
+    fly this aircraft file instead (an aircraft-level change outside the catalogue)."""
     f = AIRCRAFT[aircraft]
     cond: dict[str, float] = {"altitude": f.altitude_m, "speed": f.speed_m_s}
     if f.flaps_deg:
         cond["flaps_deg"] = f.flaps_deg
+    sensors: dict[str, Any] = {"suite": "research", "drop": list(DROPPED)}
+    if mounting:  # replaces the suite's mounting list: DROPPED gone all the same
+        sensors = {"suite": "research", "mounting": mounting}
+    dist = list(disturbances or [])
+    if turbulence != "calm":
+        dist.append({"kind": "turbulence", "intensity": turbulence})
     data: dict[str, Any] = {
-        "name": f"gap-benchmark-{aircraft}", "aircraft": aircraft, "duration": DURATION_S,
-        "rate": RATE_HZ, "seed": seed, "condition": cond,
-        "maneuver": [_maneuver(kind, surface, start, f) for kind, surface, start in SCHEDULE],
-        "sensors": {"suite": "research", "drop": list(DROPPED)}}
+        "name": f"gap-benchmark-{aircraft}", "aircraft": aircraft,
+        "duration": DURATION_S, "rate": RATE_HZ, "seed": seed, "condition": cond,
+        "maneuver": [_maneuver(k, s, t, aircraft) for k, s, t in SCHEDULE],
+        "sensors": sensors}
+    if dist:
+        data["disturbance"] = dist
     if effects:
         data["effect"] = effects
-    return card_from_dict(data, f"<gap-benchmark {aircraft}>")
+    flown = card_from_dict(data, f"<gap-benchmark {aircraft}>")
+    # a card names a known aircraft; the changed file is swapped in once it is checked
+    return replace(flown, aircraft=xml) if xml else flown
 
 
-def truths() -> dict[str, dict[str, float]]:
-    """Each aircraft's body-axis derivatives at its test condition."""
+def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, float]]:
+    """Each aircraft's derivatives at its test condition: lateral ones in body axes,
+    longitudinal ones in stability axes (the axes of the diagnosis's models), and
+    ``trim_alpha`` (rad)."""
     out = {}
-    for name, f in AIRCRAFT.items():
+    for name in aircraft:
+        f = AIRCRAFT[name]
         model = load(name)
         trimmed = trim(model, FlightCondition(f.altitude_m, f.speed_m_s,
                                               flaps_rad=f.flaps_deg * DEG))
-        out[name] = dict(derivatives(model, trimmed, axes="body").values)
+        values: dict[str, float] = {}
+        for axis in ("longitudinal", "lateral"):
+            truth = derivatives(model, trimmed, axes=AXIS_FRAME[axis])
+            values.update(truth.values)
+            # a kink at trim (the c172p's Cn_beta: 0.0593 and 0.0604 either side): the
+            # mean of the one-sided slopes, as the diagnosis's linearisation takes it
+            values.update({k: 0.5 * (kink.minus + kink.plus) for k, kink in truth.flags.items()
+                           if k not in truth.values and hasattr(kink, "minus")})
+        values["trim_alpha"] = float(trimmed.alpha)
+        out[name] = values
     return out
 
 
-def fly_case(case: Case) -> FlightRecord:
-    """The measured record of ``case`` (its effect injected)."""
-    if case.entry in AIRFRAME:
-        measured, _ = fly_card(card(case.aircraft, case.seed,
-                                    [{"name": case.entry, **case.options, **case.magnitude}]))
-        return measured
-    measured, _ = fly_card(card(case.aircraft, case.seed))
-    if case.entry == "scale":
-        ch = case.options["channel"]
-        return measured.with_channels(**{ch: measured[ch] * case.magnitude["factor"]})
-    return OUTSIDE[case.entry](measured, **case.magnitude, **case.options)
+def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | None,
+             flown: Card) -> FlightRecord:
+    """``measured`` marked as holding the surface commands (``SURFACES_META``); with
+    ``plain`` (the truth of the same card on the plain aircraft, whose positions are its
+    commands: the flight core maps commands to positions statically), each surface channel
+    is the command (trim position plus the plain flight's increments) measured by the
+    card's sensors with the same seed: what an actuator lag or rate limit hides from the
+    positions."""
+    out = measured
+    if plain is not None:
+        surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
+        commanded = truth.with_channels(**{
+            s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
+            for s in surfaces})
+        again = measure(commanded, flown.sensors, sub_seed(flown.seed, "sensors"))
+        out = measured.with_channels(**{s: again[s] for s in surfaces})
+    out.meta = replace(out.meta, extra={**out.meta.extra, SURFACES_META[0]: SURFACES_META[1]})
+    return out
 
 
-def noise_floor(case: Case) -> float:
-    """The held-out gap of the plain model on the plain flight of ``case``'s aircraft and
-    seed (the same sensor noise): the part of a gap no effect can close."""
-    plain, _ = fly_card(card(case.aircraft, case.seed))
-    ranker = Ranker(linearise(case.aircraft, [plain]), Folds.make(segments([plain]), None))
-    return overall(pooled_fractions(list(ranker.base_held.values())))
+def blind(record: FlightRecord, aircraft: str) -> FlightRecord:
+    """``record`` as a diagnosis of a real record would have it: the plain ``aircraft``'s
+    name, the metadata of ``KEPT`` only (the maneuvers and inputs flown, how it was
+    measured, what its surface channels hold), the card without its effects and
+    disturbances. Gone: what was injected, the augmented aircraft's file and exact truth,
+    the turbulence."""
+    extra = {k: v for k, v in record.meta.extra.items() if k in KEPT}
+    scenario = dict(record.meta.scenario)
+    if "card" in scenario:
+        scenario["card"] = {k: v for k, v in scenario["card"].items()
+                            if k not in ("effect", "disturbance")} | {"aircraft": aircraft}
+    out = record.with_channels()
+    out.meta = replace(out.meta, aircraft=aircraft, extra=extra, scenario=scenario)
+    return out
 
 
-def _matches(case: Case, r: Ranked) -> bool:
-    c = r.candidate
-    if c.parts or c.entry != case.entry:
-        return False
-    return all(c.options.get(k) == v for k, v in case.options.items() if k != "axes")
+def _parameters(effect: Effect) -> dict[str, Any]:
+    """The card-table fields of an effect: the sized parameters drawn, the others neutral
+    (an entry's class default is its blind-test magnitude, not nothing)."""
+    entry = CATALOGUE[effect.entry]
+    values: dict[str, Any] = {p.name: p.zero for p in entry.parameters if p.sizes}
+    values.update(effect.magnitude)
+    return {**values, **effect.options}
 
 
-def _relative_error(case: Case, r: Ranked) -> float:
-    """|estimated - injected| / |injected change| of the case's magnitude."""
-    name, injected = next(iter(case.magnitude.items()))
-    estimated = r.parameters[name]["value"]
-    change = injected if case.entry == "derivative_delta" else injected - 1.0
-    return abs(estimated - injected) / abs(change)
+def fly_case(case: Case, turbulence: str = "light",
+             truth: dict[str, float] | None = None) -> FlightRecord:
+    """The measured, blinded record of ``case`` (its effects injected; module note).
+    ``truth``: the aircraft's ``truths`` entry (needed by a pitch break)."""
+    effects, mounting, disturbances, xml = [], [], [], None
+    for e in case.effects:
+        if e.inject == "card" and e.in_catalogue:
+            effects.append({"name": e.entry, **_parameters(e)})
+        elif e.inject == "mounting":
+            mounting.append({"effect": e.entry, **_parameters(e)})
+        elif e.inject == "disturbance":
+            disturbances.append({"kind": e.entry, **_parameters(e)})
+        elif e.entry == "cm_alpha_break":
+            alpha = (truth or truths((case.aircraft,))[case.aircraft])["trim_alpha"]
+            xml = cm_alpha_break(case.aircraft, alpha, e.magnitude["above"],
+                                 e.magnitude["delta"], AUGMENT_CACHE)
+    flown = card(case.aircraft, case.seed, effects, turbulence, mounting, disturbances, xml)
+    measured, truth_record = fly_card(flown)
+    plain = None
+    if any(e.entry in (*BEHIND_POSITION, *MASS_EFFECTS) for e in case.effects):
+        plain = fly_card(card(case.aircraft, case.seed, turbulence="calm"))[1]
+    record = commands(measured, truth_record, plain if any(
+        e.entry in BEHIND_POSITION for e in case.effects) else None, flown)
+    if plain is not None:  # the weight-and-balance sheet's values: the plain aircraft's
+        record = record.with_channels(**{
+            c: np.interp(record.time, plain.time, plain[c]) for c in MASS_CHANNELS
+            if c in record and c in plain})
+    rng = np.random.default_rng([case.seed, 7])
+    for e in case.effects:
+        if e.inject != "measured":
+            continue
+        if e.in_catalogue:
+            ch = e.options["channel"]
+            effect = CATALOGUE[e.entry].build(e.magnitude)
+            record = record.with_channels(**{ch: effect.apply(record.time, record[ch], rng)})
+        elif e.entry == "structural_mode":
+            record = RECORD[e.entry](record, **e.magnitude, axis=e.axis)
+        else:
+            record = RECORD[e.entry](record, **e.magnitude, **e.options)
+    return blind(record, case.aircraft)
+
+
+def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
+               plain: FlightRecord | None = None) -> dict[str, float]:
+    """Per axis: the held-out gap of the plain model on the plain flight of ``case``'s
+    aircraft and seed (the same turbulence and sensor noise): what no effect can close."""
+    if plain is None:
+        plain = fly_case(Case(case.index, case.seed, case.aircraft, NULL), turbulence)
+    out = {}
+    for axis in axes:
+        inputs = AXIS_INPUTS[axis]
+        ranker = Ranker(linearise(case.aircraft, [plain], axis),
+                        Folds.make(segments([plain], None, inputs), None))
+        out[axis] = overall(pooled_fractions(list(ranker.base_held.values())))
+    return out
+
+
+# -- the diagnosis as scored --------------------------------------------------------------
+
+
+def axis_result(result: GapResult, axis: str) -> GapResult | None:
+    """The diagnosis of one axis (None when the axis was not diagnosed)."""
+    return result.axes().get(axis)
+
+
+def verdict(result: GapResult) -> str:
+    """no_gap, explained, partly_unexplained or unexplained."""
+    return result.verdict
+
+
+def _label(r: Ranked) -> str:
+    return r.candidate.label
+
+
+def _relative_error(effect: Effect, r: Ranked) -> float:
+    """Mean over the injected (sized) parameters of |estimate - injected| / |injected -
+    neutral|; nan when the diagnosis gives none of them."""
+    errors = []
+    for name, injected in effect.magnitude.items():
+        est = (r.parameters or {}).get(name)
+        if est is None:
+            continue
+        neutral = CATALOGUE[effect.entry].parameter(name).zero
+        value = float(est["value"]) if isinstance(est, dict) else float(est)
+        if injected != neutral:
+            errors.append(abs(value - injected) / abs(injected - neutral))
+    return float(np.mean(errors)) if errors else math.nan
 
 
 @dataclass
 class CaseResult:
-    """One case's diagnosis, scored."""
+    """One case's diagnosis, scored (every field JSON-able: a study resumes from them)."""
 
     case: Case
-    named: list[str]
-    ranked: list[str]  # the first TOP of the ranking
-    top1: bool
-    top3: bool
-    unexplained: bool
-    shrink: float  # held-out shrink of the first named effect (nan: none named)
-    floor: float  # held-out gap of the plain model on the plain flight (the noise)
-    excess_shrink: float  # the shrink of the gap above the floor
-    magnitude_error: float  # relative, of the matching ranked effect (nan: none)
-    estimate: dict[str, dict[str, float]] = field(default_factory=dict)
-    seconds: float = float("nan")
+    verdicts: dict[str, str] = field(default_factory=dict)  # per diagnosed axis
+    named: dict[str, list[str]] = field(default_factory=dict)  # labels, per axis
+    right: bool | None = None  # single: first named on its axis in its class
+    all_named: bool | None = None  # pair: both effects named (any place, their axes)
+    magnitude_error: float = math.nan  # single, named exactly: relative
+    before: dict[str, float] = field(default_factory=dict)  # held-out gap, model as is
+    after: dict[str, float] = field(default_factory=dict)  # after the named effects
+    null: dict[str, float] = field(default_factory=dict)  # the null level per axis
+    seconds: float = math.nan  # wall time
+    cpu_seconds: float = math.nan  # this process's CPU time (one core)
     error: str = ""
-    partly: bool = False  # named effects leave part of the gap above the noise floor
+
+    @property
+    def excess_shrink(self) -> float:
+        """The shrink of the held-out gap above the null level, on the injected effects'
+        axes where something is named (the smallest of them); nan when none."""
+        out = []
+        for axis, b in self.before.items():
+            a, n = self.after.get(axis, math.nan), self.null.get(axis, math.nan)
+            if all(math.isfinite(x) for x in (a, b, n)) and b > n:
+                out.append((b - a) / (b - n))
+        return min(out) if out else math.nan
 
     def to_json(self) -> dict[str, Any]:
-        return {"case": self.case.to_json(), "label": self.case.label, "named": self.named,
-                "ranked": self.ranked, "top1": self.top1, "top3": self.top3,
-                "unexplained": self.unexplained, "shrink": _finite(self.shrink),
-                "floor": _finite(self.floor), "excess_shrink": _finite(self.excess_shrink),
-                "magnitude_error": _finite(self.magnitude_error), "estimate": self.estimate,
-                "seconds": _finite(self.seconds), "error": self.error,
-                "partly_unexplained": self.partly}
-
+        return {"case": self.case.to_json(), "label": self.case.label, "kind": self.case.kind,
+                "verdicts": self.verdicts, "named": self.named, "right": self.right,
+                "all_named": self.all_named, "magnitude_error": _finite(self.magnitude_error),
+                "before": self.before, "after": self.after, "null": self.null,
+                "excess_shrink": _finite(self.excess_shrink),
+                "seconds": _finite(self.seconds), "cpu_seconds": _finite(self.cpu_seconds),
+                "error": self.error}
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> CaseResult:
-        """Back from ``to_json`` (a line of ``cases.jsonl``)."""
-        def num(x: float | None) -> float:
-            return float("nan") if x is None else float(x)
-
-        return cls(Case(**d["case"]), d["named"], d["ranked"], d["top1"], d["top3"],
-                   d["unexplained"], num(d["shrink"]), num(d["floor"]),
-                   num(d["excess_shrink"]), num(d["magnitude_error"]), d["estimate"],
-                   num(d["seconds"]), d["error"], d.get("partly_unexplained", False))
+        nan = math.nan
+        return cls(Case.from_json(d["case"]), d["verdicts"], d["named"], d["right"],
+                   d["all_named"], nan if d["magnitude_error"] is None else d["magnitude_error"],
+                   d["before"], d["after"], d["null"],
+                   nan if d["seconds"] is None else d["seconds"],
+                   nan if d.get("cpu_seconds") is None else d["cpu_seconds"], d["error"])
 
 
 def _finite(x: float) -> float | None:
-    return x if math.isfinite(x) else None
+    return float(x) if math.isfinite(x) else None
 
 
-def score(case: Case, result: GapResult, floor: float = float("nan"),
-          seconds: float = float("nan")) -> CaseResult:
-    """``result`` (the diagnosis of ``case``'s record) against what was injected;
-    ``floor``: the noise part of the gap (``noise_floor``)."""
-    ranking: list[Ranked] = []
-    for r in [*result.named[:1], *result.effects]:
-        if all(r.candidate.label != o.candidate.label for o in ranking):
-            ranking.append(r)
-    top = ranking[:TOP]
-    top1 = bool(case.in_catalogue and result.named and _matches(case, result.named[0]))
-    top3 = bool(case.in_catalogue and any(_matches(case, r) for r in top))
-    match = next((r for r in top if _matches(case, r)), None) if case.in_catalogue else None
-    first = result.named[0] if result.named else None
-    excess = float("nan")
-    if first is not None and first.heldout_before:
-        before, after = overall(first.heldout_before), overall(first.heldout_after)
-        if before - floor > 1e-12:
-            excess = (before - after) / (before - floor)
-    return CaseResult(
-        case=case, named=[r.candidate.label for r in result.named],
-        ranked=[r.candidate.label for r in top], top1=top1, top3=top3,
-        unexplained=result.unexplained,
-        shrink=first.shrink if first is not None else float("nan"), floor=floor,
-        excess_shrink=excess,
-        magnitude_error=_relative_error(case, match) if match is not None else float("nan"),
-        estimate=dict(match.parameters) if match is not None else {}, seconds=seconds,
-        partly=result.partly_unexplained)
+def _effect_axes(e: Effect) -> tuple[str, ...]:
+    return AXES if e.axis == BOTH else (e.axis,)
 
 
-def run_case(case: Case, floor: bool = True, **options: Any) -> CaseResult:
-    """Fly ``case``, diagnose it against the plain aircraft (``options``: of ``diagnose``,
-    e.g. ``try_pairs``, ``steps``; the blind check uses its defaults), score it; with
-    ``floor``, the noise floor of its flight too."""
-    t0 = time.perf_counter()
-    record = fly_case(case)
+def score(case: Case, result: GapResult) -> CaseResult:
+    """``case`` scored from its diagnosis (the null level is filled in by ``run_case``)."""
+    per_axis = {a: g for a in AXES if (g := axis_result(result, a)) is not None}
+    out = CaseResult(case, {a: verdict(g) for a, g in per_axis.items()},
+                     {a: [_label(r) for r in g.named] for a, g in per_axis.items()})
+    if case.category == NULL:
+        return out
+    if case.category == PAIR:
+        out.all_named = all(
+            any(classes.same(e, p) for a in _effect_axes(e) if a in per_axis
+                for r in per_axis[a].named for p in (_parts(r) if r.candidate.parts else [r]))
+            for e in case.effects)
+    elif case.category != OUT:
+        e = case.effects[0]
+        firsts = [per_axis[a].named[0] for a in _effect_axes(e)
+                  if a in per_axis and per_axis[a].named]
+        out.right = any(classes.same(e, r) for r in firsts)
+        exact = [r for r in firsts if classes.exact(e, r)]
+        if exact:
+            out.magnitude_error = _relative_error(e, exact[0])
+    for e in case.effects:
+        for a in _effect_axes(e):
+            g = per_axis.get(a)
+            if g is not None and g.named and g.named[0].heldout_before \
+                    and g.named[-1].heldout_after:
+                out.before[a] = overall(g.named[0].heldout_before)
+                out.after[a] = overall(g.named[-1].heldout_after)
+    return out
+
+
+def _parts(r: Ranked) -> list[Any]:
+    """The single effects of a named group, each as a Ranked-like view (the candidate and
+    its parameters under the part's label)."""
+    out = []
+    for p in r.candidate.parts:
+        prefix = f"{p.label}."
+        params = {k[len(prefix):]: v for k, v in (r.parameters or {}).items()
+                  if k.startswith(prefix)}
+        out.append(_Part(p, params))
+    return out
+
+
+@dataclass
+class _Part:
+    candidate: Any
+    parameters: dict[str, Any]
+
+
+def run_case(case: Case, turbulence: str = "light", truth: dict[str, float] | None = None,
+             null: bool = True, **options: Any) -> CaseResult:
+    """Fly ``case``, diagnose it (``options`` as for ``diagnose``), score it; with
+    ``null``, the null level of the injected effects' axes where something is named too
+    (one more flight; a null case needs none: nothing injected, nothing to shrink)."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    record = fly_case(case, turbulence, truth)
     result = diagnose([record], case.aircraft, **options)
-    level = noise_floor(case) if floor else float("nan")
-    return score(case, result, level, time.perf_counter() - t0)
-
-
-def summary(results: list[CaseResult]) -> dict[str, Any]:
-    """The fractions of the blind check: ``top1`` and ``top3`` (in-catalogue cases),
-    ``shrinkage`` (median held-out shrink after the named effect, correctly named cases;
-    ``excess_shrinkage`` the same of the gap above the noise floor),
-    ``unexplained_correct`` (cases outside the catalogue reported unexplained, or partly
-    unexplained: the named effects leave part of the gap above the noise floor). A case
-    that could not be flown (it departed: the drawn effect made the aircraft unflyable
-    open loop) is counted in ``failed`` and left out of the fractions."""
-    flown = [r for r in results if not r.error]
-    inside = [r for r in flown if r.case.in_catalogue]
-    outside = [r for r in flown if not r.case.in_catalogue]
-    right = [r for r in inside if r.top1]
-    shrinks = [r.shrink for r in right if math.isfinite(r.shrink)]
-    excess = [r.excess_shrink for r in right if math.isfinite(r.excess_shrink)]
-    errors = [r.magnitude_error for r in inside if math.isfinite(r.magnitude_error)]
-
-    def frac(xs: list[bool]) -> float | None:
-        return float(np.mean(xs)) if xs else None
-
-    by: dict[str, dict[str, Any]] = {}
-    for r in inside:
-        d = by.setdefault(r.case.entry, {"cases": 0, "top1": 0})
-        d["cases"] += 1
-        d["top1"] += int(r.top1)
-    return {
-        "cases": len(results), "in_catalogue": len(inside), "outside": len(outside),
-        "failed": [f"{r.case.label}: {r.error}" for r in results if r.error],
-        "top1": frac([r.top1 for r in inside]), "top3": frac([r.top3 for r in inside]),
-        "shrinkage": float(np.median(shrinks)) if shrinks else None,
-        "shrink_at_least_70": frac([s >= 0.7 for s in shrinks]),
-        "excess_shrinkage": float(np.median(excess)) if excess else None,
-        "excess_shrink_at_least_70": frac([s >= 0.7 for s in excess]),
-        "magnitude_error_median": float(np.median(errors)) if errors else None,
-        "unexplained_correct": frac([r.unexplained or r.partly for r in outside]),
-        "false_unexplained": frac([r.unexplained for r in inside]),
-        "false_partly_unexplained": frac([r.partly for r in right]),
-        "by_entry": by,
-        "seconds": float(sum(r.seconds for r in results if math.isfinite(r.seconds))),
-    }
+    out = score(case, result)
+    if null and out.before:
+        out.null = null_level(case, tuple(out.before), turbulence)
+    out.seconds, out.cpu_seconds = time.perf_counter() - t0, time.process_time() - c0
+    return out

@@ -29,6 +29,9 @@ Rows = list[dict[str, Any]]
 DASK_CONNECT_S = 5.0  # an unreachable scheduler is reported after this many s
 OnResult = Callable[[int, Rows], None]
 Progress = Callable[[int, int], None]
+# one unit of work: task(description, index) -> rows, a module-level function of picklable
+# arguments (a worker process or a Dask worker needs nothing else); default: a realization
+Task = Callable[[Any, int], Rows]
 
 
 def _report(progress: Progress | None, finished: int, total: int) -> None:
@@ -80,13 +83,15 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
     pool.shutdown(wait=True, cancel_futures=True)
 
 
-def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
+def run_local(description: Any, indices: Iterable[int], on_result: OnResult,
               workers: int | None = None, progress: Progress | None = None,
-              window: int | None = None, store_in: str | Path | None = None) -> None:
+              window: int | None = None, store_in: str | Path | None = None,
+              task: Task = run_realization) -> None:
     """Run the realizations ``indices`` in ``workers`` local processes (default: one per
     CPU). Workers start from a clean process (forkserver), never a fork of this one.
     ``store_in``: each worker writes its realizations to this study folder
-    (``store.write_realization``) and ``on_result`` is not called."""
+    (``store.write_realization``) and ``on_result`` is not called (Monte Carlo studies
+    only). ``task``: what each index runs (default ``run_realization`` of a ``Study``)."""
     todo = list(indices)
     workers = max(1, int(workers or os.cpu_count() or 1))
     window = max(1, int(window or 2 * workers))
@@ -102,7 +107,7 @@ def run_local(description: Study, indices: Iterable[int], on_result: OnResult,
     def submit(index: int) -> Future:
         if store_in is not None:
             return pool.submit(_run_and_store, description, index, str(store_in))
-        return pool.submit(run_realization, description, index)
+        return pool.submit(task, description, index)
 
     with ProcessPoolExecutor(max_workers=min(workers, total), mp_context=context,
                              initializer=_exit_with, initargs=(os.getpid(),)) as pool:
@@ -158,12 +163,14 @@ def dask_client(address: str | None = None, scheduler_file: str | None = None
                          f"({type(exc).__name__}: {exc})") from None
 
 
-def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,
+def run_dask(description: Any, indices: Iterable[int], on_result: OnResult,
              client: distributed.Client, progress: Progress | None = None,
-             window: int | None = None) -> None:
+             window: int | None = None, task: Task = run_realization,
+             key: str | None = None) -> None:
     """Run the realizations ``indices`` on the workers of a Dask ``client`` (flightid
     must be installed on them); at most ``window`` (default: twice the worker threads)
-    are submitted at a time."""
+    are submitted at a time. ``task`` as for ``run_local``; ``key``: the prefix of the
+    Dask task keys (default: from a ``Study``'s card)."""
     todo = list(indices)
     total, finished = len(todo), 0
     _report(progress, 0, total)
@@ -174,11 +181,11 @@ def run_dask(description: Study, indices: Iterable[int], on_result: OnResult,
         window = 2 * threads
     window = max(1, int(window))
     queue = iter(todo)
-    ident = description.identity()["card_sha256"][:12]
+    prefix = key or f"flightid-montecarlo-{description.identity()['card_sha256'][:12]}"
 
     def submit(index: int) -> distributed.Future:
-        return client.submit(run_realization, description, index, pure=False,
-                             key=f"flightid-montecarlo-{ident}-{index}-{os.getpid()}")
+        return client.submit(task, description, index, pure=False,
+                             key=f"{prefix}-{index}-{os.getpid()}")
 
     first = []
     for index in queue:

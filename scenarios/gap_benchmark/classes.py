@@ -1,0 +1,133 @@
+"""Equivalence classes: effects the maneuvers cannot tell apart. Naming any member of the
+injected effect's class counts as right (docs/gap_benchmark.md lists them; fixed before
+the held-out seed is run).
+
+- pitch stiffness: a cg offset along x, a Cm_alpha delta (a CG shift dx moves Cm_alpha by
+  CL_alpha dx / cbar and the other pitching-moment terms by a second-order amount; Etkin &
+  Reid 1996 ch. 2);
+- pitch damping: Cm_q, Cm_alphadot (alpha and q move together in the short period: only
+  their sum is identified from such data; Morelli & Klein 2016 ch. 6);
+- aileron, rudder, elevator power: the surface's effectiveness factor, the delta of its
+  main moment derivative (Cl_da, Cn_dr, Cm_de: the other terms of the surface are small);
+- lag or delay on one channel: 1/(tau s + 1) and exp(-tau s) agree to first order in
+  tau s, and at the maneuvers' 0.3-3 rad/s a 0.05 s tau leaves 1 % between them;
+- an inertia about one axis and a scaling of every moment term about it: I x = M x
+  scales the same way (Ixz coupling aside), so an inertia scale and a group of deltas of
+  every Cl (ixx), Cm (iyy) or Cn (izz) term are the same to the data;
+- alpha bias or CL_0 mismatch: a constant alpha offset against the model's trim alpha is
+  a lift offset at the measured weight.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from flightid.scenarios.gap_benchmark.cases import CHANNELS, Effect
+
+
+@dataclass(frozen=True)
+class Member:
+    """A pattern of effects: the catalogue entry, options that must match, the one
+    parameter that is sized (an inertia scale's axis), or a group whose every part is a
+    derivative delta of a derivative starting with ``group_prefix``."""
+
+    entry: str
+    options: dict[str, str] = field(default_factory=dict)
+    parameter: str = ""
+    group_prefix: str = ""
+
+
+def _delta(derivative: str) -> Member:
+    return Member("derivative_delta", {"derivative": derivative})
+
+
+CLASSES: dict[str, tuple[Member, ...]] = {
+    "pitch stiffness": (_delta("Cm_alpha"), Member("cg_offset")),
+    "pitch damping": (_delta("Cm_q"), _delta("Cm_alphadot")),
+    "aileron power": (Member("control_effectiveness", {"surface": "da"}), _delta("Cl_da")),
+    "rudder power": (Member("control_effectiveness", {"surface": "dr"}), _delta("Cn_dr")),
+    "elevator power": (Member("control_effectiveness", {"surface": "de"}), _delta("Cm_de")),
+    **{f"lag or delay on {c}": (Member("delay", {"channel": c}), Member("lag", {"channel": c}))
+       for c in dict.fromkeys(c for cs in CHANNELS.values() for c in cs)},
+    "roll inertia": (Member("inertia_scale", parameter="ixx"),
+                     Member("group", group_prefix="Cl_")),
+    "pitch inertia": (Member("inertia_scale", parameter="iyy"),
+                      Member("group", group_prefix="Cm_")),
+    "yaw inertia": (Member("inertia_scale", parameter="izz"),
+                    Member("group", group_prefix="Cn_")),
+    "alpha bias or CL_0": (Member("bias", {"channel": "alpha"}), _delta("CL_0")),
+}
+
+
+def _sized(entry: str, magnitude: dict[str, float]) -> str:
+    """The parameter departing most from neutral (1 for scales)."""
+    if not magnitude:
+        return ""
+    return max(magnitude, key=lambda k: abs(magnitude[k] - (1.0 if entry.endswith("scale")
+                                                            else 0.0)))
+
+
+def _value(p: Any) -> float:
+    return float(p["value"]) if isinstance(p, dict) else float(p)
+
+
+def _effect_matches(m: Member, e: Effect) -> bool:
+    if m.group_prefix or m.entry != e.entry:
+        return False
+    if any(e.options.get(k) != v for k, v in m.options.items()):
+        return False
+    return not m.parameter or _sized(e.entry, e.magnitude) == m.parameter
+
+
+def _named_matches(m: Member, ranked: Any) -> bool:
+    """``ranked``: a Ranked of the diagnosis (``candidate.entry``, ``.options``, ``.parts``,
+    ``parameters`` in catalogue units)."""
+    c = ranked.candidate
+    if m.group_prefix:
+        parts = list(c.parts)
+        return len(parts) > 1 and all(
+            p.entry == "derivative_delta"
+            and str(p.options.get("derivative", "")).startswith(m.group_prefix) for p in parts)
+    if c.parts or c.entry != m.entry:
+        return False
+    if any(c.options.get(k) != v for k, v in m.options.items()):
+        return False
+    if m.parameter:
+        params = {k: _value(v) for k, v in (ranked.parameters or {}).items()}
+        return not params or _sized(c.entry, params) == m.parameter
+    return True
+
+
+def class_of(effect: Effect) -> str:
+    """The name of the injected effect's class; its own label when it has none."""
+    for name, members in CLASSES.items():
+        if any(_effect_matches(m, effect) for m in members):
+            return name
+    return effect.label.split(" ")[0]
+
+
+def same(effect: Effect, ranked: Any) -> bool:
+    """Whether a named effect (a single Ranked of the diagnosis) is ``effect`` itself (its
+    entry and options; the axes of a derivative delta aside) or in its class."""
+    c = ranked.candidate
+    if not c.parts and c.entry == effect.entry and all(
+            c.options.get(k) == v for k, v in effect.options.items()
+            if k != "axes" and k in c.options):
+        if effect.entry != "inertia_scale":
+            return True
+        params = {k: _value(v) for k, v in (ranked.parameters or {}).items()}
+        return not params or _sized(c.entry, params) == _sized(effect.entry, effect.magnitude)
+    for members in CLASSES.values():
+        if any(_effect_matches(m, effect) for m in members):
+            if any(_named_matches(m, ranked) for m in members):
+                return True
+    return False
+
+
+def exact(effect: Effect, ranked: Any) -> bool:
+    """The named effect is the injected entry with its options (so its parameters can be
+    compared with the injected magnitude)."""
+    c = ranked.candidate
+    return (not c.parts and c.entry == effect.entry
+            and all(c.options.get(k) == v for k, v in effect.options.items()))
