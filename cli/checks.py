@@ -363,7 +363,8 @@ def _check_folder(option: str, path: Path) -> None:
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent
     if not parent.is_dir():
-        raise NotADirectoryError(f"cannot write {path}: a part of the path is not a folder")
+        raise NotADirectoryError(f"{option} {path}: cannot write there, a part of the path "
+                                 "is not a folder")
     files.check_writable(parent / f".{path.name}.flightid-check")
 
 

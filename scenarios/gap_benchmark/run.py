@@ -142,20 +142,25 @@ def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, f
 
 def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | None,
              flown: Card) -> FlightRecord:
-    """``measured`` marked as holding the surface commands (``SURFACES_META``); with
-    ``plain`` (the truth of the same card on the plain aircraft, whose positions are its
-    commands: the flight core maps commands to positions statically), each surface channel
-    is the command (trim position plus the plain flight's increments) measured by the
-    card's sensors with the same seed: what an actuator lag or rate limit hides from the
-    positions."""
-    out = measured
-    if plain is not None:
-        surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
-        commanded = truth.with_channels(**{
-            s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
-            for s in surfaces})
-        again = measure(commanded, flown.sensors, sub_seed(flown.seed, "sensors"))
-        out = measured.with_channels(**{s: again[s] for s in surfaces})
+    """``measured`` as is (surface positions, as a research aircraft's recorder has them)
+    without ``plain``. With ``plain`` (the truth of the same card on the plain aircraft;
+    the cases with an effect behind the surface position, ``BEHIND_POSITION``): marked as
+    holding the surface commands (``SURFACES_META``), each surface channel the plain
+    aircraft's positions (trim plus the plain flight's increments) measured by the card's
+    sensors with the same seed: what an actuator lag or rate limit hides from the
+    positions. Only those cases are command records: a command record of the plain
+    aircraft has its own actuators' rate limit between command and position (40 deg/s on
+    the Twin Otter, reached by every doublet), which the linear model does not carry, so
+    null flights recorded as commands are not at the null level (measured: every channel
+    of a Twin Otter null flight above it)."""
+    if plain is None:
+        return measured
+    surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
+    commanded = truth.with_channels(**{
+        s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
+        for s in surfaces})
+    again = measure(commanded, flown.sensors, sub_seed(flown.seed, "sensors"))
+    out = measured.with_channels(**{s: again[s] for s in surfaces})
     out.meta = replace(out.meta, extra={**out.meta.extra, SURFACES_META[0]: SURFACES_META[1]})
     return out
 
