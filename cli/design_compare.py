@@ -17,6 +17,7 @@ from flightid.api import design_compare
 from flightid.cli import study_options as opts
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
+from flightid.scenarios.montecarlo.card_file import card_with_overrides
 from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
 from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
 from flightid.units import DEG
@@ -72,6 +73,9 @@ def design_compare_command(
     dask: opts.Dask = None,
     format: opts.Format = "table",
     quiet: opts.Quiet = False,
+    set_: opts.Set = None,
+    turbulence: opts.Turbulence = None,
+    sensors: opts.Sensors = None,
 ) -> None:
     """Compare input designs by the scatter of the derivatives they give over a Monte
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
@@ -83,6 +87,7 @@ def design_compare_command(
         raise ValueError(f"--amplitude-deg must be > 0, got {amplitude_deg}")
     if not (math.isfinite(base) and base > 0):
         raise ValueError(f"--base must be > 0 s, got {base}")
+    card = card_with_overrides(card, output, set_ or (), turbulence, sensors)
     settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
     kwargs = dict(card=card, n=n, method=method, model=model,
                   designs=tuple(design or DESIGNS), equal=equal, settings=settings,

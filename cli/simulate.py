@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from flightid.channels import CHANNELS
+from flightid.cli import study_options as opts
 from flightid.cli.checks import (
     SIZE_LIMIT,
     check_count,
@@ -19,7 +20,7 @@ from flightid.cli.checks import (
     estimated_bytes,
 )
 from flightid.cli.progress import flight_progress
-from flightid.scenarios.cards import load_card
+from flightid.scenarios.cards import load_card, overridden_card
 from flightid.scenarios.simulate import ClippedInputWarning, list_cards, simulate
 
 RECORD_SUFFIXES = (".parquet", ".csv")
@@ -35,6 +36,9 @@ def simulate_command(
     list_cards_: Annotated[bool, typer.Option("--list", help="list the library cards")] = False,
     force: Annotated[bool, typer.Option(
         "--force", help=f"write even above {SIZE_LIMIT / 1e9:g} GB")] = False,
+    set_: opts.Set = None,
+    turbulence: opts.Turbulence = None,
+    sensors: opts.Sensors = None,
 ) -> None:
     """Fly a flight card (file or library name) and write the measured record."""
     if list_cards_:
@@ -51,7 +55,7 @@ def simulate_command(
         check_writable(option, path)
     if seed is not None:
         check_count("--seed", seed, low=0, high=2**32 - 1)
-    loaded = load_card(card)
+    loaded = overridden_card(load_card(card), set_ or (), turbulence, sensors)
     check_rate(f"card {loaded.name}: rate", loaded.rate, loaded.duration)
     samples = loaded.duration * loaded.rate + 1
     files = 2 if truth else 1

@@ -524,13 +524,16 @@ def ideal_suite(rate: float = 100.0) -> SensorSuite:
         "de",
         "da",
         "dr",
-        "throttle",
         "h",
+        "qbar",
+        "latitude",
+        "longitude",
     )
     return SensorSuite(
         name="ideal",
         channels={c: [Sample(rate=rate)] for c in names},
         output_rate=rate,
+        passthrough=_MASS,
         description="no sensor errors",
     )
 
