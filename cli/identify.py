@@ -11,6 +11,7 @@ from rich.console import Console
 
 from flightid.cli.checks import check_choice, check_writable, read_options
 from flightid.cli.tables import estimate_table, print_score
+from flightid.identification.data_reduction import reduce_record
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
 from flightid.identification.report import write_html
@@ -70,6 +71,9 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
+    raw: Annotated[bool, typer.Option(
+        "--raw", help="skip the standard data reduction (accelerometers and vanes to the CG, "
+                      "vane scale and bias; docs/record.md)")] = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
@@ -77,6 +81,11 @@ def identify_command(
     options: dict[str, Any] = read_options(method, parse_options(option or []))
     check_writable("--report", report)
     data = read(record)
+    reduction = None if raw else reduce_record(data)
+    if reduction is not None:
+        data = reduction.record
+        for text in reduction.warnings:
+            typer.echo(f"flightid identify: warning: {text}", err=True)
     if multistep_input and method == "oe":
         options["multistep_inputs"] = list(multistep_input)
     elif multistep_input:
@@ -97,9 +106,12 @@ def identify_command(
                       if not isinstance(v, list) or len(v) < 1000}
         if scored is not None:
             out["score"] = scored.as_dict()
+        out["data_reduction"] = "skipped (--raw)" if raw else reduction.applied
         print(json.dumps(out, indent=2, default=str))
         return
     console = Console()
+    for line in ["skipped (--raw)"] if raw else reduction.applied:
+        typer.echo(f"data reduction: {line}")
     console.print(estimate_table(est))
     for part in (est.fit.get("coefficients") or {}).values():
         for step in part.get("steps", []):
