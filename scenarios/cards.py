@@ -523,6 +523,8 @@ def _set_path(data: dict[str, Any], key: str, value: Any) -> None:
             node[part] = value
             return
         if isinstance(part, str) and part not in node:
+            if isinstance(path[depth + 1], int):
+                raise ValueError(f"--set {key}: the card has no {part} entries to index")
             node[part] = {}
         node = node[part]
 

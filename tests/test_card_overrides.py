@@ -46,6 +46,8 @@ def test_override_refuses_an_unknown_path_naming_it_and_the_valid_keys():
         override(card.data, ["sensors.mount=1"])
     with pytest.raises(ValueError, match=r"maneuver has 3 entries"):
         override(card.data, ["maneuver[3].start=1"])
+    with pytest.raises(ValueError, match=r"disturbance\[0\]\.kind: the card has no disturbance"):
+        override(load_card("twinotter-id").data, ["disturbance[0].kind=gust"])
     with pytest.raises(ValueError, match="--turbulence must be one of none, light, moderate"):
         override(card.data, turbulence="severe")
     # the card's own checks apply to the overridden card
