@@ -1,25 +1,39 @@
-"""Truth recovery with default options only, the way a user runs it.
+"""Truth recovery with default options only, the way a user runs it, on every library card.
 
-For each seed: ``flightid simulate navion-demo --seed S -o f.parquet`` (fly_card, then the
-record written and read back), then ``flightid identify f.parquet --method M --model lat``
-and ``--model lon`` with every option at its default; each estimate scored against the
-truth the record carries. Writes benchmarks/results/default_recovery.txt.
+For each card of ``flightid simulate --list`` (``example``, a schema example, aside) and
+each seed: the card flown (``flightid simulate CARD --seed S -o f.parquet``: fly_card, the
+record written and read back), then ``flightid identify f.parquet --model AXIS`` with the
+default method (output error) and every other option at its default, on each axis the
+card's maneuvers excite (lat: aileron or rudder; lon: elevator), once with the standard
+data reduction (the default) and once with ``--raw``. Each estimate is scored against the
+truth the record carries. Per card: the share of (seed, estimated derivative) pairs within
+3 standard errors, and the share of the model's derivatives estimated (the rest withheld
+as not identifiable, or the whole model refused).
 
-    python benchmarks/default_recovery.py [--seeds 1-10] [--methods oe,ee]
+    python benchmarks/default_recovery.py --seeds 1-10 [--cards a,b] [--cache DIR]
+    python benchmarks/default_recovery.py --seeds 1001-1010 --name heldout
+
+Development seeds 1-10; held-out seeds 1001-1010 (docs/validation.md), run once at the
+end. Writes benchmarks/results/default_recovery_cards[-NAME].json and .txt.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import tempfile
 from pathlib import Path
 
+from flightid.identification.data_reduction import reduce_record
 from flightid.identification.identify import identify
 from flightid.identification.scoring import score
 from flightid.record import read
-from flightid.scenarios.cards import fly_card, load_card
+from flightid.scenarios.cards import fly_card, library_cards, load_card
 
-RESULTS = Path(__file__).parent / "results" / "default_recovery.txt"
+RESULTS = Path(__file__).parent / "results"
+METHOD = "oe"  # flightid identify's default method
+SKIP = ("example",)
+AXES = {"lat": ("da", "dr"), "lon": ("de",)}
 
 
 def _seeds(text: str) -> list[int]:
@@ -27,44 +41,105 @@ def _seeds(text: str) -> list[int]:
     return list(range(int(lo), int(hi or lo) + 1))
 
 
+def excited_axes(card_name: str) -> list[str]:
+    """The axes ('lat', 'lon') whose surfaces the card's maneuvers move."""
+    flown = {s for m in load_card(card_name).maneuvers for s in m.surfaces()}
+    return [axis for axis, surfaces in AXES.items() if flown & set(surfaces)]
+
+
+def _record(card_name: str, seed: int, cache: Path):
+    path = cache / f"{card_name}-s{seed}.parquet"
+    if not path.exists():
+        measured, _ = fly_card(load_card(card_name), seed)
+        measured.write(path)
+    return read(path)
+
+
+def run_one(record, axis: str, reduced: bool) -> dict:
+    """One identification: counts within 3 sigma, estimated, withheld; or the refusal."""
+    if reduced:
+        record = reduce_record(record).record
+    try:
+        est = identify(record, METHOD, axis)
+    except ValueError as exc:
+        return {"refused": str(exc)}
+    rows = score(est, record).rows
+    done = [r for r in rows if r.status == "estimated"]
+    return {"estimated": len(done), "withheld": len(rows) - len(done),
+            "inside": sum(abs(r.sigmas) <= 3 for r in done),
+            "misses": [f"{r.name} {r.sigmas:+.1f}" for r in done if abs(r.sigmas) > 3]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--card", default="navion-demo")
+    parser.add_argument("--cards", default="", help="comma-separated (default: all)")
     parser.add_argument("--seeds", default="1-10")
-    parser.add_argument("--methods", default="oe,ee")
+    parser.add_argument("--name", default="", help="results file suffix (e.g. heldout)")
+    parser.add_argument("--cache", default="", help="folder keeping the flown records")
+    parser.add_argument("--fly-only", action="store_true")
     args = parser.parse_args()
-    card = load_card(args.card)
-    methods = args.methods.split(",")
-    counts = {m: [0, 0] for m in methods}
-    misses: dict[str, list[str]] = {m: [] for m in methods}
-    lines = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for seed in _seeds(args.seeds):
-            measured, _ = fly_card(card, seed)
-            path = Path(tmp) / f"s{seed}.parquet"
-            measured.write(path)
-            record = read(path)
-            for method in methods:
-                for model in ("lat", "lon"):
-                    scored = score(identify(record, method, model), record)
-                    rows = [r for r in scored.rows if r.status == "estimated"]
-                    inside = [r for r in rows if abs(r.sigmas) <= 3]
-                    counts[method][0] += len(inside)
-                    counts[method][1] += len(rows)
-                    misses[method] += [f"s{seed} {r.name} {r.sigmas:+.1f}" for r in rows
-                                       if abs(r.sigmas) > 3]
-                    line = f"seed {seed:2d} {method:3s} {model}: {scored.verdict}"
-                    lines.append(line)
-                    print(line, flush=True)
-    lines.append("")
-    for method, (inside, total) in counts.items():
-        lines.append(f"{method}: {inside} of {total} (seed, derivative) pairs within 3 sigma "
-                     f"({100 * inside / max(total, 1):.1f} %); beyond: "
-                     f"{', '.join(misses[method]) or 'none'}")
-    text = (f"card {args.card}, seeds {args.seeds}, default options\n" + "\n".join(lines)
-            + "\n")
-    RESULTS.write_text(text)
+    cards = args.cards.split(",") if args.cards else [c for c in library_cards()
+                                                      if c not in SKIP]
+    seeds = _seeds(args.seeds)
+    tmp = None if args.cache else tempfile.TemporaryDirectory()
+    cache = Path(args.cache or tmp.name)
+    cache.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for card in cards:
+        axes = excited_axes(card)
+        for seed in seeds:
+            record = _record(card, seed, cache)
+            if args.fly_only:
+                print(f"flew {card} seed {seed}", flush=True)
+                continue
+            if not axes:
+                rows.append({"card": card, "seed": seed, "axis": "-", "reduction": "-",
+                             "refused": "no maneuver on the elevator, aileron or rudder"})
+                continue
+            for axis in axes:
+                for reduced in (False, True):
+                    row = {"card": card, "seed": seed, "axis": axis,
+                           "reduction": "standard" if reduced else "raw",
+                           **run_one(record, axis, reduced)}
+                    rows.append(row)
+                    print(json.dumps(row), flush=True)
+    if args.fly_only:
+        return
+    suffix = f"-{args.name}" if args.name else ""
+    (RESULTS / f"default_recovery_cards{suffix}.json").write_text(json.dumps(
+        {"method": METHOD, "seeds": args.seeds, "rows": rows}, indent=1))
+    text = table(rows, args.seeds)
+    (RESULTS / f"default_recovery_cards{suffix}.txt").write_text(text)
     print(text)
+
+
+def table(rows: list[dict], seeds: str) -> str:
+    """Per card and reduction: within-3-sigma share and share estimated (markdown)."""
+    lines = [f"default method ({METHOD}) on each excited axis, seeds {seeds}", "",
+             "| card | axes | raw: within 3 sigma | raw: estimated | standard reduction: "
+             "within 3 sigma | standard reduction: estimated |", "|---|---|---|---|---|---|"]
+    by_card: dict[str, list[dict]] = {}
+    for r in rows:
+        by_card.setdefault(r["card"], []).append(r)
+    for card, rs in by_card.items():
+        cells = []
+        for reduction in ("raw", "standard"):
+            sel = [r for r in rs if r["reduction"] == reduction]
+            est = sum(r.get("estimated", 0) for r in sel)
+            inside = sum(r.get("inside", 0) for r in sel)
+            withheld = sum(r.get("withheld", 0) for r in sel)
+            refused = sum("refused" in r for r in sel)
+            cells.append(f"{100 * inside / est:.0f} % ({inside}/{est})" if est else "-")
+            share = f"{100 * est / (est + withheld):.0f} %" if est + withheld else "0 %"
+            cells.append(share + (f", {refused} refused" if refused else ""))
+        axes = ",".join(sorted({r["axis"] for r in rs}))
+        lines.append(f"| {card} | {axes} | " + " | ".join(cells) + " |")
+    lines.append("")
+    for card, rs in by_card.items():
+        refusals = sorted({r["refused"][:160] for r in rs if "refused" in r})
+        for text in refusals:
+            lines.append(f"- {card} refused: {text}")
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

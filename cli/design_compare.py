@@ -19,6 +19,7 @@ from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_choice, check_number, check_paths, check_study
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
+from flightid.scenarios.montecarlo.card_file import card_with_overrides
 from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
 from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
 from flightid.units import DEG
@@ -76,6 +77,9 @@ def design_compare_command(
     dask: opts.Dask = None,
     format: opts.Format = "table",
     quiet: opts.Quiet = False,
+    set_: opts.Set = None,
+    turbulence: opts.Turbulence = None,
+    sensors: opts.Sensors = None,
 ) -> None:
     """Compare input designs by the scatter of the derivatives they give over a Monte
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
@@ -91,6 +95,7 @@ def design_compare_command(
     options = parse_options(option or [])
     check_study(n, method, model, options, seed, workers)
     check_paths({"--card": card}, [Output("--output", output, folder=True)])
+    card = card_with_overrides(card, output, set_ or (), turbulence, sensors)
     settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
     kwargs = dict(card=card, n=n, method=method, model=model,
                   designs=tuple(design or DESIGNS), equal=equal, settings=settings,

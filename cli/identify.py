@@ -20,6 +20,7 @@ from flightid.cli.checks import (
 )
 from flightid.cli.tables import estimate_table, print_score
 from flightid.identification import convergence
+from flightid.identification.data_reduction import reduce_record
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
 from flightid.identification.report import write_html
@@ -84,6 +85,9 @@ def identify_command(
     force: Annotated[bool, typer.Option(
         "--force", help="run when the memory estimate exceeds what is available, and write "
                         "--report over an existing file of another kind")] = False,
+    raw: Annotated[bool, typer.Option(
+        "--raw", help="skip the standard data reduction (accelerometers and vanes to the CG, "
+                      "vane scale and bias; docs/record.md)")] = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
@@ -97,6 +101,11 @@ def identify_command(
         if isinstance(span, tuple) and (span[1] <= data.time[0] or span[0] >= data.time[-1]):
             raise ValueError(f"--window {window}: outside the record ({data.time[0]:g} .. "
                              f"{data.time[-1]:g} s)")
+        reduction = None if raw else reduce_record(data)
+        if reduction is not None:
+            data = reduction.record
+            for text in reduction.warnings:
+                typer.echo(f"flightid identify: warning: {text}", err=True)
         if multistep_input and method == "oe":
             options["multistep_inputs"] = list(multistep_input)
         elif multistep_input:
@@ -121,9 +130,12 @@ def identify_command(
                       if not isinstance(v, list) or len(v) < 1000}
         if scored is not None:
             out["score"] = scored.as_dict()
+        out["data_reduction"] = "skipped (--raw)" if raw else reduction.applied
         print(json.dumps(out, indent=2, default=str))
         return
     console = Console()
+    for line in ["skipped (--raw)"] if raw else reduction.applied:
+        typer.echo(f"data reduction: {line}")
     console.print(estimate_table(est))
     for part in (est.fit.get("coefficients") or {}).values():
         for step in part.get("steps", []):

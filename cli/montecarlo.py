@@ -17,6 +17,7 @@ from flightid.cli.checks import Output, check_choice, check_paths, check_study
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.scenarios import montecarlo
+from flightid.scenarios.montecarlo.card_file import card_with_overrides
 from flightid.scenarios.montecarlo.summary import Summary
 
 
@@ -74,6 +75,9 @@ def montecarlo_command(
         help="TOML file with disperse = [\"mass_scale:0.05\", ...]")] = None,
     format: opts.Format = "table",
     quiet: opts.Quiet = False,
+    set_: opts.Set = None,
+    turbulence: opts.Turbulence = None,
+    sensors: opts.Sensors = None,
 ) -> None:
     """Fly a card N times, identify each flight, and summarize bias, scatter and the
     coverage of the reported bounds; a rerun continues the study in -o."""
@@ -85,6 +89,7 @@ def montecarlo_command(
     check_paths({"CARD": card, "--disperse-file": disperse_file,
                  "--dask-scheduler-file": dask_scheduler_file},
                 [Output("--output", output, folder=True)])
+    card = card_with_overrides(card, output, set_ or (), turbulence, sensors)
     specs = [*(read_dispersions(disperse_file) if disperse_file else []), *(disperse or [])]
     kwargs = dict(method=method, model=model, options=options, study_dir=output,
                   workers=workers, dask_address=dask, seed=seed,

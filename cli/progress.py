@@ -34,14 +34,16 @@ Update = Callable[..., None]  # update(done, total, label=None)
 @contextmanager
 def flight_progress(description: str, total_s: float, show: bool = True
                     ) -> Iterator[Callable[[float, float], None] | None]:
-    """A ``progress(flown_s, total_s)`` callback drawing a transient bar (simulated seconds,
-    elapsed time, ETA) while the block runs; None when ``show`` is false."""
+    """A ``progress(flown_s, total_s)`` callback drawing a transient bar on stderr
+    (simulated seconds, elapsed time, ETA) while the block runs; None when ``show`` is
+    false."""
     if not show:
         yield None
         return
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                   TextColumn("{task.completed:.0f}/{task.total:.0f} s flown"),
-                  TimeElapsedColumn(), TimeRemainingColumn(), transient=True) as bar:
+                  TimeElapsedColumn(), TimeRemainingColumn(), transient=True,
+                  console=Console(stderr=True)) as bar:
         task = bar.add_task(description, total=total_s)
 
         def progress(flown_s: float, total: float) -> None:

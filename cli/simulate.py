@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from flightid.channels import CHANNELS
+from flightid.cli import study_options as opts
 from flightid.cli.checks import (
     MAX_SEED,
     SIZE_LIMIT,
@@ -21,7 +22,7 @@ from flightid.cli.checks import (
     estimated_bytes,
 )
 from flightid.cli.progress import flight_progress
-from flightid.scenarios.cards import load_card
+from flightid.scenarios.cards import load_card, overridden_card
 from flightid.scenarios.simulate import ClippedInputWarning, list_cards, simulate
 
 RECORD_SUFFIXES = (".parquet", ".csv")
@@ -38,6 +39,9 @@ def simulate_command(
     force: Annotated[bool, typer.Option(
         "--force", help=f"write even above {SIZE_LIMIT / 1e9:g} GB, and over an existing "
                         "file of another kind")] = False,
+    set_: opts.Set = None,
+    turbulence: opts.Turbulence = None,
+    sensors: opts.Sensors = None,
 ) -> None:
     """Fly a flight card (file or library name) and write the measured record."""
     if list_cards_:
@@ -55,7 +59,7 @@ def simulate_command(
                                  Output("--plot", plot)], force)
     if seed is not None:
         check_count("--seed", seed, low=0, high=MAX_SEED)
-    loaded = load_card(card)
+    loaded = overridden_card(load_card(card), set_ or (), turbulence, sensors)
     check_rate(f"card {loaded.name}: rate", loaded.rate, loaded.duration)
     samples = loaded.duration * loaded.rate + 1
     files = 2 if truth else 1

@@ -19,3 +19,11 @@ Dask = Annotated[str | None, typer.Option(
     "--dask", help="Dask scheduler address, e.g. tcp://host:8786")]
 Format = Annotated[str, typer.Option(help="table or json")]
 Quiet = Annotated[bool, typer.Option(help="no progress bar")]
+# card overrides (flightid.scenarios.cards.override), shared with `flightid simulate`
+Set = Annotated[list[str] | None, typer.Option(
+    "--set", help="override a card field KEY=VALUE by its TOML path, e.g. condition.speed=60 "
+                  "or sensors.drop=vanes,lever_arm (repeatable)")]
+Turbulence = Annotated[str | None, typer.Option(
+    help="replace the card's turbulence: none, light or moderate")]
+Sensors = Annotated[str | None, typer.Option(
+    help="replace the card's sensors by a built-in suite: research, hobby or ideal")]

@@ -12,6 +12,7 @@ surface properties to the project's control convention (flightid/channels.py):
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import re
 import sys
@@ -19,6 +20,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import jsbsim
 
@@ -138,6 +140,48 @@ class Model:
         }
 
 
+# jsbsim releases before the logger API have no FGLogger: nothing to route there
+_LoggerBase: Any = getattr(jsbsim, "FGLogger", object)
+
+
+class _ToPythonLogging(_LoggerBase):
+    """JSBSim's log records (jsbsim >= 1.3 routes its messages through a logger, whose
+    default prints to Python's stdout) sent to the ``flightid.jsbsim`` logger at DEBUG
+    level: silent unless an application asks for them."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._parts: list[str] = []
+
+    def set_level(self, level: Any) -> None:
+        self._parts = []
+
+    def file_location(self, filename: str, line: int) -> None:
+        self._parts.append(f"{filename}:{line}: ")
+
+    def message(self, message: str) -> None:
+        self._parts.append(message)
+
+    def format(self, format: Any) -> None:
+        pass
+
+    def flush(self) -> None:
+        text = "".join(self._parts).strip()
+        self._parts = []
+        if text:
+            JSBSIM_LOG.debug("%s", text)
+
+
+JSBSIM_LOG = logging.getLogger("flightid.jsbsim")
+
+
+def silence_jsbsim() -> None:
+    """Route JSBSim's messages of the calling thread to the ``flightid.jsbsim`` logger
+    (the logger is per thread in JSBSim; ``load`` calls this for its thread)."""
+    if hasattr(jsbsim, "set_logger") and not isinstance(jsbsim.get_logger(), _ToPythonLogging):
+        jsbsim.set_logger(_ToPythonLogging())
+
+
 @contextlib.contextmanager
 def quiet() -> Iterator[None]:
     """Silence JSBSim's C++ console output (it writes to the process's stdout/stderr)."""
@@ -233,6 +277,7 @@ def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     name, xml, origin = _locate(aircraft)
     # the static debug level silences the banner that the constructor prints
     jsbsim.FGJSBBase().debug_lvl = 0
+    silence_jsbsim()
     fdm = jsbsim.FGFDMExec(str(PACKAGE_ROOT))
     fdm.set_debug_level(0)
     fdm.disable_output()

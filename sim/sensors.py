@@ -214,11 +214,28 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
         "resampling": how,
         "definition": suite.to_dict(),
     }
+    extra["sensor_positions"] = sensor_positions(suite)
     provenance = f"{truth.meta.provenance}; measured by sensor suite {suite.name!r} seed {seed}"
     meta = dataclasses.replace(
         truth.meta, sample_rate=out_rate, units=units, extra=extra, provenance=provenance
     )
     return FlightRecord(t_out, out, meta)
+
+
+def sensor_positions(suite: SensorSuite) -> dict[str, list[float]]:
+    """Where the suite's sensors sit, as a record's ``meta.extra['sensor_positions']``
+    (docs/record.md): ``accelerometers`` [x, y, z] m from the CG in body axes (x forward,
+    y right, z down; [0, 0, 0] without a lever arm), and ``alpha_vane`` / ``beta_vane``
+    [x, y, z] m when the flow angles come from vanes (absent: the channel is the flow
+    angle at the CG)."""
+    out: dict[str, list[float]] = {"accelerometers": [0.0, 0.0, 0.0]}
+    for m in suite.mounting:
+        if isinstance(m, LeverArm):
+            out["accelerometers"] = [float(m.x), float(m.y), float(m.z)]
+        elif isinstance(m, Vanes):
+            out["alpha_vane"] = [float(m.alpha_x), float(m.alpha_y), float(m.alpha_z)]
+            out["beta_vane"] = [float(m.beta_x), float(m.beta_y), float(m.beta_z)]
+    return out
 
 
 # -- building suites from dicts --------------------------------------------------------
@@ -524,13 +541,16 @@ def ideal_suite(rate: float = 100.0) -> SensorSuite:
         "de",
         "da",
         "dr",
-        "throttle",
         "h",
+        "qbar",
+        "latitude",
+        "longitude",
     )
     return SensorSuite(
         name="ideal",
         channels={c: [Sample(rate=rate)] for c in names},
         output_rate=rate,
+        passthrough=_MASS,
         description="no sensor errors",
     )
 

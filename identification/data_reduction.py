@@ -1,0 +1,173 @@
+"""The standard data reduction before identification: accelerometers and flow vanes
+corrected to the CG from the sensor positions a record carries, and the vanes' flow
+amplification (upwash, sidewash) and bias from flight path reconstruction.
+
+As the F-111C reduction procedure (Cooper, Drobik & Martin, ARL Flight Mechanics Report
+187, 1990, sections 4.3-4.4) and Morelli & Klein (2016) ch. 10 do it:
+
+- accelerometers at r = (x, y, z) m from the CG (body axes) measure
+  a_s = a_cg + omegadot x r + omega x (omega x r) (M&K eq. 10.9), so
+  a_cg = a_s - omegadot x r - omega x (omega x r), with omegadot from a local polynomial
+  fit of the measured rates (``coefficients.smoothed_derivative``);
+- vanes measure alpha_m = K_alpha alpha_v + b_alpha, beta_m = K_beta beta_v + b_beta, with
+  alpha_v, beta_v the flow angles at the vane (alpha_v ~ alpha - x_a q / V, beta_v ~ beta
+  + x_b r / V; Cooper et al. App. I/J). K and b come from flight path reconstruction
+  (``compatibility.reconstruct`` with the vane positions fixed), the position effect is
+  then removed exactly (``compatibility.correct``). Without the channels a reconstruction
+  needs (phi, theta), only the position effect is removed and the scale is reported left.
+
+The positions are the record's ``meta.extra['sensor_positions']`` (docs/record.md). A record
+without them is returned unchanged, with a warning naming the bias to expect.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from flightid.identification import compatibility
+from flightid.identification.coefficients import smoothed_derivative
+from flightid.identification.estimate import Estimate
+from flightid.record import FlightRecord
+
+POSITIONS_KEY = "sensor_positions"
+REDUCTION_KEY = "data_reduction"
+VANE_KEYS = {"alpha": "alpha_vane", "beta": "beta_vane"}
+VANE_SCALES = {"alpha": "upwash_alpha", "beta": "sidewash_beta"}
+NO_POSITIONS = (
+    "the record carries no sensor positions (meta sensor_positions, docs/record.md): "
+    "accelerometers and vanes are taken as at the CG. An IMU off the CG biases the "
+    "specific forces by omegadot x r + omega x (omega x r) (ay by r_x rdot: CY_r, CY_p, "
+    "CY_beta), vanes ahead of the CG read alpha - x q/V and beta + x r/V (Cm_q, CL_q, "
+    "CY_r, Cn_r, Cl_r), and an uncalibrated vane scale K scales every flow-angle "
+    "derivative by 1/K (CY_beta, Cl_beta, Cn_beta, CL_alpha, Cm_alpha)")
+
+
+@dataclass
+class Reduction:
+    """A reduced record, what was applied (one line each) and the warnings."""
+
+    record: FlightRecord
+    applied: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    reconstruction: Estimate | None = None
+
+
+def _position(value: Any, key: str) -> tuple[float, float, float]:
+    if (not isinstance(value, list | tuple) or len(value) != 3
+            or not all(isinstance(v, int | float) and np.isfinite(v) for v in value)):
+        raise ValueError(f"meta sensor_positions.{key} must be [x, y, z] in m, got {value!r}")
+    return float(value[0]), float(value[1]), float(value[2])
+
+
+def accelerometers_to_cg(record: FlightRecord, position: Sequence[float]
+                         ) -> dict[str, np.ndarray]:
+    """ax, ay, az (m/s^2) at the CG from accelerometers at ``position`` (x, y, z m from the
+    CG, body axes): a_s - omegadot x r - omega x (omega x r) (M&K eq. 10.9)."""
+    x, y, z = position
+    dt = float(np.median(np.diff(record.time)))
+    p, q, r = record["p"], record["q"], record["r"]
+    pd, qd, rd = (smoothed_derivative(record[c], dt) for c in ("p", "q", "r"))
+    c1, c2, c3 = q * z - r * y, r * x - p * z, p * y - q * x  # omega x r
+    return {"ax": record["ax"] - (qd * z - rd * y) - (q * c3 - r * c2),
+            "ay": record["ay"] - (rd * x - pd * z) - (r * c1 - p * c3),
+            "az": record["az"] - (pd * y - qd * x) - (p * c2 - q * c1)}
+
+
+def _with(record: FlightRecord, channels: Mapping[str, np.ndarray],
+          positions: Mapping[str, Any], applied: list[str]) -> FlightRecord:
+    extra = dict(record.meta.extra)
+    extra[POSITIONS_KEY] = dict(positions)
+    extra[REDUCTION_KEY] = [*extra.get(REDUCTION_KEY, []), *applied]
+    meta = dataclasses.replace(record.meta, extra=extra)
+    return FlightRecord(record.time.copy(), {**record.channels, **channels}, meta)
+
+
+def _vanes(record: FlightRecord, vanes: dict[str, tuple[float, float, float]],
+           out: Reduction) -> FlightRecord:
+    """Vane scale and bias by flight path reconstruction, position effect removed."""
+    fixed = {f"vane_{angle}_{axis}": pos[i] for angle, pos in vanes.items()
+             for i, axis in enumerate("xyz")}
+    values = dict(fixed)
+    where = "; ".join(f"{a} vane at ({', '.join(f'{v:g}' for v in pos)}) m"
+                      for a, pos in vanes.items())
+    missing = [c for c in compatibility.REQUIRED if c not in record]
+    if missing:
+        out.warnings.append(
+            f"vane scale and bias not estimated: flight path reconstruction needs "
+            f"{', '.join(missing)}, which the record lacks; the flow-angle derivatives "
+            f"(CY_beta, Cl_beta, Cn_beta, CL_alpha, Cm_alpha) carry the vanes' flow "
+            f"amplification 1/K")
+        out.applied.append(f"flow angles: {where}: position effect removed")
+    else:
+        _, est = compatibility.reconstruct(record, fixed=fixed, uncertainty="cramer-rao")
+        out.reconstruction = est
+        found = dict(zip(est.names, zip(est.values, est.std, strict=True), strict=True))
+        parts = []
+        for angle in vanes:
+            scale, bias = VANE_SCALES[angle], f"bias_{angle}"
+            if scale in found:
+                k, s = found[scale]
+                values[scale] = float(k)
+                parts.append(f"{angle} scale 1 + {k:.4f} +- {s:.4f}")
+            elif scale in est.unidentifiable:
+                out.warnings.append(f"{angle} vane scale left uncorrected: "
+                                    f"{est.unidentifiable[scale]}")
+            if bias in found:
+                values[bias] = float(found[bias][0])
+                parts.append(f"{angle} bias {np.degrees(found[bias][0]):+.3f} deg")
+        out.applied.append(f"flow angles: {where}: position effect removed; "
+                           f"{', '.join(parts) or 'no scale or bias'} from flight path "
+                           f"reconstruction (Morelli & Klein 2016 ch. 10)")
+    corrected = compatibility.correct(record, values)
+    return corrected
+
+
+def reduce_record(record: FlightRecord,
+                  positions: Mapping[str, Any] | None = None) -> Reduction:
+    """The record with the standard data reduction its sensor positions call for.
+
+    Parameters
+    ----------
+    record : a flight record in SI units.
+    positions : sensor positions (m from the CG, body axes) as in
+        ``meta.extra['sensor_positions']``: ``accelerometers``, ``alpha_vane``,
+        ``beta_vane``, each [x, y, z]; default the record's own.
+
+    Returns a Reduction: the corrected record (its sensor positions then say the
+    sensors are at the CG, and ``meta.extra['data_reduction']`` lists what was done),
+    one line per correction applied, and warnings (no positions: the bias to expect).
+    Raises ValueError for malformed positions.
+    """
+    if positions is None:
+        positions = record.meta.extra.get(POSITIONS_KEY)
+    out = Reduction(record)
+    if positions is None:
+        out.warnings.append(NO_POSITIONS)
+        return out
+    if not isinstance(positions, Mapping):
+        raise ValueError(f"meta sensor_positions must be a table, got {positions!r}")
+    left = dict(positions)
+    acc = _position(left.get("accelerometers", [0.0, 0.0, 0.0]), "accelerometers")
+    channels: dict[str, np.ndarray] = {}
+    if any(acc) and all(c in record for c in ("ax", "ay", "az", "p", "q", "r")):
+        channels = accelerometers_to_cg(record, acc)
+        where = ", ".join(f"{v:g}" for v in acc)
+        out.applied.append(f"accelerometers moved to the CG from ({where}) m: "
+                           "a - omegadot x r - omega x (omega x r)")
+        left["accelerometers"] = [0.0, 0.0, 0.0]
+    reduced = _with(record, channels, left, []) if channels else record
+    vanes = {angle: _position(left[key], key) for angle, key in VANE_KEYS.items()
+             if key in left and angle in record}
+    if vanes and all(c in record for c in ("V", "alpha", "beta")):
+        reduced = _vanes(reduced, vanes, out)
+        for key in VANE_KEYS.values():
+            left.pop(key, None)
+    if out.applied:
+        reduced = _with(reduced, {}, left, out.applied)
+    out.record = reduced
+    return out
