@@ -70,7 +70,7 @@ from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.flight import Atmosphere, DepartureError, Simulation
 from flightid.sim.model import Model, load
-from flightid.sim.sensors import SensorSuite, builtin_suite, measure
+from flightid.sim.sensors import SUITES, SensorSuite, builtin_suite, measure
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
 from flightid.units import G0
@@ -97,6 +97,9 @@ VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr")
 LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
           "speed_ratio": (0.7, 1.4), "altitude_loss_m": 150.0}
 PENALTY = 20.0
+DEFAULT_CONDITION = (1524.0, 46.3)  # trim altitude (m), true airspeed (m/s)
+MAX_RATE_HZ = 1000.0  # decision and record rates (Hz)
+MAX_DECISIONS = 1_000_000  # decisions per episode (its noise is drawn at reset)
 TURBULENCE = ("none", "light")
 # light turbulence: MIL-F-8785C Dryden, 15 kt at 20 ft, POE 1e-2 (JSBSim severity 3)
 LIGHT = {"turbulence": "milspec", "windspeed_20ft_m_s": 15 * 0.514444, "severity": 3}
@@ -183,6 +186,58 @@ class _Information:
         self.n += 1
 
 
+def _one_of(option: str, value: Any, choices: Sequence[str]) -> None:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{option} must be one of {', '.join(map(repr, choices))}; "
+                         f"got {value!r}")
+
+
+def _positive(option: str, value: Any, most: float = math.inf, zero: bool = False) -> float:
+    """``value`` as a finite float in (0, most] ([0, most] with ``zero``), or a ValueError
+    naming ``option``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if (isinstance(value, bool) or not math.isfinite(v) or not (0.0 <= v if zero else 0.0 < v)
+            or not v <= most):
+        bound = f"{'>= 0' if zero else '> 0'}" + (f" and <= {most:g}" if most < math.inf else "")
+        raise ValueError(f"{option} must be a finite number {bound}; got {value!r}")
+    return v
+
+
+def _condition(condition: Sequence[float] | None) -> FlightCondition:
+    if condition is None:
+        return FlightCondition(*DEFAULT_CONDITION)
+    try:
+        alt, speed = (float(v) for v in condition)
+    except (TypeError, ValueError):
+        alt = speed = math.nan
+    if not (math.isfinite(alt) and alt >= 0.0 and math.isfinite(speed) and speed > 0.0):
+        raise ValueError("condition must be (altitude m >= 0, true airspeed m/s > 0), finite; "
+                         f"got {condition!r}")
+    return FlightCondition(alt, speed)
+
+
+def _targets(targets: str | Sequence[str]) -> tuple[str, ...]:
+    """The target derivatives: a preset's or the given names, checked."""
+    if isinstance(targets, str):
+        _one_of("targets", targets, tuple(PRESETS))
+        return PRESETS[targets]
+    names = tuple(targets) if isinstance(targets, Sequence) else ()
+    usage = (f"targets must be {' or '.join(map(repr, PRESETS))} or a non-empty list of "
+             f"distinct C{{l,m,n,X,Y,Z}}_{{{','.join(VARIABLES)}}}")
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{usage}; got {targets!r}")
+    for name in names:
+        coef, _, var = name.partition("_")
+        if coef not in SIGMA or var not in VARIABLES:
+            raise ValueError(f"{usage}; got unsupported target {name!r}")
+    if len(set(names)) < len(names):
+        raise ValueError(f"{usage}; got a repeated target in {targets!r}")
+    return names
+
+
 class ExcitationEnv(gymnasium.Env):
     """Excite an aircraft for identification; see the module docstring for the spaces,
     reward and termination."""
@@ -197,32 +252,46 @@ class ExcitationEnv(gymnasium.Env):
                  penalty: float = PENALTY, render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        if turbulence not in TURBULENCE:
-            raise ValueError(f"turbulence must be one of {TURBULENCE}, got {turbulence!r}")
+        _one_of("turbulence", turbulence, TURBULENCE)
+        if isinstance(effects, (str, Mapping)) or not isinstance(effects, Sequence) or not all(
+                isinstance(d, Mapping) for d in effects):
+            raise ValueError("effects must be a list of effect tables (dicts), e.g. "
+                             "[{'name': 'rate_limit', 'surface': 'de', 'rate_deg': 20}]; "
+                             f"got {effects!r}")
+        self.episode_s = _positive("episode_s", episode_s)
+        self.decision_hz = _positive("decision_hz", decision_hz, MAX_RATE_HZ)
+        sim_hz = self.decision_hz if sim_hz is None else _positive("sim_hz", sim_hz, MAX_RATE_HZ)
+        self.sim_per_decision = int(round(sim_hz / self.decision_hz))
+        if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
+                                            - sim_hz) > 1e-9:
+            raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz "
+                             f"{self.decision_hz}")
+        self.n_decisions = int(round(self.episode_s * self.decision_hz))
+        if not 1 <= self.n_decisions <= MAX_DECISIONS:
+            raise ValueError(f"episode_s * decision_hz = {self.episode_s:g} s x "
+                             f"{self.decision_hz:g} Hz = {self.n_decisions} decisions; it must "
+                             f"be 1 to {MAX_DECISIONS:,} (an episode's noise is drawn at reset)")
+        self.penalty = _positive("penalty", penalty, zero=True)
         suite: SensorSuite | None
         augmentation = tuple(CATALOGUE.from_dict(d, "effect", f"effects[{i}]")
                              for i, d in enumerate(effects))
         if card is not None:
+            if not isinstance(card, (str, Card)):
+                raise ValueError(f"card must be a card name, a path or a Card, got {card!r}")
             c = card if isinstance(card, Card) else load_card(card)
             aircraft, cond, suite = c.aircraft, c.condition, c.sensors
             augmentation = (*c.augmentation, *augmentation)
         else:
-            alt, speed = condition if condition is not None else (1524.0, 46.3)
-            cond = FlightCondition(float(alt), float(speed))
+            if not isinstance(aircraft, str) or not aircraft:
+                raise ValueError(f"aircraft must be an aircraft name, got {aircraft!r}")
+            cond = _condition(condition)
+            _one_of("sensors", sensors, ("none", *SUITES))
             suite = None if sensors in ("none", "ideal") else builtin_suite(sensors)
         self.render_mode = render_mode
         self.aircraft, self.condition, self.suite = aircraft, cond, suite
         self.effects = augmentation  # airframe and actuator effects flown (and in the truth)
+        self.targets = _targets(targets)
         flown = augmented_aircraft(aircraft, augmentation) if augmentation else aircraft
-        self.targets = tuple(PRESETS[targets] if isinstance(targets, str) else targets)
-        self.episode_s, self.decision_hz = float(episode_s), float(decision_hz)
-        sim_hz = self.decision_hz if sim_hz is None else float(sim_hz)
-        self.sim_per_decision = int(round(sim_hz / self.decision_hz))
-        if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
-                                            - sim_hz) > 1e-9:
-            raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz")
-        self.n_decisions = int(round(self.episode_s * self.decision_hz))
-        self.penalty = float(penalty)
         model, self.trim, self.truth = _setup(flown, cond)
         self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
         self.sim = Simulation(model, rate_hz=sim_hz, atmosphere=self._atmosphere)
@@ -237,9 +306,6 @@ class ExcitationEnv(gymnasium.Env):
         groups: dict[str, list[str]] = {}
         for name in self.targets:
             coef, _, var = name.partition("_")
-            if coef not in SIGMA or var not in VARIABLES:
-                raise ValueError(f"unsupported target {name!r}: use C{{l,m,n,X,Y,Z}}_"
-                                 f"{{{','.join(VARIABLES)}}}")
             groups.setdefault(coef, []).append(var)
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
@@ -285,7 +351,13 @@ class ExcitationEnv(gymnasium.Env):
     # -- gymnasium ------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
-        super().reset(seed=seed)
+        # checked before any state changes: a refused reset leaves the environment as it was
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
+                                 or seed < 0):
+            raise ValueError(f"reset: seed must be None or an integer >= 0; got {seed!r}")
+        if options is not None and (not isinstance(options, Mapping) or options):
+            raise ValueError(f"reset: options takes no keys (None or {{}}); got {options!r}")
+        super().reset(seed=None if seed is None else int(seed))
         self._seed = int(self.np_random.integers(2**31))
         if self._atmosphere.turbulence != "none":
             self.sim.atmosphere = replace(self._atmosphere, seed=sub_seed(self._seed, "jsbsim"))
