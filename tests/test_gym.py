@@ -23,7 +23,7 @@ from flightid.scenarios.gym.baselines import (
     three211,
     zero,
 )
-from flightid.scenarios.gym.env import SIGMA, _Information
+from flightid.scenarios.gym.env import OBSERVATIONS, REWARDS, SIGMA, _Information
 
 SEEDS = (0, 1)
 
@@ -37,6 +37,15 @@ def test_check_env(env):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "no spec" note: made directly, not through make
         check_env(env)
+
+
+@pytest.mark.parametrize("reward", REWARDS)
+@pytest.mark.parametrize("observation", OBSERVATIONS)
+def test_check_env_for_every_reward_and_observation(reward, observation):
+    e = ExcitationEnv(reward=reward, observation=observation, episode_s=2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        check_env(e)
 
 
 def test_make_by_id():
@@ -103,6 +112,75 @@ def test_returns_order(env):
          (("zero", zero), ("doublet", doublet), ("3211", three211), ("multisine", multisine))}
     for s in range(len(SEEDS)):
         assert r["zero"][s] < r["doublet"][s] < r["3211"][s] < r["multisine"][s]
+
+
+def full_rudder(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """The reward-gaming policy: full rudder held until the episode ends (at the bank
+    limit, 2.5 s in on the Navion)."""
+    a = np.zeros((env.n_decisions, 3))
+    a[:, 2] = 1.0
+    return a
+
+
+def test_full_rudder_to_the_bank_limit_scores_below_the_3211(env):
+    """Under the default reward a flight that leaves the envelope forfeits its information:
+    the full-rudder policy returns exactly -penalty, the 3211 its information (123)."""
+    assert env.reward == "valid-information"
+    for s in SEEDS:
+        rudder, info, terminated = run_episode(env, full_rudder(env, s), s)
+        assert terminated and "bank" in info["departure"]
+        assert rudder == pytest.approx(-env.penalty, abs=1e-9)
+        assert rudder < run_episode(env, three211(env, s), s)[0]
+
+
+def test_information_outside_the_linear_range_counts_only_under_the_old_reward():
+    """The same full-rudder flight (the flight does not depend on the reward) under both
+    rewards: where the default reward's validity weight is 0 (the flight beyond twice the
+    linear range), the "information" reward still pays for the samples, the default pays
+    nothing."""
+    valid, old = ExcitationEnv(), ExcitationEnv(reward="information")
+    steps = {}
+    for e in (valid, old):
+        e.reset(seed=0)
+        steps[e.reward] = []
+        for a in full_rudder(e, 0):
+            _, r, term, trunc, info = e.step(a.astype(np.float32))
+            steps[e.reward].append((r, info["validity"]))
+            if term:
+                break
+    outside = [i for i, (_, w) in enumerate(steps["valid-information"][:-1]) if w == 0.0]
+    assert len(outside) > 10
+    assert all(steps["valid-information"][i][0] == 0.0 for i in outside)
+    assert all(steps["information"][i][0] > 0.0 for i in outside)
+    assert all(w == 1.0 for _, w in steps["information"])
+
+
+@pytest.mark.parametrize("schedule", [doublet, three211, multisine])
+def test_baselines_inside_the_linear_range_score_the_same_under_both_rewards(schedule):
+    """Inputs of 0.2 of travel stay inside the linear range: every weight is 1, so the
+    default reward's return is the information reward's, to rounding."""
+    valid, old = ExcitationEnv(), ExcitationEnv(reward="information")
+    a = run_episode(valid, schedule(valid, 0), 0)
+    b = run_episode(old, schedule(old, 0), 0)
+    assert a[0] == pytest.approx(b[0], rel=1e-12) and a[1]["validity"] == 1.0
+    np.testing.assert_array_equal(a[1]["estimate"], b[1]["estimate"])
+
+
+def test_scaled_observations_are_the_si_ones_about_trim_over_the_scales():
+    si, scaled = ExcitationEnv(episode_s=2.0), ExcitationEnv(episode_s=2.0, observation="scaled")
+    np.testing.assert_array_equal(si.obs_scale, scaled.obs_scale)
+    first = [si.reset(seed=3)[0]], [scaled.reset(seed=3)[0]]
+    for a in doublet(si, 3)[:100]:
+        first[0].append(si.step(a.astype(np.float32))[0])
+        first[1].append(scaled.step(a.astype(np.float32))[0])
+    raw, norm = np.array(first[0]), np.array(first[1])
+    np.testing.assert_allclose(norm, (raw - si.obs_center) / si.obs_scale, rtol=0, atol=1e-12)
+    assert norm[-1, OBS_CHANNELS.index("t")] == pytest.approx(1.0)
+    # the doublet's 0.2 of travel on the aileron reads at most 0.2 of da's scale (the
+    # larger side of its travel), plus the research suite's noise on da (5 sigma)
+    i = OBS_CHANNELS.index("da")
+    assert np.abs(norm[:, i]).max() <= 0.2 + 5 * si._sigma_obs[i] / si.obs_scale[i]
+    assert np.all(np.abs(norm[:, 1:]) < 2.0)  # a small input stays within a few scales
 
 
 def test_full_up_elevator_terminates_with_penalty(env):

@@ -2,9 +2,10 @@
 
 An episode starts at a trim and lets a policy move the elevator, aileron and rudder
 (normalised commands) at the decision rate; the reward is the gain in information about
-the target derivatives (D-optimality), with a penalty and termination when the flight
-leaves a safe envelope. ``record()`` gives the episode as a measured FlightRecord, so that
-any identification method (``flightid.identify``) runs on it.
+the target derivatives (D-optimality) gathered inside the linear range of the regression,
+with termination when the flight leaves a safe envelope. ``record()`` gives the episode
+as a measured FlightRecord, so that any identification method (``flightid.identify``)
+runs on it.
 
 Spaces
 ------
@@ -19,9 +20,11 @@ az, de, da, dr, h) in SI units (s, m/s, rad, rad/s, m/s^2, m): the flight core's
 at the decision instant plus the white noise of the sensor suite's channels (``research``:
 its ``noise`` sigmas; ``ideal``: none). The full sensor model (anti-alias filters,
 quantisation, mounting) is applied to the whole episode by ``record()``.
+``observation="scaled"``: (value - trim value) / ``obs_scale`` (``OBS_SCALES``), 1 at the
+edge of the linear range, the envelope, the surface travel or the episode.
 
-Reward (D-optimality)
----------------------
+Reward (D-optimality; Morelli & Klein 2016, ch. 9)
+--------------------------------------------------
 Targets are grouped by coefficient (Cl, Cn, Cm, CX, CY, CZ); each group's regressors are a
 bias and the variables of its targets (beta, alpha: measured; p, q, r: phat, qhat, rhat
 from the measured rates and airspeed; de, da, dr: measured surfaces), as perturbations
@@ -36,6 +39,14 @@ order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y 
 recursively), with y the simulator's aerodynamic coefficient plus white noise of
 ``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes).
 
+``reward="valid-information"`` (default): each sample enters M with a weight w (weighted
+least squares, residual variance sigma^2 / w): d = the largest perturbation from trim of
+alpha, beta, p, q, r and airspeed in units of ``LINEAR_RANGE``, w = 1 for d <= 1,
+2 - d for 1 < d < 2, 0 beyond (the flight's truth values, not the measured ones). At
+termination the information gathered is forfeit with the penalty: a terminated episode
+returns exactly -penalty. ``reward="information"``: every sample with w = 1, and at
+termination -penalty only (a policy can raise it by leaving the linear range).
+
 Speed
 -----
 A step reads from JSBSim only the observed channels and the target coefficients (the
@@ -45,8 +56,8 @@ episode again from its actions, bit for bit the same flight (tested).
 Termination
 -----------
 At the envelope limits ``LIMITS`` (alpha, bank, load factor, airspeed, altitude loss) or
-on the flight core's DepartureError: terminated, reward - ``penalty``. Truncated at the
-episode length.
+on the flight core's DepartureError: terminated, reward - ``penalty`` (and - the episode's
+log det under the default reward). Truncated at the episode length.
 """
 
 from __future__ import annotations
@@ -97,6 +108,25 @@ VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr")
 LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
           "speed_ratio": (0.7, 1.4), "altitude_loss_m": 150.0}
 PENALTY = 20.0
+# the linear range of the regression: the largest perturbation from trim of each variable
+# (deg, deg/s; airspeed as a fraction of the trim airspeed) at which a sample's information
+# counts in full under the "valid-information" reward; it counts less beyond, nothing at
+# twice it. The 3211 and multisine baselines (0.2 of travel) stay inside on the Navion.
+LINEAR_RANGE = {"alpha_deg": 5.0, "beta_deg": 10.0, "p_deg_s": 30.0, "q_deg_s": 15.0,
+                "r_deg_s": 30.0, "speed_ratio": 0.1}
+REWARDS = ("valid-information", "information")
+OBSERVATIONS = ("si", "scaled")
+# "scaled" observations: (value - trim value) / scale, so that 1 is the edge of the linear
+# range (alpha, beta, rates, airspeed), of the envelope (bank, altitude loss), of the surface
+# travel (de, da, dr: the larger of its two sides) or of the episode (t: value / episode_s);
+# scales in SI, None where they come from the environment
+OBS_SCALES = {"t": None, "V": None,
+              **{c: math.radians(LINEAR_RANGE[k]) for c, k in (
+                  ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"),
+                  ("q", "q_deg_s"), ("r", "r_deg_s"))},
+              "phi": math.radians(LIMITS["bank_deg"]), "theta": math.radians(15.0), "ax": 0.5 * G0,
+              "ay": 0.5 * G0, "az": G0, "de": None, "da": None, "dr": None,
+              "h": LIMITS["altitude_loss_m"]}
 DEFAULT_CONDITION = (1524.0, 46.3)  # trim altitude (m), true airspeed (m/s)
 MAX_RATE_HZ = 1000.0  # decision and record rates (Hz)
 MAX_DECISIONS = 1_000_000  # decisions per episode (its noise is drawn at reset)
@@ -158,24 +188,27 @@ class _Information:
         self.theta = [[0.0] * k for _ in spec]
         self._w_coef = [1.0 / SIGMA[c] ** 2 for c, _ in spec]
         self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
-        self.n = 0
+        self.n = 0.0  # the samples' summed weights
 
     @property
     def logdet(self) -> float:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
         return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w_coef)
 
-    def add(self, x: Sequence[Sequence[float]], y: Sequence[float]) -> None:
+    def add(self, x: Sequence[Sequence[float]], y: Sequence[float], weight: float = 1.0
+            ) -> None:
         """One sample: regressors x (per design, bias first), dependent variables y (per
-        coefficient)."""
+        coefficient), with ``weight`` in [0, 1] on its information (weighted least squares:
+        the residual's variance sigma^2 / weight)."""
         theta = self.theta
         for d, xd in enumerate(x):
             inv = self.inv[d]
             v = [sum(map(operator.mul, row, xd)) for row in inv]
-            wq = self.w[d] * sum(map(operator.mul, xd, v))
+            wd = self.w[d] * weight
+            wq = wd * sum(map(operator.mul, xd, v))
             # matrix determinant lemma; Sherman-Morrison gain P x w / (1 + w x' P x)
             self.logdet_m += self.count[d] * math.log1p(wq)
-            c = self.w[d] / (1.0 + wq)
+            c = wd / (1.0 + wq)
             gain = [c * vi for vi in v]
             self.inv[d] = [[a - gi * vj for a, vj in zip(row, v, strict=True)]
                            for row, gi in zip(inv, gain, strict=True)]
@@ -183,7 +216,7 @@ class _Information:
                 th = theta[g]
                 e = y[g] - sum(map(operator.mul, th, xd))
                 theta[g] = [a + e * b for a, b in zip(th, gain, strict=True)]
-        self.n += 1
+        self.n += weight
 
 
 def _one_of(option: str, value: Any, choices: Sequence[str]) -> None:
@@ -249,10 +282,15 @@ class ExcitationEnv(gymnasium.Env):
                  episode_s: float = 20.0, decision_hz: float = 50.0, sim_hz: float | None = None,
                  sensors: str = "research", turbulence: str = "none",
                  effects: Sequence[Mapping[str, Any]] = (),
-                 penalty: float = PENALTY, render_mode: str | None = None) -> None:
+                 penalty: float = PENALTY, reward: str = "valid-information",
+                 observation: str = "si", render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         _one_of("turbulence", turbulence, TURBULENCE)
+        _one_of("reward", reward, REWARDS)
+        self.reward = reward
+        _one_of("observation", observation, OBSERVATIONS)
+        self.observation = observation
         if isinstance(effects, (str, Mapping)) or not isinstance(effects, Sequence) or not all(
                 isinstance(d, Mapping) for d in effects):
             raise ValueError("effects must be a list of effect tables (dicts), e.g. "
@@ -296,7 +334,7 @@ class ExcitationEnv(gymnasium.Env):
         self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
         self.sim = Simulation(model, rate_hz=sim_hz, atmosphere=self._atmosphere)
         self.reference = self.sim.model.reference
-        self.sim.reset(self.trim)  # the command maps: the travel of each surface
+        at_trim = self.sim.reset(self.trim)  # and the command maps: each surface's travel
         tp = {"de": self.trim.elevator, "da": self.trim.aileron, "dr": self.trim.rudder}
         self._span: list[tuple[float, float]] = []
         for c in CONTROLS:
@@ -336,12 +374,27 @@ class ExcitationEnv(gymnasium.Env):
         at = self._at
         self._i_alpha, self._i_phi, self._i_az, self._i_v, self._i_h = (
             at[c] - 1 for c in ("alpha", "phi", "az", "V", "h"))
+        # the linear range: (truth entry, 1 / range in SI), the trim values set at reset
+        lr = LINEAR_RANGE
+        self._range = [(at[c] - 1, 1.0 / math.radians(lr[k])) for c, k in (
+            ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"), ("q", "q_deg_s"),
+            ("r", "r_deg_s"))]
+        self._range.append((self._i_v, 1.0 / (lr["speed_ratio"] * self.trim.speed_m_s)))
+        self._range_trim: list[tuple[int, float, float]] = []
         self._truth_vec = [self.truth.get(n, math.nan) for n in self.targets]
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         high = np.array([self.episode_s + 1.0, *OBS_BOUNDS.values()])
         low = np.array([0.0, *(-b for b in OBS_BOUNDS.values())])
         low[OBS_CHANNELS.index("V")] = 0.0
+        derived = {"t": self.episode_s, "V": LINEAR_RANGE["speed_ratio"] * self.trim.speed_m_s,
+                   **{c: max(s) for c, s in zip(CONTROLS, self._span, strict=True)}}
+        self.obs_scale = np.array([OBS_SCALES[c] or derived[c] for c in OBS_CHANNELS])
+        self.obs_center = np.array([0.0, *(at_trim[c] for c in OBS_CHANNELS[1:])])
+        self._scaled = observation == "scaled"
+        if self._scaled:
+            low, high = (low - self.obs_center) / self.obs_scale, (high - self.obs_center) / (
+                self.obs_scale)
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
         self._replay: Simulation | None = None  # flies the episode again for record()
         self._n_sim = 0
@@ -378,8 +431,12 @@ class ExcitationEnv(gymnasium.Env):
         self._slot_trim = [[(i, trim_measured[i], f, pv) for i, f, pv in row]
                            for row in self._slots]
         self._values = [sample[c] for c in self._read]
+        self._range_trim = [(i, self._values[i], inv) for i, inv in self._range]
+        self._weight = 1.0
         obs = np.add(self._noise[0][:self._n_obs], trim_measured[:self._n_obs])
         self._obs_hist = [obs]
+        if self._scaled:
+            obs = (obs - self.obs_center) / self.obs_scale
         self._actions = [[0.0, 0.0, 0.0]]
         self._n_sim = 0
         return obs, self._info(None)
@@ -408,19 +465,28 @@ class ExcitationEnv(gymnasium.Env):
         measured = [v + e for v, e in zip((k / self.decision_hz, *values), noise, strict=True)]
         obs = np.array(measured[:self._n_obs])
         self._obs_hist.append(obs)
+        if self._scaled:
+            obs = (obs - self.obs_center) / self.obs_scale
         reward = 0.0
         if departure is None:
             speed = measured[self._at["V"]]
             x = [[1.0, *((measured[i] - t0) * (f + pv / speed) for i, t0, f, pv in row)]
                  for row in self._slot_trim]
-            self._info_state.add(x, measured[self._n_obs:])
+            if self.reward == "valid-information":
+                d = max(abs(values[i] - v0) * inv for i, v0, inv in self._range_trim)
+                self._weight = 1.0 if d <= 1.0 else max(0.0, 2.0 - d)
+            if self._weight > 0.0:
+                self._info_state.add(x, measured[self._n_obs:], self._weight)
             logdet = self._info_state.logdet
             reward = logdet - self._logdet
             self._logdet = logdet
             departure = self._envelope(values)
         terminated = departure is not None
         if terminated:
-            reward -= self.penalty
+            # "valid-information": a flight that left the envelope delivers no data, so its
+            # information is forfeit with the penalty (the episode returns -penalty)
+            reward -= self.penalty + (self._logdet if self.reward == "valid-information"
+                                      else 0.0)
         truncated = not terminated and k >= self.n_decisions
         return obs, float(reward), terminated, truncated, self._info(departure)
 
@@ -528,7 +594,8 @@ class ExcitationEnv(gymnasium.Env):
         error = [e - t for e, t in zip(est, self._truth_vec, strict=True)]
         info: dict[str, Any] = {"crb": np.array(crb), "estimate": np.array(est),
                                 "error": np.array(error), "logdet": self._logdet,
-                                "time": self._k / self.decision_hz}
+                                "time": self._k / self.decision_hz,
+                                "validity": self._weight}
         if departure is not None:
             info["departure"] = departure
         return info
