@@ -16,6 +16,7 @@ from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
     doublet,
     evaluate,
+    full_rudder,
     multisine,
     per_target,
     plot,
@@ -112,14 +113,6 @@ def test_returns_order(env):
          (("zero", zero), ("doublet", doublet), ("3211", three211), ("multisine", multisine))}
     for s in range(len(SEEDS)):
         assert r["zero"][s] < r["doublet"][s] < r["3211"][s] < r["multisine"][s]
-
-
-def full_rudder(env: ExcitationEnv, seed: int) -> np.ndarray:
-    """The reward-gaming policy: full rudder held until the episode ends (at the bank
-    limit, 2.5 s in on the Navion)."""
-    a = np.zeros((env.n_decisions, 3))
-    a[:, 2] = 1.0
-    return a
 
 
 def test_full_rudder_to_the_bank_limit_scores_below_the_3211(env):
