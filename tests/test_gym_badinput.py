@@ -41,6 +41,11 @@ BAD_OPTIONS = [
     ({"penalty": -1.0}, r"penalty must be a finite number >= 0; got -1.0"),
     ({"penalty": float("inf")}, r"penalty must be a finite number >= 0"),
     ({"render_mode": "human"}, r"render_mode must be None or 'rgb_array'"),
+    ({"reward": "accurate"}, r"reward must be one of 'valid-information', 'information', "
+                             r"'accuracy'; got 'accurate'"),
+    ({"reward": "accuracy", "targets": ["Cl_p", "Cl_de"]},
+     r"reward 'accuracy' needs a finite, nonzero truth .*targets has Cl_de = 0$"),
+    ({"observation": "normalised"}, r"observation must be one of 'si', 'scaled'"),
 ]
 
 

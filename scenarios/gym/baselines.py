@@ -11,7 +11,7 @@ baseline); ``full rudder`` (held until the bank limit ends the episode: the poli
 agent learned to game the ``information`` reward with). All have peak ``AMPLITUDE`` on the
 surfaces they move, except ``random`` and ``full rudder``.
 Reported per policy: mean return under the default reward (``valid-information``) and
-under ``reward="information"``, mean relative Cramer-Rao bound (crb / |truth|) and mean
+under ``OTHER_REWARDS``, mean relative Cramer-Rao bound (crb / |truth|) and mean
 relative error of the final estimate (|estimate - truth| / |truth|) over the targets, and
 how many episodes terminated early.
 
@@ -114,18 +114,20 @@ class Result:
     terminated: int
     crb: list[np.ndarray] = field(default_factory=list)
     error: list[np.ndarray] = field(default_factory=list)
-    returns_information: list[float] = field(default_factory=list)  # reward="information"
+    # the same episodes' returns under the other rewards, by reward name
+    other_returns: dict[str, list[float]] = field(default_factory=dict)
 
     def line(self) -> str:
-        old = (f"{np.mean(self.returns_information):>10.1f}" if self.returns_information
-               else f"{'-':>10}")
+        others = "".join(f"{np.mean(self.other_returns[r]):>12.1f}" if r in self.other_returns
+                         else f"{'-':>12}" for r in OTHER_REWARDS)
         return (f"{self.policy:<22}{np.mean(self.returns):>10.1f}{np.min(self.returns):>10.1f}"
-                f"{old}{np.mean(self.rel_crb):>12.4f}{np.mean(self.rel_error):>12.4f}"
+                f"{others}{np.mean(self.rel_crb):>12.4f}{np.mean(self.rel_error):>12.4f}"
                 f"{self.terminated:>6d}/{len(self.returns)}")
 
 
-HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}{'info.':>10}{'rel. CRB':>12}"
-          f"{'rel. error':>12}{'term':>8}")
+OTHER_REWARDS = ("information", "accuracy")  # beside the default's return
+HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}" + "".join(f"{r:>12}" for r in OTHER_REWARDS)
+          + f"{'rel. CRB':>12}{'rel. error':>12}{'term':>8}")
 
 
 def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
@@ -142,15 +144,15 @@ def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
 
 
 def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[int],
-             information: ExcitationEnv | None = None) -> Result:
-    """The policy on ``seeds`` in ``env``; with ``information`` (the same environment under
-    ``reward="information"``) its returns there too."""
+             others: Sequence[ExcitationEnv] = ()) -> Result:
+    """The policy on ``seeds`` in ``env``, and its returns in ``others`` (the same
+    environment under other rewards)."""
     res = Result(name, [], [], [], 0)
     truth = np.abs(env._truth_vec)
     for s in seeds:
-        if information is not None:
-            res.returns_information.append(run_episode(information, schedule(information, s),
-                                                       s)[0])
+        for other in others:
+            res.other_returns.setdefault(other.reward, []).append(
+                run_episode(other, schedule(other, s), s)[0])
         total, info, term = run_episode(env, schedule(env, s), s)
         res.returns.append(total)
         res.rel_crb.append(float(np.mean(info["crb"] / truth)))
@@ -228,15 +230,17 @@ def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
 
 def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
          search: bool = True) -> str:
-    env, information = ExcitationEnv(), ExcitationEnv(reward="information")
-    results = [evaluate(env, n, p, seeds, information) for n, p in POLICIES.items()]
+    env = ExcitationEnv()
+    others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
+    results = [evaluate(env, n, p, seeds, others) for n, p in POLICIES.items()]
     lines = [f"flightid/Excitation-v0 baselines: {env.aircraft} at "
              f"{env.condition.altitude_m:g} m, {env.condition.speed_m_s:g} m/s, "
              f"{env.episode_s:g} s episodes, {env.decision_hz:g} Hz decisions, "
              f"sensors {env.suite.name if env.suite else 'ideal'}, seeds {list(seeds)}",
              f"targets: {' '.join(env.targets)}; amplitude {AMPLITUDE} of travel",
-             f"return: reward {env.reward!r} (the default); info.: reward 'information'; "
-             "rel. CRB and error: the default reward's estimate", "",
+             f"return: reward {env.reward!r} (the default); {', '.join(OTHER_REWARDS)}: the "
+             "same episodes' returns under those rewards; rel. CRB and error: the default "
+             "reward's estimate", "",
              HEADER, *(r.line() for r in results)]
     if search:
         best, history = cross_entropy(env)
@@ -244,7 +248,7 @@ def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
         def tuned(e: ExcitationEnv, s: int) -> np.ndarray:
             return multisine(e, s, *best)
 
-        r = evaluate(env, "multisine (CE-tuned)", tuned, seeds, information)
+        r = evaluate(env, "multisine (CE-tuned)", tuned, seeds, others)
         results.append(r)
         lines += [r.line(), "",
                   f"cross-entropy on training seeds {list(TRAIN_SEEDS)}: amp_da {best[0]:.3f}, "

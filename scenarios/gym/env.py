@@ -46,6 +46,9 @@ alpha, beta, p, q, r and airspeed in units of ``LINEAR_RANGE``, w = 1 for d <= 1
 termination the information gathered is forfeit with the penalty: a terminated episode
 returns exactly -penalty. ``reward="information"``: every sample with w = 1, and at
 termination -penalty only (a policy can raise it by leaving the linear range).
+``reward="accuracy"``: every sample with w = 1; the return so far is ``ACCURACY_SCALE`` x
+(1 - mean over the targets of min(|estimate - truth| / |truth|, 1)), 0 at reset, and a
+step's reward its increase; forfeit at termination as under the default.
 
 Speed
 -----
@@ -114,7 +117,8 @@ PENALTY = 20.0
 # twice it. The 3211 and multisine baselines (0.2 of travel) stay inside on the Navion.
 LINEAR_RANGE = {"alpha_deg": 5.0, "beta_deg": 10.0, "p_deg_s": 30.0, "q_deg_s": 15.0,
                 "r_deg_s": 30.0, "speed_ratio": 0.1}
-REWARDS = ("valid-information", "information")
+REWARDS = ("valid-information", "information", "accuracy")
+ACCURACY_SCALE = 100.0  # "accuracy": return of an exact estimate
 OBSERVATIONS = ("si", "scaled")
 # "scaled" observations: (value - trim value) / scale, so that 1 is the edge of the linear
 # range (alpha, beta, rates, airspeed), of the envelope (bank, altitude loss), of the surface
@@ -382,6 +386,13 @@ class ExcitationEnv(gymnasium.Env):
         self._range.append((self._i_v, 1.0 / (lr["speed_ratio"] * self.trim.speed_m_s)))
         self._range_trim: list[tuple[int, float, float]] = []
         self._truth_vec = [self.truth.get(n, math.nan) for n in self.targets]
+        if reward == "accuracy" and not all(math.isfinite(t) and t != 0.0
+                                            for t in self._truth_vec):
+            raise ValueError("reward 'accuracy' needs a finite, nonzero truth for every target "
+                             "(its error is relative); targets has " + ", ".join(
+                                 f"{n} = {t:g}"
+                                 for n, t in zip(self.targets, self._truth_vec, strict=True)
+                                 if not (math.isfinite(t) and t != 0.0)))
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         high = np.array([self.episode_s + 1.0, *OBS_BOUNDS.values()])
@@ -424,6 +435,7 @@ class ExcitationEnv(gymnasium.Env):
         self._y0 = np.array([sample[c] for c in self._coefs])
         self._noise = np.hstack([obs_noise, y_noise - self._y0]).tolist()
         self._logdet = 0.0
+        self._score = 0.0  # the return so far before penalties
         self._k = 0
         self._h0 = sample["h"]
         trim_measured = [0.0, *(sample[c] for c in self._read)]
@@ -477,16 +489,16 @@ class ExcitationEnv(gymnasium.Env):
                 self._weight = 1.0 if d <= 1.0 else max(0.0, 2.0 - d)
             if self._weight > 0.0:
                 self._info_state.add(x, measured[self._n_obs:], self._weight)
-            logdet = self._info_state.logdet
-            reward = logdet - self._logdet
-            self._logdet = logdet
+            self._logdet = self._info_state.logdet
+            score = self._accuracy() if self.reward == "accuracy" else self._logdet
+            reward = score - self._score
+            self._score = score
             departure = self._envelope(values)
         terminated = departure is not None
         if terminated:
-            # "valid-information": a flight that left the envelope delivers no data, so its
-            # information is forfeit with the penalty (the episode returns -penalty)
-            reward -= self.penalty + (self._logdet if self.reward == "valid-information"
-                                      else 0.0)
+            # "valid-information", "accuracy": a flight that left the envelope delivers no
+            # data, so what it gathered is forfeit with the penalty (it returns -penalty)
+            reward -= self.penalty + (self._score if self.reward != "information" else 0.0)
         truncated = not terminated and k >= self.n_decisions
         return obs, float(reward), terminated, truncated, self._info(departure)
 
@@ -584,6 +596,14 @@ class ExcitationEnv(gymnasium.Env):
         if loss > lim["altitude_loss_m"]:
             return f"altitude loss {loss:.0f} m > {lim['altitude_loss_m']} m"
         return None
+
+    def _accuracy(self) -> float:
+        """ACCURACY_SCALE x (1 - the mean over the targets of min(|estimate - truth| /
+        |truth|, 1)): 0 for the prior's estimate (0), ACCURACY_SCALE for the truth."""
+        theta = self._info_state.theta
+        rel = sum(min(abs(theta[g][j] - t) / abs(t), 1.0)
+                  for (g, j), t in zip(self._est_at, self._truth_vec, strict=True))
+        return ACCURACY_SCALE * (1.0 - rel / len(self._truth_vec))
 
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
