@@ -24,7 +24,13 @@ from flightid.scenarios.gym.baselines import (
     three211,
     zero,
 )
-from flightid.scenarios.gym.env import OBSERVATIONS, REWARDS, SIGMA, _Information
+from flightid.scenarios.gym.env import (
+    LINEAR_RANGE,
+    OBSERVATIONS,
+    REWARDS,
+    SIGMA,
+    _Information,
+)
 
 SEEDS = (0, 1)
 
@@ -146,6 +152,25 @@ def test_information_outside_the_linear_range_counts_only_under_the_old_reward()
     assert all(steps["valid-information"][i][0] == 0.0 for i in outside)
     assert all(steps["information"][i][0] > 0.0 for i in outside)
     assert all(w == 1.0 for _, w in steps["information"])
+
+
+def test_validity_weight_is_the_documented_formula_on_the_flown_record():
+    """The weight of each sample, recomputed from the re-flown record (the truth, at the
+    decision instants) with the documented formula and ``LINEAR_RANGE``: the larger
+    multisine (0.42 of travel) gives weights of 1, between 0 and 1, and none of 0."""
+    e = ExcitationEnv(sensors="ideal", episode_s=10.0)
+    e.reset(seed=2)
+    weights = [e.step(a.astype(np.float32))[4]["validity"]
+               for a in multisine(e, 2, 0.42, 0.42, 1.27)]
+    rec = e.record(measured=False)
+    lr = LINEAR_RANGE
+    ranges = {"alpha": np.radians(lr["alpha_deg"]), "beta": np.radians(lr["beta_deg"]),
+              "p": np.radians(lr["p_deg_s"]), "q": np.radians(lr["q_deg_s"]),
+              "r": np.radians(lr["r_deg_s"]), "V": lr["speed_ratio"] * e.trim.speed_m_s}
+    d = np.max([np.abs(rec[c][1:] - rec[c][0]) / r for c, r in ranges.items()], axis=0)
+    np.testing.assert_allclose(weights, np.clip(2.0 - d, 0.0, 1.0), rtol=0, atol=1e-12)
+    w = np.array(weights)
+    assert np.any(w == 1.0) and np.any((w > 0.0) & (w < 1.0)) and w.min() > 0.0
 
 
 def test_accuracy_return_is_one_minus_the_final_relative_error():
