@@ -37,7 +37,8 @@ updates; an episode's return is therefore log det of the final target informatio
 penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
 order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y (updated
 recursively), with y the simulator's aerodynamic coefficient plus white noise of
-``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes).
+``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes);
+``info['validity']``: the last sample's weight w (below); docs/gym.md lists every key.
 
 ``reward="valid-information"`` (default): each sample enters M with a weight w (weighted
 least squares, residual variance sigma^2 / w): d = the largest perturbation from trim of
@@ -59,8 +60,11 @@ episode again from its actions, bit for bit the same flight (tested).
 Termination
 -----------
 At the envelope limits ``LIMITS`` (alpha, bank, load factor, airspeed, altitude loss) or
-on the flight core's DepartureError: terminated, reward - ``penalty`` (and - the episode's
-log det under the default reward). Truncated at the episode length.
+on the flight core's DepartureError: terminated, reward - ``penalty`` (and - the return
+gathered so far under "valid-information" and "accuracy"). Truncated at the episode length.
+
+Every option and reset argument is checked before anything changes; a bad one raises a
+ValueError naming it.
 """
 
 from __future__ import annotations
