@@ -12,7 +12,9 @@ best of ``--repeats``, interleaved, median beside it):
   property read, the sample converted to SI, departure checks);
 - lean: the flight core's ``Simulation.stepper`` once per decision, reading the 17
   channels the environment uses, 19 JSBSim properties (what ``ExcitationEnv.step`` calls);
-- env: ``ExcitationEnv.step`` (the core plus observation, information update, info);
+- env: ``ExcitationEnv.step`` (the core plus observation, information update, info) under
+  the default reward (``valid-information``: the linear-range weight of each sample);
+- env-information: the same under ``reward="information"`` (no weight);
 - make: the same through ``gymnasium.make`` (its PassiveEnvChecker and OrderEnforcing
   wrappers);
 - no-update: diagnostic, ``ExcitationEnv.step`` with the information update (the reward's
@@ -42,6 +44,7 @@ DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_throughput.txt"
 
 def main(out: Path, repeats: int = 5) -> str:
     env = ExcitationEnv()
+    env_information = ExcitationEnv(reward="information")
     made = gymnasium.make(ENV_ID)
     actions = doublet(env, 0).astype(np.float32)
     n = env.n_decisions
@@ -76,7 +79,7 @@ def main(out: Path, repeats: int = 5) -> str:
     def stepping(e, update: bool = True) -> float:
         e.reset(seed=0)
         if not update:
-            e.unwrapped._info_state.add = lambda x, y: None
+            e.unwrapped._info_state.add = lambda *sample: None
         step = e.step
         t0 = time.process_time()
         for a in actions:
@@ -84,6 +87,7 @@ def main(out: Path, repeats: int = 5) -> str:
         return time.process_time() - t0
 
     cases = {"bare": bare, "core": core, "lean": lean, "env": lambda: stepping(env),
+             "env-information": lambda: stepping(env_information),
              "make": lambda: stepping(made), "no-update": lambda: stepping(env, False)}
     times: dict[str, list[float]] = {k: [] for k in cases}
     for _ in range(repeats):

@@ -16,6 +16,7 @@ from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
     doublet,
     evaluate,
+    full_rudder,
     multisine,
     per_target,
     plot,
@@ -23,7 +24,13 @@ from flightid.scenarios.gym.baselines import (
     three211,
     zero,
 )
-from flightid.scenarios.gym.env import SIGMA, _Information
+from flightid.scenarios.gym.env import (
+    LINEAR_RANGE,
+    OBSERVATIONS,
+    REWARDS,
+    SIGMA,
+    _Information,
+)
 
 SEEDS = (0, 1)
 
@@ -37,6 +44,15 @@ def test_check_env(env):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "no spec" note: made directly, not through make
         check_env(env)
+
+
+@pytest.mark.parametrize("reward", REWARDS)
+@pytest.mark.parametrize("observation", OBSERVATIONS)
+def test_check_env_for_every_reward_and_observation(reward, observation):
+    e = ExcitationEnv(reward=reward, observation=observation, episode_s=2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        check_env(e)
 
 
 def test_make_by_id():
@@ -103,6 +119,100 @@ def test_returns_order(env):
          (("zero", zero), ("doublet", doublet), ("3211", three211), ("multisine", multisine))}
     for s in range(len(SEEDS)):
         assert r["zero"][s] < r["doublet"][s] < r["3211"][s] < r["multisine"][s]
+
+
+def test_full_rudder_to_the_bank_limit_scores_below_the_3211(env):
+    """Under the default reward a flight that leaves the envelope forfeits its information:
+    the full-rudder policy returns exactly -penalty, the 3211 its information (123)."""
+    assert env.reward == "valid-information"
+    for s in SEEDS:
+        rudder, info, terminated = run_episode(env, full_rudder(env, s), s)
+        assert terminated and "bank" in info["departure"]
+        assert rudder == pytest.approx(-env.penalty, abs=1e-9)
+        assert rudder < run_episode(env, three211(env, s), s)[0]
+
+
+def test_information_outside_the_linear_range_counts_only_under_the_old_reward():
+    """The same full-rudder flight (the flight does not depend on the reward) under both
+    rewards: where the default reward's validity weight is 0 (the flight beyond twice the
+    linear range), the "information" reward still pays for the samples, the default pays
+    nothing."""
+    valid, old = ExcitationEnv(), ExcitationEnv(reward="information")
+    steps = {}
+    for e in (valid, old):
+        e.reset(seed=0)
+        steps[e.reward] = []
+        for a in full_rudder(e, 0):
+            _, r, term, trunc, info = e.step(a.astype(np.float32))
+            steps[e.reward].append((r, info["validity"]))
+            if term:
+                break
+    outside = [i for i, (_, w) in enumerate(steps["valid-information"][:-1]) if w == 0.0]
+    assert len(outside) > 10
+    assert all(steps["valid-information"][i][0] == 0.0 for i in outside)
+    assert all(steps["information"][i][0] > 0.0 for i in outside)
+    assert all(w == 1.0 for _, w in steps["information"])
+
+
+def test_validity_weight_is_the_documented_formula_on_the_flown_record():
+    """The weight of each sample, recomputed from the re-flown record (the truth, at the
+    decision instants) with the documented formula and ``LINEAR_RANGE``: the larger
+    multisine (0.42 of travel) gives weights of 1, between 0 and 1, and none of 0."""
+    e = ExcitationEnv(sensors="ideal", episode_s=10.0)
+    e.reset(seed=2)
+    weights = [e.step(a.astype(np.float32))[4]["validity"]
+               for a in multisine(e, 2, 0.42, 0.42, 1.27)]
+    rec = e.record(measured=False)
+    lr = LINEAR_RANGE
+    ranges = {"alpha": np.radians(lr["alpha_deg"]), "beta": np.radians(lr["beta_deg"]),
+              "p": np.radians(lr["p_deg_s"]), "q": np.radians(lr["q_deg_s"]),
+              "r": np.radians(lr["r_deg_s"]), "V": lr["speed_ratio"] * e.trim.speed_m_s}
+    d = np.max([np.abs(rec[c][1:] - rec[c][0]) / r for c, r in ranges.items()], axis=0)
+    np.testing.assert_allclose(weights, np.clip(2.0 - d, 0.0, 1.0), rtol=0, atol=1e-12)
+    w = np.array(weights)
+    assert np.any(w == 1.0) and np.any((w > 0.0) & (w < 1.0)) and w.min() > 0.0
+
+
+def test_accuracy_return_is_one_minus_the_final_relative_error():
+    """reward="accuracy": the rewards telescope to 100 (1 - mean min(|error| / |truth|, 1))
+    of the final estimate; the 3211 scores above the zero input on each seed (measured:
+    96.1 and 94.8 against 8.0 and 17.9) and the full rudder returns -penalty."""
+    e = ExcitationEnv(reward="accuracy")
+    truth = np.abs(e._truth_vec)
+    for s in SEEDS:
+        total, info, _ = run_episode(e, three211(e, s), s)
+        rel = np.minimum(np.abs(info["error"]) / truth, 1.0)
+        assert total == pytest.approx(100.0 * (1.0 - rel.mean()), abs=1e-9)
+        assert total > run_episode(e, zero(e, s), s)[0] + 50.0
+        assert run_episode(e, full_rudder(e, s), s)[0] == pytest.approx(-e.penalty, abs=1e-9)
+
+
+@pytest.mark.parametrize("schedule", [doublet, three211, multisine])
+def test_baselines_inside_the_linear_range_score_the_same_under_both_rewards(schedule):
+    """Inputs of 0.2 of travel stay inside the linear range: every weight is 1, so the
+    default reward's return is the information reward's, to rounding."""
+    valid, old = ExcitationEnv(), ExcitationEnv(reward="information")
+    a = run_episode(valid, schedule(valid, 0), 0)
+    b = run_episode(old, schedule(old, 0), 0)
+    assert a[0] == pytest.approx(b[0], rel=1e-12) and a[1]["validity"] == 1.0
+    np.testing.assert_array_equal(a[1]["estimate"], b[1]["estimate"])
+
+
+def test_scaled_observations_are_the_si_ones_about_trim_over_the_scales():
+    si, scaled = ExcitationEnv(episode_s=2.0), ExcitationEnv(episode_s=2.0, observation="scaled")
+    np.testing.assert_array_equal(si.obs_scale, scaled.obs_scale)
+    first = [si.reset(seed=3)[0]], [scaled.reset(seed=3)[0]]
+    for a in doublet(si, 3)[:100]:
+        first[0].append(si.step(a.astype(np.float32))[0])
+        first[1].append(scaled.step(a.astype(np.float32))[0])
+    raw, norm = np.array(first[0]), np.array(first[1])
+    np.testing.assert_allclose(norm, (raw - si.obs_center) / si.obs_scale, rtol=0, atol=1e-12)
+    assert norm[-1, OBS_CHANNELS.index("t")] == pytest.approx(1.0)
+    # the doublet's 0.2 of travel on the aileron reads at most 0.2 of da's scale (the
+    # larger side of its travel), plus the research suite's noise on da (5 sigma)
+    i = OBS_CHANNELS.index("da")
+    assert np.abs(norm[:, i]).max() <= 0.2 + 5 * si._sigma_obs[i] / si.obs_scale[i]
+    assert np.all(np.abs(norm[:, 1:]) < 2.0)  # a small input stays within a few scales
 
 
 def test_full_up_elevator_terminates_with_penalty(env):

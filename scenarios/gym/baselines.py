@@ -7,8 +7,11 @@ grid: ``zero``; ``doublet`` (aileron doublet, then rudder doublet); ``3211`` (ai
 3-2-1-1, then rudder 3-2-1-1); ``multisine`` (aileron and rudder at once, interleaved
 harmonics of a 20 s period with Schroeder phases, Morelli's orthogonal multisine idea);
 ``random`` (``action_space.sample()`` seeded with the episode's seed, the usual RL
-baseline). All have peak ``AMPLITUDE`` on the surfaces they move, except ``random``.
-Reported per policy: mean return, mean relative Cramer-Rao bound (crb / |truth|) and mean
+baseline); ``full rudder`` (held until the bank limit ends the episode: the policy a PPO
+agent learned to game the ``information`` reward with). All have peak ``AMPLITUDE`` on the
+surfaces they move, except ``random`` and ``full rudder``.
+Reported per policy: mean return under the default reward (``valid-information``) and
+under ``OTHER_REWARDS``, mean relative Cramer-Rao bound (crb / |truth|) and mean
 relative error of the final estimate (|estimate - truth| / |truth|) over the targets, and
 how many episodes terminated early.
 
@@ -82,13 +85,21 @@ def multisine(env: ExcitationEnv, seed: int, amp_da: float = AMPLITUDE,
     return a
 
 
+def full_rudder(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """Full rudder (+1) on every decision: on the Navion the bank limit ends it at 2.5 s."""
+    a = np.zeros((env.n_decisions, 3))
+    a[:, 2] = 1.0
+    return a
+
+
 def random_policy(env: ExcitationEnv, seed: int) -> np.ndarray:
     env.action_space.seed(seed)
     return np.array([env.action_space.sample() for _ in range(env.n_decisions)])
 
 
 POLICIES: dict[str, Schedule] = {"zero": zero, "doublet": doublet, "3211": three211,
-                                 "multisine": multisine, "random": random_policy}
+                                 "multisine": multisine, "random": random_policy,
+                                 "full rudder": full_rudder}
 
 
 @dataclass
@@ -103,15 +114,20 @@ class Result:
     terminated: int
     crb: list[np.ndarray] = field(default_factory=list)
     error: list[np.ndarray] = field(default_factory=list)
+    # the same episodes' returns under the other rewards, by reward name
+    other_returns: dict[str, list[float]] = field(default_factory=dict)
 
     def line(self) -> str:
+        others = "".join(f"{np.mean(self.other_returns[r]):>12.1f}" if r in self.other_returns
+                         else f"{'-':>12}" for r in OTHER_REWARDS)
         return (f"{self.policy:<22}{np.mean(self.returns):>10.1f}{np.min(self.returns):>10.1f}"
-                f"{np.mean(self.rel_crb):>12.4f}{np.mean(self.rel_error):>12.4f}"
+                f"{others}{np.mean(self.rel_crb):>12.4f}{np.mean(self.rel_error):>12.4f}"
                 f"{self.terminated:>6d}/{len(self.returns)}")
 
 
-HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}{'rel. CRB':>12}{'rel. error':>12}"
-          f"{'term':>8}")
+OTHER_REWARDS = ("information", "accuracy")  # beside the default's return
+HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}" + "".join(f"{r:>12}" for r in OTHER_REWARDS)
+          + f"{'rel. CRB':>12}{'rel. error':>12}{'term':>8}")
 
 
 def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
@@ -127,10 +143,16 @@ def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
     return total, info, terminated
 
 
-def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[int]) -> Result:
+def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[int],
+             others: Sequence[ExcitationEnv] = ()) -> Result:
+    """The policy on ``seeds`` in ``env``, and its returns in ``others`` (the same
+    environment under other rewards)."""
     res = Result(name, [], [], [], 0)
     truth = np.abs(env._truth_vec)
     for s in seeds:
+        for other in others:
+            res.other_returns.setdefault(other.reward, []).append(
+                run_episode(other, schedule(other, s), s)[0])
         total, info, term = run_episode(env, schedule(env, s), s)
         res.returns.append(total)
         res.rel_crb.append(float(np.mean(info["crb"] / truth)))
@@ -209,12 +231,16 @@ def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
 def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
          search: bool = True) -> str:
     env = ExcitationEnv()
-    results = [evaluate(env, n, p, seeds) for n, p in POLICIES.items()]
+    others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
+    results = [evaluate(env, n, p, seeds, others) for n, p in POLICIES.items()]
     lines = [f"flightid/Excitation-v0 baselines: {env.aircraft} at "
              f"{env.condition.altitude_m:g} m, {env.condition.speed_m_s:g} m/s, "
              f"{env.episode_s:g} s episodes, {env.decision_hz:g} Hz decisions, "
              f"sensors {env.suite.name if env.suite else 'ideal'}, seeds {list(seeds)}",
-             f"targets: {' '.join(env.targets)}; amplitude {AMPLITUDE} of travel", "",
+             f"targets: {' '.join(env.targets)}; amplitude {AMPLITUDE} of travel",
+             f"return: reward {env.reward!r} (the default); {', '.join(OTHER_REWARDS)}: the "
+             "same episodes' returns under those rewards; rel. CRB and error: the default "
+             "reward's estimate", "",
              HEADER, *(r.line() for r in results)]
     if search:
         best, history = cross_entropy(env)
@@ -222,7 +248,7 @@ def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
         def tuned(e: ExcitationEnv, s: int) -> np.ndarray:
             return multisine(e, s, *best)
 
-        r = evaluate(env, "multisine (CE-tuned)", tuned, seeds)
+        r = evaluate(env, "multisine (CE-tuned)", tuned, seeds, others)
         results.append(r)
         lines += [r.line(), "",
                   f"cross-entropy on training seeds {list(TRAIN_SEEDS)}: amp_da {best[0]:.3f}, "

@@ -2,9 +2,10 @@
 
 An episode starts at a trim and lets a policy move the elevator, aileron and rudder
 (normalised commands) at the decision rate; the reward is the gain in information about
-the target derivatives (D-optimality), with a penalty and termination when the flight
-leaves a safe envelope. ``record()`` gives the episode as a measured FlightRecord, so that
-any identification method (``flightid.identify``) runs on it.
+the target derivatives (D-optimality) gathered inside the linear range of the regression,
+with termination when the flight leaves a safe envelope. ``record()`` gives the episode
+as a measured FlightRecord, so that any identification method (``flightid.identify``)
+runs on it.
 
 Spaces
 ------
@@ -19,9 +20,11 @@ az, de, da, dr, h) in SI units (s, m/s, rad, rad/s, m/s^2, m): the flight core's
 at the decision instant plus the white noise of the sensor suite's channels (``research``:
 its ``noise`` sigmas; ``ideal``: none). The full sensor model (anti-alias filters,
 quantisation, mounting) is applied to the whole episode by ``record()``.
+``observation="scaled"``: (value - trim value) / ``obs_scale`` (``OBS_SCALES``), 1 at the
+edge of the linear range, the envelope, the surface travel or the episode.
 
-Reward (D-optimality)
----------------------
+Reward (D-optimality; Morelli & Klein 2016, ch. 9)
+--------------------------------------------------
 Targets are grouped by coefficient (Cl, Cn, Cm, CX, CY, CZ); each group's regressors are a
 bias and the variables of its targets (beta, alpha: measured; p, q, r: phat, qhat, rhat
 from the measured rates and airspeed; de, da, dr: measured surfaces), as perturbations
@@ -34,7 +37,19 @@ updates; an episode's return is therefore log det of the final target informatio
 penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
 order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y (updated
 recursively), with y the simulator's aerodynamic coefficient plus white noise of
-``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes).
+``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes);
+``info['validity']``: the last sample's weight w (below); docs/gym.md lists every key.
+
+``reward="valid-information"`` (default): each sample enters M with a weight w (weighted
+least squares, residual variance sigma^2 / w): d = the largest perturbation from trim of
+alpha, beta, p, q, r and airspeed in units of ``LINEAR_RANGE``, w = 1 for d <= 1,
+2 - d for 1 < d < 2, 0 beyond (the flight's truth values, not the measured ones). At
+termination the information gathered is forfeit with the penalty: a terminated episode
+returns exactly -penalty. ``reward="information"``: every sample with w = 1, and at
+termination -penalty only (a policy can raise it by leaving the linear range).
+``reward="accuracy"``: every sample with w = 1; the return so far is ``ACCURACY_SCALE`` x
+(1 - mean over the targets of min(|estimate - truth| / |truth|, 1)), 0 at reset, and a
+step's reward its increase; forfeit at termination as under the default.
 
 Speed
 -----
@@ -45,8 +60,11 @@ episode again from its actions, bit for bit the same flight (tested).
 Termination
 -----------
 At the envelope limits ``LIMITS`` (alpha, bank, load factor, airspeed, altitude loss) or
-on the flight core's DepartureError: terminated, reward - ``penalty``. Truncated at the
-episode length.
+on the flight core's DepartureError: terminated, reward - ``penalty`` (and - the return
+gathered so far under "valid-information" and "accuracy"). Truncated at the episode length.
+
+Every option and reset argument is checked before anything changes; a bad one raises a
+ValueError naming it.
 """
 
 from __future__ import annotations
@@ -70,7 +88,7 @@ from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.flight import Atmosphere, DepartureError, Simulation
 from flightid.sim.model import Model, load
-from flightid.sim.sensors import SensorSuite, builtin_suite, measure
+from flightid.sim.sensors import SUITES, SensorSuite, builtin_suite, measure
 from flightid.sim.trim import Trim, trim
 from flightid.sim.truth import derivatives
 from flightid.units import G0
@@ -97,6 +115,29 @@ VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr")
 LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
           "speed_ratio": (0.7, 1.4), "altitude_loss_m": 150.0}
 PENALTY = 20.0
+# the linear range of the regression: the largest perturbation from trim of each variable
+# (deg, deg/s; airspeed as a fraction of the trim airspeed) at which a sample's information
+# counts in full under the "valid-information" reward; it counts less beyond, nothing at
+# twice it. The 3211 and multisine baselines (0.2 of travel) stay inside on the Navion.
+LINEAR_RANGE = {"alpha_deg": 5.0, "beta_deg": 10.0, "p_deg_s": 30.0, "q_deg_s": 15.0,
+                "r_deg_s": 30.0, "speed_ratio": 0.1}
+REWARDS = ("valid-information", "information", "accuracy")
+ACCURACY_SCALE = 100.0  # "accuracy": return of an exact estimate
+OBSERVATIONS = ("si", "scaled")
+# "scaled" observations: (value - trim value) / scale, so that 1 is the edge of the linear
+# range (alpha, beta, rates, airspeed), of the envelope (bank, altitude loss), of the surface
+# travel (de, da, dr: the larger of its two sides) or of the episode (t: value / episode_s);
+# scales in SI, None where they come from the environment
+OBS_SCALES = {"t": None, "V": None,
+              **{c: math.radians(LINEAR_RANGE[k]) for c, k in (
+                  ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"),
+                  ("q", "q_deg_s"), ("r", "r_deg_s"))},
+              "phi": math.radians(LIMITS["bank_deg"]), "theta": math.radians(15.0), "ax": 0.5 * G0,
+              "ay": 0.5 * G0, "az": G0, "de": None, "da": None, "dr": None,
+              "h": LIMITS["altitude_loss_m"]}
+DEFAULT_CONDITION = (1524.0, 46.3)  # trim altitude (m), true airspeed (m/s)
+MAX_RATE_HZ = 1000.0  # decision and record rates (Hz)
+MAX_DECISIONS = 1_000_000  # decisions per episode (its noise is drawn at reset)
 TURBULENCE = ("none", "light")
 # light turbulence: MIL-F-8785C Dryden, 15 kt at 20 ft, POE 1e-2 (JSBSim severity 3)
 LIGHT = {"turbulence": "milspec", "windspeed_20ft_m_s": 15 * 0.514444, "severity": 3}
@@ -155,24 +196,27 @@ class _Information:
         self.theta = [[0.0] * k for _ in spec]
         self._w_coef = [1.0 / SIGMA[c] ** 2 for c, _ in spec]
         self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
-        self.n = 0
+        self.n = 0.0  # the samples' summed weights
 
     @property
     def logdet(self) -> float:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
         return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w_coef)
 
-    def add(self, x: Sequence[Sequence[float]], y: Sequence[float]) -> None:
+    def add(self, x: Sequence[Sequence[float]], y: Sequence[float], weight: float = 1.0
+            ) -> None:
         """One sample: regressors x (per design, bias first), dependent variables y (per
-        coefficient)."""
+        coefficient), with ``weight`` in [0, 1] on its information (weighted least squares:
+        the residual's variance sigma^2 / weight)."""
         theta = self.theta
         for d, xd in enumerate(x):
             inv = self.inv[d]
             v = [sum(map(operator.mul, row, xd)) for row in inv]
-            wq = self.w[d] * sum(map(operator.mul, xd, v))
+            wd = self.w[d] * weight
+            wq = wd * sum(map(operator.mul, xd, v))
             # matrix determinant lemma; Sherman-Morrison gain P x w / (1 + w x' P x)
             self.logdet_m += self.count[d] * math.log1p(wq)
-            c = self.w[d] / (1.0 + wq)
+            c = wd / (1.0 + wq)
             gain = [c * vi for vi in v]
             self.inv[d] = [[a - gi * vj for a, vj in zip(row, v, strict=True)]
                            for row, gi in zip(inv, gain, strict=True)]
@@ -180,7 +224,59 @@ class _Information:
                 th = theta[g]
                 e = y[g] - sum(map(operator.mul, th, xd))
                 theta[g] = [a + e * b for a, b in zip(th, gain, strict=True)]
-        self.n += 1
+        self.n += weight
+
+
+def _one_of(option: str, value: Any, choices: Sequence[str]) -> None:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{option} must be one of {', '.join(map(repr, choices))}; "
+                         f"got {value!r}")
+
+
+def _positive(option: str, value: Any, most: float = math.inf, zero: bool = False) -> float:
+    """``value`` as a finite float in (0, most] ([0, most] with ``zero``), or a ValueError
+    naming ``option``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if (isinstance(value, bool) or not math.isfinite(v) or not (0.0 <= v if zero else 0.0 < v)
+            or not v <= most):
+        bound = f"{'>= 0' if zero else '> 0'}" + (f" and <= {most:g}" if most < math.inf else "")
+        raise ValueError(f"{option} must be a finite number {bound}; got {value!r}")
+    return v
+
+
+def _condition(condition: Sequence[float] | None) -> FlightCondition:
+    if condition is None:
+        return FlightCondition(*DEFAULT_CONDITION)
+    try:
+        alt, speed = (float(v) for v in condition)
+    except (TypeError, ValueError):
+        alt = speed = math.nan
+    if not (math.isfinite(alt) and alt >= 0.0 and math.isfinite(speed) and speed > 0.0):
+        raise ValueError("condition must be (altitude m >= 0, true airspeed m/s > 0), finite; "
+                         f"got {condition!r}")
+    return FlightCondition(alt, speed)
+
+
+def _targets(targets: str | Sequence[str]) -> tuple[str, ...]:
+    """The target derivatives: a preset's or the given names, checked."""
+    if isinstance(targets, str):
+        _one_of("targets", targets, tuple(PRESETS))
+        return PRESETS[targets]
+    names = tuple(targets) if isinstance(targets, Sequence) else ()
+    usage = (f"targets must be {' or '.join(map(repr, PRESETS))} or a non-empty list of "
+             f"distinct C{{l,m,n,X,Y,Z}}_{{{','.join(VARIABLES)}}}")
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{usage}; got {targets!r}")
+    for name in names:
+        coef, _, var = name.partition("_")
+        if coef not in SIGMA or var not in VARIABLES:
+            raise ValueError(f"{usage}; got unsupported target {name!r}")
+    if len(set(names)) < len(names):
+        raise ValueError(f"{usage}; got a repeated target in {targets!r}")
+    return names
 
 
 class ExcitationEnv(gymnasium.Env):
@@ -194,40 +290,59 @@ class ExcitationEnv(gymnasium.Env):
                  episode_s: float = 20.0, decision_hz: float = 50.0, sim_hz: float | None = None,
                  sensors: str = "research", turbulence: str = "none",
                  effects: Sequence[Mapping[str, Any]] = (),
-                 penalty: float = PENALTY, render_mode: str | None = None) -> None:
+                 penalty: float = PENALTY, reward: str = "valid-information",
+                 observation: str = "si", render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        if turbulence not in TURBULENCE:
-            raise ValueError(f"turbulence must be one of {TURBULENCE}, got {turbulence!r}")
+        _one_of("turbulence", turbulence, TURBULENCE)
+        _one_of("reward", reward, REWARDS)
+        self.reward = reward
+        _one_of("observation", observation, OBSERVATIONS)
+        self.observation = observation
+        if isinstance(effects, (str, Mapping)) or not isinstance(effects, Sequence) or not all(
+                isinstance(d, Mapping) for d in effects):
+            raise ValueError("effects must be a list of effect tables (dicts), e.g. "
+                             "[{'name': 'rate_limit', 'surface': 'de', 'rate_deg': 20}]; "
+                             f"got {effects!r}")
+        self.episode_s = _positive("episode_s", episode_s)
+        self.decision_hz = _positive("decision_hz", decision_hz, MAX_RATE_HZ)
+        sim_hz = self.decision_hz if sim_hz is None else _positive("sim_hz", sim_hz, MAX_RATE_HZ)
+        self.sim_per_decision = int(round(sim_hz / self.decision_hz))
+        if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
+                                            - sim_hz) > 1e-9:
+            raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz "
+                             f"{self.decision_hz}")
+        self.n_decisions = int(round(self.episode_s * self.decision_hz))
+        if not 1 <= self.n_decisions <= MAX_DECISIONS:
+            raise ValueError(f"episode_s * decision_hz = {self.episode_s:g} s x "
+                             f"{self.decision_hz:g} Hz = {self.n_decisions} decisions; it must "
+                             f"be 1 to {MAX_DECISIONS:,} (an episode's noise is drawn at reset)")
+        self.penalty = _positive("penalty", penalty, zero=True)
         suite: SensorSuite | None
         augmentation = tuple(CATALOGUE.from_dict(d, "effect", f"effects[{i}]")
                              for i, d in enumerate(effects))
         if card is not None:
+            if not isinstance(card, (str, Card)):
+                raise ValueError(f"card must be a card name, a path or a Card, got {card!r}")
             c = card if isinstance(card, Card) else load_card(card)
             aircraft, cond, suite = c.aircraft, c.condition, c.sensors
             augmentation = (*c.augmentation, *augmentation)
         else:
-            alt, speed = condition if condition is not None else (1524.0, 46.3)
-            cond = FlightCondition(float(alt), float(speed))
+            if not isinstance(aircraft, str) or not aircraft:
+                raise ValueError(f"aircraft must be an aircraft name, got {aircraft!r}")
+            cond = _condition(condition)
+            _one_of("sensors", sensors, ("none", *SUITES))
             suite = None if sensors in ("none", "ideal") else builtin_suite(sensors)
         self.render_mode = render_mode
         self.aircraft, self.condition, self.suite = aircraft, cond, suite
         self.effects = augmentation  # airframe and actuator effects flown (and in the truth)
+        self.targets = _targets(targets)
         flown = augmented_aircraft(aircraft, augmentation) if augmentation else aircraft
-        self.targets = tuple(PRESETS[targets] if isinstance(targets, str) else targets)
-        self.episode_s, self.decision_hz = float(episode_s), float(decision_hz)
-        sim_hz = self.decision_hz if sim_hz is None else float(sim_hz)
-        self.sim_per_decision = int(round(sim_hz / self.decision_hz))
-        if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
-                                            - sim_hz) > 1e-9:
-            raise ValueError(f"sim_hz {sim_hz} must be an integer multiple of decision_hz")
-        self.n_decisions = int(round(self.episode_s * self.decision_hz))
-        self.penalty = float(penalty)
         model, self.trim, self.truth = _setup(flown, cond)
         self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
         self.sim = Simulation(model, rate_hz=sim_hz, atmosphere=self._atmosphere)
         self.reference = self.sim.model.reference
-        self.sim.reset(self.trim)  # the command maps: the travel of each surface
+        at_trim = self.sim.reset(self.trim)  # and the command maps: each surface's travel
         tp = {"de": self.trim.elevator, "da": self.trim.aileron, "dr": self.trim.rudder}
         self._span: list[tuple[float, float]] = []
         for c in CONTROLS:
@@ -237,9 +352,6 @@ class ExcitationEnv(gymnasium.Env):
         groups: dict[str, list[str]] = {}
         for name in self.targets:
             coef, _, var = name.partition("_")
-            if coef not in SIGMA or var not in VARIABLES:
-                raise ValueError(f"unsupported target {name!r}: use C{{l,m,n,X,Y,Z}}_"
-                                 f"{{{','.join(VARIABLES)}}}")
             groups.setdefault(coef, []).append(var)
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
@@ -270,12 +382,34 @@ class ExcitationEnv(gymnasium.Env):
         at = self._at
         self._i_alpha, self._i_phi, self._i_az, self._i_v, self._i_h = (
             at[c] - 1 for c in ("alpha", "phi", "az", "V", "h"))
+        # the linear range: (truth entry, 1 / range in SI), the trim values set at reset
+        lr = LINEAR_RANGE
+        self._range = [(at[c] - 1, 1.0 / math.radians(lr[k])) for c, k in (
+            ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"), ("q", "q_deg_s"),
+            ("r", "r_deg_s"))]
+        self._range.append((self._i_v, 1.0 / (lr["speed_ratio"] * self.trim.speed_m_s)))
+        self._range_trim: list[tuple[int, float, float]] = []
         self._truth_vec = [self.truth.get(n, math.nan) for n in self.targets]
+        if reward == "accuracy" and not all(math.isfinite(t) and t != 0.0
+                                            for t in self._truth_vec):
+            raise ValueError("reward 'accuracy' needs a finite, nonzero truth for every target "
+                             "(its error is relative); targets has " + ", ".join(
+                                 f"{n} = {t:g}"
+                                 for n, t in zip(self.targets, self._truth_vec, strict=True)
+                                 if not (math.isfinite(t) and t != 0.0)))
         self._sigma_obs = np.array([0.0] + [_noise_sigma(suite, c) for c in OBS_CHANNELS[1:]])
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         high = np.array([self.episode_s + 1.0, *OBS_BOUNDS.values()])
         low = np.array([0.0, *(-b for b in OBS_BOUNDS.values())])
         low[OBS_CHANNELS.index("V")] = 0.0
+        derived = {"t": self.episode_s, "V": LINEAR_RANGE["speed_ratio"] * self.trim.speed_m_s,
+                   **{c: max(s) for c, s in zip(CONTROLS, self._span, strict=True)}}
+        self.obs_scale = np.array([OBS_SCALES[c] or derived[c] for c in OBS_CHANNELS])
+        self.obs_center = np.array([0.0, *(at_trim[c] for c in OBS_CHANNELS[1:])])
+        self._scaled = observation == "scaled"
+        if self._scaled:
+            low, high = (low - self.obs_center) / self.obs_scale, (high - self.obs_center) / (
+                self.obs_scale)
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
         self._replay: Simulation | None = None  # flies the episode again for record()
         self._n_sim = 0
@@ -285,7 +419,13 @@ class ExcitationEnv(gymnasium.Env):
     # -- gymnasium ------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
-        super().reset(seed=seed)
+        # checked before any state changes: a refused reset leaves the environment as it was
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
+                                 or seed < 0):
+            raise ValueError(f"reset: seed must be None or an integer >= 0; got {seed!r}")
+        if options is not None and (not isinstance(options, Mapping) or options):
+            raise ValueError(f"reset: options takes no keys (None or {{}}); got {options!r}")
+        super().reset(seed=None if seed is None else int(seed))
         self._seed = int(self.np_random.integers(2**31))
         if self._atmosphere.turbulence != "none":
             self.sim.atmosphere = replace(self._atmosphere, seed=sub_seed(self._seed, "jsbsim"))
@@ -299,6 +439,7 @@ class ExcitationEnv(gymnasium.Env):
         self._y0 = np.array([sample[c] for c in self._coefs])
         self._noise = np.hstack([obs_noise, y_noise - self._y0]).tolist()
         self._logdet = 0.0
+        self._score = 0.0  # the return so far before penalties
         self._k = 0
         self._h0 = sample["h"]
         trim_measured = [0.0, *(sample[c] for c in self._read)]
@@ -306,8 +447,12 @@ class ExcitationEnv(gymnasium.Env):
         self._slot_trim = [[(i, trim_measured[i], f, pv) for i, f, pv in row]
                            for row in self._slots]
         self._values = [sample[c] for c in self._read]
+        self._range_trim = [(i, self._values[i], inv) for i, inv in self._range]
+        self._weight = 1.0
         obs = np.add(self._noise[0][:self._n_obs], trim_measured[:self._n_obs])
         self._obs_hist = [obs]
+        if self._scaled:
+            obs = (obs - self.obs_center) / self.obs_scale
         self._actions = [[0.0, 0.0, 0.0]]
         self._n_sim = 0
         return obs, self._info(None)
@@ -336,19 +481,28 @@ class ExcitationEnv(gymnasium.Env):
         measured = [v + e for v, e in zip((k / self.decision_hz, *values), noise, strict=True)]
         obs = np.array(measured[:self._n_obs])
         self._obs_hist.append(obs)
+        if self._scaled:
+            obs = (obs - self.obs_center) / self.obs_scale
         reward = 0.0
         if departure is None:
             speed = measured[self._at["V"]]
             x = [[1.0, *((measured[i] - t0) * (f + pv / speed) for i, t0, f, pv in row)]
                  for row in self._slot_trim]
-            self._info_state.add(x, measured[self._n_obs:])
-            logdet = self._info_state.logdet
-            reward = logdet - self._logdet
-            self._logdet = logdet
+            if self.reward == "valid-information":
+                d = max(abs(values[i] - v0) * inv for i, v0, inv in self._range_trim)
+                self._weight = 1.0 if d <= 1.0 else max(0.0, 2.0 - d)
+            if self._weight > 0.0:
+                self._info_state.add(x, measured[self._n_obs:], self._weight)
+            self._logdet = self._info_state.logdet
+            score = self._accuracy() if self.reward == "accuracy" else self._logdet
+            reward = score - self._score
+            self._score = score
             departure = self._envelope(values)
         terminated = departure is not None
         if terminated:
-            reward -= self.penalty
+            # "valid-information", "accuracy": a flight that left the envelope delivers no
+            # data, so what it gathered is forfeit with the penalty (it returns -penalty)
+            reward -= self.penalty + (self._score if self.reward != "information" else 0.0)
         truncated = not terminated and k >= self.n_decisions
         return obs, float(reward), terminated, truncated, self._info(departure)
 
@@ -447,6 +601,14 @@ class ExcitationEnv(gymnasium.Env):
             return f"altitude loss {loss:.0f} m > {lim['altitude_loss_m']} m"
         return None
 
+    def _accuracy(self) -> float:
+        """ACCURACY_SCALE x (1 - the mean over the targets of min(|estimate - truth| /
+        |truth|, 1)): 0 for the prior's estimate (0), ACCURACY_SCALE for the truth."""
+        theta = self._info_state.theta
+        rel = sum(min(abs(theta[g][j] - t) / abs(t), 1.0)
+                  for (g, j), t in zip(self._est_at, self._truth_vec, strict=True))
+        return ACCURACY_SCALE * (1.0 - rel / len(self._truth_vec))
+
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
@@ -456,7 +618,8 @@ class ExcitationEnv(gymnasium.Env):
         error = [e - t for e, t in zip(est, self._truth_vec, strict=True)]
         info: dict[str, Any] = {"crb": np.array(crb), "estimate": np.array(est),
                                 "error": np.array(error), "logdet": self._logdet,
-                                "time": self._k / self.decision_hz}
+                                "time": self._k / self.decision_hz,
+                                "validity": self._weight}
         if departure is not None:
             info["departure"] = departure
         return info
