@@ -41,7 +41,7 @@ def test_defaults_recover_the_truth(records, method):
             result = CliRunner().invoke(app, ["identify", str(path), "--method", method,
                                               "--model", model, "--format", "json"])
             assert result.exit_code == 0, result.output
-            out = json.loads(result.output)
+            out = json.loads(result.stdout)
             rows = out["score"]["rows"]
             assert rows, "a simulated record is scored against its own truth"
             assert all(r["status"] != "not estimated" for r in rows)

@@ -16,6 +16,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from lateral_card import maneuvers
 
 from flightid.identification.gap import diagnose
 from flightid.identification.gap.candidates import catalogue_candidates
@@ -25,7 +26,6 @@ from flightid.identification.gap.ranges import out_of_range
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT
-from flightid.scenarios.gap_benchmark.run import SCHEDULE, _maneuver
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import Sample
@@ -48,7 +48,7 @@ def _lateral(aircraft: str = "navion", effects=(), mounting=None, channels=None)
                                for c, pre in channels.items()}
     data = {"name": "gap-candidates", "aircraft": aircraft, "duration": 44.0, "rate": 50.0,
             "seed": 1, "condition": {"altitude": f.altitude_m, "speed": f.speed_m_s},
-            "maneuver": [_maneuver(k, s, t, f) for k, s, t in SCHEDULE], "sensors": sensors}
+            "maneuver": maneuvers(aircraft), "sensors": sensors}
     if effects:
         data["effect"] = list(effects)
     return fly_card(card_from_dict(data))
@@ -98,7 +98,7 @@ def hobby():
     data = {"name": "gap-candidates-hobby", "aircraft": "telemaster", "duration": 44.0,
             "rate": 50.0, "seed": 1,
             "condition": {"altitude": f.altitude_m, "speed": f.speed_m_s},
-            "maneuver": [_maneuver(k, s, t, f) for k, s, t in SCHEDULE],
+            "maneuver": maneuvers("telemaster"),
             "sensors": {"suite": "hobby", "output_rate": 50.0,
                         "drop": ["vanes", "lever_arm", "engine_vibration"]},
             "effect": [{"name": "control_effectiveness", "surface": "dr", "factor": 0.6}]}

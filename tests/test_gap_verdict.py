@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from lateral_card import card_data
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
@@ -23,18 +24,11 @@ from flightid.identification.gap.verdict import (
     worst,
 )
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
-from flightid.scenarios.gap_benchmark.run import AIRCRAFT, DROPPED, DURATION_S, RATE_HZ, SCHEDULE
 
 
 def _flown(aircraft: str, seed: int, effects: list[dict] | None = None,
            turbulence: str | None = None):
-    f = AIRCRAFT[aircraft]
-    data = {"name": "verdict", "aircraft": aircraft, "duration": DURATION_S, "rate": RATE_HZ,
-            "seed": seed, "condition": {"altitude": f.altitude_m, "speed": f.speed_m_s},
-            "maneuver": [{"kind": k, "surface": s, "start": t, "base": f.base_s,
-                          "amplitude_deg": f.aileron_deg if s == "da" else f.rudder_deg}
-                         for k, s, t in SCHEDULE],
-            "sensors": {"suite": "research", "drop": list(DROPPED)}}
+    data = card_data(aircraft, seed)
     if turbulence:
         data["disturbance"] = [{"kind": "turbulence", "intensity": turbulence}]
     if effects:

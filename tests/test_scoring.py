@@ -94,7 +94,7 @@ def test_cli_identify_json_and_score(tmp_path):
                                       "--coefficient", "Cn", "--truth", str(truth),
                                       "--format", "json"])
     assert result.exit_code == 0, result.output
-    out = json.loads(result.output)
+    out = json.loads(result.stdout)
     assert out["estimates"]["Cn_beta"]["value"] == pytest.approx(0.08544, rel=0.01)
     assert out["std_kind"] == StdKind.CRAMER_RAO_COLORED == "cramer-rao-colored"
     # equation error vs output error on real data: Cn_p and Cn_da differ by more than
