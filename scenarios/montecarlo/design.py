@@ -36,6 +36,7 @@ from flightid.scenarios.inputs import (
     scale_to_energy,
 )
 from flightid.scenarios.montecarlo import run as run_study
+from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_ratio_interval
 from flightid.scenarios.montecarlo.summary import Summary
 from flightid.scenarios.multisine import Multisine
 from flightid.units import DEG
@@ -207,10 +208,44 @@ class Comparison:
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
 
-    def better(self, a: str, b: str) -> list[str]:
-        """Derivatives whose scatter is smaller with design ``a`` than with ``b``."""
-        t = self.table()
-        return [str(d) for d in t.index if t.loc[d, a] < t.loc[d, b]]
+    def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
+        """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the
+        ratio of their scatters a / b, its ``level`` interval (``intervals.
+        scatter_ratio_interval``: F distribution), the realizations that estimated it
+        with each (n_a, n_b), and the winner: ``a`` when the interval lies below 1, ``b``
+        when above, "" when it contains 1 (the data do not tell them apart)."""
+        df = self.frame()
+        cols = ["ratio", "low", "high", "n_a", "n_b", "winner"]
+        if df.empty:
+            return pd.DataFrame(columns=cols)
+        scatter = df.pivot(index="derivative", columns="design", values="scatter")
+        count = df.pivot(index="derivative", columns="design", values="estimated")
+        rows = {}
+        for name in scatter.index:
+            sa, sb = float(scatter.loc[name, a]), float(scatter.loc[name, b])
+            if not (math.isfinite(sa) and math.isfinite(sb)) or sb <= 0:
+                continue
+            na, nb = int(count.loc[name, a]), int(count.loc[name, b])
+            low, high = scatter_ratio_interval(sa / sb, na, nb, level)
+            rows[str(name)] = {"ratio": sa / sb, "low": low, "high": high, "n_a": na,
+                               "n_b": nb, "winner": a if high < 1 else b if low > 1 else ""}
+        return pd.DataFrame.from_dict(rows, orient="index", columns=cols)
+
+    def best(self, level: float = LEVEL) -> dict[str, str]:
+        """Per derivative, the design whose scatter is smaller than every other design's
+        that estimated it, each ratio's ``level`` interval below 1; "" where no design
+        is smaller than all others with that confidence."""
+        kinds = [r.kind for r in self.results]
+        out = {}
+        for name in self.table().index:
+            out[str(name)] = ""
+            for a in kinds:
+                others = [b for b in kinds if b != a]
+                ratios = [self.scatter_ratios(a, b, level) for b in others]
+                if others and all(name in r.index and r.loc[name, "winner"] == a
+                                  for r in ratios):
+                    out[str(name)] = a
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data, JSON-ready (NaN as None)."""
@@ -218,16 +253,29 @@ class Comparison:
                 "model": self.model, "n": self.n, "equal": self.equal,
                 "reference": self.reference, "settings": asdict(self.settings),
                 "designs": [r.as_dict() for r in self.results],
-                "3211_beats_doublet": self._verdict()}
+                "3211_beats_doublet": self.verdict("3211", "doublet"),
+                "smallest_scatter": self.best()}
 
-    def _verdict(self) -> dict[str, Any] | None:
+    def verdict(self, a: str, b: str, level: float = LEVEL) -> dict[str, Any] | None:
+        """Design ``a`` against ``b``: of the derivatives in the study (``of``), how many
+        both estimated (``derivatives``), where ``a``'s scatter is smaller with the
+        ``level`` interval of the ratio below 1 (``<a>_smaller_scatter``), where ``b``'s
+        is (``<b>_smaller_scatter``), where the interval contains 1 (``undecided``), and
+        each ratio with its interval; None when either design is not in the comparison."""
         kinds = [r.kind for r in self.results]
-        if "3211" not in kinds or "doublet" not in kinds:
+        if a not in kinds or b not in kinds:
             return None
-        names = list(self.table().index)
-        wins = self.better("3211", "doublet")
-        return {"derivatives": len(names), "3211_smaller_scatter": wins,
-                "doublet_smaller_or_equal": [n for n in names if n not in wins]}
+        ratios = self.scatter_ratios(a, b, level)
+        return {"of": len(self.table().index), "derivatives": len(ratios),
+                "level": level,
+                f"{a}_smaller_scatter": [n for n in ratios.index
+                                         if ratios.loc[n, "winner"] == a],
+                f"{b}_smaller_scatter": [n for n in ratios.index
+                                         if ratios.loc[n, "winner"] == b],
+                "undecided": [n for n in ratios.index if ratios.loc[n, "winner"] == ""],
+                "ratios": {n: {k: (v.item() if hasattr(v, "item") else v)
+                               for k, v in ratios.loc[n].items() if k != "winner"}
+                           for n in ratios.index}}
 
 
 def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
