@@ -1,7 +1,9 @@
-"""``flightid design-compare``: doublet, 2-1-1, 3211, sweep and multisine on the same
-aircraft and condition, each over a Monte Carlo study with the same seeds; a table of each
-derivative's scatter by design, the designs' flight time and input energy, and
-STUDY/design-compare.{png,html} (the work is ``flightid.api.design_compare``)."""
+"""``flightid design-compare``: doublet, 2-1-1, 3211, sweep, multisine and designs of the
+user's own (--design-file, a maneuver table) on the same aircraft and condition, each
+over a Monte Carlo study with the same seeds; tables of each derivative's scatter and
+bound by design, the designs' flight time and input energy, the 3211 / doublet ratios
+with their intervals, and STUDY/design-compare.{png,html} (the work is
+``flightid.api.design_compare``)."""
 
 from __future__ import annotations
 
@@ -20,7 +22,17 @@ from flightid.cli.checks import Output, check_choice, check_number, check_paths,
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.cli.tables import add_columns
-from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
+from flightid.scenarios.cards import load_maneuvers
+from flightid.scenarios.input_design import InputDesign
+from flightid.scenarios.inputs import Maneuvers
+from flightid.scenarios.montecarlo.design import (
+    DESIGNS,
+    EQUAL,
+    Comparison,
+    DesignSettings,
+    check_own,
+    make_design,
+)
 from flightid.scenarios.montecarlo.design_report import costs_rows, ratio_rows
 from flightid.scenarios.montecarlo.intervals import LEVEL
 from flightid.units import DEG
@@ -73,6 +85,16 @@ def _verdict_line(verdict: dict) -> str:
                                          " (NOT most: see docs/montecarlo.md for why)"))
 
 
+def _own_design(path: str) -> tuple[str, InputDesign]:
+    """(name, design) of a --design-file maneuver table; its name must not be taken."""
+    name, parts = load_maneuvers(path)
+    try:
+        check_own({name: Maneuvers(parts=parts)})
+    except ValueError as exc:
+        raise ValueError(f"--design-file {path}: {exc}") from None
+    return name, Maneuvers(parts=parts)
+
+
 def design_compare_command(
     card: Annotated[str, typer.Option(
         help="card giving aircraft, condition, sensors, disturbances (its maneuvers are "
@@ -89,6 +111,12 @@ def design_compare_command(
     base: Annotated[float, typer.Option(help="pulse base time (s) of the multi-steps")] = 0.4,
     design: Annotated[list[str] | None, typer.Option(
         help=f"design to fly (repeatable; default all: {', '.join(DESIGNS)})")] = None,
+    design_file: Annotated[list[str] | None, typer.Option(
+        help="a design of your own: a TOML maneuver table ([[maneuver]] tables in the "
+             "card's syntax, several surfaces at once; optional name = \"...\"), scaled "
+             "like the built-ins (repeatable)")] = None,
+    multisine_band: Annotated[tuple[float, float], typer.Option(
+        help="the multisine's band F_MIN F_MAX (Hz)")] = DesignSettings().multisine_band,
     equal: Annotated[str, typer.Option(help="amplitude or energy")] = "amplitude",
     reference: Annotated[str, typer.Option(
         help="with --equal energy: the design whose energy all get")] = "3211",
@@ -103,21 +131,40 @@ def design_compare_command(
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
     check_choice("--format", format, ("table", "json"))
     check_choice("--equal", equal, EQUAL)
-    check_choice("--reference", reference, DESIGNS)
+    own: dict[str, InputDesign] = {}
+    for path in design_file or ():
+        name, made = _own_design(path)
+        if name in own:
+            raise ValueError(f"--design-file {path}: the name {name!r} is taken by another "
+                             "--design-file; set name = \"...\" in one of them")
+        own[name] = made
+    check_choice("--reference", reference, (*DESIGNS, *own))
     for d in design or ():
         check_choice("--design", d, DESIGNS)
     check_choice("--surface", surface, SURFACES)
     check_number("--amplitude-deg", amplitude_deg, low=0.0, low_open=True, high=90.0,
                  unit="deg")
     check_number("--base", base, low=0.0, low_open=True, high=60.0, unit="s")
+    check_number("--multisine-band F_MIN", multisine_band[0], low=0.0, low_open=True,
+                 unit="Hz")
+    check_number("--multisine-band F_MAX", multisine_band[1], low=multisine_band[0],
+                 low_open=True, unit="Hz")
     options = parse_options(option or [])
     check_study(n, method, model, options, seed, workers)
-    check_paths({"--card": card}, [Output("--output", output, folder=True)])
-    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
+    check_paths({"--card": card, "--design-file": design_file},
+                [Output("--output", output, folder=True)])
+    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base,
+                              multisine_band=tuple(multisine_band))
+    kinds = tuple(design or DESIGNS)
+    if "multisine" in kinds:  # a band without harmonics fails here, before any study
+        try:
+            make_design("multisine", settings)
+        except ValueError as exc:
+            raise ValueError(f"--multisine-band: {exc}") from None
     kwargs = dict(card=card, n=n, method=method, model=model,
-                  designs=tuple(design or DESIGNS), equal=equal, settings=settings,
+                  designs=kinds, equal=equal, settings=settings,
                   reference=reference, workers=workers, dask_address=dask, seed=seed,
-                  options=options)
+                  options=options, own=own)
     with count_progress("design-compare", show=not quiet) as update:
         progress = ((lambda kind, done, total: update(done, total, f"design-compare {kind}"))
                     if update else None)

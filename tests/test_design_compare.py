@@ -15,7 +15,8 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.scenarios import montecarlo
-from flightid.scenarios.cards import card_from_dict, load_card
+from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo import design, design_report, store
 from flightid.scenarios.montecarlo.summary import summarize
 from flightid.units import DEG
@@ -197,3 +198,98 @@ def test_verdict_counts_only_derivatives_both_estimated_and_claims_only_clear_ra
     assert heights == sorted([0.2, 0.010, 0.05, 0.009, 0.02])
     assert "CY_r\n[1]" in [t.get_text() for t in ax.get_xticklabels()]
     assert "derivative's unit" in ax.get_ylabel()
+
+
+OWN = """name = "ail-rud"
+description = "aileron 3211 with a 0.3 s base, then a rudder doublet"
+
+[[maneuver]]
+kind = "3211"
+surface = "da"
+start = 2.0
+base = 0.3
+amplitude_deg = 4
+
+[[maneuver]]
+kind = "doublet"
+surface = "dr"
+start = 5.0
+base = 0.5
+amplitude_deg = 3
+"""
+
+
+def test_a_maneuver_table_is_one_design_on_several_surfaces_scaled_like_the_builtins(
+        tmp_path):
+    (tmp_path / "own.toml").write_text(OWN)
+    name, parts = load_maneuvers(tmp_path / "own.toml")
+    own = Maneuvers(parts=parts)
+    assert name == "ail-rud" and own.surfaces() == ("da", "dr")
+    assert (own.start, own.end) == (2.0, 6.0)  # the doublet ends at 5 + 2 x 0.5 s
+    t = np.arange(0, 8, 1 / RATE)
+    u = own.signals(t)
+    assert u["da"].max() == pytest.approx(4 * DEG) and u["dr"].max() == pytest.approx(3 * DEG)
+    settings = design.DesignSettings(surface="da")
+    built = design.equalized_designs(("3211",), settings, "amplitude", RATE, own={name: own})
+    # equal amplitude: the largest |u| of any surface is the settings' 3 deg, the rudder
+    # keeping its 3/4 of the aileron
+    scaled = built[name].signals(t)
+    assert design.peak(built[name], RATE) == pytest.approx(3 * DEG, rel=1e-9)
+    assert scaled["dr"].max() == pytest.approx(3 * DEG * 3 / 4, rel=1e-9)
+    # energy summed over both surfaces: 4, 2+2 (and 7 x 0.3, 2 x 0.5) s at full amplitude
+    a = 3 * DEG
+    assert design.input_energy(built[name], RATE) == pytest.approx(
+        a**2 * 7 * 0.3 + (0.75 * a) ** 2 * 2 * 0.5, rel=0.02)
+    energy = design.equalized_designs(("3211",), settings, "energy", RATE, reference=name,
+                                      own={name: own})
+    target = design.input_energy(built[name], RATE)
+    for k, d in energy.items():
+        assert design.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), k
+    assert len(design.maneuver_dicts(energy[name])) == 2
+
+
+def test_a_bad_maneuver_table_is_refused_naming_file_line_and_field(tmp_path):
+    bad = tmp_path / "bad.toml"
+    for text, message in (
+            (OWN.replace('kind = "doublet"', 'kind = "chirp"'),
+             r"bad.toml:12: field 'maneuver\[1\].kind': unknown input kind 'chirp'"),
+            ('name = "x"\n', "at least one \\[\\[maneuver\\]\\]"),
+            ("duration = 10\n" + OWN, "field 'duration': unknown field in a maneuver table"),
+            (OWN.replace('"ail-rud"', '"3211"'), None)):
+        bad.write_text(text)
+        if message is None:  # a built-in's name: refused by the command line, exit 2
+            result = CliRunner().invoke(app, ["design-compare", "-n", "1", "-o",
+                                              str(tmp_path / "s"), "--design-file", str(bad)])
+            assert result.exit_code == 2 and "is a built-in design's" in result.output
+            continue
+        with pytest.raises(CardError, match=message):
+            load_maneuvers(bad)
+    result = CliRunner().invoke(app, ["design-compare", "-n", "1", "-o", str(tmp_path / "s"),
+                                      "--multisine-band", "0.5", "0.4"])
+    assert result.exit_code == 2 and "--multisine-band F_MAX must be > 0.5" in result.output
+    assert not (tmp_path / "s").exists()
+
+
+def test_own_design_runs_end_to_end_at_its_own_energy_with_a_set_multisine_band(tmp_path):
+    (tmp_path / "own.toml").write_text(OWN)
+    folder = tmp_path / "study"
+    result = CliRunner().invoke(app, [
+        "design-compare", "-n", "2", "-o", str(folder), "--model", "lat", "--surface",
+        "da", "--design", "multisine", "--multisine-band", "0.3", "1.5", "--design-file",
+        str(tmp_path / "own.toml"), "--equal", "energy", "--reference", "ail-rud",
+        "--workers", "2", "--quiet", "--format", "json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.output)
+    by = {d["kind"]: d for d in doc["designs"]}
+    assert list(by) == ["multisine", "ail-rud"]
+    assert by["multisine"]["energy"] == pytest.approx(by["ail-rud"]["energy"], rel=1e-5)
+    assert [m["surface"] for m in by["ail-rud"]["maneuvers"]] == ["da", "dr"]
+    flown = load_card(folder / "cards" / "multisine.toml").maneuvers[0]
+    assert (flown.f_min, flown.f_max) == (0.3, 1.5)
+    assert len(load_card(folder / "cards" / "ail-rud.toml").maneuvers) == 2
+    # the rudder moves only in the own design: it alone estimates the rudder derivatives
+    own_rows = {r["name"]: r for r in by["ail-rud"]["summary"]["rows"]}
+    ms_rows = {r["name"]: r for r in by["multisine"]["summary"]["rows"]}
+    assert own_rows["Cn_dr"]["estimated"] == 2 and "Cn_dr" not in ms_rows or \
+        ms_rows["Cn_dr"]["estimated"] == 0
+    assert (folder / "design-compare.png").exists()
