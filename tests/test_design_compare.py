@@ -9,6 +9,7 @@ import math
 import tomllib
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 from typer.testing import CliRunner
@@ -80,6 +81,8 @@ def test_3211_beats_a_doublet_of_equal_amplitude(small):
     folder, doc = small
     assert (folder / "design-compare.png").exists()
     assert "data:image/png;base64," in (folder / "design-compare.html").read_text()
+    table = pd.read_csv(folder / "design-compare.csv")
+    assert set(table["design"]) == {"doublet", "3211"}
     assert doc["equal"] == "amplitude" and doc["model"] == "lon"
     by = {d["kind"]: d for d in doc["designs"]}
     for d in by.values():

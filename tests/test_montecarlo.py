@@ -73,6 +73,9 @@ def test_report_labels_its_histograms_writes_them_as_png_and_bounds_the_coverage
     folder, summary, _ = base
     html = (folder / "report.html").read_text()
     assert "Clopper" in html and "data:image/png;base64," in html
+    table = pd.read_csv(folder / "summary.csv", index_col="name")
+    assert table.loc["Cl_p", "scatter"] == pytest.approx(summary.row("Cl_p").scatter,
+                                                          rel=1e-12)
     for r in summary.rows:  # every derivative estimated: a PNG beside the report
         png = folder / report.histogram_name(r.name)
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png

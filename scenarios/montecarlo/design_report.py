@@ -18,6 +18,7 @@ from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
 
 PNG = "design-compare.png"
 HTML = "design-compare.html"
+CSV = "design-compare.csv"  # Comparison.frame(): one row per derivative and design
 COLORS = {"doublet": "#c0392b", "211": "#e67e22", "3211": "#2e86c1", "sweep": "#27ae60",
           "multisine": "#8e44ad"}
 
@@ -118,9 +119,11 @@ def ratio_rows(comparison: Comparison) -> list[list[str]]:
 
 
 def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
-    """Write FOLDER/design-compare.png and FOLDER/design-compare.html; return both."""
+    """Write FOLDER/design-compare.png, FOLDER/design-compare.html and beside them
+    FOLDER/design-compare.csv (``Comparison.frame``); return the PNG and HTML paths."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    comparison.frame().to_csv(folder / CSV, index=False)
     png = folder / PNG
     figure(comparison).savefig(png)
     data = base64.b64encode(png.read_bytes()).decode()

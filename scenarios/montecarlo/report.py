@@ -3,7 +3,7 @@ and, per derivative, a histogram of the estimates (axes labelled with the deriva
 unit) with the truth and the normal curve the mean reported bound predicts (centred on
 the truth); figures drawn with ``matplotlib.figure.Figure``, written beside the report
 as STUDY/histogram-<derivative>.png and embedded in it as base64 PNG, so the HTML file
-also stands alone."""
+also stands alone; the summary table also as STUDY/summary.csv."""
 
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ from flightid.identification.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.summary import Summary
 
 REPORT = "report.html"
+CSV = "summary.csv"  # the summary's rows beside the report, one per derivative
 
 
 # the unit of a probability density over a derivative's values: the inverse of its unit
@@ -116,8 +117,11 @@ def histograms(df: pd.DataFrame, summary: Summary) -> dict[str, bytes]:
 
 def write_report(study_dir: str | Path, df: pd.DataFrame, summary: Summary,
                  title: str = "Monte Carlo study") -> Path:
-    """Write STUDY/report.html and each histogram beside it (``histogram_name``); return
-    the report's path."""
+    """Write STUDY/report.html, each histogram beside it (``histogram_name``) and the
+    summary's rows as STUDY/summary.csv (the columns of ``Summary.frame``); return the
+    report's path."""
+    if summary.rows:
+        summary.frame().to_csv(Path(study_dir) / CSV)
     pngs = histograms(df, summary)
     for name, png in pngs.items():
         (Path(study_dir) / histogram_name(name)).write_bytes(png)
