@@ -1,7 +1,9 @@
-"""``flightid design-compare``: doublet, 2-1-1, 3211, sweep and multisine on the same
-aircraft and condition, each over a Monte Carlo study with the same seeds; a table of each
-derivative's scatter by design, the designs' flight time and input energy, and
-STUDY/design-compare.{png,html} (the work is ``flightid.api.design_compare``)."""
+"""``flightid design-compare``: doublet, 2-1-1, 3211, sweep, multisine and designs of the
+user's own (--design-file, a maneuver table) on the same aircraft and condition, each
+over a Monte Carlo study with the same seeds; tables of each derivative's scatter and
+bound by design, the designs' flight time and input energy, the 3211 / doublet ratios
+with their intervals, and STUDY/design-compare.{png,html} (the work is
+``flightid.api.design_compare``)."""
 
 from __future__ import annotations
 
@@ -19,37 +21,79 @@ from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_choice, check_number, check_paths, check_study
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
+from flightid.cli.tables import add_columns
+from flightid.scenarios.cards import load_maneuvers
+from flightid.scenarios.input_design import InputDesign
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.card_file import card_with_overrides
-from flightid.scenarios.montecarlo.design import DESIGNS, EQUAL, Comparison, DesignSettings
-from flightid.scenarios.montecarlo.design_report import COST_HEAD, costs_rows
+from flightid.scenarios.montecarlo.design import (
+    DESIGNS,
+    EQUAL,
+    Comparison,
+    DesignSettings,
+    check_own,
+    make_design,
+)
+from flightid.scenarios.montecarlo.design_report import costs_rows, ratio_rows
+from flightid.scenarios.montecarlo.intervals import LEVEL
 from flightid.units import DEG
 
+# COST_HEAD shortened to fit 80 columns
+COST_SHORT = ("design", "flight (s)", "input (s)", "energy (rad²s)", "peak (deg)", "n",
+              "failed")
 SURFACES = tuple(c for c in CONTROLS if c != "throttle")  # the designs move a surface (rad)
 
 
 def _tables(comparison: Comparison) -> list[Table]:
-    costs = Table(title=f"designs (equal {comparison.equal}"
-                  + (f": the energy of the {comparison.reference})"
-                     if comparison.equal == "energy" else ")"))
-    for head in COST_HEAD:
-        costs.add_column(head, justify="left" if head == "design" else "right")
-    for row in costs_rows(comparison):
-        costs.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
-    scatter, bound = comparison.table("scatter"), comparison.table("mean_bound")
-    kinds = list(scatter.columns)
-    by = Table(title="scatter of the estimates (mean reported bound) by design; "
-               "* smallest scatter")
-    by.add_column("derivative", justify="left")
-    for k in kinds:
-        by.add_column(k, justify="right")
-    for name in scatter.index:
-        values = scatter.loc[name].astype(float)
-        best = values.idxmin() if values.notna().any() else None
-        by.add_row(str(name), *(
-            "-" if not math.isfinite(float(values[k])) else
-            f"{values[k]:.4f} ({bound.loc[name, k]:.4f}){' *' if k == best else ''}"
-            for k in kinds))
-    return [costs, by]
+    """The designs' costs, the scatter and the mean bound by derivative and design (two
+    tables: one of 5 designs fits 80 columns), and the 3211 / doublet scatter ratios with
+    their intervals."""
+    costs = add_columns(Table(title=f"designs (equal {comparison.equal}"
+                              + (f": the energy of the {comparison.reference})"
+                                 if comparison.equal == "energy" else ")")), COST_SHORT,
+                        rows=[[f"{v:.4g}" if isinstance(v, float) else str(v) for v in row]
+                              for row in costs_rows(comparison)])
+    level = f"{100 * LEVEL:.0f} %"
+    best = comparison.best()
+    kinds = [r.kind for r in comparison.results]
+    out = [costs]
+    for column, title in (
+            ("scatter", f"scatter of the estimates by design; * smaller than every other "
+                        f"design's ({level} interval of the ratio below 1)"),
+            ("mean_bound", "mean reported bound by design")):
+        wide = comparison.table(column)
+        out.append(add_columns(Table(title=title), ["derivative", *kinds], rows=[
+            [str(name), *("-" if not math.isfinite(float(wide.loc[name, k])) else
+                          f"{float(wide.loc[name, k]):.4g}"
+                          + ("*" if column == "scatter" and best.get(str(name)) == k else "")
+                          for k in kinds)] for name in wide.index]))
+    if ratio_rows(comparison):
+        out.append(add_columns(
+            Table(title=f"scatter 3211 / doublet, {level} interval (F distribution)"),
+            ["derivative", "ratio", f"{level} interval", "n 3211", "n doublet", "smaller"],
+            rows=ratio_rows(comparison)))
+    return out
+
+
+def _verdict_line(verdict: dict) -> str:
+    """The 3211-against-doublet verdict counted over the derivatives both estimated."""
+    wins, losses = len(verdict["3211_smaller_scatter"]), len(verdict["doublet_smaller_scatter"])
+    both, of = verdict["derivatives"], verdict["of"]
+    return (f"3211 smaller scatter than the doublet for {wins} of {both} derivatives "
+            f"estimated by both (of {of}; {100 * verdict['level']:.0f} % interval of the "
+            f"ratio below 1); doublet smaller for {losses}; not clear for "
+            f"{both - wins - losses}" + ("" if wins * 2 > both else
+                                         " (NOT most: see docs/montecarlo.md for why)"))
+
+
+def _own_design(path: str) -> tuple[str, InputDesign]:
+    """(name, design) of a --design-file maneuver table; its name must not be taken."""
+    name, parts = load_maneuvers(path)
+    try:
+        check_own({name: Maneuvers(parts=parts)})
+    except ValueError as exc:
+        raise ValueError(f"--design-file {path}: {exc}") from None
+    return name, Maneuvers(parts=parts)
 
 
 def design_compare_command(
@@ -68,6 +112,12 @@ def design_compare_command(
     base: Annotated[float, typer.Option(help="pulse base time (s) of the multi-steps")] = 0.4,
     design: Annotated[list[str] | None, typer.Option(
         help=f"design to fly (repeatable; default all: {', '.join(DESIGNS)})")] = None,
+    design_file: Annotated[list[str] | None, typer.Option(
+        help="a design of your own: a TOML maneuver table ([[maneuver]] tables in the "
+             "card's syntax, several surfaces at once; optional name = \"...\"), scaled "
+             "like the built-ins (repeatable)")] = None,
+    multisine_band: Annotated[tuple[float, float], typer.Option(
+        help="the multisine's band F_MIN F_MAX (Hz)")] = DesignSettings().multisine_band,
     equal: Annotated[str, typer.Option(help="amplitude or energy")] = "amplitude",
     reference: Annotated[str, typer.Option(
         help="with --equal energy: the design whose energy all get")] = "3211",
@@ -85,22 +135,41 @@ def design_compare_command(
     Carlo (the same seeds for every design), at equal amplitude or equal input energy."""
     check_choice("--format", format, ("table", "json"))
     check_choice("--equal", equal, EQUAL)
-    check_choice("--reference", reference, DESIGNS)
+    own: dict[str, InputDesign] = {}
+    for path in design_file or ():
+        name, made = _own_design(path)
+        if name in own:
+            raise ValueError(f"--design-file {path}: the name {name!r} is taken by another "
+                             "--design-file; set name = \"...\" in one of them")
+        own[name] = made
+    check_choice("--reference", reference, (*DESIGNS, *own))
     for d in design or ():
         check_choice("--design", d, DESIGNS)
     check_choice("--surface", surface, SURFACES)
     check_number("--amplitude-deg", amplitude_deg, low=0.0, low_open=True, high=90.0,
                  unit="deg")
     check_number("--base", base, low=0.0, low_open=True, high=60.0, unit="s")
+    check_number("--multisine-band F_MIN", multisine_band[0], low=0.0, low_open=True,
+                 unit="Hz")
+    check_number("--multisine-band F_MAX", multisine_band[1], low=multisine_band[0],
+                 low_open=True, unit="Hz")
     options = parse_options(option or [])
     check_study(n, method, model, options, seed, workers)
-    check_paths({"--card": card}, [Output("--output", output, folder=True)])
+    check_paths({"--card": card, "--design-file": design_file},
+                [Output("--output", output, folder=True)])
     card = card_with_overrides(card, output, set_ or (), turbulence, sensors)
-    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base)
+    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base,
+                              multisine_band=tuple(multisine_band))
+    kinds = tuple(design or DESIGNS)
+    if "multisine" in kinds:  # a band without harmonics fails here, before any study
+        try:
+            make_design("multisine", settings)
+        except ValueError as exc:
+            raise ValueError(f"--multisine-band: {exc}") from None
     kwargs = dict(card=card, n=n, method=method, model=model,
-                  designs=tuple(design or DESIGNS), equal=equal, settings=settings,
+                  designs=kinds, equal=equal, settings=settings,
                   reference=reference, workers=workers, dask_address=dask, seed=seed,
-                  options=options)
+                  options=options, own=own)
     with count_progress("design-compare", show=not quiet) as update:
         progress = ((lambda kind, done, total: update(done, total, f"design-compare {kind}"))
                     if update else None)
@@ -113,8 +182,5 @@ def design_compare_command(
         console.print(table)
     verdict = comparison.as_dict()["3211_beats_doublet"]
     if verdict is not None:
-        wins, total = len(verdict["3211_smaller_scatter"]), verdict["derivatives"]
-        console.print(f"3211 smaller scatter than the doublet for {wins} of {total} "
-                      "derivatives" + ("" if wins * 2 > total else
-                                       " (NOT most: see docs/montecarlo.md for why)"))
+        console.print(_verdict_line(verdict))
     typer.echo(f"wrote {png} and {page}")

@@ -49,3 +49,16 @@ def split(derivative: str) -> tuple[str, str]:
 def is_derivative(text: str) -> bool:
     """True when ``text`` is a canonical derivative name."""
     return bool(_NAME.match(text))
+
+
+# the unit of a derivative by its variable: per rad for angles, per unit of the
+# nondimensional rate (so dimensionless) for rates, per unit throttle, 1 for the value
+_UNITS = {"alpha": "1/rad", "beta": "1/rad", "de": "1/rad", "da": "1/rad", "dr": "1/rad",
+          "p": "1", "q": "1", "r": "1", "alphadot": "1", "dt": "1", "0": "1"}
+
+
+def unit(derivative: str) -> str:
+    """The unit of a canonical derivative ("1/rad" or "1", dimensionless); "" for a name
+    that is not canonical (a method's own parameter)."""
+    m = _NAME.match(derivative)
+    return _UNITS[m.group(2)] if m else ""

@@ -600,6 +600,34 @@ def load_card(path: str | Path) -> Card:
     return card_from_dict(data, str(p), text)
 
 
+def load_maneuvers(path: str | Path) -> tuple[str, tuple[InputDesign, ...]]:
+    """A maneuver table: a TOML file of ``[[maneuver]]`` tables in the card's syntax (any
+    kinds and surfaces, flown together), with an optional ``name`` (default the file's
+    stem) and ``description``. Returns (name, maneuvers); CardError names the file, line
+    and field."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CardError(str(p), None, None, f"cannot read the maneuver table: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise CardError(str(p), int(m.group(1)) if m else None, None,
+                        f"TOML syntax error: {exc}") from None
+    chk = _Checker(str(p), text)
+    for key in data:
+        if key not in ("name", "description", "maneuver"):
+            raise chk.fail(key, "unknown field in a maneuver table; allowed: name, "
+                           "description, [[maneuver]]")
+    if not data.get("maneuver"):
+        raise chk.fail("maneuver", "is required: at least one [[maneuver]] table")
+    name = data.get("name", p.stem)
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
+        raise chk.fail("name", f"must be letters, digits, '_', '.' or '-', got {name!r}")
+    return name, _maneuvers(chk, data["maneuver"], math.inf)
+
+
 # -- flying -----------------------------------------------------------------------------------
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "INPUT_KINDS",
     "Doublet",
     "InputDesign",
+    "Maneuvers",
     "Multistep",
     "Pulse",
     "Step",
@@ -44,6 +45,7 @@ __all__ = [
     "input_from_dict",
     "inputs_from_list",
     "rate_limit",
+    "scale_amplitude",
     "scale_to_energy",
     "spectrum",
     "total_signals",
@@ -335,6 +337,51 @@ def total_signals(designs: list[InputDesign], t: np.ndarray) -> dict[str, np.nda
     return out
 
 
+@dataclass(kw_only=True)
+class Maneuvers(InputDesign):
+    """Several designs flown together as one (a card's ``[[maneuver]]`` list, e.g. aileron
+    and rudder multisines at once): their increments summed per surface, each designs'
+    own rate limit applied to it; it starts when the first one starts (``start`` is set
+    from the parts) and ends when the last one ends; the whole's ``rate_limit`` is unused
+    (each part has its own)."""
+
+    kind: ClassVar[str] = "maneuvers"
+    parts: tuple[InputDesign, ...] = ()
+
+    def __post_init__(self) -> None:
+        require(len(self.parts) >= 1, "maneuver", "needs at least one maneuver")
+        self.start = min(d.start for d in self.parts)
+
+    def surfaces(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(s for d in self.parts for s in d.surfaces()))
+
+    def signals(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        return total_signals(list(self.parts), check_time(t))
+
+    def shapes(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        return self.signals(t)
+
+    @property
+    def end(self) -> float:
+        return max(d.end for d in self.parts)
+
+
+def scale_amplitude(design: InputDesign, c: float) -> InputDesign:
+    """A copy of ``design`` with its amplitude(s) times ``c`` (every part of a Maneuvers);
+    ValueError naming the design when it has no amplitude to scale."""
+    if isinstance(design, Maneuvers):
+        return dataclasses.replace(design, parts=tuple(scale_amplitude(d, c)
+                                                        for d in design.parts))
+    changes: dict[str, Any] = {}
+    for f in dataclasses.fields(design):
+        if f.name == "amplitude" or f.name == "amplitudes":
+            v = getattr(design, f.name)
+            changes[f.name] = tuple(c * a for a in v) if isinstance(v, tuple) else c * v
+    if not changes:
+        raise ValueError(f"{design.kind!r} has no amplitude to scale")
+    return dataclasses.replace(design, **changes)
+
+
 # -- comparing designs -------------------------------------------------------------
 
 
@@ -385,14 +432,7 @@ def scale_to_energy(design: InputDesign, t: np.ndarray, target: float) -> InputD
         raise ValueError(f"target energy must be > 0, got {target}")
 
     def scaled(c: float) -> InputDesign:
-        changes: dict[str, Any] = {}
-        for f in dataclasses.fields(design):
-            if f.name == "amplitude" or f.name == "amplitudes":
-                v = getattr(design, f.name)
-                changes[f.name] = tuple(c * a for a in v) if isinstance(v, tuple) else c * v
-        if not changes:
-            raise ValueError(f"{design.kind!r} has no amplitude to scale")
-        return dataclasses.replace(design, **changes)
+        return scale_amplitude(design, c)
 
     def total(d: InputDesign) -> float:
         return sum(energy(t, u) for u in d.signals(t).values())

@@ -9,13 +9,17 @@ import math
 import tomllib
 
 import numpy as np
+import pandas as pd
 import pytest
+from scipy import stats
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.scenarios import montecarlo
-from flightid.scenarios.cards import card_from_dict, load_card
-from flightid.scenarios.montecarlo import design
+from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
+from flightid.scenarios.inputs import Maneuvers
+from flightid.scenarios.montecarlo import design, design_report, store
+from flightid.scenarios.montecarlo.summary import summarize
 from flightid.units import DEG
 
 RATE = 100.0
@@ -77,6 +81,8 @@ def test_3211_beats_a_doublet_of_equal_amplitude(small):
     folder, doc = small
     assert (folder / "design-compare.png").exists()
     assert "data:image/png;base64," in (folder / "design-compare.html").read_text()
+    table = pd.read_csv(folder / "design-compare.csv")
+    assert set(table["design"]) == {"doublet", "3211"}
     assert doc["equal"] == "amplitude" and doc["model"] == "lon"
     by = {d["kind"]: d for d in doc["designs"]}
     for d in by.values():
@@ -107,7 +113,33 @@ def test_3211_beats_a_doublet_of_equal_amplitude(small):
     logs = [math.log(three[n]["scatter"] / doublet[n]["scatter"]) for n in doublet]
     assert float(np.mean(logs)) < 0.0, logs
     verdict = doc["3211_beats_doublet"]
-    assert verdict["derivatives"] == len(doublet)
+    assert verdict["derivatives"] == verdict["of"] == len(doublet)
+
+
+def test_tables_keep_every_digit_at_80_columns(small):
+    """The rerun continues the stored study (nothing flies) and prints its tables in an
+    80-column terminal: every number of the JSON output appears whole, none cut by an
+    ellipsis, and the verdict counts the derivatives both designs estimated."""
+    folder, doc = small
+    result = CliRunner().invoke(app, [
+        "design-compare", "-n", "6", "-o", str(folder), "--design", "doublet",
+        "--design", "3211", "--workers", "1", "--quiet"], env={"COLUMNS": "80"})
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert "…" not in out
+    assert max(len(line) for line in out.splitlines() if not line.startswith("wrote")) <= 80
+    cells = [c.strip(" *") for line in out.splitlines() for c in line.split("│")]
+    for d in doc["designs"]:
+        for r in d["summary"]["rows"]:
+            assert f"{r['scatter']:.4g}" in cells or f"{r['scatter']:.4g}*" in [
+                c.strip() for line in out.splitlines() for c in line.split("│")], r
+            assert f"{r['mean_bound']:.4g}" in cells, r
+    verdict = doc["3211_beats_doublet"]
+    for name, r in verdict["ratios"].items():
+        assert f"{r['low']:.3g} - {r['high']:.3g}" in cells, name
+    wins = len(verdict["3211_smaller_scatter"])
+    assert (f"3211 smaller scatter than the doublet for {wins} of {verdict['derivatives']} "
+            "derivatives estimated by both") in " ".join(out.split())
 
 
 def test_command_line_refuses_bad_settings_with_exit_2(tmp_path):
@@ -118,3 +150,149 @@ def test_command_line_refuses_bad_settings_with_exit_2(tmp_path):
                                           str(tmp_path / "s"), "--quiet", *args])
         assert result.exit_code == 2, result.output
         assert message in result.output
+
+
+def _comparison_of(scatters: dict[str, dict[str, float | None]], n: int = 20
+                   ) -> design.Comparison:
+    """A Comparison of designs whose rows have exactly the given scatters (None: the
+    derivative found unidentifiable by that design), from errors z * scatter with z
+    fixed-seed normal draws standardized to sample standard deviation 1."""
+    truth = {"Cm_alpha": -0.683, "CY_r": 0.0, "Cn_r": -0.125}
+    z = np.random.default_rng(7).normal(size=n)
+    z = (z - z.mean()) / z.std(ddof=1)
+    out = design.Comparison("navion-demo", "navion", "oe", "lat", n, "amplitude", "3211",
+                            design.DesignSettings())
+    for kind, by_name in scatters.items():
+        rows = []
+        for name, s in by_name.items():
+            for i in range(n):
+                rows.append({"index": i, "seed": i, "name": name, "truth": truth[name],
+                             "estimate": truth[name] + (z[i] * s if s else math.nan),
+                             "std": s or math.nan, "error": z[i] * s if s else math.nan,
+                             "sigmas": z[i] if s else math.nan,
+                             "status": "estimated" if s else "unidentifiable",
+                             "reason": ""})
+        summary = summarize(store.frame(rows))
+        out.results.append(design.DesignResult(kind, 12.0, 2.8, 0.007, 3 * DEG, summary,
+                                               kind))
+    return out
+
+
+def test_verdict_counts_only_derivatives_both_estimated_and_claims_only_clear_ratios():
+    comparison = _comparison_of({"doublet": {"Cm_alpha": 0.2, "CY_r": 0.010, "Cn_r": None},
+                                 "3211": {"Cm_alpha": 0.05, "CY_r": 0.009, "Cn_r": 0.02}})
+    verdict = comparison.verdict("3211", "doublet")
+    # three derivatives in the study, two estimated by both
+    assert verdict["of"] == 3 and verdict["derivatives"] == 2
+    # 0.25 at n = 20 is clear (90 % interval 0.170-0.368); 0.9 is not (0.611-1.325)
+    assert verdict["3211_smaller_scatter"] == ["Cm_alpha"]
+    assert verdict["undecided"] == ["CY_r"] and verdict["doublet_smaller_scatter"] == []
+    r = verdict["ratios"]["CY_r"]
+    assert r["ratio"] == pytest.approx(0.9, rel=1e-9)
+    assert (r["low"], r["high"]) == pytest.approx(
+        (0.9 / math.sqrt(stats.f.ppf(0.95, 19, 19)), 0.9 / math.sqrt(stats.f.ppf(0.05, 19, 19))),
+        rel=1e-9)
+    assert verdict["ratios"]["Cm_alpha"]["high"] == pytest.approx(0.25 * 1.4726, rel=1e-3)
+    assert comparison.best() == {"CY_r": "", "Cm_alpha": "3211", "Cn_r": ""}
+    # the figure keeps CY_r (truth 0): its bars are its scatters in its own unit
+    ax = design_report.figure(comparison).axes[0]
+    heights = sorted(round(p.get_height(), 6) for p in ax.patches
+                     if np.isfinite(p.get_height()))  # (the doublet's Cn_r: NaN, no bar)
+    assert heights == sorted([0.2, 0.010, 0.05, 0.009, 0.02])
+    assert "CY_r\n[1]" in [t.get_text() for t in ax.get_xticklabels()]
+    assert "derivative's unit" in ax.get_ylabel()
+
+
+OWN = """name = "ail-rud"
+description = "aileron 3211 with a 0.3 s base, then a rudder doublet"
+
+[[maneuver]]
+kind = "3211"
+surface = "da"
+start = 2.0
+base = 0.3
+amplitude_deg = 4
+
+[[maneuver]]
+kind = "doublet"
+surface = "dr"
+start = 5.0
+base = 0.5
+amplitude_deg = 3
+"""
+
+
+def test_a_maneuver_table_is_one_design_on_several_surfaces_scaled_like_the_builtins(
+        tmp_path):
+    (tmp_path / "own.toml").write_text(OWN)
+    name, parts = load_maneuvers(tmp_path / "own.toml")
+    own = Maneuvers(parts=parts)
+    assert name == "ail-rud" and own.surfaces() == ("da", "dr")
+    assert (own.start, own.end) == (2.0, 6.0)  # the doublet ends at 5 + 2 x 0.5 s
+    t = np.arange(0, 8, 1 / RATE)
+    u = own.signals(t)
+    assert u["da"].max() == pytest.approx(4 * DEG) and u["dr"].max() == pytest.approx(3 * DEG)
+    settings = design.DesignSettings(surface="da")
+    built = design.equalized_designs(("3211",), settings, "amplitude", RATE, own={name: own})
+    # equal amplitude: the largest |u| of any surface is the settings' 3 deg, the rudder
+    # keeping its 3/4 of the aileron
+    scaled = built[name].signals(t)
+    assert design.peak(built[name], RATE) == pytest.approx(3 * DEG, rel=1e-9)
+    assert scaled["dr"].max() == pytest.approx(3 * DEG * 3 / 4, rel=1e-9)
+    # energy summed over both surfaces: 4, 2+2 (and 7 x 0.3, 2 x 0.5) s at full amplitude
+    a = 3 * DEG
+    assert design.input_energy(built[name], RATE) == pytest.approx(
+        a**2 * 7 * 0.3 + (0.75 * a) ** 2 * 2 * 0.5, rel=0.02)
+    energy = design.equalized_designs(("3211",), settings, "energy", RATE, reference=name,
+                                      own={name: own})
+    target = design.input_energy(built[name], RATE)
+    for k, d in energy.items():
+        assert design.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), k
+    assert len(design.maneuver_dicts(energy[name])) == 2
+
+
+def test_a_bad_maneuver_table_is_refused_naming_file_line_and_field(tmp_path):
+    bad = tmp_path / "bad.toml"
+    for text, message in (
+            (OWN.replace('kind = "doublet"', 'kind = "chirp"'),
+             r"bad.toml:12: field 'maneuver\[1\].kind': unknown input kind 'chirp'"),
+            ('name = "x"\n', "at least one \\[\\[maneuver\\]\\]"),
+            ("duration = 10\n" + OWN, "field 'duration': unknown field in a maneuver table"),
+            (OWN.replace('"ail-rud"', '"3211"'), None)):
+        bad.write_text(text)
+        if message is None:  # a built-in's name: refused by the command line, exit 2
+            result = CliRunner().invoke(app, ["design-compare", "-n", "1", "-o",
+                                              str(tmp_path / "s"), "--design-file", str(bad)])
+            assert result.exit_code == 2 and "is a built-in design's" in result.output
+            continue
+        with pytest.raises(CardError, match=message):
+            load_maneuvers(bad)
+    result = CliRunner().invoke(app, ["design-compare", "-n", "1", "-o", str(tmp_path / "s"),
+                                      "--multisine-band", "0.5", "0.4"])
+    assert result.exit_code == 2 and "--multisine-band F_MAX must be > 0.5" in result.output
+    assert not (tmp_path / "s").exists()
+
+
+def test_own_design_runs_end_to_end_at_its_own_energy_with_a_set_multisine_band(tmp_path):
+    (tmp_path / "own.toml").write_text(OWN)
+    folder = tmp_path / "study"
+    result = CliRunner().invoke(app, [
+        "design-compare", "-n", "2", "-o", str(folder), "--model", "lat", "--surface",
+        "da", "--design", "multisine", "--multisine-band", "0.3", "1.5", "--design-file",
+        str(tmp_path / "own.toml"), "--equal", "energy", "--reference", "ail-rud",
+        "--workers", "2", "--quiet", "--format", "json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.output)
+    by = {d["kind"]: d for d in doc["designs"]}
+    assert list(by) == ["multisine", "ail-rud"]
+    assert by["multisine"]["energy"] == pytest.approx(by["ail-rud"]["energy"], rel=1e-5)
+    assert [m["surface"] for m in by["ail-rud"]["maneuvers"]] == ["da", "dr"]
+    flown = load_card(folder / "cards" / "multisine.toml").maneuvers[0]
+    assert (flown.f_min, flown.f_max) == (0.3, 1.5)
+    assert len(load_card(folder / "cards" / "ail-rud.toml").maneuvers) == 2
+    # the rudder moves only in the own design: it alone estimates the rudder derivatives
+    own_rows = {r["name"]: r for r in by["ail-rud"]["summary"]["rows"]}
+    ms_rows = {r["name"]: r for r in by["multisine"]["summary"]["rows"]}
+    assert own_rows["Cn_dr"]["estimated"] == 2 and "Cn_dr" not in ms_rows or \
+        ms_rows["Cn_dr"]["estimated"] == 0
+    assert (folder / "design-compare.png").exists()

@@ -8,6 +8,7 @@ realization costs about 1-3 s.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -18,9 +19,13 @@ import time
 import pandas as pd
 import pytest
 from dask import distributed
+from scipy import stats
+from typer.testing import CliRunner
 
+from flightid.cli.app import app
 from flightid.scenarios import montecarlo
-from flightid.scenarios.montecarlo import store
+from flightid.scenarios.montecarlo import report, store
+from flightid.scenarios.montecarlo.intervals import binomial_interval
 
 CARD, METHOD, MODEL = "navion-demo", "oe", "lat"
 LATERAL = ("CY_beta", "CY_dr", "CY_r", "Cl_beta", "Cl_da", "Cl_dr", "Cl_p", "Cl_r",
@@ -62,6 +67,50 @@ def test_study_stores_every_realization_and_summarizes(base):
     # documented n=30 study shows the bounds are optimistic for some of them)
     mean_coverage = sum(summary.row(name).coverage for name in LATERAL) / len(LATERAL)
     assert 0.5 <= mean_coverage <= 1.0
+
+
+def test_report_labels_its_histograms_writes_them_as_png_and_bounds_the_coverage(base):
+    folder, summary, _ = base
+    html = (folder / "report.html").read_text()
+    assert "Clopper" in html and "data:image/png;base64," in html
+    table = pd.read_csv(folder / "summary.csv", index_col="name")
+    assert table.loc["Cl_p", "scatter"] == pytest.approx(summary.row("Cl_p").scatter,
+                                                          rel=1e-12)
+    for r in summary.rows:  # every derivative estimated: a PNG beside the report
+        png = folder / report.histogram_name(r.name)
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+        # the coverage's interval is the exact binomial one of its k of n
+        k = round(r.coverage * r.estimated)
+        ci = stats.binomtest(k, r.estimated).proportion_ci(0.95, method="exact")
+        assert (r.coverage_low, r.coverage_high) == pytest.approx((ci.low, ci.high), abs=1e-12)
+    # n = 6 all covered: the true coverage is only known to be above 54 %
+    assert binomial_interval(6, 6)[0] == pytest.approx(0.5407, abs=1e-4)
+    df = montecarlo.load(folder)
+    values = df.loc[df["name"] == "Cl_beta", "estimate"].to_numpy(float)
+    ax = report.histogram("Cl_beta", values, summary.row("Cl_beta").truth,
+                          summary.row("Cl_beta").mean_bound).axes[0]
+    assert ax.get_xlabel() == "estimate of Cl_beta [1/rad]"
+    assert ax.get_ylabel() == "probability density [rad]"
+    ax = report.histogram("Cn_r", values, -0.1, 0.01).axes[0]
+    assert ax.get_xlabel() == "estimate of Cn_r [1]"
+
+
+def test_summary_tables_keep_every_digit_at_80_columns(base):
+    folder, _, _ = base
+    runner = CliRunner()
+    doc = json.loads(runner.invoke(app, ["montecarlo-report", str(folder), "--format",
+                                         "json"]).output)
+    result = runner.invoke(app, ["montecarlo-report", str(folder)], env={"COLUMNS": "80"})
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert "…" not in out
+    assert max(len(line) for line in out.splitlines() if not line.startswith("wrote")) <= 80
+    cells = [c.strip() for line in out.splitlines() for c in line.split("│")]
+    for r in doc["rows"]:
+        for text in (f"{r['truth']:.4g}", f"{r['bias']:+.3g}", f"{r['scatter']:.3g}",
+                     f"{r['mean_bound']:.3g}", f"{r['ratio']:.2f}",
+                     f"{100 * r['coverage_low']:.0f} % - {100 * r['coverage_high']:.0f} %"):
+            assert text in cells, (r["name"], text)
 
 
 def test_rerun_continues_and_extends(base, tmp_path):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -29,13 +30,16 @@ from flightid.scenarios.cards import load_card
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import (
     Doublet,
+    Maneuvers,
     Sweep,
     ThreeTwoOneOne,
     TwoOneOne,
     energy,
+    scale_amplitude,
     scale_to_energy,
 )
 from flightid.scenarios.montecarlo import run as run_study
+from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_ratio_interval
 from flightid.scenarios.montecarlo.summary import Summary
 from flightid.scenarios.multisine import Multisine
 from flightid.units import DEG
@@ -101,14 +105,25 @@ def peak(design: InputDesign, rate: float) -> float:
 
 
 def equalized_designs(kinds: Sequence[str], settings: DesignSettings, equal: str,
-                      rate: float, reference: str = "3211") -> dict[str, InputDesign]:
-    """The designs at equal peak amplitude, or scaled to the reference's input energy."""
+                      rate: float, reference: str = "3211",
+                      own: Mapping[str, InputDesign] | None = None) -> dict[str, InputDesign]:
+    """The built-in designs ``kinds`` and the user's ``own`` designs (name -> design, a
+    ``Maneuvers`` for several surfaces at once) at equal peak amplitude (an own design
+    scaled so that its largest |u| over its surfaces is the settings' amplitude), or all
+    scaled to the input energy of ``reference`` (a built-in or own name) at that
+    amplitude."""
     if equal not in EQUAL:
         raise ValueError(f"equal must be one of {', '.join(EQUAL)}, got {equal!r}")
     designs = {k: make_design(k, settings) for k in kinds}
+    for name, d in (own or {}).items():
+        top = peak(d, rate)
+        if not top > 0:
+            raise ValueError(f"design {name!r} does not move any surface")
+        designs[name] = scale_amplitude(d, settings.amplitude / top)
     if equal == "amplitude":
         return designs
-    target = input_energy(make_design(reference, settings), rate)
+    ref = designs[reference] if reference in designs else make_design(reference, settings)
+    target = input_energy(ref, rate)
     out = {}
     for k, d in designs.items():
         t = time_grid(d, rate)
@@ -147,10 +162,28 @@ def design_card(base: Mapping[str, Any], kind: str, design: InputDesign,
     set to the input plus SETTLE_S."""
     data = {k: v for k, v in base.items() if k != "maneuver"}
     data["name"] = f"{base.get('name', 'card')}-{kind}"
-    data["description"] = f"design-compare: {kind} on {design.surfaces()[0]}"
+    data["description"] = f"design-compare: {kind} on {', '.join(design.surfaces())}"
     data["duration"] = float(time_grid(design, rate)[-1])
-    data["maneuver"] = [design.to_dict()]
+    data["maneuver"] = maneuver_dicts(design)
     return data
+
+
+def maneuver_dicts(design: InputDesign) -> list[dict[str, Any]]:
+    """The card's ``[[maneuver]]`` tables of a design (one per part of a Maneuvers)."""
+    parts = design.parts if isinstance(design, Maneuvers) else (design,)
+    return [d.to_dict() for d in parts]
+
+
+def check_own(own: Mapping[str, InputDesign]) -> None:
+    """Raise ValueError unless every own design's name is a usable folder name that is
+    not a built-in design's."""
+    for name in own:
+        if name in DESIGNS:
+            raise ValueError(f"design name {name!r} is a built-in design's; name it "
+                             "otherwise (the maneuver table's name = \"...\")")
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", name) or name in (CARDS, ".", ".."):
+            raise ValueError(f"design name {name!r}: use letters, digits, '_', '.', '-' "
+                             f"(not {CARDS!r})")
 
 
 @dataclass
@@ -165,6 +198,7 @@ class DesignResult:
     peak: float
     summary: Summary
     study_dir: str
+    maneuvers: list[dict[str, Any]] = field(default_factory=list)  # as flown (SI)
 
     def as_dict(self) -> dict[str, Any]:
         d = {k: v for k, v in asdict(self).items() if k != "summary"}
@@ -207,10 +241,44 @@ class Comparison:
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
 
-    def better(self, a: str, b: str) -> list[str]:
-        """Derivatives whose scatter is smaller with design ``a`` than with ``b``."""
-        t = self.table()
-        return [str(d) for d in t.index if t.loc[d, a] < t.loc[d, b]]
+    def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
+        """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the
+        ratio of their scatters a / b, its ``level`` interval (``intervals.
+        scatter_ratio_interval``: F distribution), the realizations that estimated it
+        with each (n_a, n_b), and the winner: ``a`` when the interval lies below 1, ``b``
+        when above, "" when it contains 1 (the data do not tell them apart)."""
+        df = self.frame()
+        cols = ["ratio", "low", "high", "n_a", "n_b", "winner"]
+        if df.empty:
+            return pd.DataFrame(columns=cols)
+        scatter = df.pivot(index="derivative", columns="design", values="scatter")
+        count = df.pivot(index="derivative", columns="design", values="estimated")
+        rows = {}
+        for name in scatter.index:
+            sa, sb = float(scatter.loc[name, a]), float(scatter.loc[name, b])
+            if not (math.isfinite(sa) and math.isfinite(sb)) or sb <= 0:
+                continue
+            na, nb = int(count.loc[name, a]), int(count.loc[name, b])
+            low, high = scatter_ratio_interval(sa / sb, na, nb, level)
+            rows[str(name)] = {"ratio": sa / sb, "low": low, "high": high, "n_a": na,
+                               "n_b": nb, "winner": a if high < 1 else b if low > 1 else ""}
+        return pd.DataFrame.from_dict(rows, orient="index", columns=cols)
+
+    def best(self, level: float = LEVEL) -> dict[str, str]:
+        """Per derivative, the design whose scatter is smaller than every other design's
+        that estimated it, each ratio's ``level`` interval below 1; "" where no design
+        is smaller than all others with that confidence."""
+        kinds = [r.kind for r in self.results]
+        out = {}
+        for name in self.table().index:
+            out[str(name)] = ""
+            for a in kinds:
+                others = [b for b in kinds if b != a]
+                ratios = [self.scatter_ratios(a, b, level) for b in others]
+                if others and all(name in r.index and r.loc[name, "winner"] == a
+                                  for r in ratios):
+                    out[str(name)] = a
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data, JSON-ready (NaN as None)."""
@@ -218,16 +286,29 @@ class Comparison:
                 "model": self.model, "n": self.n, "equal": self.equal,
                 "reference": self.reference, "settings": asdict(self.settings),
                 "designs": [r.as_dict() for r in self.results],
-                "3211_beats_doublet": self._verdict()}
+                "3211_beats_doublet": self.verdict("3211", "doublet"),
+                "smallest_scatter": self.best()}
 
-    def _verdict(self) -> dict[str, Any] | None:
+    def verdict(self, a: str, b: str, level: float = LEVEL) -> dict[str, Any] | None:
+        """Design ``a`` against ``b``: of the derivatives in the study (``of``), how many
+        both estimated (``derivatives``), where ``a``'s scatter is smaller with the
+        ``level`` interval of the ratio below 1 (``<a>_smaller_scatter``), where ``b``'s
+        is (``<b>_smaller_scatter``), where the interval contains 1 (``undecided``), and
+        each ratio with its interval; None when either design is not in the comparison."""
         kinds = [r.kind for r in self.results]
-        if "3211" not in kinds or "doublet" not in kinds:
+        if a not in kinds or b not in kinds:
             return None
-        names = list(self.table().index)
-        wins = self.better("3211", "doublet")
-        return {"derivatives": len(names), "3211_smaller_scatter": wins,
-                "doublet_smaller_or_equal": [n for n in names if n not in wins]}
+        ratios = self.scatter_ratios(a, b, level)
+        return {"of": len(self.table().index), "derivatives": len(ratios),
+                "level": level,
+                f"{a}_smaller_scatter": [n for n in ratios.index
+                                         if ratios.loc[n, "winner"] == a],
+                f"{b}_smaller_scatter": [n for n in ratios.index
+                                         if ratios.loc[n, "winner"] == b],
+                "undecided": [n for n in ratios.index if ratios.loc[n, "winner"] == ""],
+                "ratios": {n: {k: (v.item() if hasattr(v, "item") else v)
+                               for k, v in ratios.loc[n].items() if k != "winner"}
+                           for n in ratios.index}}
 
 
 def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
@@ -236,24 +317,29 @@ def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
             settings: DesignSettings = DesignSettings(), reference: str = "3211",
             workers: int | None = None, dask_address: str | None = None,
             seed: int | None = None, options: Mapping[str, Any] | None = None,
-            progress: Callable[[str, int, int], None] | None = None) -> Comparison:
-    """Fly every design in ``designs`` on ``card``'s aircraft, condition, sensors and
-    disturbances (its maneuvers are replaced), ``n`` realizations each with the same
-    seeds, identify with ``method`` and ``model``, and return the Comparison.
+            progress: Callable[[str, int, int], None] | None = None,
+            own: Mapping[str, InputDesign] | None = None) -> Comparison:
+    """Fly every design in ``designs`` and the user's ``own`` designs (name -> design;
+    ``Maneuvers`` for several surfaces at once; ``cards.load_maneuvers`` reads one from
+    a maneuver table) on ``card``'s aircraft, condition, sensors and disturbances (its
+    maneuvers are replaced), ``n`` realizations each with the same seeds, identify with
+    ``method`` and ``model``, and return the Comparison.
     ``progress(design, done, total)`` after each realization."""
+    own = dict(own or {})
+    check_own(own)
     unknown = [d for d in designs if d not in DESIGNS]
     if unknown:
         raise ValueError(f"unknown design(s) {', '.join(unknown)}; designs: "
                          f"{', '.join(DESIGNS)}")
-    if not designs:
+    if not designs and not own:
         raise ValueError("no design to compare")
-    if reference not in DESIGNS:
+    if reference not in DESIGNS and reference not in own:
         raise ValueError(f"unknown reference design {reference!r}; designs: "
-                         f"{', '.join(DESIGNS)}")
+                         f"{', '.join([*DESIGNS, *own])}")
     base = load_card(card)
     root = Path(study_dir)
     (root / CARDS).mkdir(parents=True, exist_ok=True)
-    built = equalized_designs(designs, settings, equal, base.rate, reference)
+    built = equalized_designs(designs, settings, equal, base.rate, reference, own)
     result = Comparison(str(card), base.aircraft, method, model, int(n), equal, reference,
                         settings)
     for kind, design in built.items():
@@ -269,5 +355,6 @@ def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
         result.results.append(DesignResult(
             kind=kind, flight_time=float(t[-1]), input_time=float(design.end - design.start),
             energy=input_energy(design, base.rate), peak=peak(design, base.rate),
-            summary=summary, study_dir=str(root / kind)))
+            summary=summary, study_dir=str(root / kind),
+            maneuvers=maneuver_dicts(design)))
     return result

@@ -1,5 +1,5 @@
 """The report of an input-design comparison: a PNG of each derivative's scatter by design
-(relative to |truth|, log scale, with the mean reported bound as a marker), the same
+(in the derivative's units, log scale, with its interval and the mean reported bound), the same
 figure and the tables in STUDY/design-compare.html, and a Markdown table for docs/."""
 
 from __future__ import annotations
@@ -12,36 +12,46 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.derivatives import unit
 from flightid.scenarios.montecarlo.design import Comparison, compare
+from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
 
 PNG = "design-compare.png"
 HTML = "design-compare.html"
+CSV = "design-compare.csv"  # Comparison.frame(): one row per derivative and design
 COLORS = {"doublet": "#c0392b", "211": "#e67e22", "3211": "#2e86c1", "sweep": "#27ae60",
           "multisine": "#8e44ad"}
 
 
-def figure(comparison: Comparison) -> Figure:
-    """Bars: scatter / |truth| (%) per derivative and design; dots: mean bound / |truth|."""
+def figure(comparison: Comparison, level: float = LEVEL) -> Figure:
+    """Bars: each derivative's scatter by design in the derivative's own units (1/rad or
+    dimensionless, ``derivatives.unit``; log scale), so a derivative whose truth is 0
+    keeps its bars; whiskers: the scatter's ``level`` interval (chi-square,
+    ``intervals.scatter_interval``); dashes: the mean reported bound."""
     scatter, bound = comparison.table("scatter"), comparison.table("mean_bound")
-    truth = comparison.frame().groupby("derivative")["truth"].mean().abs()
+    count = comparison.table("estimated")
     names = list(scatter.index)
     kinds = list(scatter.columns)
-    fig = Figure(figsize=(max(6.0, 1.3 * len(names) + 2), 4.2), dpi=110, layout="constrained")
+    fig = Figure(figsize=(max(6.0, 1.3 * len(names) + 2), 4.4), dpi=110, layout="constrained")
     ax = fig.add_subplot()
     width = 0.8 / max(1, len(kinds))
     x = np.arange(len(names))
     for j, kind in enumerate(kinds):
-        scale = 100 / truth.reindex(names).replace(0, np.nan).to_numpy(float)
         pos = x - 0.4 + width * (j + 0.5)
-        ax.bar(pos, scatter[kind].to_numpy(float) * scale, width, color=COLORS.get(kind),
-               label=kind)
-        ax.plot(pos, bound[kind].to_numpy(float) * scale, "k_", ms=8)
+        s = scatter[kind].to_numpy(float)
+        whiskers = np.array([scatter_interval(v, int(c), level) for v, c in
+                             zip(s, count[kind].fillna(0).to_numpy(), strict=True)]).T
+        ax.bar(pos, s, width, color=COLORS.get(kind), label=kind)
+        ax.errorbar(pos, s, yerr=np.abs(whiskers - s), fmt="none", ecolor="0.3", lw=0.8)
+        ax.plot(pos, bound[kind].to_numpy(float), "k_", ms=8)
     ax.set_yscale("log")
-    ax.set_xticks(x, names, fontsize=9)
-    ax.set_ylabel("scatter / |truth| (%)")
+    ax.set_xticks(x, [f"{n}\n[{unit(str(n)) or '?'}]" for n in names], fontsize=8)
+    ax.set_xlabel("derivative [its unit: 1/rad, or 1 for a nondimensional rate]", fontsize=8)
+    ax.set_ylabel("scatter of the estimates (derivative's unit, log)")
     ax.set_title(f"{comparison.aircraft} {comparison.model}, {comparison.method}, "
-                 f"equal {comparison.equal}, n={comparison.n} per design "
-                 "(bars: scatter, dashes: mean bound)", fontsize=9)
+                 f"equal {comparison.equal}, n={comparison.n} per design (bars: scatter, "
+                 f"whiskers: its {100 * level:.0f} % interval, dashes: mean bound)",
+                 fontsize=8)
     ax.legend(fontsize=8, ncol=len(kinds))
     ax.grid(axis="y", which="both", alpha=0.3)
     return fig
@@ -65,7 +75,9 @@ COST_HEAD = ["design", "flight time (s)", "input time (s)", "input energy (rad²
 
 
 def markdown(comparison: Comparison) -> str:
-    """Markdown tables: the designs' costs, then scatter (bias, mean bound) by derivative."""
+    """Markdown tables: the designs' costs, then scatter (bias, mean bound) by derivative
+    (bold: smaller than every other design's, the ratio's interval below 1), then the
+    3211 / doublet scatter ratios with their intervals."""
     lines = ["| " + " | ".join(COST_HEAD) + " |", "|" + "---|" * len(COST_HEAD)]
     for row in costs_rows(comparison):
         lines.append("| " + " | ".join(
@@ -76,20 +88,42 @@ def markdown(comparison: Comparison) -> str:
     lines += ["", "scatter (bias, mean bound) by design:", "",
               "| derivative | truth | " + " | ".join(kinds) + " |",
               "|---|---|" + "---|" * len(kinds)]
+    best = comparison.best()
     for name in scatter.index:
-        best = scatter.loc[name].astype(float).idxmin()
         cells = []
         for k in kinds:
             s = f"{scatter.loc[name, k]:.4f} ({bias.loc[name, k]:+.4f}, {bound.loc[name, k]:.4f})"
-            cells.append(f"**{s}**" if k == best else s)
+            cells.append(f"**{s}**" if k == best[str(name)] else s)
         lines.append(f"| {name} | {truth[name]:+.4f} | " + " | ".join(cells) + " |")
+    rows = ratio_rows(comparison)
+    if rows:
+        lines += ["", f"scatter 3211 / doublet with its {100 * LEVEL:.0f} % interval "
+                  "(F distribution, Montgomery & Runger 2014, 10-5):", "",
+                  "| " + " | ".join(RATIO_HEAD) + " |", "|" + "---|" * len(RATIO_HEAD)]
+        lines += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join(lines) + "\n"
 
 
+RATIO_HEAD = ["derivative", "3211 / doublet", "interval", "n 3211", "n doublet", "smaller"]
+
+
+def ratio_rows(comparison: Comparison) -> list[list[str]]:
+    """The 3211 / doublet scatter ratio per derivative both estimated, as text: ratio, its
+    interval, the realizations of each and the smaller ("not clear" when the interval
+    contains 1); [] without both designs."""
+    if comparison.verdict("3211", "doublet") is None:
+        return []
+    return [[str(name), f"{r['ratio']:.3g}", f"{r['low']:.3g} - {r['high']:.3g}",
+             str(r["n_a"]), str(r["n_b"]), r["winner"] or "not clear"]
+            for name, r in comparison.scatter_ratios("3211", "doublet").iterrows()]
+
+
 def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
-    """Write FOLDER/design-compare.png and FOLDER/design-compare.html; return both."""
+    """Write FOLDER/design-compare.png, FOLDER/design-compare.html and beside them
+    FOLDER/design-compare.csv (``Comparison.frame``); return the PNG and HTML paths."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    comparison.frame().to_csv(folder / CSV, index=False)
     png = folder / PNG
     figure(comparison).savefig(png)
     data = base64.b64encode(png.read_bytes()).decode()
@@ -116,6 +150,13 @@ def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
         for name in table.index:
             parts.append(f"<tr><td>{html.escape(str(name))}</td>" + "".join(
                 f"<td>{_cell(float(table.loc[name, k]))}</td>" for k in kinds) + "</tr>")
+        parts.append("</table>")
+    rows = ratio_rows(comparison)
+    if rows:
+        parts.append(f"<h2>scatter 3211 / doublet, {100 * LEVEL:.0f} % interval (F "
+                     "distribution)</h2><table><tr>"
+                     + "".join(f"<th>{h}</th>" for h in RATIO_HEAD) + "</tr>")
+        parts += ["<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in r) + "</tr>" for r in rows]
         parts.append("</table>")
     parts.append(f"<img alt='scatter by design' src='data:image/png;base64,{data}'>")
     parts.append("<p>Per design: " + ", ".join(

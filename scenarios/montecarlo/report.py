@@ -1,7 +1,9 @@
-"""STUDY/report.html: the summary table and, per derivative, a histogram of the
-estimates with the truth and the normal curve the mean reported bound predicts (centred
-on the truth); figures drawn with ``matplotlib.figure.Figure`` and embedded as base64
-PNG, so the file stands alone."""
+"""STUDY/report.html: the summary table (the coverage with its Clopper-Pearson interval)
+and, per derivative, a histogram of the estimates (axes labelled with the derivative's
+unit) with the truth and the normal curve the mean reported bound predicts (centred on
+the truth); figures drawn with ``matplotlib.figure.Figure``, written beside the report
+as STUDY/histogram-<derivative>.png and embedded in it as base64 PNG, so the HTML file
+also stands alone; the summary table also as STUDY/summary.csv."""
 
 from __future__ import annotations
 
@@ -9,22 +11,38 @@ import base64
 import html
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from flightid.derivatives import unit
 from flightid.identification.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.summary import Summary
 
 REPORT = "report.html"
+CSV = "summary.csv"  # the summary's rows beside the report, one per derivative
 
 
-def _figure(name: str, values: np.ndarray, truth: float, bound: float) -> str:
+# the unit of a probability density over a derivative's values: the inverse of its unit
+_DENSITY_UNIT = {"1/rad": "rad", "1": "1"}
+
+
+def histogram_name(derivative: str) -> str:
+    """The file name of a derivative's histogram beside the report."""
+    return f"histogram-{re.sub(r'[^A-Za-z0-9_.-]', '_', derivative)}.png"
+
+
+def histogram(name: str, values: np.ndarray, truth: float, bound: float) -> Figure:
+    """The histogram (as a density) of ``values``, the estimates of derivative ``name``,
+    with the truth and N(truth, bound); the x axis in the derivative's unit
+    (``derivatives.unit``), the y axis in its inverse."""
+    u = unit(name)
     # fixed margins: a constrained layout draws every figure twice (half the report's time)
-    fig = Figure(figsize=(4.2, 2.8), dpi=100)
-    fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.9)
+    fig = Figure(figsize=(4.2, 3.0), dpi=100)
+    fig.subplots_adjust(left=0.16, right=0.97, bottom=0.16, top=0.9)
     ax = fig.add_subplot()
     bins = max(5, min(40, int(math.sqrt(values.size)) * 2))
     ax.hist(values, bins=bins, density=True, color="#8fb3d9", edgecolor="white",
@@ -37,11 +55,12 @@ def _figure(name: str, values: np.ndarray, truth: float, bound: float) -> str:
         ax.plot(x, np.exp(-0.5 * ((x - truth) / bound) ** 2) / (bound * math.sqrt(2 * math.pi)),
                 color="#c0392b", lw=1.2, label="N(truth, mean bound)")
     ax.set_title(name, fontsize=10)
+    ax.set_xlabel(f"estimate of {name} [{u}]" if u else f"estimate of {name}", fontsize=8)
+    ax.set_ylabel(f"probability density [{_DENSITY_UNIT[u]}]" if u else
+                  f"probability density [1 / unit of {name}]", fontsize=8)
     ax.tick_params(labelsize=8)
     ax.legend(fontsize=7)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    return base64.b64encode(buf.getvalue()).decode()
+    return fig
 
 
 def _cell(v: object) -> str:
@@ -50,10 +69,13 @@ def _cell(v: object) -> str:
     return html.escape(str(v))
 
 
-def render(df: pd.DataFrame, summary: Summary, title: str) -> str:
-    """The report as HTML text."""
+def render(df: pd.DataFrame, summary: Summary, title: str,
+           pngs: dict[str, bytes] | None = None) -> str:
+    """The report as HTML text; ``pngs``: each derivative's histogram (``histograms``),
+    drawn here when not given."""
     head = ["derivative", "truth", "estimated", "mean", "bias", "scatter", "mean bound",
-            "scatter/bound", "coverage 95 %", "unidentifiable", "failures"]
+            "scatter/bound", "coverage of the 95 % intervals",
+            "its 95 % interval (Clopper-Pearson)", "unidentifiable", "failures"]
     lines = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
              "</title><style>body{font-family:sans-serif;margin:2em}table{border-collapse:"
              "collapse}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}"
@@ -65,22 +87,44 @@ def render(df: pd.DataFrame, summary: Summary, title: str) -> str:
              "<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"]
     for r in summary.rows:
         cells = [r.name, r.truth, r.estimated, r.mean, r.bias, r.scatter, r.mean_bound,
-                 r.ratio, r.coverage, r.unidentifiable, r.failures]
+                 r.ratio, r.coverage, f"{_cell(r.coverage_low)} - {_cell(r.coverage_high)}",
+                 r.unidentifiable, r.failures]
         lines.append("<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in cells) + "</tr>")
-    lines.append("</table><h2>Estimates</h2><div>")
-    est = df[df["status"] == STATUS_ESTIMATED]
-    for r in summary.rows:
-        values = est.loc[est["name"] == r.name, "estimate"].to_numpy(float)
-        if values.size:
-            png = _figure(r.name, values, r.truth, r.mean_bound)
-            lines.append(f"<img alt='{html.escape(r.name)}' src='data:image/png;base64,{png}'>")
+    lines.append("</table><p>Coverage: the share of the realizations whose 95 % interval "
+                 "(estimate +- 1.96 reported std) holds the truth; its interval is the exact "
+                 "binomial one of Clopper &amp; Pearson (1934).</p><h2>Estimates</h2><p>"
+                 "Each histogram also as histogram-&lt;derivative&gt;.png beside this file."
+                 "</p><div>")
+    for name, png in (histograms(df, summary) if pngs is None else pngs).items():
+        data = base64.b64encode(png).decode()
+        lines.append(f"<img alt='{html.escape(name)}' src='data:image/png;base64,{data}'>")
     lines.append("</div></body></html>")
     return "\n".join(lines)
 
 
+def histograms(df: pd.DataFrame, summary: Summary) -> dict[str, bytes]:
+    """Each estimated derivative's histogram (``histogram``) as PNG bytes."""
+    est = df[df["status"] == STATUS_ESTIMATED]
+    out = {}
+    for r in summary.rows:
+        values = est.loc[est["name"] == r.name, "estimate"].to_numpy(float)
+        if values.size:
+            buf = io.BytesIO()
+            histogram(r.name, values, r.truth, r.mean_bound).savefig(buf, format="png")
+            out[r.name] = buf.getvalue()
+    return out
+
+
 def write_report(study_dir: str | Path, df: pd.DataFrame, summary: Summary,
                  title: str = "Monte Carlo study") -> Path:
-    """Write STUDY/report.html and return its path."""
+    """Write STUDY/report.html, each histogram beside it (``histogram_name``) and the
+    summary's rows as STUDY/summary.csv (the columns of ``Summary.frame``); return the
+    report's path."""
+    if summary.rows:
+        summary.frame().to_csv(Path(study_dir) / CSV)
+    pngs = histograms(df, summary)
+    for name, png in pngs.items():
+        (Path(study_dir) / histogram_name(name)).write_bytes(png)
     path = Path(study_dir) / REPORT
-    path.write_text(render(df, summary, title), encoding="utf-8")
+    path.write_text(render(df, summary, title, pngs), encoding="utf-8")
     return path

@@ -27,6 +27,11 @@ _PREFIX, _SUFFIX = "realization-", ".parquet"
 SUMMARY_COLUMNS = ("index", "name", "truth", "estimate", "std", "error", "status", "reason")
 
 
+# identity keys kept for information only: the card's path or name (the same card given
+# by another path, absolute or relative, is the same study when card_sha256 is equal)
+INFORMATION_ONLY = ("card",)
+
+
 class StudyMismatch(ValueError):
     """A stored study was described differently from the run that wants to continue it."""
 
@@ -49,9 +54,10 @@ def result_path(study_dir: str | Path, index: int) -> Path:
 
 def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
     """Create STUDY/ for ``description``, or check that the stored study has the same
-    identity (card and its content, method, model, options, base seed; n may differ: a
-    larger n extends it). Raises StudyMismatch naming each difference. Returns the
-    stored description document."""
+    identity (the card's content hash, method, model, options, base seed, dispersions;
+    not the card's path, kept for information; n may differ: a larger n extends it).
+    Raises StudyMismatch naming each difference. Returns the stored description
+    document."""
     root = Path(study_dir)
     path = root / DESCRIPTION
     identity = description.identity()
@@ -59,7 +65,8 @@ def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
         stored = _read_json(path)
         old = stored["identity"]
         diffs = [f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}"
-                 for k in sorted(set(old) | set(identity)) if old.get(k) != identity.get(k)]
+                 for k in sorted(set(old) | set(identity))
+                 if k not in INFORMATION_ONLY and old.get(k) != identity.get(k)]
         if diffs:
             raise StudyMismatch(f"{root} holds another study ({'; '.join(diffs)}); "
                                 "use another folder or the stored description")

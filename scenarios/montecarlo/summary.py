@@ -7,6 +7,8 @@ dispersions); truth: the mean truth;
 mean_bound: mean of the reported standard errors; ratio: scatter / mean_bound (1 when the
 bounds are right, > 1 when they are optimistic); coverage: share of the realizations with
 |error| <= 1.96 std (0.95 for a Gaussian estimator whose bounds are right);
+coverage_low, coverage_high: its 95 % Clopper-Pearson interval (Clopper & Pearson 1934;
+``intervals.binomial_interval``), what the n realizations can tell of the true coverage;
 unidentifiable: share of the realizations (that did not fail) that found the derivative
 unidentifiable; failures: realizations that produced no estimate at all.
 """
@@ -21,9 +23,11 @@ import numpy as np
 import pandas as pd
 
 from flightid.identification.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
+from flightid.scenarios.montecarlo.intervals import binomial_interval
 from flightid.scenarios.montecarlo.study import STATUS_FAILED
 
 Z95 = 1.96
+COVERAGE_LEVEL = 0.95  # the confidence of the coverage's interval
 
 
 @dataclass
@@ -41,6 +45,8 @@ class DerivativeSummary:
     coverage: float
     unidentifiable: float
     failures: int
+    coverage_low: float = math.nan
+    coverage_high: float = math.nan
 
 
 @dataclass
@@ -98,14 +104,16 @@ def summarize(df: pd.DataFrame) -> Summary:
         # next, and the estimator's bias and scatter are those of estimate - truth
         scatter = float(err.std(ddof=1)) if n > 1 else math.nan
         bound = float(std.mean()) if n else math.nan
+        covered = int(np.sum(np.abs(err) <= Z95 * std))
+        low, high = binomial_interval(covered, n, COVERAGE_LEVEL)
         rows.append(DerivativeSummary(
             name=str(name), truth=truth, estimated=n, mean=mean,
             bias=float(err.mean()) if n else math.nan,
             scatter=scatter, mean_bound=bound,
             ratio=scatter / bound if n > 1 and bound > 0 else math.nan,
-            coverage=float(np.mean(np.abs(err) <= Z95 * std)) if n else math.nan,
+            coverage=covered / n if n else math.nan,
             unidentifiable=(float((g["status"] == STATUS_UNIDENTIFIABLE).sum()) / survivors
                             if survivors else math.nan),
-            failures=failures))
+            failures=failures, coverage_low=low, coverage_high=high))
     return Summary(realizations, failures, rows,
                    {str(k): int(v) for k, v in reasons.items()})

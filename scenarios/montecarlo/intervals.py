@@ -1,0 +1,65 @@
+"""Confidence intervals of a study's statistics: the ratio of two scatters (F
+distribution), one scatter (chi-square) and a coverage (Clopper-Pearson binomial).
+
+A scatter is a sample standard deviation s of n normal errors: (n - 1) s^2 / sigma^2 is
+chi-square with n - 1 degrees of freedom, and for two independent samples
+(s_a^2 / s_b^2) / (sigma_a^2 / sigma_b^2) is F(n_a - 1, n_b - 1) (Montgomery & Runger,
+Applied Statistics and Probability for Engineers, 2014, 8-4 and 10-5). A coverage is a
+binomial share k / n; its exact interval is that of Clopper & Pearson (1934, Biometrika
+26, 404-413), from the beta distribution.
+"""
+
+from __future__ import annotations
+
+import math
+
+from scipy import stats
+
+LEVEL = 0.90  # the confidence of the intervals reported with scatter ratios
+
+
+def _alpha(level: float) -> float:
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"confidence level must be in (0, 1), got {level}")
+    return 1.0 - level
+
+
+def scatter_ratio_interval(ratio: float, n_a: int, n_b: int,
+                           level: float = LEVEL) -> tuple[float, float]:
+    """The ``level`` interval of sigma_a / sigma_b given the ratio of sample standard
+    deviations s_a / s_b = ``ratio`` (n_a and n_b errors each): ratio / sqrt(F_hi) to
+    ratio / sqrt(F_lo), with F_lo and F_hi the (1 -+ level) / 2 quantiles of
+    F(n_a - 1, n_b - 1). (NaN, NaN) when either n is below 2 or the ratio is not finite.
+    The samples are taken as independent; with the same seeds for both (common random
+    numbers) the errors correlate positively and the interval is conservative."""
+    alpha = _alpha(level)
+    if n_a < 2 or n_b < 2 or not math.isfinite(ratio) or ratio < 0:
+        return math.nan, math.nan
+    f = stats.f(n_a - 1, n_b - 1)
+    return (ratio / math.sqrt(f.ppf(1 - alpha / 2)), ratio / math.sqrt(f.ppf(alpha / 2)))
+
+
+def scatter_interval(scatter: float, n: int, level: float = LEVEL) -> tuple[float, float]:
+    """The ``level`` interval of sigma given a sample standard deviation ``scatter`` of
+    ``n`` normal errors: scatter sqrt((n - 1) / chi2_hi) to scatter sqrt((n - 1) / chi2_lo)
+    (same units as ``scatter``); (NaN, NaN) for n below 2."""
+    alpha = _alpha(level)
+    if n < 2 or not math.isfinite(scatter):
+        return math.nan, math.nan
+    chi2 = stats.chi2(n - 1)
+    return (scatter * math.sqrt((n - 1) / chi2.ppf(1 - alpha / 2)),
+            scatter * math.sqrt((n - 1) / chi2.ppf(alpha / 2)))
+
+
+def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """The Clopper-Pearson ``level`` interval of a share from ``k`` successes in ``n``
+    trials (fractions 0..1): the alpha/2 quantile of Beta(k, n - k + 1) to the 1 - alpha/2
+    quantile of Beta(k + 1, n - k), 0 at k = 0 and 1 at k = n; (NaN, NaN) for n = 0."""
+    alpha = _alpha(level)
+    if n <= 0:
+        return math.nan, math.nan
+    if not 0 <= k <= n:
+        raise ValueError(f"successes must be within 0..{n}, got {k}")
+    low = 0.0 if k == 0 else float(stats.beta.ppf(alpha / 2, k, n - k + 1))
+    high = 1.0 if k == n else float(stats.beta.ppf(1 - alpha / 2, k + 1, n - k))
+    return low, high
