@@ -14,6 +14,7 @@ import argparse
 import json
 import os
 import platform
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,7 +33,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--study", default=None)
     args = parser.parse_args()
-    study = Path(args.study or f"/tmp/flightid-design-compare-{args.equal}")
+    study = Path(args.study or
+                 Path(tempfile.gettempdir()) / f"flightid-design-compare-{args.equal}")
     t0 = time.perf_counter()
     comparison = design.compare(args.card, args.n, args.method, args.model, study,
                                 equal=args.equal, workers=args.workers)

@@ -4,6 +4,7 @@ known sensor errors, and on the real NASA Twin Otter record."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +19,8 @@ from flightid.sim import trim as trimming
 from flightid.sim.effects import Bias, Quantization, WhiteNoise
 from flightid.units import DEG, G0
 
-TWIN_OTTER = "/work/shared/data/twin_otter/totter_f1_017_data.mat"
+TWIN_OTTER = str(Path(__file__).resolve().parents[2]
+                 / "shared/data/twin_otter/totter_f1_017_data.mat")
 # injected sensor errors (SI): of the order that Table 1 of Cooper, Drobik & Martin (ARL
 # Flight Mechanics Report 187, 1990) allows for each sensor
 BIASES = {"p": 0.3 * DEG, "q": -0.2 * DEG, "r": 0.25 * DEG, "ax": 0.05, "ay": -0.04,

@@ -17,7 +17,7 @@ from flightid.identification.frequency_response import frequency_response_arrays
 from flightid.identification.linear_models import ReferenceCondition, lateral, model_for_record
 from flightid.record import FlightRecord, read
 
-TWIN_OTTER = Path("/work/shared/data/twin_otter/totter_f1_017_data.mat")
+TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 
 # Morelli & Klein (2016) example 7.1: frequency-domain output error, 0.1-1.5 Hz
 PUBLISHED_7_1 = {

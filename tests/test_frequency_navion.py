@@ -24,7 +24,7 @@ from flightid.sim import trim as trimming
 from flightid.sim import truth
 from flightid.sim.sensors import measure, research_suite
 
-TWIN_OTTER = Path("/work/shared/data/twin_otter/totter_f1_017_data.mat")
+TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 
 
 def navion_sweeps(seed: int):
