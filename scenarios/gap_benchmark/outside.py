@@ -28,7 +28,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -37,7 +36,7 @@ import numpy as np
 from scipy import signal
 
 from flightid.record import FlightRecord
-from flightid.sim.augment import augment
+from flightid.sim.augment import augment, publish
 from flightid.sim.effects.airframe import DerivativeDelta
 
 STRUCTURE = {"lateral": (("da", "dr"), {"p": 1.0, "r": 0.3, "ay": 2.0}),
@@ -109,12 +108,7 @@ def cm_alpha_break(aircraft: str, trim_alpha: float, above: float, delta: float,
         raise RuntimeError(f"cm_alpha_break: found {kinked} alpha terms in the Cm_alpha "
                            f"delta of {aircraft}, expected 1")
     tree.write(path, encoding="utf-8", xml_declaration=True)
-    folder.mkdir(parents=True, exist_ok=True)
-    try:
-        (tmp / "aircraft").rename(folder / "aircraft")
-    except OSError:  # another process wrote it first
-        pass
-    shutil.rmtree(tmp, ignore_errors=True)
+    publish(tmp, folder)
     return str(xml)
 
 

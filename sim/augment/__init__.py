@@ -1,6 +1,12 @@
 """Augmented aircraft: airframe and actuator effects (``flightid.sim.effects.airframe``)
 written into a copy of a JSBSim model."""
 
-from flightid.sim.augment.writer import AugmentError, augment, augment_cached, cache_folder
+from flightid.sim.augment.writer import (
+    AugmentError,
+    augment,
+    augment_cached,
+    cache_folder,
+    publish,
+)
 
-__all__ = ["AugmentError", "augment", "augment_cached", "cache_folder"]
+__all__ = ["AugmentError", "augment", "augment_cached", "cache_folder", "publish"]

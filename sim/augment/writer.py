@@ -108,13 +108,20 @@ def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base:
         Path(base).mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix="writing-", dir=base))
         augment(aircraft, effects, tmp, name=new, surface_drive=surface_drive)
-        folder.mkdir(parents=True, exist_ok=True)
-        try:
-            (tmp / "aircraft").rename(folder / "aircraft")
-        except OSError:  # another process wrote it first
-            pass
-        shutil.rmtree(tmp, ignore_errors=True)
+        publish(tmp, folder)
     return xml
+
+
+def publish(tmp: Path, folder: Path) -> None:
+    """Move ``tmp/aircraft``, written whole, to ``folder/aircraft`` in one rename (so that
+    a process reading the cache never sees half an aircraft), and remove ``tmp``; a folder
+    another process published first is kept."""
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        (tmp / "aircraft").rename(folder / "aircraft")
+    except OSError:  # another process wrote it first
+        pass
+    shutil.rmtree(tmp, ignore_errors=True)
 
 
 def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str | Path,
