@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from flightid.cli import study_options as opts
 from flightid.cli.checks import (
     Output,
     check_choice,
@@ -32,12 +33,8 @@ def compatibility_command(
     output: Annotated[str | None, typer.Option("-o", "--output",
                                                help="write the corrected record here")] = None,
     format: Annotated[str, typer.Option(help="table or json")] = "table",
-    strict: Annotated[bool, typer.Option(
-        "--strict", help="exit 4 when the reconstruction does not converge (default: a "
-                         "warning and 'not converged' in the verdict line, exit 0)")] = False,
-    force: Annotated[bool, typer.Option(
-        "--force", help="run when the memory estimate exceeds what is available, and "
-                        "write -o over an existing file of another kind")] = False,
+    strict: opts.Strict = False,
+    force: opts.Force = False,
 ) -> None:
     """Data compatibility: flight path reconstruction of sensor biases, scale factors and
     vane calibration; optionally write the corrected record."""

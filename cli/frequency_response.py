@@ -9,6 +9,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
+from flightid.cli import study_options as opts
 from flightid.cli.checks import (
     Output,
     check_frequency_band,
@@ -39,9 +40,7 @@ def frequency_response_command(
     f_min: Annotated[float | None, typer.Option(help="lowest frequency, Hz")] = None,
     f_max: Annotated[float | None, typer.Option(help="highest frequency, Hz")] = None,
     plot: Annotated[str | None, typer.Option(help="write a Bode/coherence PNG here")] = None,
-    force: Annotated[bool, typer.Option(
-        "--force", help="run when the memory estimate exceeds what is available, and "
-                        "write --plot over an existing file of another kind")] = False,
+    force: opts.Force = False,
 ) -> None:
     """Frequency response output/input with coherence and random error (CIFER style)."""
     for w in window or ():

@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import gap
+from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_paths, read_record
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.correct import refly
@@ -45,9 +46,7 @@ def gap_command(
         "--surfaces", help="what the records' surface channels hold: position or command "
                            "(default: their metadata, else position); on commands the "
                            "actuator effects are candidates")] = None,
-    force: Annotated[bool, typer.Option(
-        "--force", help="run when the memory estimate exceeds what is available, and write "
-                        "--report over an existing file of another kind")] = False,
+    force: opts.Force = False,
 ) -> None:
     """Is there a gap between a JSBSim model and flight data; where it lies, which
     catalogue effect causes it, and how far it shrinks on held-out data (each axis)."""

@@ -9,6 +9,7 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
+from flightid.cli import study_options as opts
 from flightid.cli.checks import (
     Output,
     check_choice,
@@ -79,12 +80,8 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
-    strict: Annotated[bool, typer.Option(
-        "--strict", help="exit 4 when the fit does not converge (default: a warning and "
-                         "'not converged' in the verdict line, exit 0)")] = False,
-    force: Annotated[bool, typer.Option(
-        "--force", help="run when the memory estimate exceeds what is available, and write "
-                        "--report over an existing file of another kind")] = False,
+    strict: opts.Strict = False,
+    force: opts.Force = False,
     raw: Annotated[bool, typer.Option(
         "--raw", help="skip the standard data reduction (accelerometers and vanes to the CG, "
                       "vane scale and bias; docs/record.md)")] = False,

@@ -1,5 +1,6 @@
-"""Options shared by the commands that run Monte Carlo studies (``montecarlo``,
-``design-compare``): one declaration each, so that their help and names stay the same."""
+"""Options shared by several commands (the Monte Carlo ones, ``montecarlo`` and
+``design-compare``; ``--strict`` and ``--force`` of the commands that read a record): one
+declaration each, so that their help and names stay the same."""
 
 from __future__ import annotations
 
@@ -27,3 +28,10 @@ Turbulence = Annotated[str | None, typer.Option(
     help="replace the card's turbulence: none, light or moderate")]
 Sensors = Annotated[str | None, typer.Option(
     help="replace the card's sensors by a built-in suite: research, hobby or ideal")]
+# the commands that read a record and fit it (identify, compatibility, gap, ...)
+Strict = Annotated[bool, typer.Option(
+    "--strict", help="exit 4 when a fit does not converge (default: a warning and 'not "
+                     "converged' in the verdict line, exit 0)")]
+Force = Annotated[bool, typer.Option(
+    "--force", help="run when the memory estimate exceeds what is available, and write the "
+                    "outputs over an existing file of another kind")]
