@@ -75,6 +75,8 @@ def _print(summary: Summary, format: str) -> None:
         console = Console()
         console.print(summary_table(summary))
         console.print(coverage_table(summary))
+        for line in summary.warnings():
+            console.print(f"warning: {line}")
 
 
 def montecarlo_command(

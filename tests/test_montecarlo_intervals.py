@@ -8,14 +8,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 
+from flightid.identification.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.intervals import (
+    binomial_band,
     binomial_interval,
     scatter_interval,
     scatter_ratio_interval,
 )
+from flightid.scenarios.montecarlo.report import render
+from flightid.scenarios.montecarlo.summary import summarize
 
 
 def test_scatter_ratio_interval_is_the_f_interval():
@@ -75,3 +80,42 @@ def test_intervals_cover_the_truth_as_often_as_they_say():
     k = rng.binomial(30, 0.9, trials)
     covered = [lo <= 0.9 <= hi for lo, hi in (binomial_interval(int(x), 30) for x in k)]
     assert np.mean(covered) >= 0.95 - 3 * math.sqrt(0.95 * 0.05 / trials)
+
+
+def test_binomial_band_is_the_binomial_quantiles_and_holds_the_nominal_share():
+    """The 99 % band of a 95 % share at n = 200 is scipy's Binomial quantiles over n
+    (0.905-0.985), and a coverage falls outside it about 1 % of the time when the bounds
+    are right (4000 fixed-seed draws: 0.2-2 %, the binomial's discreteness keeps it under
+    1 %)."""
+    low, high = binomial_band(200, 0.95, 0.99)
+    a, b = stats.binom.interval(0.99, 200, 0.95)
+    assert (low, high) == (a / 200, b / 200)
+    assert low < 0.95 < high
+    draws = np.random.default_rng(3).binomial(200, 0.95, 4000) / 200
+    outside = np.mean((draws < low) | (draws > high))
+    assert 0.002 <= outside <= 0.02
+    assert all(math.isnan(x) for x in binomial_band(0))
+
+
+def _study_rows(n: int, bound_scale: float, name: str, rng: np.random.Generator) -> list:
+    """n realizations of one derivative whose errors are N(0, 1) and whose reported
+    standard error is ``bound_scale`` (1: right bounds)."""
+    err = rng.standard_normal(n)
+    return [{"index": i, "status": STATUS_ESTIMATED, "name": name, "estimate": 1.0 + e,
+             "std": bound_scale, "error": e, "truth": 1.0, "reason": ""}
+            for i, e in enumerate(err)]
+
+
+def test_optimistic_bounds_are_warned_about_right_ones_are_not():
+    """60 realizations: bounds of half the scatter cover about 68 %, outside the 99 % band
+    (0.87-1.00 at n = 60): warned as optimistic, in the summary and the report; right
+    bounds are not warned about."""
+    rng = np.random.default_rng(7)
+    df = pd.DataFrame(_study_rows(60, 1.0, "Cl_p", rng) + _study_rows(60, 0.5, "Cn_r", rng))
+    summary = summarize(df)
+    assert summary.row("Cl_p").coverage_warning == ""
+    warned = summary.row("Cn_r")
+    assert warned.coverage < 0.8 and "optimistic" in warned.coverage_warning
+    assert summary.warnings() == [f"Cn_r: {warned.coverage_warning}"]
+    assert "Warning</b>: Cn_r: coverage" in render(df, summary, "t", pngs={})
+    assert summary.as_dict()["rows"][1]["coverage_warning"] == warned.coverage_warning

@@ -63,3 +63,14 @@ def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple[float, float
     low = 0.0 if k == 0 else float(stats.beta.ppf(alpha / 2, k, n - k + 1))
     high = 1.0 if k == n else float(stats.beta.ppf(1 - alpha / 2, k + 1, n - k))
     return low, high
+
+
+def binomial_band(n: int, nominal: float = 0.95, level: float = 0.99) -> tuple[float, float]:
+    """The central ``level`` band of the share of successes in ``n`` trials whose true
+    share is ``nominal`` (fractions 0..1: the Binomial(n, nominal) quantiles over n): a
+    coverage outside it is a warning that the bounds are not what they claim, at the
+    false-alarm rate 1 - ``level`` per derivative; (NaN, NaN) for n = 0."""
+    if n <= 0:
+        return math.nan, math.nan
+    low, high = stats.binom.interval(level, n, nominal)
+    return float(low) / n, float(high) / n

@@ -90,7 +90,9 @@ def render(df: pd.DataFrame, summary: Summary, title: str,
                  r.ratio, r.coverage, f"{_cell(r.coverage_low)} - {_cell(r.coverage_high)}",
                  r.unidentifiable, r.failures]
         lines.append("<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in cells) + "</tr>")
-    lines.append("</table><p>Coverage: the share of the realizations whose 95 % interval "
+    lines.append("</table>" + "".join(f"<p><b>Warning</b>: {html.escape(w)}</p>"
+                                     for w in summary.warnings()))
+    lines.append("<p>Coverage: the share of the realizations whose 95 % interval "
                  "(estimate +- 1.96 reported std) holds the truth; its interval is the exact "
                  "binomial one of Clopper &amp; Pearson (1934).</p><h2>Estimates</h2><p>"
                  "Each histogram also as histogram-&lt;derivative&gt;.png beside this file."

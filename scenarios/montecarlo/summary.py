@@ -10,7 +10,10 @@ bounds are right, > 1 when they are optimistic); coverage: share of the realizat
 coverage_low, coverage_high: its 95 % Clopper-Pearson interval (Clopper & Pearson 1934;
 ``intervals.binomial_interval``), what the n realizations can tell of the true coverage;
 unidentifiable: share of the realizations (that did not fail) that found the derivative
-unidentifiable; failures: realizations that produced no estimate at all.
+unidentifiable; failures: realizations that produced no estimate at all;
+coverage_warning: set when the coverage falls outside the 99 % band of a binomial share
+of 0.95 for its n (``intervals.binomial_band``): the bounds are optimistic (below the
+band) or pessimistic (above it), beyond what n realizations leave to chance.
 """
 
 from __future__ import annotations
@@ -23,11 +26,13 @@ import numpy as np
 import pandas as pd
 
 from flightid.identification.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
-from flightid.scenarios.montecarlo.intervals import binomial_interval
+from flightid.scenarios.montecarlo.intervals import binomial_band, binomial_interval
 from flightid.scenarios.montecarlo.study import STATUS_FAILED
 
 Z95 = 1.96
 COVERAGE_LEVEL = 0.95  # the confidence of the coverage's interval
+NOMINAL = 0.95  # the coverage of right 95 % intervals
+BAND_LEVEL = 0.99  # the band around NOMINAL outside which a coverage is warned about
 
 
 @dataclass
@@ -47,6 +52,22 @@ class DerivativeSummary:
     failures: int
     coverage_low: float = math.nan
     coverage_high: float = math.nan
+    coverage_warning: str = ""
+
+
+def coverage_warning(covered: int, n: int) -> str:
+    """The warning of a coverage of ``covered`` in ``n`` outside the ``BAND_LEVEL`` band of
+    ``NOMINAL`` (``intervals.binomial_band``); "" inside it or for n = 0."""
+    if n <= 0:
+        return ""
+    low, high = binomial_band(n, NOMINAL, BAND_LEVEL)
+    share = covered / n
+    if low <= share <= high:
+        return ""
+    what = "optimistic: the scatter exceeds them" if share < low else \
+        "pessimistic: wider than the scatter"
+    return (f"coverage {share:.2f} is outside {low:.2f}-{high:.2f}, the {BAND_LEVEL:.0%} band "
+            f"of {NOMINAL:.0%} intervals at n = {n}: the bounds are {what}")
 
 
 @dataclass
@@ -77,6 +98,10 @@ class Summary:
     @property
     def names(self) -> list[str]:
         return [r.name for r in self.rows]
+
+    def warnings(self) -> list[str]:
+        """"<derivative>: <coverage warning>" for each derivative that has one."""
+        return [f"{r.name}: {r.coverage_warning}" for r in self.rows if r.coverage_warning]
 
 
 def _finite(v: Any) -> Any:
@@ -114,6 +139,7 @@ def summarize(df: pd.DataFrame) -> Summary:
             coverage=covered / n if n else math.nan,
             unidentifiable=(float((g["status"] == STATUS_UNIDENTIFIABLE).sum()) / survivors
                             if survivors else math.nan),
-            failures=failures, coverage_low=low, coverage_high=high))
+            failures=failures, coverage_low=low, coverage_high=high,
+            coverage_warning=coverage_warning(covered, n)))
     return Summary(realizations, failures, rows,
                    {str(k): int(v) for k, v in reasons.items()})
