@@ -18,6 +18,7 @@ import os
 import re
 import secrets
 import stat
+import tomllib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -187,3 +188,16 @@ def content_kind(path: str | os.PathLike[str]) -> str | None:
     if line.startswith("# flightid-record") or "," in line:
         return "csv"
     return None
+
+
+def read_toml(path: str | Path, what: str, kind: str = "TOML file") -> dict[str, Any]:
+    """The tables of the TOML file ``path``; FileNotFoundError "no such ``what``" when it
+    is missing, ValueError naming the file when it is not readable TOML (the message says
+    ``kind``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such {what}")
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable {kind} ({exc})") from None

@@ -23,13 +23,13 @@ The same constants from a project or JSBSim aircraft name are the command line's
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from flightid.files import read_toml
 from flightid.flight_record import FlightRecord, Reference
 from flightid.units import to_si
 
@@ -93,12 +93,7 @@ def quantity(value: Any, si_unit: str, where: str) -> float:
 def read_constants(path: str | Path) -> AircraftConstants:
     """Aircraft constants from a TOML file (module docstring); values in SI after it."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such aircraft constants file")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable TOML file ({exc})") from None
+    data = read_toml(path, "aircraft constants file", "TOML file")
     unknown = sorted(set(data) - {"name", "mass_properties", "reference", "sensors"})
     if unknown:
         raise ValueError(f"{path}: unknown entries {', '.join(unknown)}; an aircraft "

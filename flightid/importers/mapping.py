@@ -15,11 +15,11 @@ naming the valid names.
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from flightid.channels import CHANNELS
+from flightid.files import read_toml
 from flightid.units import UNIT_NAMES, unit_key
 
 TIME = "time"
@@ -90,12 +90,7 @@ def parse_map(texts: list[str], unit_texts: list[str] | None = None) -> ColumnMa
 def read_map(path: str | Path) -> ColumnMap:
     """A ColumnMap from a TOML mapping file (module docstring)."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such mapping file")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable TOML mapping file ({exc})") from None
+    data = read_toml(path, "mapping file", "TOML mapping file")
     unknown = sorted(set(data) - {"columns", "units"})
     if unknown:
         raise ValueError(f"{path}: unknown table(s) {', '.join(unknown)}; a mapping file has "

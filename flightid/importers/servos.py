@@ -19,12 +19,12 @@ to the servos, not where the surfaces went.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from flightid.files import read_toml
 from flightid.importers.constants import quantity
 from flightid.units import DEG
 
@@ -121,12 +121,7 @@ def read_servo_map(path: str | Path) -> ServoMapping:
     flightid control channel, or an output outside 1..14, is refused naming the valid
     ones."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such servo mapping file")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable TOML file ({exc})") from None
+    data = read_toml(path, "servo mapping file", "TOML file")
     surfaces: dict[str, Servo] = {}
     throttle = None
     for name, table in data.items():
