@@ -38,10 +38,10 @@ from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
 from flightid.cli.simulate import simulate_command
 from flightid.cli.trim_truth import trim_command, truth_command
-from flightid.identification.convergence import NotConvergedError
+from flightid.identification.engine.convergence import NotConvergedError
 from flightid.scenarios.cards import CardError
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError, TrimInputError
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.trim import TrimError, TrimInputError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_PHYSICAL = 0, 1, 2, 3
 EXIT_NOT_CONVERGED = 4  # --strict and an iterative fit that did not converge

@@ -20,12 +20,12 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.cli.tables import estimate_table, print_score
-from flightid.identification import convergence
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.input_denoising import denoise_channels
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.engine import convergence
+from flightid.identification.evaluation.report import write_html
+from flightid.identification.evaluation.scoring import load_truth, record_truth, score
 from flightid.identification.identify import identify
-from flightid.identification.input_denoising import denoise_channels
-from flightid.identification.report import write_html
-from flightid.identification.scoring import load_truth, record_truth, score
 
 
 def parse_options(texts: list[str]) -> dict[str, str]:

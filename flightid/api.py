@@ -14,20 +14,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from flightid.identification.evaluation.scoring import Score, record_truth, score
 from flightid.identification.gap import diagnose as gap
 from flightid.identification.identify import identify
 from flightid.identification.methods import registry
 from flightid.identification.methods.protocol import Method
-from flightid.identification.scoring import Score, record_truth, score
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, fly_card, load_card
 from flightid.scenarios.gap_benchmark import benchmark as gap_benchmark
 from flightid.scenarios.gym import ENV_ID as EXCITATION_ENV  # registers it with gymnasium
 from flightid.scenarios.montecarlo import run as montecarlo
 from flightid.scenarios.montecarlo.design_report import compare_and_report as design_compare
-from flightid.sim.model import load
-from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import Truth, derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import Trim, trim
+from flightid.sim.jsbsim.truth import Truth, derivatives
 
 __all__ = ["EXCITATION_ENV", "Flight", "fly", "gap", "identify", "methods", "montecarlo", "score",
            "truth", "gap_benchmark"]

@@ -1,5 +1,5 @@
-"""Flight path reconstruction (identification/compatibility.py) on JSBSim flights with
-known sensor errors, and on the real NASA Twin Otter record."""
+"""Flight path reconstruction (identification/compatibility/reconstruction.py) on JSBSim
+flights with known sensor errors, and on the real NASA Twin Otter record."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification import compatibility as compat
+from flightid.identification.compatibility import reconstruction as compat
 from flightid.record import FlightRecord, read
 from flightid.scenarios.inputs import Multistep, total_signals
-from flightid.sim import flight, sensors
-from flightid.sim import trim as trimming
 from flightid.sim.effects import Bias, Quantization, WhiteNoise
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.sensors import suites as sensors
 from flightid.units import DEG, G0
 
 TWIN_OTTER = str(Path(__file__).resolve().parents[2]

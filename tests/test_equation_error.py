@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flightid.identification import coefficients as coef
-from flightid.identification import validation as va
+from flightid.identification.data import coefficients as coef
 from flightid.identification.estimate import StdKind
+from flightid.identification.evaluation import validation as va
 from flightid.identification.methods import equation_error as ee
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sidpac import read_mat

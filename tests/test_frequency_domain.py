@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from flightid.identification.frequency_domain import (
+from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.state_space_fit import (
     default_frequencies,
     equation_error,
     fit_state_space,
     output_error,
     verify_time_domain,
 )
-from flightid.identification.frequency_response import frequency_response_arrays
-from flightid.identification.linear_models import ReferenceCondition, lateral, model_for_record
+from flightid.identification.models.linear import ReferenceCondition, lateral, model_for_record
 from flightid.record import FlightRecord, read
 
 TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"

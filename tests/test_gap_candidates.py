@@ -29,7 +29,7 @@ from flightid.scenarios.gap_benchmark.cases import AIRCRAFT
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import Sample
-from flightid.sim.sensors import research_suite
+from flightid.sim.sensors.suites import research_suite
 
 DROPPED = ["vanes", "lever_arm"]  # calibrated to the CG, as the blind check's cards
 # the lateral cards' recorded rate: half the blind check's 50 Hz, so that each diagnosis

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flightid.identification import linear_models as lm
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
 from flightid.identification.methods.output_error import simulate
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 

@@ -12,10 +12,10 @@ from typer.testing import CliRunner
 from flightid.cli.app import app
 from flightid.cli.tables import print_score
 from flightid.identification.estimate import Estimate, StdKind
+from flightid.identification.evaluation.scoring import load_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.methods.registry import methods
-from flightid.identification.model_structure import regression
-from flightid.identification.scoring import load_truth, score
+from flightid.identification.models.structure import regression
 
 TWIN_OTTER = (
     Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
