@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
@@ -23,8 +23,6 @@ from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed
 from flightid.sim.jsbsim import trim as trimming
 from flightid.sim.jsbsim import truth
 from flightid.sim.sensors.suites import measure, research_suite
-
-TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 
 
 def navion_sweeps(seed: int):

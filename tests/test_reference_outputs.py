@@ -15,10 +15,12 @@ from reference_outputs import SAVED, contract, demo_estimates, twin_otter
 REFERENCE = json.loads(SAVED.read_text(encoding="utf-8"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, compute", [("contract", contract), ("demo", demo_estimates)])
 def test_navion_estimates_are_bit_identical(name, compute):
     assert compute() == REFERENCE[name]
 
 
+@pytest.mark.slow
 def test_twin_otter_reproductions_are_bit_identical():
     assert twin_otter(TWIN_OTTER) == REFERENCE["twin_otter"]
