@@ -46,7 +46,7 @@ from flightid.identification.methods import output_error as oe  # noqa: E402
 from flightid.identification.models import linear as lm  # noqa: E402
 from flightid.identification.models.linear import LATERAL_EXAMPLE_6_1  # noqa: E402
 from flightid.record import FlightRecord  # noqa: E402
-from flightid.sim.flight.simulation import disturbed as dist  # noqa: E402
+from flightid.sim.flight import disturbed as dist  # noqa: E402
 from flightid.sim.jsbsim import truth as truth_mod  # noqa: E402
 from flightid.sim.jsbsim.model import as_model  # noqa: E402
 from flightid.sim.jsbsim.trim import trim as trim_aircraft  # noqa: E402

@@ -21,8 +21,8 @@ import pytest
 from flightid.scenarios.cards import CardError, card_from_dict, fly_card, load_card
 from flightid.sim.augment import augment
 from flightid.sim.effects.airframe import DerivativeDelta, RateLimit
+from flightid.sim.flight import disturbed as dist
 from flightid.sim.flight.simulation import Simulation, fly, hold_center
-from flightid.sim.flight.simulation import disturbed as dist
 from flightid.sim.jsbsim.model import PACKAGE_AIRCRAFT, load
 from flightid.sim.jsbsim.trim import trim
 from flightid.sim.jsbsim.truth import derivatives

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.flight.simulation import disturbed as dist
+from flightid.sim.flight import disturbed as dist
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
 from flightid.units import DEG, FT, KT

@@ -28,7 +28,7 @@ from flightid.identification.methods import filter_error as fe
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference, read
-from flightid.sim.flight.simulation import disturbed as dist
+from flightid.sim.flight import disturbed as dist
 from flightid.sim.jsbsim import trim as trimming
 from flightid.sim.jsbsim import truth
 from flightid.sim.jsbsim.model import as_model

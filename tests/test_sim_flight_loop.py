@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from flightid.sim.flight import disturbed as dist
 from flightid.sim.flight.simulation import Atmosphere, Simulation, _interp, fly
-from flightid.sim.flight.simulation import disturbed as dist
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
 from flightid.sim.sensors.suites import hobby_suite, measure

@@ -53,7 +53,7 @@ from flightid.sim.effects.catalogue import (
     listing,
     markdown_table,
 )
-from flightid.sim.flight.simulation import disturbed as dist
+from flightid.sim.flight import disturbed as dist
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
 from flightid.sim.sensors.suites import SensorSuite, measure
