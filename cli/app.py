@@ -28,6 +28,7 @@ from flightid.cli import bridge
 from flightid.cli.compatibility import compatibility_command
 from flightid.cli.demo import demo_command
 from flightid.cli.design_compare import design_compare_command
+from flightid.cli.design_optimize import design_optimize_command
 from flightid.cli.effects import effects_command
 from flightid.cli.frequency_response import frequency_response_command
 from flightid.cli.gap import gap_command
@@ -175,6 +176,7 @@ app.command("gap-benchmark")(gap_benchmark_command)
 app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
 app.command("design-compare")(design_compare_command)
+app.command("design-optimize")(design_optimize_command)
 
 
 def main() -> None:

@@ -38,8 +38,14 @@ from flightid.scenarios.inputs import (
     scale_amplitude,
     scale_to_energy,
 )
+from flightid.scenarios.montecarlo import load
 from flightid.scenarios.montecarlo import run as run_study
-from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_ratio_interval
+from flightid.scenarios.montecarlo.intervals import (
+    LEVEL,
+    PAIRED_MIN,
+    paired_ratio_interval,
+    scatter_ratio_interval,
+)
 from flightid.scenarios.montecarlo.summary import Summary
 from flightid.scenarios.multisine import Multisine
 from flightid.units import DEG
@@ -219,6 +225,31 @@ class Comparison:
     reference: str
     settings: DesignSettings
     results: list[DesignResult] = field(default_factory=list)
+    _errors: dict[str, pd.DataFrame] = field(default_factory=dict, repr=False, compare=False)
+
+    def errors(self, kind: str) -> pd.DataFrame:
+        """Design ``kind``'s estimated errors (estimate - truth), realization index (rows)
+        by derivative (columns), from its study's stored rows."""
+        if kind not in self._errors:
+            study = next(r.study_dir for r in self.results if r.kind == kind)
+            rows = load(study, ["index", "name", "error", "status"])
+            rows = rows[rows["status"] == "estimated"]
+            self._errors[kind] = rows.pivot_table(index="index", columns="name",
+                                                  values="error", observed=True)
+        return self._errors[kind]
+
+    def paired_interval(self, a: str, b: str, name: str, level: float = LEVEL
+                        ) -> tuple[float, float, int]:
+        """The paired-bootstrap ``level`` interval of design ``a``'s scatter over ``b``'s
+        for derivative ``name`` over the realizations both estimated (the same seeds):
+        (low, high, pairs); NaN bounds under ``intervals.PAIRED_MIN`` pairs."""
+        ea, eb = self.errors(a), self.errors(b)
+        if name not in ea.columns or name not in eb.columns:
+            return math.nan, math.nan, 0
+        both = pd.concat([ea[name], eb[name]], axis=1, join="inner").dropna()
+        low, high = paired_ratio_interval(both.iloc[:, 0].to_numpy(),
+                                          both.iloc[:, 1].to_numpy(), level)
+        return low, high, len(both)
 
     def frame(self) -> pd.DataFrame:
         """One row per (derivative, design): truth, bias, scatter, mean_bound, ratio,
@@ -243,12 +274,15 @@ class Comparison:
 
     def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
         """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the
-        ratio of their scatters a / b, its ``level`` interval (``intervals.
-        scatter_ratio_interval``: F distribution), the realizations that estimated it
-        with each (n_a, n_b), and the winner: ``a`` when the interval lies below 1, ``b``
-        when above, "" when it contains 1 (the data do not tell them apart)."""
+        ratio of their scatters a / b, its ``level`` interval, the realizations that
+        estimated it with each (n_a, n_b), the interval's kind (``paired``: the paired
+        bootstrap over the realizations both estimated, ``paired_interval``, when there
+        are ``intervals.PAIRED_MIN`` pairs or more; else ``F``: ``intervals.
+        scatter_ratio_interval``, conservative for the same seeds) and the winner: ``a``
+        when the interval lies below 1, ``b`` when above, "" when it contains 1 (the data
+        do not tell them apart)."""
         df = self.frame()
-        cols = ["ratio", "low", "high", "n_a", "n_b", "winner"]
+        cols = ["ratio", "low", "high", "n_a", "n_b", "interval", "winner"]
         if df.empty:
             return pd.DataFrame(columns=cols)
         scatter = df.pivot(index="derivative", columns="design", values="scatter")
@@ -260,8 +294,14 @@ class Comparison:
                 continue
             na, nb = int(count.loc[name, a]), int(count.loc[name, b])
             low, high = scatter_ratio_interval(sa / sb, na, nb, level)
+            kind = "F"
+            if min(na, nb) >= PAIRED_MIN:
+                plow, phigh, _ = self.paired_interval(a, b, str(name), level)
+                if math.isfinite(plow):
+                    low, high, kind = plow, phigh, "paired"
             rows[str(name)] = {"ratio": sa / sb, "low": low, "high": high, "n_a": na,
-                               "n_b": nb, "winner": a if high < 1 else b if low > 1 else ""}
+                               "n_b": nb, "interval": kind,
+                               "winner": a if high < 1 else b if low > 1 else ""}
         return pd.DataFrame.from_dict(rows, orient="index", columns=cols)
 
     def best(self, level: float = LEVEL) -> dict[str, str]:
