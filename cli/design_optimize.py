@@ -143,9 +143,12 @@ def design_optimize_command(
                   f"{100 * excursions['speed']:.1f} %")
     if comparison is not None:
         r = comparison.scatter_ratios("optimized", reference + "-ref")
+        m = comparison.mean_relative_scatter("optimized", reference + "-ref")
         console.print(f"Monte Carlo: optimised scatter smaller than the {reference} for "
                       f"{int((r['winner'] == 'optimized').sum())} of {len(r)} derivatives "
                       f"estimated by both, larger for "
                       f"{int((r['winner'] == reference + '-ref').sum())} (90 % interval of "
-                      f"the ratio); study in {study}")
+                      f"the ratio); mean scatter/|truth| optimised / {reference} "
+                      f"{m['ratio']:.3f} (90 % interval {m['low']:.3f}-{m['high']:.3f}, "
+                      f"{m['realizations']} realizations); study in {study}")
     typer.echo(f"wrote {output}")

@@ -43,6 +43,7 @@ from flightid.scenarios.montecarlo import run as run_study
 from flightid.scenarios.montecarlo.intervals import (
     LEVEL,
     PAIRED_MIN,
+    paired_mean_relative_interval,
     paired_ratio_interval,
     scatter_ratio_interval,
 )
@@ -271,6 +272,25 @@ class Comparison:
             return df
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
+
+    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL
+                              ) -> dict[str, Any]:
+        """Design ``a`` against ``b`` over every derivative with a non-zero truth that both
+        estimated in every shared realization: the ratio of their mean scatter / |truth|
+        and its paired-bootstrap ``level`` interval (``intervals.
+        paired_mean_relative_interval``), the derivatives and realizations used, and the
+        winner ("" when the interval contains 1)."""
+        truth = self.frame().drop_duplicates("derivative").set_index("derivative")["truth"]
+        ea, eb = self.errors(a), self.errors(b)
+        names = [n for n in ea.columns if n in eb.columns and truth.get(n, 0.0) != 0.0]
+        both = ea[names].join(eb[names], how="inner", lsuffix=":a", rsuffix=":b").dropna()
+        xa = both[[f"{n}:a" for n in names]].to_numpy()
+        xb = both[[f"{n}:b" for n in names]].to_numpy()
+        ratio, low, high = paired_mean_relative_interval(
+            xa, xb, truth[names].to_numpy(float), level)
+        return {"ratio": ratio, "low": low, "high": high, "level": level,
+                "derivatives": names, "realizations": len(both),
+                "winner": a if high < 1 else b if low > 1 else ""}
 
     def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
         """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the

@@ -101,3 +101,33 @@ def paired_ratio_interval(errors_a: np.ndarray, errors_b: np.ndarray, level: flo
     ratios = np.std(a[idx], axis=1, ddof=1) / np.std(b[idx], axis=1, ddof=1)
     low, high = np.quantile(ratios[np.isfinite(ratios)], [alpha / 2, 1 - alpha / 2])
     return float(low), float(high)
+
+
+def paired_mean_relative_interval(errors_a: np.ndarray, errors_b: np.ndarray,
+                                  truth: np.ndarray, level: float = LEVEL,
+                                  draws: int = BOOTSTRAP_DRAWS, seed: int = 0
+                                  ) -> tuple[float, float, float]:
+    """Design a against b on several derivatives at once: the ratio of the mean over the
+    derivatives of scatter / |truth| (``errors_*``: realizations x derivatives, the same
+    seeds row by row; ``truth`` non-zero, one per derivative) and its ``level``
+    percentile-bootstrap interval, resampling whole realizations as pairs:
+    (ratio, low, high); NaN bounds for fewer than PAIRED_MIN realizations."""
+    alpha = _alpha(level)
+    a = np.asarray(errors_a, float)
+    b = np.asarray(errors_b, float)
+    scale = 1.0 / np.abs(np.asarray(truth, float))
+    if a.shape != b.shape or a.ndim != 2 or a.shape[1] != scale.size:
+        raise ValueError(f"paired errors need equal shapes (realizations x {scale.size}), "
+                         f"got {a.shape} and {b.shape}")
+
+    def stat(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return (np.mean(np.std(x, axis=-2, ddof=1) * scale, axis=-1)
+                / np.mean(np.std(y, axis=-2, ddof=1) * scale, axis=-1))
+
+    ratio = float(stat(a, b))
+    if a.shape[0] < PAIRED_MIN:
+        return ratio, math.nan, math.nan
+    idx = np.random.default_rng(seed).integers(0, a.shape[0], size=(draws, a.shape[0]))
+    ratios = stat(a[idx], b[idx])
+    low, high = np.quantile(ratios, [alpha / 2, 1 - alpha / 2])
+    return ratio, float(low), float(high)
