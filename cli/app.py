@@ -38,6 +38,7 @@ from flightid.cli.importing import import_command
 from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
 from flightid.cli.simulate import simulate_command
+from flightid.cli.study_compare import study_compare_command
 from flightid.cli.trim_truth import trim_command, truth_command
 from flightid.identification.convergence import NotConvergedError
 from flightid.scenarios.cards import CardError
@@ -177,6 +178,7 @@ app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
 app.command("design-compare")(design_compare_command)
 app.command("design-optimize")(design_optimize_command)
+app.command("study-compare")(study_compare_command)
 
 
 def main() -> None:

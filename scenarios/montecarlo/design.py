@@ -283,9 +283,9 @@ class Comparison:
         truth = self.frame().drop_duplicates("derivative").set_index("derivative")["truth"]
         ea, eb = self.errors(a), self.errors(b)
         names = [n for n in ea.columns if n in eb.columns and truth.get(n, 0.0) != 0.0]
-        both = ea[names].join(eb[names], how="inner", lsuffix=":a", rsuffix=":b").dropna()
-        xa = both[[f"{n}:a" for n in names]].to_numpy()
-        xb = both[[f"{n}:b" for n in names]].to_numpy()
+        both = pd.concat([ea[names], eb[names]], axis=1, keys=["a", "b"],
+                         join="inner").dropna()
+        xa, xb = both["a"].to_numpy(), both["b"].to_numpy()
         ratio, low, high = paired_mean_relative_interval(
             xa, xb, truth[names].to_numpy(float), level)
         return {"ratio": ratio, "low": low, "high": high, "level": level,
