@@ -117,3 +117,23 @@ def test_design_optimize_bad_options_exit_2(tmp_path, args, message):
     assert result.exit_code == 2
     assert message in result.output
     assert not (tmp_path / "x.toml").exists()
+
+
+def test_built_ins_fly_on_each_surface_in_turn():
+    s = design.DesignSettings(surface="da", then=("dr",), amplitude=4 * DEG)
+    d = design.make_design("3211", s)
+    assert isinstance(d, Maneuvers) and [p.surfaces() for p in d.parts] == [("da",), ("dr",)]
+    # the rudder's 3211 starts GAP_S after the aileron's ends; 7 base times each
+    assert d.parts[1].start == pytest.approx(d.parts[0].end + design.GAP_S)
+    t = design.time_grid(d, 100.0)
+    e = [design.input_energy(p, 100.0) for p in d.parts]
+    assert e[0] == pytest.approx(e[1], rel=1e-9)
+    assert design.input_energy(d, 100.0) == pytest.approx((4 * DEG) ** 2 * 7 * 0.4 * 2,
+                                                          rel=0.02)
+    assert t[-1] == pytest.approx(d.end + design.SETTLE_S)
+
+
+def test_design_compare_refuses_a_surface_given_twice(tmp_path):
+    result = RUNNER.invoke(app, ["design-compare", "--surface", "da", "--surface", "da",
+                                 "-o", str(tmp_path / "s"), "--quiet"])
+    assert result.exit_code == 2 and "given twice" in result.output

@@ -19,7 +19,7 @@ import json
 import math
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +54,7 @@ from flightid.units import DEG
 DESIGNS = ("doublet", "211", "3211", "sweep", "multisine")
 EQUAL = ("amplitude", "energy")
 START_S = 2.0  # s of trimmed flight before the input
+GAP_S = 4.0  # s between one surface's input and the next one's (DesignSettings.then)
 SETTLE_S = 8.0  # s of free response after it (the identification window keeps 8 s)
 CARDS = "cards"
 
@@ -61,7 +62,10 @@ CARDS = "cards"
 @dataclass(frozen=True)
 class DesignSettings:
     """What the designs share: ``surface``, peak ``amplitude`` (rad), multi-step ``base``
-    (s), the sweep's band (Hz) and duration (s), the multisine's band (Hz) and period (s)."""
+    (s), the sweep's band (Hz) and duration (s), the multisine's band (Hz) and period (s),
+    and ``then``: further surfaces each design is flown on in turn after ``surface``, the
+    next GAP_S s after the previous input ends (as the library cards fly an aileron and a
+    rudder input)."""
 
     surface: str = "de"
     amplitude: float = 3.0 * DEG
@@ -70,11 +74,19 @@ class DesignSettings:
     sweep_duration: float = 12.0
     multisine_band: tuple[float, float] = (0.2, 2.0)
     multisine_period: float = 10.0
+    then: tuple[str, ...] = ()
 
 
 def make_design(kind: str, settings: DesignSettings = DesignSettings(),
                 start: float = START_S) -> InputDesign:
-    """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude."""
+    """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude, on the
+    settings' surface and then on each of ``settings.then`` in turn (a Maneuvers)."""
+    if settings.then:
+        parts = [make_design(kind, replace(settings, then=()), start)]
+        for surface in settings.then:
+            parts.append(make_design(kind, replace(settings, surface=surface, then=()),
+                                     parts[-1].end + GAP_S))
+        return Maneuvers(parts=tuple(parts))
     s = settings
     common = dict(surface=s.surface, amplitude=s.amplitude, start=start)
     if kind == "doublet":

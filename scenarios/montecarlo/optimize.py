@@ -5,7 +5,7 @@ do (``input_optimization`` for the prediction and the optimiser).
 The problem is measured on the card itself: a flight without inputs (the card's
 condition, sensors and turbulence, seed of the card) gives the trim condition, the JSBSim
 truth and the residual spectrum. Every built-in design is applied to each surface in
-turn (the next ``GAP_S`` s after the previous input ends), all scaled to the energy of
+turn (the next ``design.GAP_S`` s after the previous input ends), all scaled to the energy of
 the ``reference`` built-in; the multisine gets that energy and the reference's input
 time, so it flies as long as the reference does.
 """
@@ -29,7 +29,7 @@ from flightid.scenarios.input_optimization import (
     predicted_bounds,
     problem_from_flight,
 )
-from flightid.scenarios.inputs import Maneuvers, scale_to_energy
+from flightid.scenarios.inputs import scale_to_energy
 from flightid.scenarios.montecarlo.design import (
     DESIGNS,
     SETTLE_S,
@@ -44,21 +44,14 @@ from flightid.scenarios.montecarlo.design import (
     time_grid,
 )
 
-GAP_S = 4.0  # s between one surface's input and the next one's
 QUIET_S = 60.0  # s of the flight without inputs that measures the residual spectrum
 
 
-def sequenced(kind: str, surfaces: Sequence[str], settings: DesignSettings,
-              gap: float = GAP_S) -> InputDesign:
-    """Built-in design ``kind`` on each of ``surfaces`` in turn from START_S, the next
-    ``gap`` s after the previous one ends (as the library cards fly their inputs)."""
-    parts: list[InputDesign] = []
-    start = START_S
-    for s in surfaces:
-        d = make_design(kind, dataclasses.replace(settings, surface=s), start=start)
-        parts.append(d)
-        start = d.end + gap
-    return parts[0] if len(parts) == 1 else Maneuvers(parts=tuple(parts))
+def sequenced(kind: str, surfaces: Sequence[str], settings: DesignSettings) -> InputDesign:
+    """Built-in design ``kind`` on each of ``surfaces`` in turn from START_S (``make_design``
+    with ``then``)."""
+    return make_design(kind, dataclasses.replace(settings, surface=surfaces[0],
+                                                 then=tuple(surfaces[1:])))
 
 
 def card_problem(card: str, model: str = "lat", derivatives: Sequence[str] | None = None
