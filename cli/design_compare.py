@@ -76,8 +76,8 @@ def _tables(comparison: Comparison) -> list[Table]:
                           for k in kinds)] for name in wide.index]))
     if ratio_rows(comparison):
         out.append(add_columns(
-            Table(title=f"scatter 3211 / doublet, {level} interval (paired bootstrap, or F "
-                        "under 20 pairs)"),
+            Table(title=f"scatter 3211 / doublet, {level} interval (paired bootstrap where "
+                        "both n are 20 or more, else F)"),
             ["derivative", "ratio", f"{level} interval", "n 3211", "n doublet", "smaller"],
             rows=ratio_rows(comparison)))
     return out

@@ -99,8 +99,8 @@ def markdown(comparison: Comparison) -> str:
     rows = ratio_rows(comparison)
     if rows:
         lines += ["", f"scatter 3211 / doublet with its {100 * LEVEL:.0f} % interval "
-                  "(paired bootstrap over the same seeds from 20 pairs, Efron & Tibshirani 1993; "
-                  "else F distribution, Montgomery & Runger 2014, 10-5):", "",
+                  "(paired bootstrap over the same seeds where both n are 20 or more, Efron & "
+                  "Tibshirani 1993; else F distribution, Montgomery & Runger 2014, 10-5):", "",
                   "| " + " | ".join(RATIO_HEAD) + " |", "|" + "---|" * len(RATIO_HEAD)]
         lines += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join(lines) + "\n"
@@ -115,7 +115,7 @@ def ratio_rows(comparison: Comparison) -> list[list[str]]:
     contains 1); [] without both designs."""
     if comparison.verdict("3211", "doublet") is None:
         return []
-    return [[str(name), f"{r['ratio']:.3g}", f"{r['low']:.3g} - {r['high']:.3g} {r['interval']}",
+    return [[str(name), f"{r['ratio']:.3g}", f"{r['low']:.3g} - {r['high']:.3g}",
              str(r["n_a"]), str(r["n_b"]), r["winner"] or "not clear"]
             for name, r in comparison.scatter_ratios("3211", "doublet").iterrows()]
 
