@@ -65,6 +65,8 @@ def design_optimize_command(
         help="built-in design whose energy and input time the multisine gets")] = "3211",
     amplitude_deg: Annotated[float, typer.Option(
         help="peak amplitude (deg) of the reference on each surface")] = 4.0,
+    max_amplitude_deg: Annotated[float, typer.Option(
+        help="limit of the optimised design's peak deflection on any surface (deg)")] = 10.0,
     max_bank_deg: Annotated[float, typer.Option(help="bank limit (deg)")] = 30.0,
     max_alpha_deg: Annotated[float, typer.Option(help="angle-of-attack limit (deg)")] = 15.0,
     max_speed_change: Annotated[float, typer.Option(
@@ -94,6 +96,8 @@ def design_optimize_command(
                  unit="deg")
     check_number("--band F_MIN", band[0], low=0.0, low_open=True, unit="Hz")
     check_number("--band F_MAX", band[1], low=band[0], low_open=True, unit="Hz")
+    check_number("--max-amplitude-deg", max_amplitude_deg, low=0.0, low_open=True,
+                 high=30.0, unit="deg")
     check_number("--max-bank-deg", max_bank_deg, low=0.0, low_open=True, high=90.0, unit="deg")
     check_number("--max-alpha-deg", max_alpha_deg, low=0.0, low_open=True, high=90.0,
                  unit="deg")
@@ -108,6 +112,10 @@ def design_optimize_command(
     excursions = envelope_excursions(card, result.designs["optimized"])
     violations = envelope_violations(excursions, Envelope(
         max_bank_deg * DEG, max_alpha_deg * DEG, max_speed_change))
+    top = next(r["peak"] for r in result.rows if r["design"] == "optimized")
+    if top > max_amplitude_deg * DEG:
+        violations.append(f"peak deflection {top / DEG:.2f} deg exceeds --max-amplitude-deg "
+                          f"{max_amplitude_deg:g} deg")
     if violations:
         typer.echo(f"error: the optimised design flown in JSBSim leaves the envelope: "
                    f"{'; '.join(violations)}; lower --amplitude-deg or raise the limit "
