@@ -137,3 +137,13 @@ def test_design_compare_refuses_a_surface_given_twice(tmp_path):
     result = RUNNER.invoke(app, ["design-compare", "--surface", "da", "--surface", "da",
                                  "-o", str(tmp_path / "s"), "--quiet"])
     assert result.exit_code == 2 and "given twice" in result.output
+
+
+def test_design_optimize_past_a_limit_exits_3_and_writes_nothing(tmp_path):
+    out = tmp_path / "opt.toml"
+    # the optimised aileron multisine peaks at 4.95 deg (docs/montecarlo.md)
+    result = RUNNER.invoke(app, ["design-optimize", "-o", str(out),
+                                 "--max-amplitude-deg", "3"])
+    assert result.exit_code == 3, result.output
+    assert "exceeds --max-amplitude-deg 3 deg" in result.output
+    assert not out.exists()
