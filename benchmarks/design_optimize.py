@@ -102,7 +102,8 @@ def main() -> None:
                    f"{mb.loc[n, 'optimized']:.4f} | {mb.loc[n, '3211-da-dr']:.4f} |")
     with open(RESULTS / "design_optimize.md", "a") as fh:
         fh.write("\n".join(out) + "\n")
-    (RESULTS / "design_optimize.json").write_text(json.dumps(rows, indent=1, default=str))
+    text = json.dumps(rows, indent=1, default=str).replace(str(study), "STUDY")
+    (RESULTS / "design_optimize.json").write_text(text)  # no machine path in the results
     print("\n".join(out))
 
 
