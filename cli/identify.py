@@ -20,7 +20,7 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.cli.tables import estimate_table, print_score
-from flightid.identification import convergence
+from flightid.identification import convergence, nuisance
 from flightid.identification.data_reduction import reduce_record
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
@@ -134,6 +134,11 @@ def identify_command(
     for line in ["skipped (--raw)"] if raw else reduction.applied:
         typer.echo(f"data reduction: {line}")
     console.print(estimate_table(est))
+    biases = nuisance.from_fit(est)
+    if biases:
+        typer.echo("nuisance biases (the trim's part and the excess over it):")
+        for line in nuisance.describe(biases):
+            typer.echo(f"  {line}")
     for part in (est.fit.get("coefficients") or {}).values():
         for step in part.get("steps", []):
             console.print(f"  {step['action']:>6} {step['term']}: {step['why']}")
