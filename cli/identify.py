@@ -21,11 +21,15 @@ from flightid.cli.checks import (
 )
 from flightid.cli.tables import estimate_table, print_score
 from flightid.identification import convergence, nuisance
+from flightid.identification.agreement import Agreement
+from flightid.identification.agreement import compare as compare_estimates
 from flightid.identification.data_reduction import reduce_record
+from flightid.identification.estimate import Estimate
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
 from flightid.identification.report import write_html
 from flightid.identification.scoring import load_truth, record_truth, score
+from flightid.record import FlightRecord
 
 
 def parse_options(texts: list[str]) -> dict[str, str]:
@@ -80,6 +84,9 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
+    compare: Annotated[list[str] | None, typer.Option(
+        help="also fit this method (repeatable) with the same model and window, and say "
+             "whether the methods agree within their bounds, or why not")] = None,
     strict: opts.Strict = False,
     force: opts.Force = False,
     raw: Annotated[bool, typer.Option(
@@ -110,6 +117,7 @@ def identify_command(
         if coefficient:
             options["coefficients"] = list(coefficient)
         est = identify(data, method, model, window=span, strict=strict, **options)
+        agreement = compared(data, est, compare or [], span) if compare else None
     not_converged = convergence.verdict_line(est, f"method {method}")
     truth_values = load_truth(truth) if truth else record_truth(data)
     scored = score(est, truth_values, scope="all" if all_rows else "estimated") \
@@ -128,6 +136,8 @@ def identify_command(
         if scored is not None:
             out["score"] = scored.as_dict()
         out["data_reduction"] = "skipped (--raw)" if raw else reduction.applied
+        if agreement is not None:
+            out["agreement"] = agreement.to_json()
         print(json.dumps(out, indent=2, default=str))
         return
     console = Console()
@@ -144,3 +154,19 @@ def identify_command(
             console.print(f"  {step['action']:>6} {step['term']}: {step['why']}")
     if scored is not None:
         print_score(scored, console)
+    if agreement is not None:
+        for line in agreement.lines():
+            typer.echo(line)
+
+
+def compared(data: FlightRecord, est: Estimate, methods: list[str],
+             span: str | tuple[float, float]) -> Agreement:
+    """``est`` compared with each of ``methods`` fitted to ``data`` with its model and
+    window (``agreement.compare``); a method that cannot fit them is refused, named."""
+    others = []
+    for method in methods:
+        try:
+            others.append(identify(data, method, est.fit["model"], window=span))
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"--compare {method}: {exc}") from None
+    return compare_estimates([est, *others])
