@@ -3,9 +3,9 @@ they do not, the reasons the fits themselves give.
 
 Two estimates of a derivative agree when they differ by at most ``AGREE_SIGMAS`` standard
 errors of the difference, sqrt(s_a^2 + s_b^2) (the estimates taken as independent: the
-methods weigh the same data differently; Morelli & Klein 2016 sec. 11.3 compares methods
-this way). The coefficients at the reference (C_0) and the nuisance parameters are not
-compared: each method defines them differently.
+methods weigh the same data differently, so this is a screen, not an exact test). The
+coefficients at the reference (C_0) and the nuisance parameters are not compared: each
+method defines them differently.
 
 A disagreement is listed with every reason found in the fits:
 
@@ -15,9 +15,10 @@ A disagreement is listed with every reason found in the fits:
 - different models: a derivative one method estimates and the other holds (at zero or a
   priori) moves the derivatives correlated with it;
 - bounds that assume white residuals next to ones corrected for colored residuals (the
-  white ones are too small when the residuals are colored: Morelli & Klein 2016 sec. 5.5);
+  white ones are too small when the residuals are colored: Morelli & Klein 2016 eqs. 5.71
+  and 6.54 correct them);
 - equation error takes the measured states as exact regressors: their noise and
-  filtering bias its estimates (Morelli & Klein 2016 sec. 5.2; Jategaonkar 2015 ch. 6).
+  filtering bias its estimates (Morelli & Klein 2016 sec. 11.2 for the filtering).
 
 When none applies, it says that no reason was found in the fits.
 """

@@ -11,8 +11,9 @@ Each bias is split:
   change over the window divided by the window's length). An accelerometer reads the
   specific force of the mean state: f_y = V (beta_dot + r - p alpha) - g cos(theta)
   sin(phi) and f_z = V (alpha_dot - q + p beta) - g cos(theta) cos(phi), body axes, z
-  down (Stevens, Lewis & Johnson 2016, sec. 2.5; Jategaonkar 2015, sec. 10.3, the
-  kinematic equations of flight path reconstruction), averaged over the window;
+  down: the force equations (Stevens, Lewis & Johnson 2016, eqs. 1.7-18 to 1.7-21;
+  Morelli & Klein 2016, eqs. 3.32-3.38) with u = V, v = V beta, w = V alpha, as flight
+  path reconstruction uses them (Jategaonkar 2015, ch. 10), averaged over the window;
 - **excess**: the rest, fitted minus trim part. On the accelerometer outputs it is the
   accelerometer's bias as the kinematics see it; on a state equation it is the rate the
   fitted model has at the mean condition, which a consistent model does not have.
