@@ -27,6 +27,7 @@ from flightid.identification.data_reduction import reduce_record
 from flightid.identification.estimate import Estimate
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
+from flightid.identification.methods import registry
 from flightid.identification.report import write_html
 from flightid.identification.scoring import load_truth, record_truth, score
 from flightid.record import FlightRecord
@@ -98,6 +99,9 @@ def identify_command(
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
     check_model("--model", method, model)
+    for other in compare or []:
+        check_choice("--compare", other, list(registry.methods()))
+        check_model("--compare", other, model)
     check_paths({"RECORD": record, "--truth": truth}, [Output("--report", report, "html")],
                 force)
     with printed_warnings("identify"):

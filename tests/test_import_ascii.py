@@ -283,3 +283,10 @@ def test_nuisance_biases_are_split_and_a_wrong_accelerometer_is_flagged(flight, 
     theta = np.mean(flight.measured.slice(1.0, 11.5)["theta"])
     assert flipped["implausible"]
     assert flipped["excess"] == pytest.approx(2 * G0 * np.cos(theta), rel=0.05)
+
+
+def test_an_unknown_method_to_compare_is_refused_naming_the_valid_ones(imported):
+    result = CliRunner().invoke(app, ["identify", str(imported[1]), "--compare", "magic"])
+    assert result.exit_code == 2
+    assert "--compare 'magic' is not accepted; use one of ee, swr, oe" in result.output
+    assert "Traceback" not in result.output
