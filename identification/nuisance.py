@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from flightid.identification import linear_models as lm
+from flightid.identification.a_priori import preset_derivatives
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 from flightid.units import DEG, G0
@@ -121,9 +122,7 @@ def bias_budget(est: Estimate, record: FlightRecord, preset: str) -> list[BiasTe
                                                            strict=True)}
     if preset not in lm.MODELS or not any(n.startswith(BIAS_PREFIX) for n in fitted):
         return []
-    full = {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
-            "longitudinal": lm.LONGITUDINAL_DERIVATIVES}[preset]
-    derivatives = [n for n in full if n in fitted] or None
+    derivatives = [n for n in preset_derivatives(preset) if n in fitted] or None
     model = lm.model_for_record(preset, record, **({"derivatives": derivatives}
                                                    if derivatives else {}))
     values = {n: v for n, (v, _) in fitted.items() if n in model.parameters}
