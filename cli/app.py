@@ -54,6 +54,8 @@ COMMANDS = {
     "montecarlo": ("flightid.cli.montecarlo", "montecarlo_command"),
     "montecarlo-report": ("flightid.cli.montecarlo", "montecarlo_report_command"),
     "design-compare": ("flightid.cli.design_compare", "design_compare_command"),
+    "design-optimize": ("flightid.cli.design_optimize", "design_optimize_command"),
+    "study-compare": ("flightid.cli.study_compare", "study_compare_command"),
     "bridge": ("flightid.cli.bridge", "app"),
 }
 # the exceptions of the library that the policy classifies: {name: module}. An exception

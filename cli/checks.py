@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
+from flightid.identification import nuisance
 from flightid.identification.data import time_base
 from flightid.identification.data.unit_sanity import check_units
 from flightid.identification.engine import resources
@@ -251,7 +252,8 @@ def check_aircraft_xml(aircraft: str) -> None:
 
 
 # warnings of the data a command prints as "flightid <command>: warning: ..." lines
-DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning)
+DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning,
+                 nuisance.ImplausibleBiasWarning)
 
 
 @contextmanager
