@@ -5,7 +5,7 @@ with every float stored exactly (``float.hex``):
 
 - ``contract``: every registered method on the method contract's record (the Navion demo
   card, seed 5, window 12-32 s, the method's contract model), as
-  tests/contract/test_method_contract.py computes it;
+  ``flightid.testing.MethodContract`` computes it;
 - ``demo``: the two output-error estimates of ``flightid demo`` (seed 1);
 - ``twin_otter``: the NASA Twin Otter record through equation error (CY, Cl, Cn), output
   error from the equation-error start and frequency-domain output error, as
@@ -26,7 +26,6 @@ from conftest import TWIN_OTTER
 from threadpoolctl import threadpool_limits
 
 from flightid.identification.estimate import Estimate
-from flightid.identification.identify import identify
 from flightid.identification.methods import (
     equation_error,
     frequency_output_error,
@@ -37,11 +36,10 @@ from flightid.identification.models import linear as lm
 from flightid.record import read
 from flightid.scenarios import demo
 from flightid.scenarios.cards import fly_card, load_card
+from flightid.testing import MethodContract, contract_record
 
 HERE = Path(__file__).resolve().parent
 SAVED = HERE / "reference_outputs.json"
-CONTRACT_SEED = 5
-CONTRACT_WINDOW = (12.0, 32.0)
 DEMO_SEED = 1
 # the lateral equation-error regressors of Morelli & Klein example 5.1
 TWIN_OTTER_EE = (("CY", ("beta", "rhat", "dr")), ("Cl", ("beta", "phat", "rhat", "da", "dr")),
@@ -57,13 +55,9 @@ def numbers(est: Estimate) -> dict[str, list[str]]:
 
 def contract() -> dict[str, dict[str, list[str]]]:
     """Every registered method on the method contract's record."""
-    record, _ = fly_card(load_card("navion-demo"), CONTRACT_SEED)
-    out = {}
-    for method_id in sorted(registry.methods()):
-        spec = registry.get(method_id)
-        out[method_id] = numbers(identify(record, method_id, spec.contract_model or None,
-                                          window=CONTRACT_WINDOW))
-    return out
+    record = contract_record()
+    return {method_id: numbers(MethodContract(method_id, record).identify())
+            for method_id in sorted(registry.methods())}
 
 
 def demo_estimates() -> dict[str, dict[str, list[str]]]:

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from flightid.identification.methods import registry
-from flightid.testing import assert_recovers, recovery
+from flightid.testing import assert_recovers, check_method, recovery
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "own_method.md"
 
@@ -49,6 +49,12 @@ def test_entry_point_registers_and_recovers_the_truth(installed_example):
     # measured: 11 of 15 (seed 3: Cn_beta, Cn_p, Cn_da at 7 sigma; seed 1 Cn_r at 3.1);
     # docs/own_method.md says why the yaw bounds are too tight in turbulence
     assert result.pairs == 15 and result.inside >= 11
+
+
+def test_the_plug_in_meets_the_method_contract(installed_example):
+    registry.load_entry_points()
+    est = check_method("cn_ols")
+    assert est.method == "cn_ols" and len(est.names) == 6
 
 
 def test_a_method_that_misses_fails_the_assertion(installed_example):

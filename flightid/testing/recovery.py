@@ -1,4 +1,4 @@
-"""pytest helpers: hold any identification method, yours included, to the known truth.
+"""Hold any identification method, yours included, to the known truth.
 
     from flightid.testing import assert_recovers
 
