@@ -16,6 +16,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import platform  # noqa: E402
 import statistics  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -25,7 +26,11 @@ from flightid.identification.methods import output_error as oe  # noqa: E402
 from flightid.identification.models import linear as lm  # noqa: E402
 from flightid.record import read  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
+# the record where the tests find it (tests/conftest.py: shared/ beside the checkout, or
+# FLIGHTID_SHARED)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import TWIN_OTTER as DATA  # noqa: E402
+
 RESULTS = Path(__file__).resolve().parent / "results" / "output_error.txt"
 RUNS = 15
 TARGET_S = 0.3  # the project's target; NASA's SIDPAC oe.m needs about 1.5 s

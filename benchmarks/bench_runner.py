@@ -12,7 +12,7 @@ spread (median and worst) of the process CPU time, and the best wall time. The
 requirement is judged on the best CPU times (wall times of other processes' spells are
 not the runner's). ``--baseline FILE`` also times ``fly`` and ``step`` of another
 version of ``sim/flight/simulation.py``
-(e.g. ``git show HEAD:sim/flight/simulation.py > /tmp/old_flight.py``).
+(e.g. ``git show HEAD:sim/flight/simulation.py > old_flight.py``).
 Writes benchmarks/results/runner.txt.
 
     .venv/bin/python benchmarks/bench_runner.py [--repeats 15] [--baseline FILE]

@@ -4,8 +4,8 @@ same seeds for every design; writes benchmarks/results/design_compare-<equal>.{j
 
     .venv/bin/python benchmarks/design_compare.py --n 50 --equal amplitude --workers 2
 
-The studies live in --study (default /tmp/flightid-design-compare-<equal>) and continue
-when the script is rerun (a larger --n extends them).
+The studies live in --study (default: flightid-design-compare-<equal> in the system's
+temporary folder) and continue when the script is rerun (a larger --n extends them).
 """
 
 from __future__ import annotations

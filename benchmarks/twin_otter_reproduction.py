@@ -18,7 +18,10 @@ from flightid.identification.models import linear as lm
 from flightid.record import read
 
 HERE = Path(__file__).resolve().parent
-RECORD = HERE.parents[1] / "shared" / "data" / "twin_otter" / "totter_f1_017_data.mat"
+# the record where the tests find it (tests/conftest.py: shared/ beside the checkout, or
+# FLIGHTID_SHARED)
+sys.path.insert(0, str(HERE.parent / "tests"))
+from conftest import TWIN_OTTER as RECORD  # noqa: E402
 
 # (value, std) from the record's README (stability axes, per rad)
 PUBLISHED = {

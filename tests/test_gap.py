@@ -4,9 +4,9 @@ and the real NASA Twin Otter record."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import pytest
+from conftest import TWIN_OTTER
 
 from flightid.identification.gap import diagnose, write_aircraft
 from flightid.identification.gap.refly import refly
@@ -16,7 +16,6 @@ from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.sim.jsbsim.model import load
 
 INJECTED = 0.03  # Cn_beta delta (per rad, stability axes) flown into the navion
-TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 
 
 def _flown(effect: dict | None):

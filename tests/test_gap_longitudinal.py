@@ -3,9 +3,8 @@ and the axis chosen from what the records excite."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
+from conftest import TWIN_OTTER
 
 from flightid.identification.gap import diagnose, write_aircraft
 from flightid.identification.gap.linearise import excited_axes
@@ -18,7 +17,6 @@ from flightid.sim.jsbsim.trim import trim
 from flightid.sim.jsbsim.truth import derivatives
 from flightid.units import DEG
 
-TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 ALTITUDE, SPEED = 1890.0, 61.7  # TM-4099's 120 kt, the NASA record's altitude
 
 
