@@ -20,11 +20,8 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.files import atomic_path
-from flightid.identification.frequency.response import (
-    bode_figure,
-    default_windows,
-    frequency_response,
-)
+from flightid.identification.frequency.grids import default_windows
+from flightid.identification.frequency.response import bode_figure, frequency_response
 
 
 def frequency_response_command(

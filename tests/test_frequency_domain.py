@@ -6,9 +6,9 @@ import pytest
 from conftest import TWIN_OTTER
 from scipy import signal
 
+from flightid.identification.frequency.grids import fourier_frequencies
 from flightid.identification.frequency.response import frequency_response_arrays
 from flightid.identification.frequency.state_space_fit import (
-    default_frequencies,
     equation_error,
     fit_state_space,
     output_error,
@@ -82,7 +82,7 @@ def test_twin_otter_output_error_matches_example_7_1(twin_otter):
     # bounds come out 0.75-0.85 times the published ones; on the 1/T grid 1.2-1.4 times
     for n, (_, s) in PUBLISHED_7_1.items():
         assert 0.6 < est.std_of(n) / s < 1.0, (n, est.std_of(n), s)
-    coarse = output_error(twin_otter, model, frequencies=default_frequencies(twin_otter))
+    coarse = output_error(twin_otter, model, frequencies=fourier_frequencies(twin_otter))
     for n, (_, s) in PUBLISHED_7_1.items():
         assert 1.0 < coarse.std_of(n) / s < 2.0, (n, coarse.std_of(n), s)
 

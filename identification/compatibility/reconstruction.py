@@ -60,6 +60,7 @@ from flightid.identification.engine import convergence
 from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import colored_residual_covariance
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.estimate import Estimate
 from flightid.identification.models.rigid_body import local_gravity
 from flightid.record import FlightRecord
@@ -772,9 +773,7 @@ def _result(problem: Problem, fit: MaximumLikelihoodFit, values: Mapping[str, fl
     else:
         cov = np.linalg.inv(fit.information)
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    spread = np.sum((problem.z - problem.z.mean(axis=0)) ** 2, axis=0)
-    r2 = {o: float(1 - np.sum(fit.residuals[:, j] ** 2) / spread[j]) if spread[j] > 0
-          else float("nan") for j, o in enumerate(problem.outputs)}
+    r2 = r_squared_by_output(problem.z, fit.residuals, problem.outputs)
     outputs = {o: {"measured": problem.z[:, j], "model": fit.y[:, j],
                    "residual": fit.residuals[:, j]} for j, o in enumerate(problem.outputs)}
     stats = {

@@ -16,6 +16,7 @@ import numpy as np
 from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import output_error_covariance, standard_errors
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
+from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.estimate import Estimate
 
 
@@ -40,9 +41,7 @@ def estimate_from_fit(
                "residual": fit.residuals[:, j]}
         for j, name in enumerate(output_names)
     }
-    spread = np.sum((measured - measured.mean(axis=0)) ** 2, axis=0)
-    r2 = {o: float(1 - np.sum(fit.residuals[:, j] ** 2) / spread[j]) if spread[j] > 0
-          else float("nan") for j, o in enumerate(output_names)}
+    r2 = r_squared_by_output(measured, fit.residuals, output_names)
     fit_stats = {
         "model": model,
         "converged": fit.converged,

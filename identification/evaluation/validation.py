@@ -1,10 +1,7 @@
 """Model validation: fit and prediction metrics, residual whiteness, prediction on new data.
 
-* Theil inequality coefficient (Theil 1961; used for model
-  validation by Jategaonkar 2015 and Morelli & Klein 2016):
-  TIC = sqrt(mean((y - yhat)^2)) / (sqrt(mean(y^2)) + sqrt(mean(yhat^2))), 0 for a perfect
-  match, 1 for no agreement; below about 0.25-0.3 is taken as a good match.
-* J_rms: the root mean square of the residual, in the unit of y.
+* TIC, J_rms and R^2 from ``engine.metrics`` (a TIC below about 0.25-0.3 is taken as a
+  good match);
 * Residual whiteness: the fraction of the normalised residual autocorrelation at lags
   1..L inside the 95 % band +/- 1.96 / sqrt(N) (about 95 % for white residuals), and the
   Ljung-Box portmanteau statistic Q = N (N + 2) sum_k r_k^2 / (N - k), chi-square with L
@@ -20,32 +17,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.stats import chi2
 
+from flightid.identification.engine.metrics import j_rms, paired, r_squared, theil_inequality
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods.equation_error import channel_values
 from flightid.identification.methods.equation_error import predict as ee_predict
 from flightid.record import FlightRecord
-
-
-def theil_inequality(y: np.ndarray, yhat: np.ndarray) -> float:
-    """Theil inequality coefficient of a model output yhat against measured y (0..1)."""
-    y, yhat = _pair(y, yhat)
-    denom = np.sqrt(np.mean(y**2)) + np.sqrt(np.mean(yhat**2))
-    if denom == 0:
-        return 0.0
-    return float(np.sqrt(np.mean((y - yhat) ** 2)) / denom)
-
-
-def j_rms(y: np.ndarray, yhat: np.ndarray) -> float:
-    """Root mean square of the residual y - yhat (unit of y)."""
-    y, yhat = _pair(y, yhat)
-    return float(np.sqrt(np.mean((y - yhat) ** 2)))
-
-
-def r_squared(y: np.ndarray, yhat: np.ndarray) -> float:
-    """Coefficient of determination 1 - SSE/SST about the mean of y (dimensionless)."""
-    y, yhat = _pair(y, yhat)
-    sst = float(np.sum((y - y.mean()) ** 2))
-    return 1.0 - float(np.sum((y - yhat) ** 2)) / sst if sst > 0 else float("nan")
 
 
 @dataclass
@@ -85,7 +61,7 @@ def residual_whiteness(residual: np.ndarray, max_lag: int | None = None) -> Whit
 
 def metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, float]:
     """TIC, J_rms, R2 and residual whiteness of a model output against measured data."""
-    y, yhat = _pair(y, yhat)
+    y, yhat = paired(y, yhat)
     white = residual_whiteness(y - yhat)
     return {
         "TIC": theil_inequality(y, yhat),
@@ -131,13 +107,3 @@ def predict_record(est: Estimate, record: FlightRecord, refit_bias: bool = True)
     predicted = predicted + shift
     return Prediction(coefficient, record.time.copy(), measured, predicted, shift,
                       metrics(measured, predicted))
-
-
-def _pair(y: np.ndarray, yhat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    y = np.asarray(y, dtype=float)
-    yhat = np.asarray(yhat, dtype=float)
-    if y.shape != yhat.shape:
-        raise ValueError(f"measured {y.shape} and model {yhat.shape} outputs differ in shape")
-    if y.size == 0:
-        raise ValueError("no samples to compare")
-    return y, yhat

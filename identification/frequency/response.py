@@ -38,6 +38,7 @@ from scipy.signal import czt
 from scipy.signal.windows import tukey
 
 from flightid.identification.engine import identifiability as ident
+from flightid.identification.frequency.grids import default_windows, response_frequencies
 
 TAPERS = ("hann", "hamming", "rectangular")
 
@@ -361,30 +362,6 @@ def responses_from_spectra(
     return out
 
 
-def default_frequencies(
-    duration: float, dt: float, windows: Sequence[float], n: int = 100,
-    f_max: float | None = None,
-) -> np.ndarray:
-    """Log-spaced grid from 2 / (longest window) to f_max (default a fifth of the sample
-    rate), in Hz: two periods in the longest window (Tischler & Remple eq. 7.32)."""
-    f_lo = 2.0 / max(windows)
-    f_hi = f_max if f_max is not None else 0.2 / dt
-    if f_hi <= f_lo:
-        raise ValueError(
-            f"no frequencies: the lowest resolvable ({f_lo:g} Hz for a {max(windows):g} s "
-            f"window) is above f_max = {f_hi:g} Hz"
-        )
-    return np.geomspace(f_lo, f_hi, n)
-
-
-def default_windows(duration: float, dt: float) -> tuple[float, ...]:
-    """Window lengths (s) for a composite: half, a quarter and an eighth of the record,
-    none shorter than 40 samples (Tischler & Remple sec. 7.8 use about 5 windows from
-    T_rec/2 down)."""
-    wins = [duration / 2, duration / 4, duration / 8]
-    return tuple(w for w in wins if w >= 40 * dt) or (duration / 2,)
-
-
 def estimate_response(
     inputs: dict[str, np.ndarray],
     output: np.ndarray,
@@ -490,7 +467,7 @@ def frequency_response_arrays(
     duration = y.size * dt
     wins = tuple(windows) if windows else default_windows(duration, dt)
     f = (np.asarray(frequencies, dtype=float) if frequencies is not None
-         else default_frequencies(duration, dt, wins))
+         else response_frequencies(duration, dt, wins))
     per_window = [
         estimate_response(inputs, y, dt, output_name=output_name, window=w, frequencies=f,
                           overlap=overlap, taper=taper)

@@ -49,6 +49,7 @@ from scipy.signal import StateSpace, lsim
 
 from flightid.identification.data.coefficients import channel_values, nondimensional_rates
 from flightid.identification.estimate import Estimate
+from flightid.identification.frequency.grids import fourier_frequencies
 from flightid.identification.frequency.response import (
     FrequencyResponse,
     finite_fourier_transform,
@@ -69,14 +70,6 @@ REGRESSOR_VARIABLES: dict[str, str] = {
     "alpha": "alpha", "beta": "beta", "phat": "p", "qhat": "q", "rhat": "r",
     "de": "de", "da": "da", "dr": "dr", "throttle": "dt",
 }
-
-
-def default_frequencies(record: FlightRecord, f_min: float = 0.1, f_max: float = 1.5
-                        ) -> np.ndarray:
-    """Frequencies from f_min to f_max (Hz) spaced 1/T, T the record length (s)."""
-    duration = record.time[-1] - record.time[0]
-    step = 1.0 / duration
-    return np.arange(f_min, f_max + 0.5 * step, step)
 
 
 def fourier_data(record: FlightRecord, channels: Sequence[str], frequencies: np.ndarray
@@ -126,7 +119,7 @@ def equation_error(
     record = _with_rates(record, regressors)
     if coefficient not in record:  # computed from the rigid-body equations
         record = record.with_channels(**{coefficient: channel_values(record, coefficient)})
-    f = default_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
+    f = fourier_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
     data = fourier_data(record, [coefficient, *regressors], f)
     z = data[coefficient]
     x = np.column_stack([data[r] for r in regressors])
@@ -315,7 +308,7 @@ def _transformed(record: FlightRecord, model: LinearModel, frequencies: np.ndarr
         if ch not in record:
             raise ValueError(f"record {index} has no channel {ch!r} needed by model "
                              f"{model.name}")
-    f = default_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
+    f = fourier_frequencies(record) if frequencies is None else np.asarray(frequencies, float)
     omega = 2 * np.pi * f
     data = fourier_data(record, list(dict.fromkeys([*model.inputs, *model.outputs])), f)
     u = np.column_stack([data[c] for c in model.inputs])

@@ -38,6 +38,7 @@ from flightid.identification.data.coefficients import (
     differentiated,
     smoothed,
 )
+from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.identification.models import a_priori
@@ -377,7 +378,7 @@ def least_squares(x: np.ndarray, y: np.ndarray, colored: bool = True) -> LeastSq
         cov = cov_ols
         kind = "OLS"
     sst = float(np.sum((y - y.mean()) ** 2))
-    r2 = 1.0 - sse / sst if sst > 0 else math.nan
+    r2 = determination(sse, sst)
     sigma_max2 = sst / n
     # count the regressors other than a constant column for the F statistic
     has_const = np.any(np.all(np.isclose(x, x[:1]), axis=0))

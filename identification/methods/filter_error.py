@@ -52,6 +52,7 @@ import scipy.linalg
 from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import cramer_rao_covariance, standard_errors
 from flightid.identification.engine.gauss_newton import damped_newton_step
+from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.engine.refit import refit_without_unidentifiable
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.estimate import Estimate
@@ -604,9 +605,7 @@ def _result(prob: _Problem, fit: _Relaxed, unidentifiable: dict[str, str],
         name: {"measured": d.z[:, j], "model": predicted[:, j], "residual": ev.nu[:, j]}
         for j, name in enumerate(d.model.outputs)
     }
-    spread = np.sum((d.z - d.z.mean(axis=0)) ** 2, axis=0)
-    r2 = {o: float(1 - np.sum(ev.nu[:, j] ** 2) / spread[j]) if spread[j] > 0
-          else float("nan") for j, o in enumerate(d.model.outputs)}
+    r2 = r_squared_by_output(d.z, ev.nu, d.model.outputs)
     outs = d.model.outputs
     fit_stats = {
         "model": d.model.name,

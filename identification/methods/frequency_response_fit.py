@@ -14,6 +14,7 @@ import numpy as np
 
 from flightid.identification.estimate import Estimate
 from flightid.identification.frequency import state_space_fit as frequency_domain
+from flightid.identification.frequency.grids import default_windows
 from flightid.identification.frequency.response import frequency_response_arrays
 from flightid.identification.frequency.transfer_function import COHERENCE_MIN
 from flightid.identification.methods.protocol import LinearModelOptions, Method, option
@@ -152,20 +153,6 @@ def fit(records: Sequence[FlightRecord], model: str = "lateral",
                    windows=wins, responses=len(responses), whole_record=whole,
                    condition=cond)
     return est
-
-
-def default_windows(duration: float, dt: float, n_inputs: int) -> tuple[float, ...]:
-    """Composite windows (s): the longest that still gives n_inputs + 1 half-overlapped
-    segments (T 2/(q + 2): 2/3 of the record for one input), half and a quarter of it,
-    none under 40 samples.
-
-    Long windows matter: the Hann window widens a lightly damped resonance, and the
-    short windows alone would overstate the Dutch-roll damping (Cn_r 20 % too large on
-    the Navion yaw sweep with 40/20/10 s windows, 8 % with 64/32/16 s).
-    """
-    longest = 2.0 * duration / (n_inputs + 2)
-    wins = [longest, longest / 2, longest / 4]
-    return tuple(w for w in wins if w >= 40 * dt) or (longest,)
 
 
 METHOD = Method(

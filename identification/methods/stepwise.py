@@ -35,6 +35,7 @@ from itertools import combinations_with_replacement
 
 import numpy as np
 
+from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
@@ -64,7 +65,7 @@ def _sse(x: np.ndarray, y: np.ndarray) -> float:
 def _stats(x: np.ndarray, y: np.ndarray, sse: float) -> tuple[float, float]:
     n, p = x.shape
     sst = float(np.sum((y - y.mean()) ** 2))
-    r2 = 1.0 - sse / sst if sst > 0 else float("nan")
+    r2 = determination(sse, sst)
     pse = sse / n + (sst / n) * p / n
     return r2, pse
 
