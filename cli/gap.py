@@ -5,7 +5,6 @@ HTML report and the corrected aircraft optionally written (printing only; the wo
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Annotated
 
@@ -16,6 +15,7 @@ from rich.table import Table
 from flightid.api import gap
 from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_paths, read_record
+from flightid.files import json_safe
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, injected
 from flightid.identification.gap.refly import refly
@@ -76,7 +76,7 @@ def gap_command(
         d["injected"] = injected(recs)
         if written:
             d["aircraft_written"] = str(written)
-            d["refly"] = _finite(again)
+            d["refly"] = json_safe(again)
         print(json.dumps(d, indent=2))
         return
     console = Console()
@@ -212,12 +212,3 @@ def _short(key: str) -> str:
     return f"{first or entry}.{name}"
 
 
-def _finite(x: object) -> object:
-    """``x`` with NaN and infinities as None (strict JSON)."""
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_finite(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x

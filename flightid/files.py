@@ -14,6 +14,8 @@ command never writes a file of another kind over it unasked (``flightid.cli.chec
 from __future__ import annotations
 
 import errno
+import math
+import numbers
 import os
 import re
 import secrets
@@ -201,3 +203,30 @@ def read_toml(path: str | Path, what: str, kind: str = "TOML file") -> dict[str,
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not a readable {kind} ({exc})") from None
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` ready for strict JSON (RFC 8259 has no NaN or infinity).
+
+    Parameters
+    ----------
+    value : Any
+        A number, or dicts, lists and tuples of them, numpy scalars included.
+
+    Returns
+    -------
+    Any
+        The same structure (tuples as lists) with every non-finite number as None, numpy
+        floats as float and numpy integers as int; everything else unchanged.
+    """
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        return float(value) if math.isfinite(value) else None
+    return value

@@ -46,6 +46,15 @@ def test_rows_verdict_and_unidentifiable():
     assert [r.name for r in score(_estimate(), truth).rows] == ["Cm_alpha", "Cm_q", "Cm_de"]
 
 
+def test_an_infinite_sigma_is_null_in_strict_json():
+    # a zero standard error and a non-zero error: infinitely many sigmas
+    est = Estimate("test", ["Cm_alpha"], np.array([-1.2]), np.array([0.0]))
+    row = score(est, {"Cm_alpha": -1.3}).rows[0]
+    assert row.sigmas == float("inf")
+    d = json.loads(json.dumps(score(est, {"Cm_alpha": -1.3}).as_dict(), allow_nan=False))
+    assert d["rows"][0]["sigmas"] is None and d["rows"][0]["error"] == pytest.approx(0.1)
+
+
 def test_table_prints_unidentifiable_as_text():
     from rich.console import Console
 

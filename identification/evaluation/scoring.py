@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from flightid.derivatives import is_derivative
+from flightid.files import json_safe
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 
@@ -54,7 +55,7 @@ class Score:
             "method": self.method,
             "n_sigma": self.n_sigma,
             "verdict": self.verdict,
-            "rows": [{k: _finite(v) for k, v in asdict(r).items()} for r in self.rows],
+            "rows": [json_safe(asdict(r)) for r in self.rows],
         }
 
     def __str__(self) -> str:
@@ -179,9 +180,3 @@ def _row(name: str, truth: float, estimates: list[Estimate]) -> ScoreRow:
                 sig = 0.0 if error == 0 else math.copysign(math.inf, error)
             return ScoreRow(name, truth, value, std, error, sig, STATUS_ESTIMATED)
     return ScoreRow(name, truth, None, None, None, None, STATUS_NOT_ESTIMATED)
-
-
-def _finite(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return str(value)
-    return value

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from flightid.files import json_safe
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
 from flightid.scenarios.montecarlo.intervals import binomial_band, binomial_interval
 from flightid.scenarios.montecarlo.study import STATUS_FAILED
@@ -83,7 +84,7 @@ class Summary:
         """Plain data (NaN as None), JSON-ready."""
         return {"realizations": self.realizations, "failures": self.failures,
                 "failure_reasons": dict(self.failure_reasons),
-                "rows": [{k: _finite(v) for k, v in asdict(r).items()} for r in self.rows]}
+                "rows": [json_safe(asdict(r)) for r in self.rows]}
 
     def frame(self) -> pd.DataFrame:
         """The rows as a DataFrame indexed by derivative name."""
@@ -102,10 +103,6 @@ class Summary:
     def warnings(self) -> list[str]:
         """"<derivative>: <coverage warning>" for each derivative that has one."""
         return [f"{r.name}: {r.coverage_warning}" for r in self.rows if r.coverage_warning]
-
-
-def _finite(v: Any) -> Any:
-    return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
 def summarize(df: pd.DataFrame) -> Summary:
