@@ -6,9 +6,7 @@ histories, residuals, and each estimate with its 2-sigma bar against the truth.
 
 from __future__ import annotations
 
-import base64
 import html
-import io
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -18,13 +16,8 @@ from matplotlib.figure import Figure
 from flightid.channels import CHANNELS
 from flightid.files import write_text
 from flightid.identification.estimate import Estimate
+from flightid.identification.evaluation.embed import png_img
 from flightid.identification.methods import registry
-
-
-def _png(fig: Figure) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    return base64.b64encode(buf.getvalue()).decode()
 
 
 def time_history_figure(estimate: Estimate, title: str = "") -> Figure:
@@ -179,16 +172,11 @@ def write_html(
         if fit_rows:
             parts.append(_table(fit_rows, ["fit statistic", "value"]))
         if est.outputs:
-            parts.append(f"<img alt='time histories' src='data:image/png;base64,"
-                         f"{_png(time_history_figure(est))}'>")
+            parts.append(png_img(time_history_figure(est), "time histories"))
         if any(n.startswith("C") for n in est.names):
-            parts.append(f"<img alt='estimates' src='data:image/png;base64,"
-                         f"{_png(estimates_figure(est, truth))}'>")
+            parts.append(png_img(estimates_figure(est, truth), "estimates"))
     for caption, fig in figures:
-        data = (base64.b64encode(Path(fig).read_bytes()).decode()
-                if isinstance(fig, str | Path) else _png(fig))
-        parts.append(f"<h2>{html.escape(caption)}</h2><img alt='{html.escape(caption)}' "
-                     f"src='data:image/png;base64,{data}'>")
+        parts.append(f"<h2>{html.escape(caption)}</h2>{png_img(fig, caption)}")
     parts.append("</body></html>")
     path = Path(path)
     return write_text(path, "\n".join(parts), encoding="utf-8")

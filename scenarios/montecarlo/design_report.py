@@ -4,7 +4,6 @@ figure and the tables in STUDY/design-compare.html, and a Markdown table for doc
 
 from __future__ import annotations
 
-import base64
 import html
 import math
 from pathlib import Path
@@ -13,6 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
+from flightid.identification.evaluation.embed import png_img
 from flightid.scenarios.montecarlo.design import Comparison, compare
 from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
@@ -130,7 +130,6 @@ def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
     write_tables(comparison.frame(), folder / CSV, index=False)
     png = folder / PNG
     figure(comparison).savefig(png)
-    data = base64.b64encode(png.read_bytes()).decode()
     scatter, bias, bound = (comparison.table(c) for c in ("scatter", "bias", "mean_bound"))
     kinds = list(scatter.columns)
     parts = ["<!doctype html><html><head><meta charset='utf-8'><title>design-compare"
@@ -162,7 +161,7 @@ def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
                      + "".join(f"<th>{h}</th>" for h in RATIO_HEAD) + "</tr>")
         parts += ["<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in r) + "</tr>" for r in rows]
         parts.append("</table>")
-    parts.append(f"<img alt='scatter by design' src='data:image/png;base64,{data}'>")
+    parts.append(png_img(png, "scatter by design"))
     parts.append("<p>Per design: " + ", ".join(
         f"<a href='{html.escape(r.kind)}/report.html'>{html.escape(r.kind)}</a>"
         for r in comparison.results) + "</p></body></html>")

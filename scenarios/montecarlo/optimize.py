@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from flightid.channels import LATERAL_INPUTS
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.input_optimization import (
@@ -94,7 +95,7 @@ class Optimized:
 
 
 def optimize(card: str = "navion-demo", model: str = "lat",
-             surfaces: Sequence[str] = ("da", "dr"), criterion: str = "A",
+             surfaces: Sequence[str] = LATERAL_INPUTS, criterion: str = "A",
              band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
              settings: DesignSettings | None = None,
              derivatives: Sequence[str] | None = None,

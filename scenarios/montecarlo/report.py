@@ -7,7 +7,6 @@ also stands alone; the summary table also as STUDY/summary.csv."""
 
 from __future__ import annotations
 
-import base64
 import html
 import io
 import math
@@ -19,6 +18,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
+from flightid.identification.evaluation.embed import png_img
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.summary import Summary
@@ -99,8 +99,7 @@ def render(df: pd.DataFrame, summary: Summary, title: str,
                  "Each histogram also as histogram-&lt;derivative&gt;.png beside this file."
                  "</p><div>")
     for name, png in (histograms(df, summary) if pngs is None else pngs).items():
-        data = base64.b64encode(png).decode()
-        lines.append(f"<img alt='{html.escape(name)}' src='data:image/png;base64,{data}'>")
+        lines.append(png_img(png, name))
     lines.append("</div></body></html>")
     return "\n".join(lines)
 
