@@ -16,6 +16,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.api import design_compare
+from flightid.channels import LATERAL_INPUTS
 from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_choice, check_number, check_paths, check_unique
 from flightid.cli.design_compare import SURFACES
@@ -85,7 +86,7 @@ def design_optimize_command(
 ) -> None:
     """Optimise a multisine for the predicted bounds of the card's derivatives at the
     energy and input time of a built-in design; write it as a maneuver table."""
-    surfaces = tuple(surface or ("da", "dr"))
+    surfaces = tuple(surface or LATERAL_INPUTS)
     for s in surfaces:
         check_choice("--surface", s, SURFACES)
     check_unique("--surface", surfaces)

@@ -11,6 +11,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from flightid.cli.checks import check_choice
 from flightid.sim.effects.catalogue import ActsOn, listing, markdown_table
 
 
@@ -38,8 +39,7 @@ def effects_command(
 ) -> None:
     """The effect catalogue: every injectable effect, where it acts, its parameters (default
     magnitude for blind tests and allowed range) and what it does."""
-    if format not in ("table", "json", "markdown"):
-        raise ValueError(f"--format must be table, json or markdown, got {format!r}")
+    check_choice("--format", format, ("table", "json", "markdown"))
     if acts_on is not None and acts_on not in {a.value for a in ActsOn}:
         raise ValueError(f"--acts-on: unknown {acts_on!r}; one of "
                          f"{', '.join(a.value for a in ActsOn)}")

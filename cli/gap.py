@@ -14,7 +14,7 @@ from rich.table import Table
 
 from flightid.api import gap
 from flightid.cli import study_options as opts
-from flightid.cli.checks import Output, check_paths, read_record
+from flightid.cli.checks import Output, check_choice, check_paths, read_record
 from flightid.files import json_safe
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, injected
@@ -51,8 +51,7 @@ def gap_command(
 ) -> None:
     """Is there a gap between a JSBSim model and flight data; where it lies, which
     catalogue effect causes it, and how far it shrinks on held-out data (each axis)."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
     if axis not in ("both", "lateral", "longitudinal"):
         raise ValueError(f"--axis must be lateral, longitudinal or both, got {axis!r}")
     if surfaces not in (None, "position", "command"):

@@ -15,7 +15,7 @@ from rich.table import Table
 
 from flightid.api import gap_benchmark
 from flightid.cli import study_options as opts
-from flightid.cli.checks import MAX_SEED, Output, check_count, check_paths
+from flightid.cli.checks import MAX_SEED, Output, check_choice, check_count, check_paths
 from flightid.cli.progress import count_progress
 from flightid.scenarios.gap_benchmark import AIRCRAFT, TARGETS, Benchmark, check
 
@@ -99,8 +99,7 @@ def gap_benchmark_command(
     """The gap diagnosis's blind check: N drawn cases (an aircraft and an effect of the
     catalogue, a pair, or an effect outside it) and NULLS null cases, flown in turbulence,
     diagnosed without being told, and scored per kind against the targets."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
     check_count("--n", n, low=1, high=MAX_CASES)
     check_count("--nulls", nulls, low=0, high=MAX_CASES)
     check_count("--seed", seed, low=0, high=MAX_SEED)

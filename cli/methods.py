@@ -11,6 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from flightid.api import methods
+from flightid.cli.checks import check_choice
 
 
 def methods_command(
@@ -19,8 +20,7 @@ def methods_command(
 ) -> None:
     """List the identification methods: id, what it does, its models and every option
     with its type, default and meaning."""
-    if format not in ("table", "json"):
-        raise ValueError(f"--format must be table or json, got {format!r}")
+    check_choice("--format", format, ("table", "json"))
     found = methods()
     if method is not None and method not in found:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(found)}")

@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from flightid.cli.checks import check_aircraft_xml
+from flightid.cli.checks import check_aircraft_xml, check_choice
 from flightid.sim.jsbsim.model import Model, load
 from flightid.sim.jsbsim.trim import Trim, trim
 from flightid.sim.jsbsim.truth import derivatives
@@ -24,11 +24,6 @@ _FORMATS = ("table", "json")
 def _fail(message: str) -> ValueError:
     """Bad input: the app's error policy prints it as one line and exits 2."""
     return ValueError(message)
-
-
-def _check_format(fmt: str) -> None:
-    if fmt not in _FORMATS:
-        raise _fail(f"unknown format {fmt!r}; use table or json")
 
 
 def _trimmed(aircraft: str, altitude: float, speed: float, gamma_deg: float,
@@ -51,7 +46,7 @@ def trim_command(
     format: Annotated[str, typer.Option(help="table or json")] = "table",
 ) -> None:
     """Trim an aircraft with JSBSim and print alpha, attitude, surfaces and throttle."""
-    _check_format(format)
+    check_choice("--format", format, _FORMATS)
     _, t = _trimmed(aircraft, altitude, speed, gamma, bank, flaps)
     rows = [
         ("alpha", t.alpha, "rad"), ("theta", t.theta, "rad"), ("phi", t.phi, "rad"),
@@ -88,7 +83,7 @@ def truth_command(
     """Truth stability and control derivatives of the JSBSim model at level trim."""
     if axes not in ("body", "stability"):
         raise _fail(f"unknown axes {axes!r}; use body or stability")
-    _check_format(format)
+    check_choice("--format", format, _FORMATS)
     model, t = _trimmed(aircraft, altitude, speed, 0.0, 0.0, flaps)
     truth = derivatives(model, t, axes=axes, propulsion=propulsion)
     if format == "json":

@@ -56,7 +56,7 @@ def test_unknown_option_is_a_usage_error_exit_2():
 
 def test_bad_option_value_is_exit_2():
     out = run("truth", "navion", "--altitude", "0", "--speed", "50", "--format", "xml")
-    assert_one_line(out, 2, "flightid truth: unknown format 'xml'")
+    assert_one_line(out, 2, "flightid truth: --format 'xml' is not accepted")
 
 
 def test_malformed_card_names_file_line_and_field(tmp_path):

@@ -273,7 +273,7 @@ def test_study_on_local_processes_and_dask_resumes(tmp_path):
     (["--aircraft", "navion,b747"], "--aircraft b747"),
     (["--turbulence", "heavy"], "--turbulence must be one of calm, light, moderate"),
     (["--workers", "0"], "--workers must be at least 1"),
-    (["--format", "xml"], "table or json"),
+    (["--format", "xml"], "use one of table, json"),
 ])
 def test_command_rejects_bad_input(args, message):
     r = CliRunner().invoke(app, ["gap-benchmark", *args])

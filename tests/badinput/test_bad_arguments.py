@@ -51,17 +51,17 @@ def test_identify_arguments(cli, flight_file, extra, expected):
 
 
 @pytest.mark.parametrize("args, expected", [
-    (["methods", "--format", "xml"], "table or json"),
+    (["methods", "--format", "xml"], "use one of table, json"),
     (["methods", "nosuch"], "unknown method 'nosuch'"),
     (["trim", "navion", "--altitude", "300", "--speed", "50", "--format", "xml"],
-     "unknown format 'xml'"),
+     "--format 'xml' is not accepted; use one of table, json"),
     (["truth", "navion", "--altitude", "300", "--speed", "50", "--axes", "wind"],
      "unknown axes 'wind'"),
     (["trim", "navion", "--altitude", "nan", "--speed", "50"], "finite"),
     (["trim", "navion", "--altitude", "1e9", "--speed", "50"], "absurd"),
     (["trim", "navion", "--altitude", "300", "--speed", "-5"], "speed"),
     (["trim", "navion", "--altitude", "300", "--speed", "fast"], "--speed"),  # typer usage
-    (["effects", "--format", "xml"], "table, json or markdown"),
+    (["effects", "--format", "xml"], "use one of table, json, markdown"),
     (["effects", "--acts-on", "nothing"], "unknown 'nothing'"),
     (["identify", "x.parquet", "--no-such-option"], "no such option"),  # typer usage
     (["simulate", "navion-demo"], "give a CARD and -o/--output"),
