@@ -97,6 +97,9 @@ _TABLE: tuple[tuple[str, str, str], ...] = (
 CHANNELS: dict[str, Channel] = {n: Channel(n, u, d) for n, u, d in _TABLE}
 
 CONTROLS: tuple[str, ...] = ("de", "da", "dr", "throttle")
+# the surfaces of each axis: elevator; aileron and rudder
+LONGITUDINAL_INPUTS: tuple[str, ...] = ("de",)
+LATERAL_INPUTS: tuple[str, ...] = ("da", "dr")
 
 
 def unit_of(name: str) -> str:

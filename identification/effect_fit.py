@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flightid.channels import CONTROLS, LATERAL_INPUTS
 from flightid.identification.engine.gauss_newton import maximum_likelihood
 from flightid.identification.engine.likelihood import (
     concentrated_cost,
@@ -65,7 +66,6 @@ OFFSET = "offset_"  # a control's constant offset, fitted with the effect (rad, 
 OFFSET_STEP = 1e-4  # its finite-difference step (rad: 0.006 deg)
 LONGITUDINAL = ("V", "alpha", "q", "theta", "de")
 LATERAL = ("beta", "p", "r", "phi", "da", "dr")
-CONTROLS = ("de", "da", "dr", "throttle")
 
 
 @dataclass
@@ -99,7 +99,7 @@ class EffectFit:
 def default_outputs(effect: AugmentEffect) -> tuple[str, ...]:
     """The outputs compared: lateral for an aileron or rudder effect, else longitudinal."""
     surface = effect.options().get("surface", "de")
-    return LATERAL if surface in ("da", "dr") else LONGITUDINAL
+    return LATERAL if surface in LATERAL_INPUTS else LONGITUDINAL
 
 
 def parameter_scale(p: Parameter) -> float:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flightid.channels import LATERAL_INPUTS
 from flightid.record import FlightRecord
 from flightid.units import G0
 
@@ -267,7 +268,7 @@ def lateral(
     return LinearModel(
         name="lateral",
         states=("beta", "p", "r", "phi"),
-        inputs=("da", "dr"),
+        inputs=LATERAL_INPUTS,
         outputs=("beta", "p", "r", "phi", "ay"),
         parameters=parameters,
         start=start_values,

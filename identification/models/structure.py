@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from flightid.channels import LATERAL_INPUTS
 from flightid.identification.models import linear as lm
 
 ALIASES = {"lat": "lateral", "lon": "longitudinal"}
@@ -102,7 +103,7 @@ def linear_channels(model: str) -> tuple[str, ...]:
 
 # inputs and outputs of each linear preset (checked against the models in the tests)
 _PRESET_SIGNALS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "lateral": (("da", "dr"), ("beta", "p", "r", "phi", "ay")),
+    "lateral": (LATERAL_INPUTS, ("beta", "p", "r", "phi", "ay")),
     "short_period": (("de",), ("alpha", "q", "az")),
     "longitudinal": (("de",), ("V", "alpha", "q", "theta", "az")),
 }
