@@ -90,8 +90,21 @@ class Flight:
 
 
 def fly(card: str | Path | Card, seed: int | None = None) -> Flight:
-    """Fly a flight card (a library name such as "navion-demo", a TOML path, or a Card)
-    with ``seed`` (default: the card's) in JSBSim; a pure function of card and seed."""
+    """Fly a flight card in JSBSim; a pure function of card and seed.
+
+    Parameters
+    ----------
+    card : str, Path or Card
+        A library name such as "navion-demo", a TOML path, or a Card.
+    seed : int, optional
+        The seed of sensor noise and turbulence (default: the card's).
+
+    Returns
+    -------
+    Flight
+        The measured and the true record (SI units, angles in rad), the exact derivatives
+        (per rad) and the card's maneuvers and a priori values.
+    """
     c = card if isinstance(card, Card) else load_card(card)
     used = c.seed if seed is None else int(seed)
     measured, truth_record = fly_card(c, used)
@@ -108,14 +121,39 @@ def fly(card: str | Path | Card, seed: int | None = None) -> Flight:
 def truth(aircraft: str, altitude: float, speed: float, *, gamma: float = 0.0,
           bank: float = 0.0, flaps: float = 0.0, axes: str = "body",
           propulsion: bool = False) -> Truth:
-    """Exact derivatives of a JSBSim aircraft (project name, stock JSBSim name or XML path)
-    trimmed at ``altitude`` (m above sea level), true airspeed ``speed`` (m/s), flight-path
-    angle ``gamma``, ``bank`` and ``flaps`` (rad); ``axes`` 'body' or 'stability'."""
+    """Exact derivatives of a JSBSim aircraft at a trimmed condition.
+
+    Parameters
+    ----------
+    aircraft : str
+        A project name, a stock JSBSim name or an XML path.
+    altitude : float
+        Altitude above sea level, m.
+    speed : float
+        True airspeed, m/s.
+    gamma, bank, flaps : float
+        Flight-path angle, bank angle and flap deflection, rad.
+    axes : str
+        'body' or 'stability'.
+    propulsion : bool
+        Include the propeller's contribution.
+
+    Returns
+    -------
+    Truth
+        The trim and the derivatives (per rad, rates nondimensional).
+    """
     model = load(aircraft)
     trimmed = trim(model, altitude, speed, gamma, bank, flaps)
     return derivatives(model, trimmed, axes=axes, propulsion=propulsion)
 
 
 def methods() -> dict[str, Method]:
-    """{id: Method} of every registered identification method (built-in and plug-ins)."""
+    """Every registered identification method, built-in and plug-ins.
+
+    Returns
+    -------
+    dict of str to Method
+        {id: Method}.
+    """
     return registry.methods()

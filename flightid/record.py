@@ -28,7 +28,18 @@ _READERS = {".parquet": read_parquet, ".csv": read_csv, ".mat": read_mat}
 
 
 def read(path: str | Path) -> FlightRecord:
-    """Read a flight record from .parquet, .csv (as written by flightid) or SIDPAC .mat."""
+    """Read a flight record from .parquet, .csv (as written by flightid) or SIDPAC .mat.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its suffix names the format.
+
+    Returns
+    -------
+    FlightRecord
+        The record, in SI units with angles in rad.
+    """
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")

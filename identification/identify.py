@@ -73,16 +73,31 @@ def excited_model(record: FlightRecord, method: str = "oe") -> str:
 def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto", *,
              window: str | Sequence[float] = "auto", strict: bool = False,
              **options: Any) -> Estimate:
-    """Estimate ``model``'s derivatives from ``record`` by ``method`` (an id of
-    ``flightid methods``); ``options`` are the method's (see its Options dataclass).
+    """Estimate a model's derivatives from a record by one identification method.
 
-    model: a preset, a structure, or 'auto'/None (default): ``excited_model``, the
-    short-period model for an elevator-only record, the method's default otherwise
-    (``fit['model']`` says which).
-    window: 'auto' (default) fits a record that lists its maneuvers on the window of the
-    maneuvers on the model's inputs; 'none' uses the whole record; (start, end) in s.
-    strict: an iterative fit that does not converge raises
-    ``convergence.NotConvergedError`` instead of warning (``NotConvergedWarning``).
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight data (SI units, angles in rad).
+    method : str
+        An id of ``flightid methods`` (default ``oe``, output error).
+    model : str or None
+        A preset, a structure, or 'auto'/None (default): ``excited_model``, the
+        short-period model for an elevator-only record, the method's default otherwise
+        (``fit['model']`` says which).
+    window : str or sequence of float
+        'auto' (default) fits a record that lists its maneuvers on the window of the
+        maneuvers on the model's inputs; 'none' uses the whole record; (start, end) in s.
+    strict : bool
+        An iterative fit that does not converge raises ``convergence.NotConvergedError``
+        instead of warning (``NotConvergedWarning``).
+    **options
+        The method's options (see its Options dataclass, ``flightid methods``).
+
+    Returns
+    -------
+    Estimate
+        The derivatives (per rad, rates nondimensional), their standard errors and the fit.
 
     A linear model's nuisance biases are split into their trim part and the excess
     (``nuisance.bias_budget``, in ``fit['biases']``); an excess beyond what an instrument

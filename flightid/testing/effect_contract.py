@@ -290,7 +290,22 @@ def check_zero_unchanged(entry: Entry, flight: ContractFlight) -> None:
 
 
 def run_effect_check(name: str, entry: Entry, flight: ContractFlight | None = None) -> None:
-    """One check of ``EFFECT_CHECKS`` by name (the injections fly ``flight``)."""
+    """Run one check of the effect contract by name.
+
+    Parameters
+    ----------
+    name : str
+        One of ``EFFECT_CHECKS``.
+    entry : Entry
+        The catalogue entry.
+    flight : ContractFlight, optional
+        The flight the injection checks fly (default: a new ``contract_flight()``).
+
+    Raises
+    ------
+    AssertionError
+        Naming the entry and what does not hold.
+    """
     declared = {"declaration": check_declaration, "implementation": check_implementation,
                 "sections": check_sections}
     injected = {"default_changes": check_default_changes,

@@ -64,9 +64,28 @@ class Recovery:
 def within(truth: float, estimate: float, std: float | None, sigma: float | None = 3.0,
            rel: float | None = None, abs_tol: float = ZERO_TRUTH_TOL,
            need: str = "both") -> bool:
-    """Whether an estimate lies within ``sigma`` standard errors ``std`` of the truth
-    and/or (``need``: ``both`` or ``either``) within the relative tolerance ``rel`` (0.05:
-    5 % of |truth|; a zero truth: |error| <= ``abs_tol``, in the derivative's units)."""
+    """Whether an estimate lies within the tolerance of the truth.
+
+    Parameters
+    ----------
+    truth, estimate : float
+        The true and the estimated value (the derivative's units).
+    std : float or None
+        The estimate's standard error (same units).
+    sigma : float or None
+        Standard errors the estimate may lie from the truth (None: not checked).
+    rel : float or None
+        Relative tolerance (0.05: 5 % of |truth|; None: not checked).
+    abs_tol : float
+        The tolerance of a zero truth instead of ``rel`` (the derivative's units).
+    need : str
+        ``both`` or ``either`` of the sigma and relative tests must hold.
+
+    Returns
+    -------
+    bool
+        True when inside.
+    """
     if need not in NEEDS:
         raise ValueError(f"need must be one of {', '.join(NEEDS)}, got {need!r}")
     if sigma is None and rel is None:
@@ -81,7 +100,24 @@ def within(truth: float, estimate: float, std: float | None, sigma: float | None
 
 
 def miss_text(seed: int, name: str, truth: float, estimate: float, std: float | None) -> str:
-    """One miss: estimate, truth, error in % of the truth and in standard errors."""
+    """One miss in words: estimate, truth, error in % of the truth and in standard errors.
+
+    Parameters
+    ----------
+    seed : int
+        The flight's seed.
+    name : str
+        The derivative.
+    truth, estimate : float
+        The true and the estimated value (the derivative's units).
+    std : float or None
+        The estimate's standard error.
+
+    Returns
+    -------
+    str
+        e.g. ``seed 3 Cn_p: estimate -0.0612, truth -0.0644, error +5.0 % (+4.2 sigma)``.
+    """
     error = estimate - truth
     percent = f"{100 * error / abs(truth):+.1f} %" if truth != 0 else "truth 0"
     sigmas = f"{error / std:+.1f} sigma" if std else "no bound"
@@ -93,9 +129,28 @@ def recovery(method: str | Method, card: str = "navion-demo", seeds: Iterable[in
              sigma: float | None = 3.0, model: str | None = None, *, rel: float | None = None,
              abs_tol: float = ZERO_TRUTH_TOL, need: str = "both",
              **options: Any) -> Recovery:
-    """Fly ``card`` once per seed, identify with ``method`` (an id, or a Method that is
-    registered for the call) and count the estimates within the tolerance (``within``):
-    ``sigma`` standard errors and/or the relative tolerance ``rel`` (``need``)."""
+    """Fly a card once per seed, identify, and count the estimates within the tolerance.
+
+    Parameters
+    ----------
+    method : str or Method
+        A method's id, or a Method value (registered for the call).
+    card : str
+        A library card.
+    seeds : iterable of int
+        One flight per seed.
+    sigma, rel, abs_tol, need
+        The tolerance, as in ``within``.
+    model : str, optional
+        The model (default: the method's choice for the record).
+    **options
+        The method's options.
+
+    Returns
+    -------
+    Recovery
+        The counts of (seed, derivative) pairs inside and the misses in words.
+    """
     within(0.0, 0.0, 1.0, sigma, rel, abs_tol, need)  # a bad tolerance fails before flying
     if isinstance(method, Method) and method.id not in registry.methods():
         registry.register(method)
@@ -128,13 +183,38 @@ def assert_recovers(method: str | Method, card: str = "navion-demo",
 
     Parameters
     ----------
-    sigma : standard errors an estimate may lie from the truth (None: not checked).
-    rel : relative tolerance (0.05: 5 % of |truth|; None: not checked); a zero truth is
+    method : str or Method
+        A method's id, or a Method value (registered for the call).
+    card : str
+        A library card.
+    seeds : iterable of int
+        One flight per seed.
+    sigma : float or None
+        Standard errors an estimate may lie from the truth (None: not checked).
+    fraction : float
+        The share of pairs that must be inside (0..1).
+    model : str, optional
+        The model (default: the method's choice for the record).
+    rel : float or None
+        Relative tolerance (0.05: 5 % of |truth|; None: not checked); a zero truth is
         held to ``abs_tol`` instead (absolute, in the derivative's units, per rad).
-    need : ``both`` (default) or ``either`` of the sigma and relative tests must hold
-        when both are given.
+    abs_tol : float
+        The tolerance of a zero truth (the derivative's units).
+    need : str
+        ``both`` (default) or ``either`` of the sigma and relative tests must hold when
+        both are given.
+    **options
+        The method's options.
 
-    The AssertionError lists every miss: estimate, truth, error in % and in sigmas.
+    Returns
+    -------
+    Recovery
+        The counts, when the assertion holds.
+
+    Raises
+    ------
+    AssertionError
+        Listing every miss: estimate, truth, error in % and in sigmas.
     """
     result = recovery(method, card, seeds, sigma, model, rel=rel, abs_tol=abs_tol,
                       need=need, **options)

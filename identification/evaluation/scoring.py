@@ -94,12 +94,27 @@ def score(
     n_sigma: float = 3.0,
     scope: str = "estimated",
 ) -> Score:
-    """Compare one or several estimates with truth values {derivative name: value} (or the
-    truth a simulated record carries).
+    """Compare one or several estimates with the truth.
 
-    scope 'estimated' (default): a row per derivative the estimate estimated or found
-    unidentifiable; 'all': a row per truth value, "not estimated" where no estimate has it.
-    Coefficients at the reference condition (``C*_0``) are not scored.
+    Parameters
+    ----------
+    estimate : Estimate or iterable of Estimate
+        What the methods estimated.
+    truth : mapping of str to float, or FlightRecord
+        {derivative name: value} (per rad, rates nondimensional), or a simulated record
+        carrying its truth.
+    n_sigma : float
+        How many standard errors an estimate may lie from the truth and count as inside.
+    scope : str
+        'estimated' (default): a row per derivative the estimate estimated or found
+        unidentifiable; 'all': a row per truth value, "not estimated" where no estimate
+        has it. Coefficients at the reference condition (``C*_0``) are not scored.
+
+    Returns
+    -------
+    Score
+        A row per derivative (truth, estimate, standard error, error, error in standard
+        errors) and a one-line verdict.
     """
     if scope not in SCOPES:
         raise ValueError(f"scope must be one of {', '.join(SCOPES)}, got {scope!r}")

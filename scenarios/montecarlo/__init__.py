@@ -34,16 +34,44 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
         progress: Callable[[int, int], None] | None = None, *, seed: int | None = None,
         dask_scheduler_file: str | Path | None = None, report: bool = True,
         disperse: Sequence[str] = ()) -> Summary:
-    """Run (or continue, or extend) the study of ``n`` realizations of ``card`` in
-    ``study_dir`` (default ``montecarlo/<card>-<method>-<model>``) and return its Summary.
+    """Run (or continue, or extend) a Monte Carlo study of one card.
 
     Realizations already stored are not recomputed; a stored study described otherwise
-    (card, method, model, options, seed, dispersions) is refused (StudyMismatch). ``workers`` local
-    processes (default: one per CPU), or the Dask scheduler at ``dask_address`` / in
-    ``dask_scheduler_file``. ``progress(done, total)`` after each realization.
-    ``disperse``: dispersion specs such as ``mass_scale:0.05`` (``disperse.parse``), drawn
-    anew for each realization; their values are stored in its rows and its truth is the
-    dispersed aircraft's.
+    (card, method, model, options, seed, dispersions) is refused (StudyMismatch).
+
+    Parameters
+    ----------
+    card : str or Path
+        A library card name or a card file.
+    n : int
+        The number of realizations.
+    method, model : str
+        The identification method's id and its model.
+    options : mapping, optional
+        The method's options.
+    study_dir : str or Path, optional
+        Where the study is stored (default ``montecarlo/<card>-<method>-<model>``).
+    workers : int, optional
+        Local processes (default: one per CPU).
+    dask_address : str, optional
+        A Dask scheduler's address (instead of local processes).
+    progress : callable, optional
+        ``progress(done, total)`` after each realization.
+    seed : int, optional
+        The study's seed (default: the card's).
+    dask_scheduler_file : str or Path, optional
+        A Dask scheduler file (instead of ``dask_address``).
+    report : bool
+        Write the HTML report and the histograms into ``study_dir``.
+    disperse : sequence of str
+        Dispersion specs such as ``mass_scale:0.05`` (``disperse.parse``), drawn anew for
+        each realization; their values are stored in its rows and its truth is the
+        dispersed aircraft's.
+
+    Returns
+    -------
+    Summary
+        Per derivative: bias, scatter, mean bound, coverage (derivative units, per rad).
     """
     dispersions = parse_all(disperse)  # a bad spec fails here, not once per realization
     description = Study(str(card), int(n), method, model, dict(options or {}), seed,

@@ -172,8 +172,20 @@ def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
 
 def compare_and_report(study_dir: str | Path = "design-compare", **kwargs: object
                        ) -> tuple[Comparison, Path, Path]:
-    """``design.compare`` (same keywords) and then ``write`` into ``study_dir``: the
-    Comparison, the PNG and the HTML page."""
+    """Compare input designs (``design.compare``) and write the comparison's figure and page.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        Where the studies, the PNG and the HTML page go.
+    **kwargs
+        ``design.compare``'s keywords (card, designs, n, method, model, ...).
+
+    Returns
+    -------
+    tuple of (Comparison, Path, Path)
+        The comparison, the PNG and the HTML page.
+    """
     comparison = compare(study_dir=study_dir, **kwargs)  # type: ignore[arg-type]
     png, page = write(comparison, study_dir)
     return comparison, png, page
