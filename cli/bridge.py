@@ -40,6 +40,7 @@ from flightid.sim.bridge.air import (
     serve_record,
     serve_simulation,
 )
+from flightid.sim.bridge.gaps import MAX_GAP_SAMPLES
 from flightid.sim.bridge.link import (
     Link,
     LinkFaults,
@@ -48,14 +49,10 @@ from flightid.sim.bridge.link import (
     open_pty_pair,
     parse_hostport,
 )
-from flightid.sim.bridge.recorder import (
-    MAX_GAP_SAMPLES,
-    SEGMENTS,
-    convert_tlog,
-    record_stream,
-)
+from flightid.sim.bridge.recording import record_stream
 from flightid.sim.bridge.schedule import PROFILES
 from flightid.sim.bridge.signing import SenderFilter, read_key, state_path
+from flightid.sim.bridge.tlog import SEGMENTS, convert_tlog
 from flightid.sim.flight.simulation import Simulation
 from flightid.sim.jsbsim.trim import trim
 

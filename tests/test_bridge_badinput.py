@@ -21,14 +21,11 @@ from flightid.record import read
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.bridge.air import BridgeConfig
 from flightid.sim.bridge.frames import TlogWriter, read_tlog
+from flightid.sim.bridge.gaps import nominal_interval
 from flightid.sim.bridge.link import LinkFaults, UdpLink
+from flightid.sim.bridge.loopback import record_bridged
 from flightid.sim.bridge.messages import message_time
-from flightid.sim.bridge.recorder import (
-    convert_tlog,
-    decode_tlog,
-    nominal_interval,
-    record_bridged,
-)
+from flightid.sim.bridge.tlog import convert_tlog, decode_tlog
 
 RUNNER = CliRunner()
 

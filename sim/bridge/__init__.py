@@ -6,9 +6,11 @@ Air side: ``air`` (stream a FlightRecord or fly a simulation in the loop), ``sch
 (recorder streams and the link budget), ``messages`` (MAVLink 2 encoding of canonical
 channels and its inverse), ``link`` (serial, pty and UDP links and their faults),
 ``signing`` (who may send controls: the ground station's ids, MAVLink 2 signing).
-Ground side: ``frames`` (resynchronising frame scanner, .tlog files), ``recorder``
-(record a stream, convert a tlog to a FlightRecord), ``align`` (clock alignment of
-separately clocked recorders).
+Ground side: ``frames`` (resynchronising frame scanner, .tlog files), ``recording``
+(record a stream), ``sources`` (per-source sequence losses), ``tlog`` (convert a tlog to
+a FlightRecord, without importing the air side), ``gaps`` (its time base and the gaps
+too long to interpolate), ``align`` (clock alignment of separately clocked recorders).
+``loopback`` joins both sides on this machine.
 
 The package imports nothing itself: import the module that holds what you need, e.g.
 ``from flightid.sim.bridge.air import serve_record``. The command line for it lives in

@@ -1,219 +1,31 @@
-"""The ground side of the recorder bridge: record a MAVLink stream, convert tlogs.
-
-``record_stream`` reads bytes from a link (serial device, pty, loopback UDP), keeps every
-intact packet (``frames.FrameScanner``), writes them to a standard .tlog and a
-``<tlog>.json`` report (corrupt frames, junk bytes, sequence losses).
-``convert_tlog`` turns a tlog into a FlightRecord: canonical channels in SI
-(``messages.decode``), separately clocked recorders aligned to the reference
-recorder's clock (``align``), and every channel resampled onto one uniform time
-base by linear interpolation (the method and its details are stated in the metadata).
-
-Lost packets are counted from MAVLink sequence numbers per (sysid, compid). A sequence
-number has 8 bits, so a gap of more than 255 packets wraps; gaps are unwrapped with the
-source's own time stamps and its mean packet rate (the wrap count closest to rate * dt).
+"""A .tlog as a FlightRecord: canonical channels in SI (``messages.decode``), separately
+clocked recorders aligned to the reference recorder's clock (``align``), and every channel
+resampled onto one uniform time base by linear interpolation (the method and its details
+are stated in the metadata). Reading a tlog imports nothing of the air side.
 """
 
 from __future__ import annotations
 
 import json
-import threading
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from flightid.files import atomic_path, write_text
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.bridge.air import BridgeConfig, serve_record
 from flightid.sim.bridge.align import ClockMap, timesync_map, xcorr_map
-from flightid.sim.bridge.frames import Frame, FrameScanner, TlogWriter, read_tlog
-from flightid.sim.bridge.link import Link, SerialLink, UdpLink, open_pty_pair
+from flightid.sim.bridge.frames import read_tlog
+from flightid.sim.bridge.gaps import (
+    MAX_GAP_SAMPLES,
+    MIN_RECORD_SAMPLES,
+    grid_rate,
+    long_gaps,
+    longest_stretch,
+    nominal_interval,
+)
 from flightid.sim.bridge.messages import CHANNEL_SOURCES, ServoMap, decode, message_time
+from flightid.sim.bridge.sources import Source, SourceLoss, loss_dict, sequence_losses, source_name
 from flightid.sim.jsbsim.model import load
-
-Source = tuple[int, int]
-
-
-def source_name(src: Source) -> str:
-    """'sysid/compid'."""
-    return f"{src[0]}/{src[1]}"
-
-
-@dataclass
-class SourceLoss:
-    """Packets received from one source and packets missing between them."""
-
-    received: int = 0
-    lost: int = 0
-    wraps: int = 0  # gaps longer than 255 packets found by the time stamps
-
-    @property
-    def loss_rate(self) -> float:
-        """lost / (received + lost)."""
-        total = self.received + self.lost
-        return self.lost / total if total else 0.0
-
-
-def sequence_losses(packets: list[tuple[Source, int, float | None]]) -> dict[Source, SourceLoss]:
-    """Per source, packets lost between the first and last received (seq gaps).
-
-    ``packets``: (source, seq, message time or None) in arrival order. Between two
-    received packets that carry time stamps, the number of 256-packet wraps is the one
-    that brings the sequence advance closest to (mean packet rate) * (time between them).
-    """
-    by_src: dict[Source, list[tuple[int, float]]] = {}
-    for src, seq, t in packets:
-        by_src.setdefault(src, []).append((seq, np.nan if t is None else t))
-    out = {}
-    for src, items in by_src.items():
-        seq = np.array([s for s, _ in items])
-        t = np.array([x for _, x in items], dtype=float)
-        adv = (np.diff(seq) % 256).astype(float)
-        adv[adv == 0] = 256.0  # same seq again: a full wrap (as mavutil counts it)
-        timed = np.flatnonzero(np.isfinite(t))
-        wraps = 0
-        if len(timed) >= 2:
-            # advance and elapsed time between consecutive time-stamped packets
-            seg_adv = np.array([adv[a:b].sum() for a, b in zip(timed[:-1], timed[1:],
-                                                                strict=True)])
-            seg_dt = np.diff(t[timed])
-            for _ in range(2):  # the rate from the unwrapped advances, then once more
-                pos = seg_dt > 0
-                if not pos.any() or seg_dt[pos].sum() <= 0:
-                    break
-                rate = seg_adv.sum() / seg_dt[pos].sum()
-                k = np.where(pos, np.round((rate * seg_dt - seg_adv) / 256.0), 0.0)
-                k = np.maximum(k, 0.0)
-                seg_adv = seg_adv + 256.0 * k
-                wraps += int(k.sum())
-            total = seg_adv.sum() + adv[: timed[0]].sum() + adv[timed[-1]:].sum()
-        else:
-            total = adv.sum()
-        out[src] = SourceLoss(len(items), int(total - (len(items) - 1)), wraps)
-    return out
-
-
-@dataclass
-class RecordingReport:
-    """What the ground side got: bytes, frames, rejects and per-source losses."""
-
-    tlog: str
-    duration: float = 0.0
-    scan: dict = field(default_factory=dict)
-    sources: dict[str, dict] = field(default_factory=dict)
-    ended_by: str = ""
-
-    def as_dict(self) -> dict:
-        """Plain data."""
-        return dict(vars(self))
-
-    def summary(self) -> str:
-        """Readable summary."""
-        s = self.scan
-        lines = [
-            f"{self.tlog}: {s.get('frames', 0)} packets in {self.duration:.1f} s "
-            f"({self.ended_by}); {s.get('bytes', 0)} bytes, {s.get('rejected', 0)} corrupt "
-            f"frame attempts, {s.get('junk_bytes', 0)} junk bytes"
-        ]
-        for name, d in self.sources.items():
-            lines.append(f"  source {name}: {d['received']} received, {d['lost']} lost "
-                         f"({100 * d['loss_rate']:.2f} %)")
-        return "\n".join(lines)
-
-
-def _loss_dict(losses: dict[Source, SourceLoss]) -> dict[str, dict]:
-    return {source_name(s): {"received": v.received, "lost": v.lost, "loss_rate": v.loss_rate,
-                             "wraps": v.wraps} for s, v in sorted(losses.items())}
-
-
-def record_stream(
-    link: Link, tlog_path: str | Path, *, duration: float | None = None,
-    idle_timeout: float = 5.0, first_timeout: float = 30.0, on_frame=None,
-    stop: threading.Event | None = None,
-) -> RecordingReport:
-    """Record intact packets from ``link`` into a .tlog until ``duration`` s have passed,
-    the stream ends, nothing arrives for ``idle_timeout`` s (``first_timeout`` s before
-    the first byte), or ``stop`` is set and nothing is pending. Writes ``<tlog>.json``.
-
-    The tlog is written to a temporary file beside ``tlog_path`` and moved there when the
-    recording ends (also when it is interrupted: the packets recorded so far are kept); an
-    error leaves no partial tlog and an existing file untouched. A recording without a
-    single intact packet raises TimeoutError and writes nothing."""
-    tlog_path = Path(tlog_path)
-    with atomic_path(tlog_path) as tmp:
-        report = _record_into(link, tlog_path, tmp, duration, idle_timeout, first_timeout,
-                              on_frame, stop)
-        if isinstance(report, RecordingReport) and not report.scan.get("frames"):
-            name = getattr(link, "name", "the link")
-            junk = report.scan.get("bytes", 0)
-            raise TimeoutError(
-                f"no MAVLink packet arrived on {name} ({report.ended_by}"
-                + (f"; {junk} bytes, none of them an intact packet" if junk else "")
-                + f"); nothing written to {tlog_path}")
-    if isinstance(report, KeyboardInterrupt):
-        raise report
-    write_text(str(tlog_path) + ".json", json.dumps(report.as_dict(), indent=2))
-    return report
-
-
-def _record_into(link: Link, tlog_path: Path, tmp: Path, duration: float | None,
-                 idle_timeout: float, first_timeout: float, on_frame,
-                 stop: threading.Event | None) -> RecordingReport | KeyboardInterrupt:
-    """The recording loop of :func:`record_stream`, writing into ``tmp``; an interrupt is
-    returned (not raised) so that the packets recorded so far are kept."""
-    scanner = FrameScanner()
-    writer = TlogWriter(tmp)
-    packets: list[tuple[Source, int, float | None]] = []
-    start = time.monotonic()
-    last_data = None
-    ended = "duration"
-
-    def keep(frames: list[Frame]) -> None:
-        now = time.time()
-        for fr in frames:
-            writer.write(now, fr.raw)
-            packets.append((fr.source, fr.msg.get_seq(), message_time(fr.msg)))
-            if on_frame is not None:
-                on_frame(fr)
-
-    try:
-        while True:
-            now = time.monotonic()
-            if duration is not None and now - start >= duration:
-                ended = "duration"
-                break
-            wait = 0.1 if duration is None else max(0.0, min(0.1, start + duration - now))
-            data = link.read(wait)
-            if data is None:
-                ended = "end of stream"
-                break
-            if not data and stop is not None and stop.is_set():
-                ended = "stopped by the sender"
-                break
-            if data:
-                last_data = time.monotonic()
-                keep(scanner.feed(data))
-                if link.datagrams:
-                    keep(scanner.flush())
-            elif last_data is None and time.monotonic() - start > first_timeout:
-                ended = f"no data within {first_timeout} s"
-                break
-            elif last_data is not None and time.monotonic() - last_data > idle_timeout:
-                ended = f"idle for {idle_timeout} s"
-                break
-        keep(scanner.flush())
-    except KeyboardInterrupt as exc:
-        return exc
-    finally:
-        writer.close()
-    return RecordingReport(
-        str(tlog_path), time.monotonic() - start, scanner.stats.as_dict(),
-        _loss_dict(sequence_losses(packets)), ended,
-    )
-
-
-# -- tlog -> FlightRecord ------------------------------------------------------------------
 
 
 @dataclass
@@ -485,81 +297,6 @@ def _xcorr_any(channels, src, maps, max_offset) -> tuple[ClockMap | None, str]:
     return best, ("" if best else err)
 
 
-def nominal_interval(t: np.ndarray) -> float:
-    """The interval (s) a series was sent at: its most frequent time step (to 0.1 ms; the
-    smallest of equally frequent ones). With independent losses a step of k intervals
-    has probability (1 - p) p^(k-1), largest at k = 1 whatever the loss rate p."""
-    steps = np.round(np.diff(t), 4)
-    steps = steps[steps > 0]
-    if not steps.size:
-        return float("inf")
-    values, counts = np.unique(steps, return_counts=True)
-    return float(values[np.argmax(counts)])
-
-
-def _grid_rate(times: list[np.ndarray], intervals: list[float]) -> float:
-    """Rate (Hz, to 1 mHz) of the most densely sampled series (times on the reference clock,
-    their nominal intervals in s)."""
-    usable = [i for i in range(len(times)) if len(times[i]) >= 2 and np.isfinite(intervals[i])]
-    if not usable:
-        return 0.0
-    k = max(usable, key=lambda i: len(times[i]) / max(float(np.ptp(times[i])), 1e-9))
-    return round(1.0 / intervals[k], 3)
-
-
-@dataclass(frozen=True)
-class Gap:
-    """A stretch (s, reference clock) over which a channel has no sample for longer than
-    the allowed number of its own sample intervals (``missing`` samples)."""
-
-    channel: str
-    start: float
-    end: float
-    missing: int
-
-    def describe(self) -> str:
-        """'V from 12.300 to 12.900 s (0.600 s, 14 samples missing)'."""
-        return (f"{self.channel} from {self.start:.3f} to {self.end:.3f} s "
-                f"({self.end - self.start:.3f} s, {self.missing} samples missing)")
-
-
-#: default longest run of missing samples of a channel interpolated over (its own samples)
-MAX_GAP_SAMPLES = 5
-MIN_RECORD_SAMPLES = 10  # an output rate must give a record at least this long (samples)
-
-
-def long_gaps(chosen: dict[str, np.ndarray], intervals: dict[str, float], start: float,
-              end: float, max_gap: int) -> list[Gap]:
-    """Gaps of more than ``max_gap`` missing samples (of each channel's nominal interval,
-    s) in the channels' times ``chosen`` (s), including the ends of the span [start, end]."""
-    out = []
-    for ch, t in sorted(chosen.items()):
-        dt = intervals[ch]
-        if len(t) < 2 or not np.isfinite(dt):
-            out.append(Gap(ch, start, end, -1))
-            continue
-        edges = np.concatenate([[min(start, t[0])], t, [max(end, t[-1])]])
-        steps = np.diff(edges)
-        missing = np.round(steps / dt).astype(int) - 1
-        missing[0] += 1  # the ends: time before the first / after the last sample
-        missing[-1] += 1
-        for k in np.flatnonzero(missing > max_gap):
-            out.append(Gap(ch, float(edges[k]), float(edges[k + 1]), int(missing[k])))
-    return out
-
-
-def longest_stretch(start: float, end: float, gaps: list[Gap]) -> tuple[float, float]:
-    """The longest part of [start, end] (s) that no gap overlaps."""
-    best, lo = (start, start), start
-    for g in sorted(gaps, key=lambda g: g.start):
-        if g.start > lo and g.start - lo > best[1] - best[0]:
-            best = (lo, g.start)
-        lo = max(lo, g.end)
-    if end - lo > best[1] - best[0]:
-        best = (lo, end)
-    return best
-
-
 SEGMENTS = ("all", "longest")
 
 
@@ -608,7 +345,7 @@ def convert_tlog(
     if not chosen:
         raise ValueError(f"{path}: no message in the tlog carries a flight-record channel")
     intervals = {ch: nominal_interval(t) for ch, (_, t) in chosen.items()}
-    fs = rate or _grid_rate([t for _, t in chosen.values()], [intervals[c] for c in chosen])
+    fs = rate or grid_rate([t for _, t in chosen.values()], [intervals[c] for c in chosen])
     if not fs > 0:
         raise ValueError(f"{path}: too few intact packets: no channel has two time-stamped "
                          "samples to find an output rate from")
@@ -671,7 +408,7 @@ def convert_tlog(
             },
             "untimed_messages": data.untimed,
             "sources": sources,
-            "losses": _loss_dict(data.losses),
+            "losses": loss_dict(data.losses),
             "packets": data.packets,
             "counts": {source_name(s): c for s, c in data.counts.items()},
             "truncated_bytes": data.truncated_bytes,
@@ -687,7 +424,7 @@ def convert_tlog(
             extra["bridge"]["read_notes"].append(f"{side}: unreadable report ({exc})")
     meta = RecordMeta(
         aircraft=aircraft, sample_rate=fs,
-        provenance=f"MAVLink tlog {path} converted by flightid.sim.bridge.recorder", extra=extra,
+        provenance=f"MAVLink tlog {path} converted by flightid.sim.bridge.tlog", extra=extra,
     )
     if aircraft:
         # MAVLink carries no mass properties or geometry: take them from the aircraft
@@ -697,49 +434,3 @@ def convert_tlog(
         out.update({k: np.full(grid.size, v) for k, v in model.mass_properties().items()})
         extra["bridge"]["a_priori"] = f"mass properties and reference geometry of {aircraft!r}"
     return FlightRecord(grid, out, meta)
-
-
-def record_bridged(
-    record: FlightRecord, tlog_path: str | Path, config=None, *, transport: str = "pty",
-    port: int = 0,
-):
-    """Stream a record through the bridge to a recorder on this machine, over a pty pair
-    (``transport='pty'``) or loopback UDP (``'udp'``, ``port`` 0 = any free port).
-
-    Returns (air-side BridgeReport, ground-side RecordingReport); the tlog is written.
-    """
-    config = config or BridgeConfig()
-    stop = threading.Event()
-    result: dict = {}
-    if transport == "pty":
-        pty = open_pty_pair()
-        ground: Link = SerialLink(pty.slave_path, config.baud or 115200)
-        air: Link = pty.master_link()
-        closers = [ground.close, pty.close]
-    elif transport == "udp":
-        ground = UdpLink(("127.0.0.1", port), listen=True)
-        air = UdpLink(ground.local_address, listen=False)
-        closers = [ground.close, air.close]
-    else:
-        raise ValueError(f"unknown transport {transport!r}; use 'pty' or 'udp'")
-
-    def run_ground() -> None:
-        try:
-            result["ground"] = record_stream(ground, tlog_path, idle_timeout=30.0, stop=stop)
-        except BaseException as exc:  # surfaced below
-            result["error"] = exc
-
-    thread = threading.Thread(target=run_ground, daemon=True)
-    thread.start()
-    try:
-        air_report = serve_record(record, air, config)
-    finally:
-        stop.set()
-        thread.join(60.0)
-        for close in closers:
-            close()
-    if "error" in result:
-        raise result["error"]
-    if "ground" not in result:
-        raise TimeoutError("the recorder did not finish within 60 s of the end of the stream")
-    return air_report, result["ground"]
