@@ -12,7 +12,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from flightid.cli.checks import check_choice
-from flightid.sim.effects.catalogue import ActsOn, listing, markdown_table
+from flightid.sim.effects.catalogue import ActsOn
+from flightid.sim.effects.listing import listing, markdown_table
 
 
 def _parameters(entry: dict) -> str:

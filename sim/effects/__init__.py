@@ -22,8 +22,8 @@ from flightid.sim.effects.catalogue import (
     Option,
     Parameter,
     effect_from_dict,
-    listing,
 )
+from flightid.sim.effects.listing import listing
 from flightid.sim.effects.sensor import (
     Bias,
     Delay,

@@ -22,9 +22,8 @@ from flightid.sim.effects.catalogue import (
     SECTIONS,
     ActsOn,
     Entry,
-    listing,
-    markdown_table,
 )
+from flightid.sim.effects.listing import listing, markdown_table
 from flightid.testing import EFFECT_CHECKS, ContractFlight, contract_flight, run_effect_check
 
 ENTRIES = list(CATALOGUE.values())
