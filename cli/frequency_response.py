@@ -21,7 +21,8 @@ from flightid.cli.checks import (
 )
 from flightid.files import atomic_path
 from flightid.identification.frequency.grids import default_windows
-from flightid.identification.frequency.response import bode_figure, frequency_response
+from flightid.identification.frequency.plots import bode_figure
+from flightid.identification.frequency.response import frequency_response
 
 
 def frequency_response_command(

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 from scipy import signal
 
+from flightid.identification.frequency.fourier import finite_fourier_transform
 from flightid.identification.frequency.response import (
     FrequencyResponse,
     composite,
-    cross_spectra,
     estimate_response,
-    finite_fourier_transform,
     frequency_response,
     frequency_response_arrays,
 )
+from flightid.identification.frequency.spectra import cross_spectra
 from flightid.record import FlightRecord
 
 DT = 0.02

@@ -4,7 +4,7 @@ cost; time-domain verification of a frequency-domain model.
 Data (Morelli & Klein 2016 ch. 7): each channel minus its mean over the maneuver is
 Fourier transformed at chosen frequencies (typically 0.1-1.5 Hz for rigid-body
 dynamics) with the high-accuracy finite Fourier transform
-(``frequency_response.finite_fourier_transform``: chirp z-transform plus cubic end
+(``fourier.finite_fourier_transform``: chirp z-transform plus cubic end
 corrections).
 
 Removing the means is exact for algebraic relations (coefficients, outputs): constants
@@ -49,11 +49,9 @@ from scipy.signal import StateSpace, lsim
 
 from flightid.identification.data.coefficients import channel_values, nondimensional_rates
 from flightid.identification.estimate import Estimate
+from flightid.identification.frequency.fourier import finite_fourier_transform
 from flightid.identification.frequency.grids import fourier_frequencies
-from flightid.identification.frequency.response import (
-    FrequencyResponse,
-    finite_fourier_transform,
-)
+from flightid.identification.frequency.response import FrequencyResponse
 from flightid.identification.frequency.transfer_function import (
     COHERENCE_MIN,
     central_jacobian,
