@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-from flightid.sim.augment.writer import POSITIONS
+from flightid.sim.augment.document import POSITIONS
 from flightid.sim.jsbsim.model import locate
 
 MAX_CHAIN = 8  # actuators followed in series
