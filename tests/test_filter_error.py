@@ -25,6 +25,7 @@ from test_output_error import (
 
 from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
+from flightid.identification.methods import kalman_filter as kf
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference, read
@@ -44,7 +45,7 @@ def turbulent_flight(aircraft: str, seed: int, process_noise: dict[str, float],
     t = np.arange(0.0, duration, 0.02)
     inputs = lateral_inputs(t)
     u = np.column_stack([inputs[name] for name in model.inputs])
-    y = fe.simulate_process_noise(model, truth, process_noise, t, u, seed=seed)
+    y = kf.simulate_process_noise(model, truth, process_noise, t, u, seed=seed)
     rng = np.random.default_rng(1000 + seed)
     channels = {name: y[:, j] + NOISE[name] * rng.standard_normal(t.size)
                 for j, name in enumerate(model.outputs)}
@@ -71,7 +72,7 @@ def test_process_noise_covariance_equals_the_integral():
     s = np.linspace(0.0, dt, 2001)
     integrand = np.array([scipy_expm(A * si) @ F @ F.T @ scipy_expm(A * si).T for si in s])
     expected = np.trapezoid(integrand, s, axis=0)
-    assert np.allclose(fe.process_noise_covariance(A, F, dt), expected, rtol=1e-6, atol=0)
+    assert np.allclose(kf.process_noise_covariance(A, F, dt), expected, rtol=1e-6, atol=0)
 
 
 def scipy_expm(m):
@@ -83,7 +84,7 @@ def test_steady_state_gain_is_the_limit_of_the_time_varying_filter():
     A, B, C, D = model.matrices(LATERAL_TRUTH["navion"])
     F = np.diag([0.01, 0.03, 0.01, 0.0])
     R = np.diag([NOISE[o] ** 2 for o in model.outputs])
-    flt = fe.steady_state_filter(A, B, C, D, F, R, 0.02)
+    flt = kf.steady_state_filter(A, B, C, D, F, R, 0.02)
     # the Kalman filter's covariance recursion from P = 0, run to convergence
     P = np.zeros_like(A)
     for _ in range(5000):
@@ -99,18 +100,18 @@ def test_likelihood_gradient_equals_finite_differences():
     model, truth, rec = turbulent_flight("navion", 5, PROCESS_NOISE, duration=6.0)
     data = oe.problem_from_record(rec, model)
     names = ["Cl_p", "Cn_beta", "CY_dr", "bias_ay", "F_beta", "F_p"]
-    prob = fe._Problem(data, names, {}, ("beta", "p", "r"), {"F_r": 0.01})
+    prob = kf.FilterProblem(data, names, {}, ("beta", "p", "r"), {"F_r": 0.01})
     theta = np.array([truth["Cl_p"] * 1.1, truth["Cn_beta"] * 0.9, truth["CY_dr"], 0.02,
                       0.012, 0.025])
     R = np.diag([NOISE[o] ** 2 for o in model.outputs])
-    ev = fe._evaluate(prob, theta, R, data.x0, sensitivities=True)
+    ev = kf.evaluate(prob, theta, R, data.x0, sensitivities=True)
     for j in range(len(theta)):
         h = 1e-4 * max(abs(theta[j]), 1e-2)
         up, down = theta.copy(), theta.copy()
         up[j] += h
         down[j] -= h
-        fd = (fe._evaluate(prob, up, R, data.x0, False).cost
-              - fe._evaluate(prob, down, R, data.x0, False).cost) / (2 * h)
+        fd = (kf.evaluate(prob, up, R, data.x0, False).cost
+              - kf.evaluate(prob, down, R, data.x0, False).cost) / (2 * h)
         # central difference of a smooth cost: agreement to 1e-5 of the gradient scale
         assert abs(ev.gradient[j] - fd) < 1e-5 * np.abs(ev.gradient).max() + 1e-6 * abs(fd), \
             (names[j], ev.gradient[j], fd)
@@ -249,7 +250,7 @@ def test_bad_input_is_reported_clearly():
     with pytest.raises(ValueError, match="process_noise_start has 'F_phi'"):
         fe.estimate(rec, model, process_noise_start={"F_phi": 0.1})
     with pytest.raises(ValueError, match="process noise on unknown state"):
-        fe.simulate_process_noise(model, LATERAL_TRUTH["navion"], {"q": 0.1}, rec.time,
+        kf.simulate_process_noise(model, LATERAL_TRUTH["navion"], {"q": 0.1}, rec.time,
                                   np.zeros((rec.time.size, 2)))
 
 
