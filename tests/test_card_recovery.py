@@ -54,6 +54,7 @@ from flightid.identification.data import input_denoising, windows
 from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.identification.methods import output_error
 from flightid.identification.models import linear as lm
+from flightid.identification.models import six_dof
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.jsbsim.model import load
@@ -175,7 +176,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
 
 def identify_6dof(record: FlightRecord):
     """6-DOF output error on the whole record, the propulsion's forces and moments as inputs."""
-    model = n6.model_from_record(record, n6.default_structure("body"), propulsive_moments=True)
+    model = n6.model_from_record(record, six_dof.default_structure("body"), propulsive_moments=True)
     return [n6.estimate(record, model, initial_state="estimate", colored=True)]
 
 

@@ -18,7 +18,9 @@ import pytest
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import nonlinear_6dof as n6
+from flightid.identification.methods import six_dof_simulation as sim6
 from flightid.identification.models import rigid_body as rb
+from flightid.identification.models import six_dof
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
 from flightid.sim.flight import simulation as flight
 from flightid.sim.jsbsim import trim as trimming
@@ -56,7 +58,7 @@ def twin_otter():
 def _navion_structure() -> dict[str, tuple[str, ...]]:
     # Lift and drag in stability axes, and the rolling and yawing moments too: the Navion's
     # XML writes them about the stability axes with stability-axis rates
-    return n6.default_structure("stability", alphadot=True)
+    return six_dof.default_structure("stability", alphadot=True)
 
 
 NAVION_OPTIONS = {"structure": _navion_structure(), "rotor_momentum": True,
@@ -114,16 +116,16 @@ def test_local_gravity_is_wgs84_normal_gravity():
 def test_complex_step_sensitivities_match_central_differences(navion):
     record, _ = navion
     short = record.slice(0.0, 4.0)
-    model = n6.model_from_record(short, n6.default_structure("stability", alphadot=True),
+    model = n6.model_from_record(short, six_dof.default_structure("stability", alphadot=True),
                                  rotor_momentum=True)
     problem = n6.problem_from_record(short, model, initial_state="estimate")
     values = {**model.start, "x0_q": 0.01, "h_engine": -500.0}
     names = ["CL_alpha", "Cm_q", "Cm_alphadot", "h_engine", "x0_q", "Cl_p"]
-    _, sens = n6._outputs_and_sensitivities(problem, values, names)
+    _, sens = sim6.outputs_and_sensitivities(problem, values, names)
     for k, name in enumerate(names):
         h = 1e-5 * max(1.0, abs(values[name]))
-        up = n6._outputs(problem, {**values, name: values[name] + h})
-        down = n6._outputs(problem, {**values, name: values[name] - h})
+        up = sim6.outputs(problem, {**values, name: values[name] + h})
+        down = sim6.outputs(problem, {**values, name: values[name] - h})
         fd = (up - down) / (2 * h)
         scale = np.max(np.abs(fd)) + 1e-12
         # central differences are accurate to O(h^2) ~ 1e-8 relative here
@@ -162,7 +164,7 @@ def test_twin_otter_noise_free_derivatives(twin_otter):
         assert est[name] == pytest.approx(true[name], rel=0.01), name
     # the fitted model predicts the record it was fitted to (simulate = the fit's model)
     values = {n: est[n] for n in est.names}
-    predicted = n6.simulate(record, model, values)
+    predicted = sim6.simulate(record, model, values)
     for name in ("q", "r", "az"):
         np.testing.assert_allclose(predicted[name], est.outputs[name]["model"], atol=1e-12)
 
@@ -206,7 +208,7 @@ def test_navion_with_noise_within_three_cramer_rao_bounds(navion, seed):
 def test_rudder_derivatives_unidentifiable_without_rudder_input():
     record, _ = _fly("navion", 0.0, 53.6448, rudder=False)
     record = record.slice(0.0, 10.0)
-    model = n6.model_from_record(record, n6.default_structure("stability"))
+    model = n6.model_from_record(record, six_dof.default_structure("stability"))
     est = n6.estimate(record, model, max_iterations=3)
     assert set(est.unidentifiable) == {"CY_dr", "Cl_dr", "Cn_dr"}
     assert all("input dr is not excited" in why for why in est.unidentifiable.values())
@@ -225,7 +227,7 @@ def test_propulsive_moments_close_the_twin_otter_moment_budget(twin_otter):
     mp = _mean_inertia(record)
     aero = (qs * ref.span * record["Cl"], qs * ref.chord * record["Cm"],
             qs * ref.span * record["Cn"])
-    total = [a + record[c] for a, c in zip(aero, n6.PROPULSIVE_MOMENTS, strict=True)]
+    total = [a + record[c] for a, c in zip(aero, six_dof.PROPULSIVE_MOMENTS, strict=True)]
     rdot_aero = rb.rotational(x, *aero, mp)[2]
     rdot_total = rb.rotational(x, *total, mp)[2]
     assert np.std(record["N_prop"]) > 10.0  # N m: the differential thrust is there
@@ -236,7 +238,7 @@ def test_propulsive_moments_close_the_twin_otter_moment_budget(twin_otter):
 def test_cubic_midpoints_exact_for_cubics():
     t = np.linspace(0.0, 1.0, 11)
     x = np.column_stack([1 + 2 * t - 3 * t**2 + 4 * t**3, np.sin(t)])
-    mid = n6._cubic_midpoints(x)
+    mid = sim6.cubic_midpoints(x)
     tm = 0.5 * (t[1:] + t[:-1])
     exact = 1 + 2 * tm - 3 * tm**2 + 4 * tm**3
     assert np.allclose(mid[1:-1, 0], exact[1:-1], atol=1e-12)

@@ -52,6 +52,8 @@ import numpy as np
 import pytest
 
 from flightid.identification.methods import nonlinear_6dof as n6
+from flightid.identification.methods import six_dof_simulation as sim6
+from flightid.identification.models import six_dof
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
 from flightid.sim.flight import simulation as flight
 from flightid.sim.jsbsim import trim as trimming
@@ -94,7 +96,7 @@ def _nominal_bounds(est, record, model) -> dict[str, float]:
     problem = n6.problem_from_record(record, model)
     values = {n: est[n] for n in est.names if n in model.parameters}
     names = [n for n in values if n not in est.unidentifiable]
-    _, sens = n6._outputs_and_sensitivities(problem, values, names)
+    _, sens = sim6.outputs_and_sensitivities(problem, values, names)
     weights = np.array([NOMINAL_NOISE[o] ** -2 for o in model.outputs])
     info = np.einsum("tyi,y,tyj->ij", sens, weights, sens)
     return dict(zip(names, np.sqrt(np.diag(np.linalg.inv(info))), strict=True))
@@ -108,7 +110,7 @@ def noise_free_fit(request):
     force_axes = "stability" if axes == "stability" else "body"
     # the propulsive forces and moments are inputs (the engine model's thrust and moments,
     # as a flight-test engineer computes them), so the estimates are the aerodynamic ones
-    model = n6.model_from_record(record, n6.default_structure(force_axes, alphadot=alphadot),
+    model = n6.model_from_record(record, six_dof.default_structure(force_axes, alphadot=alphadot),
                                  propulsive_moments=True, moment_axes=axes)
     est = n6.estimate(record, model)
     return aircraft, record, model, est, true
