@@ -35,7 +35,7 @@ import jsbsim
 import numpy as np
 
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
-from flightid.sim.flight.simulation import MIN_INTERNAL_HZ
+from flightid.sim.flight.controls import MIN_INTERNAL_HZ
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import apply, trim
 

@@ -22,7 +22,8 @@ from flightid.scenarios.cards import CardError, card_from_dict, fly_card, load_c
 from flightid.sim.augment import augment
 from flightid.sim.effects.airframe import DerivativeDelta, RateLimit
 from flightid.sim.flight import disturbed as dist
-from flightid.sim.flight.simulation import Simulation, fly, hold_center
+from flightid.sim.flight.controls import hold_center
+from flightid.sim.flight.simulation import Simulation, fly
 from flightid.sim.jsbsim.model import PACKAGE_AIRCRAFT, load
 from flightid.sim.jsbsim.trim import trim
 from flightid.sim.jsbsim.truth import derivatives

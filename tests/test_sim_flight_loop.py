@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from flightid.sim.flight import disturbed as dist
-from flightid.sim.flight.simulation import Atmosphere, Simulation, _interp, fly
+from flightid.sim.flight.controls import interp_point
+from flightid.sim.flight.simulation import Atmosphere, Simulation, fly
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
 from flightid.sim.sensors.suites import hobby_suite, measure
@@ -135,7 +136,7 @@ def test_scalar_interpolation_is_numpys_to_the_bit():
     fp = np.tanh(3 * xp) + 0.1 * xp
     fp[20:25] = fp[20]  # a plateau
     x = np.concatenate([rng.uniform(-0.7, 0.6, 2000), xp, [xp[0], xp[-1], -1.0, 1.0]])
-    ours = np.array([_interp(float(v), xp.tolist(), fp.tolist()) for v in x])
+    ours = np.array([interp_point(float(v), xp.tolist(), fp.tolist()) for v in x])
     np.testing.assert_array_equal(ours, np.interp(x, xp, fp))
 
 

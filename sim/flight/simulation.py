@@ -41,7 +41,7 @@ turbulence velocities and rates are zero, so the aero-relative rates equal the b
 rates and the total wind is the steady wind plus the gusts written by the loop: those
 nine properties are filled in after the flight instead of read (and checked against
 JSBSim at the last sample). ``step`` converts its one sample with plain float
-arithmetic, by the same formulas (``_channels``, table-driven: ``scaled_channels``).
+arithmetic, by the same formulas (``channels_from_raw``, table-driven: ``scaled_channels``).
 ``stepper(channels)`` is ``step`` for a loop that needs a few channels (a gym environment):
 it reads only their properties and keeps nothing (0.9 of bare JSBSim stepping, against
 0.6 for ``step``; benchmarks/gym_throughput.py). benchmarks/bench_runner.py measures
@@ -54,22 +54,48 @@ stale afterwards. ``Simulation.get`` / ``Simulation.set`` resolve on the current
 
 from __future__ import annotations
 
-import itertools
 import math
 import struct
-from bisect import bisect_right
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from flightid.record import FlightRecord, RecordMeta, Reference
+from flightid.record import FlightRecord, RecordMeta
+from flightid.sim.flight.controls import (
+    Control,
+    command_maps,
+    hold_center,
+    interp_point,
+    sampled_controls,
+    schedule_writes,
+    substeps,
+)
+from flightid.sim.flight.properties import (
+    AERO_RATES,
+    AGL,
+    CALM_FILLED,
+    FLAP,
+    GUST,
+    NEAR_GROUND_FT,
+    RATES,
+    RAW,
+    RPM,
+    STEADY_WIND,
+    TOTAL_WIND,
+    TURB,
+    WOW,
+    book_turbulence,
+    channels_from_raw,
+    divide,
+    ned_to_body,
+    scaled_channels,
+)
 from flightid.sim.jsbsim.model import (
     COMMANDS,
     DRIVE,
     DRIVE_ON,
-    SURFACES,
     Model,
     as_model,
     quiet,
@@ -77,14 +103,12 @@ from flightid.sim.jsbsim.model import (
 )
 from flightid.sim.jsbsim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.jsbsim.trim import Trim, apply
-from flightid.units import EARTH_RADIUS_M, FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
+from flightid.units import FT
 
-MIN_INTERNAL_HZ = 400.0
 SURFACE_MODES = ("commanded", "driven")
 _DRIVE_SPAN = 10.0  # rad: the driven surfaces' identity map spans any position
 TURBULENCE_TYPES = {"none": 0, "standard": 1, "culp": 2, "milspec": 3, "tustin": 4}
 
-Control = np.ndarray | Callable[[float], float] | float
 
 
 class DepartureError(RuntimeError):
@@ -139,136 +163,6 @@ class Limits:
     min_speed_m_s: float | None = None  # default: 0.3 x trim speed
 
 
-# departure only (not channels): the flight loop reads them only within _NEAR_GROUND_FT
-# of the trim's terrain (the height above sea level, read anyway, tells)
-_AGL, _WOW = "position/h-agl-ft", "gear/wow"
-_NEAR_GROUND_FT = 300.0
-
-# raw JSBSim properties of every sample, in row order (JSBSim units)
-_RAW = (
-    "velocities/u-aero-fps", "velocities/v-aero-fps", "velocities/w-aero-fps",
-    "velocities/p-rad_sec", "velocities/q-rad_sec", "velocities/r-rad_sec",
-    "velocities/p-aero-rad_sec", "velocities/q-aero-rad_sec", "velocities/r-aero-rad_sec",
-    "attitude/phi-rad", "attitude/theta-rad", "attitude/psi-rad",
-    "aero/alpha-rad", "aero/beta-rad", "velocities/vt-fps", "aero/qbar-psf",
-    "atmosphere/rho-slugs_ft3", "position/h-sl-ft", "velocities/mach",
-    "forces/fbx-total-lbs", "forces/fby-total-lbs", "forces/fbz-total-lbs",
-    "accelerations/pdot-rad_sec2", "accelerations/qdot-rad_sec2", "accelerations/rdot-rad_sec2",
-    "fcs/elevator-pos-rad", "fcs/left-aileron-pos-rad", "fcs/rudder-pos-rad",
-    "fcs/throttle-pos-norm", "forces/fbx-prop-lbs", "inertia/mass-slugs",
-    "inertia/ixx-slugs_ft2", "inertia/iyy-slugs_ft2", "inertia/izz-slugs_ft2",
-    "inertia/ixz-slugs_ft2",
-    "forces/fbx-aero-lbs", "forces/fby-aero-lbs", "forces/fbz-aero-lbs",
-    "moments/l-aero-lbsft", "moments/m-aero-lbsft", "moments/n-aero-lbsft",
-    "moments/l-prop-lbsft", "moments/m-prop-lbsft", "moments/n-prop-lbsft",
-    "atmosphere/total-wind-north-fps", "atmosphere/total-wind-east-fps",
-    "atmosphere/total-wind-down-fps",
-    "atmosphere/turb-north-fps", "atmosphere/turb-east-fps", "atmosphere/turb-down-fps",
-    "position/lat-geod-rad", "position/long-gc-rad", _AGL, _WOW,
-)
-_FLAP = "fcs/flap-pos-rad"
-# rotation speed, first one the aircraft has: a JSBSim propeller, a JSBSim engine, or an
-# FCS function (the Telemaster computes its propeller rpm from the throttle)
-_RPM = ("propulsion/engine[0]/propeller-rpm", "propulsion/engine[0]/engine-rpm",
-        "fcs/propeller-rpm")
-_AXES = ("north", "east", "down")
-_GUST = tuple(f"atmosphere/gust-{a}-fps" for a in _AXES)
-_STEADY_WIND = tuple(f"atmosphere/wind-{a}-fps" for a in _AXES)
-_TOTAL_WIND = tuple(f"atmosphere/total-wind-{a}-fps" for a in _AXES)
-_TURB = tuple(f"atmosphere/turb-{a}-fps" for a in _AXES)
-_RATES = ("velocities/p-rad_sec", "velocities/q-rad_sec", "velocities/r-rad_sec")
-_AERO_RATES = ("velocities/p-aero-rad_sec", "velocities/q-aero-rad_sec",
-               "velocities/r-aero-rad_sec")
-# not read per sample when JSBSim's turbulence is off (FGAuxiliary: aero rates = body
-# rates - turbulence rates; FGWinds: total wind = wind + gust + cosine gust + turbulence)
-_CALM_FILLED = _AERO_RATES + _TURB + _TOTAL_WIND
-
-
-_MAPS: dict[tuple, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
-
-
-def _command_maps(model: Model, trim: Trim) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """FCS maps of de, da, dr at a trim, cached per aircraft file and trim setting."""
-    key = (str(model.xml_path), tuple(sorted(trim.jsbsim.items())))
-    if key not in _MAPS:
-        if len(_MAPS) > 64:
-            _MAPS.clear()
-        _MAPS[key] = {c: m for c in ("de", "da", "dr")
-                      if (m := _command_map(model, c)) is not None}
-    return _MAPS[key]
-
-
-def _command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | None:
-    """(positions, commands) of the FCS map pilot command -> surface (project sign), or None."""
-    cmd, _ = COMMANDS[control]
-    prop, sign = SURFACES[control]
-    if not (model.has(cmd) and model.has(prop)):
-        return None
-    fdm = model.fdm
-    saved = fdm[cmd]
-    # the grid holds the usual kinks exactly: command + trim command = 0 and = +-1
-    trim_cmd = fdm[COMMANDS[control][1]] if model.has(COMMANDS[control][1]) else 0.0
-    grid = np.unique(np.concatenate([np.linspace(-2.0, 2.0, 81),
-                                     [-trim_cmd, -1.0 - trim_cmd, 1.0 - trim_cmd]]))
-    pos = np.empty_like(grid)
-    fdm.set_trim_status(True)  # actuators and kinematics follow their input at once
-    try:
-        for i, c in enumerate(grid):
-            fdm[cmd] = c
-            fdm.run_ic()
-            pos[i] = sign * fdm[prop]
-    finally:
-        fdm.set_trim_status(False)
-        fdm[cmd] = saved
-    order = np.argsort(pos, kind="stable")
-    pos, cmds = pos[order], grid[order]
-    keep = np.concatenate(([True], np.diff(pos) > 1e-12))  # drop saturated plateaus
-    if keep.sum() < 2:
-        return None
-    return pos[keep], cmds[keep]
-
-
-def _divide(a: float, b: float) -> float:
-    """a / b with numpy's answer for b = 0 (+-inf, or nan for 0 / 0), as records have."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return float(np.float64(a) / b)
-
-
-def hold_center(rate_hz: float) -> float:
-    """Where a control given for sample k acts, relative to t_k (s).
-
-    JSBSim computes the forces of a run after its FCS, so the control set before the run
-    that ends at t_k makes the forces at t_k and at every substep up to the next setting,
-    t_k + (substeps - 1) h: their middle is (substeps - 1) h / 2, h the internal step. An
-    input sampled from a continuous signal is best taken there.
-    """
-    n = substeps(rate_hz)
-    return (n - 1) / (2.0 * n * rate_hz)
-
-
-def substeps(rate_hz: float) -> int:
-    """JSBSim runs per record interval at ``rate_hz``: at least ``MIN_INTERNAL_HZ``."""
-    return max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
-
-
-def _interp(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
-    """``np.interp`` of one point with numpy's arithmetic (same result, no array overhead)."""
-    if x <= xp[0]:
-        return fp[0]
-    if x >= xp[-1]:
-        return fp[-1]
-    j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
-    if xp[j] == x:
-        return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    y = slope * (x - xp[j]) + fp[j]
-    if y != y:  # nan from an infinite slope: numpy retries from the right end
-        y = slope * (x - xp[j + 1]) + fp[j + 1]
-        if y != y and fp[j] == fp[j + 1]:
-            y = fp[j]
-    return y
-
-
 class Simulation:
     """Stepping core: ``reset(trim)``, then ``step(controls)`` per interval, or ``fly``."""
 
@@ -298,15 +192,15 @@ class Simulation:
             raise ValueError(f"{model.name}: surfaces='driven' needs an aircraft augmented "
                              "with surface_drive=True (flightid.sim.augment)")
         # the raw columns of a sample: fixed for the aircraft, so decided once
-        flap = (_FLAP,) if model.has(_FLAP) else ()
-        self._rpm = next((p for p in _RPM if model.has(p)), None)
-        self.columns: tuple[str, ...] = _RAW + flap + ((self._rpm,) if self._rpm else ())
+        flap = (FLAP,) if model.has(FLAP) else ()
+        self._rpm = next((p for p in RPM if model.has(p)), None)
+        self.columns: tuple[str, ...] = RAW + flap + ((self._rpm,) if self._rpm else ())
         self._col = {name: i for i, name in enumerate(self.columns)}
         self._table = scaled_channels(model.reference)
         # what the flight loop reads per sample (the rest is filled in after the flight)
         self._calm = self.atmosphere.turbulence == "none"
-        self._loop_columns = tuple(c for c in self.columns if c not in (_AGL, _WOW)
-                                   and not (self._calm and c in _CALM_FILLED))
+        self._loop_columns = tuple(c for c in self.columns if c not in (AGL, WOW)
+                                   and not (self._calm and c in CALM_FILLED))
         self._bind()
         self._maps: dict[str, tuple[list[float], list[float]]] = {}
         self._trim_cmd: dict[str, float] = {}
@@ -317,8 +211,8 @@ class Simulation:
         """Take the property nodes of the current FGFDMExec (again after a reload)."""
         model = self.model
         # gear/wow is absent on aircraft without gear: created, it stays 0
-        node = {p: model.node(p, create=(p == _WOW)) for p in self.columns}
-        self._agl_node, self._wow_node = node[_AGL], node[_WOW]
+        node = {p: model.node(p, create=(p == WOW)) for p in self.columns}
+        self._agl_node, self._wow_node = node[AGL], node[WOW]
         self._nodes = [node[p] for p in self.columns]
         self._loop_nodes = [node[p] for p in self._loop_columns]
         # the unbound method, mapped over the nodes: the cheapest read from Python
@@ -330,7 +224,7 @@ class Simulation:
                                  for c in ("de", "da", "dr") if model.has(COMMANDS[c][0])}
         self._throttle_setters = [model.node(p).set_double_value
                                   for p in model.throttle_props() if model.has(p)]
-        self._gust_setters = [model.node(p).set_double_value for p in _GUST]
+        self._gust_setters = [model.node(p).set_double_value for p in GUST]
         self._run = model.fdm.run
 
     # -- setup ---------------------------------------------------------------------
@@ -389,7 +283,7 @@ class Simulation:
                 self._trim_cmd = dict(self._trim_pos)
             else:
                 self._maps = {c: (pos.tolist(), cmds.tolist())
-                              for c, (pos, cmds) in _command_maps(model, trim).items()}
+                              for c, (pos, cmds) in command_maps(model, trim).items()}
                 self._trim_cmd = {c: trim.jsbsim.get(COMMANDS[c][0], 0.0)
                                   for c in self._cmd_setters}
             self._trim_throttle = trim.throttle
@@ -433,7 +327,7 @@ class Simulation:
         # IC body velocities are ground-relative: add the wind so the airspeed stays trimmed
         n, e, d = self.atmosphere.wind_ned_m_s
         wind = np.array([n, e, d], dtype=float) / FT
-        w_body = _ned_to_body(wind[:, None], *(np.array([trim.jsbsim[f"ic/{a}"]])
+        w_body = ned_to_body(wind[:, None], *(np.array([trim.jsbsim[f"ic/{a}"]])
                               for a in ("phi-rad", "theta-rad", "psi-true-rad")))[:, 0]
         for i, axis in enumerate("uvw"):
             fdm[f"ic/{axis}-fps"] = trim.jsbsim[f"ic/{axis}-fps"] + w_body[i]
@@ -462,7 +356,7 @@ class Simulation:
         m = self._maps.get(control)
         if m is None:
             return self._trim_cmd[control]
-        return _interp(self._trim_pos[control] + increment, *m)
+        return interp_point(self._trim_pos[control] + increment, *m)
 
     def _apply_controls(self, controls: Mapping[str, float] | None) -> None:
         controls = controls or {}
@@ -549,7 +443,7 @@ class Simulation:
                     for i, c in enumerate(("de", "da", "dr")) if c in self._cmd_setters]
         command_for = self._command_for
         a_lo, a_hi, v_lo, v_hi = self._envelope
-        h_guard = self.trim.terrain_m / FT + _NEAR_GROUND_FT
+        h_guard = self.trim.terrain_m / FT + NEAR_GROUND_FT
         flight = self._resets
 
         def advance(increments: Sequence[float]) -> list[float]:
@@ -572,7 +466,7 @@ class Simulation:
             try:
                 return [row[i] * k if j is None else row[i] * k / row[j] for i, k, j in spec]
             except ZeroDivisionError:  # qbar or V = 0 (limits allowing it): inf or nan
-                return [row[i] * k if j is None else _divide(row[i] * k, row[j])
+                return [row[i] * k if j is None else divide(row[i] * k, row[j])
                         for i, k, j in spec]
 
         return advance
@@ -596,7 +490,7 @@ class Simulation:
             raise ValueError(f"duration_s must be positive, got {duration_s}")
         rate_hz = self.rate_hz
         n = int(round(duration_s * rate_hz)) + 1
-        inputs = _sampled(controls or {}, n, rate_hz)
+        inputs = sampled_controls(controls or {}, n, rate_hz)
         if self.driven:  # positions of a continuous surface: each taken where it acts
             grid, at = np.arange(n), np.arange(n) + hold_center(rate_hz) * rate_hz
             inputs.update({c: np.interp(at, grid, u) for c, u in inputs.items() if c in DRIVE})
@@ -614,10 +508,10 @@ class Simulation:
         # JSBSim's pilot commands and gust velocities are inputs that no JSBSim model writes:
         # set at reset, they need writing again only when they change; turbulence changes
         # every sample and is written every sample
-        commands = _changes(self._command_schedule(inputs, n), n)
+        commands = schedule_writes(self._command_schedule(inputs, n), n)
         every_sample = np.count_nonzero(np.any(np.diff(extra, axis=0), axis=1)) > n // 4
-        gusts = _changes([] if every_sample else zip(self._gust_setters, gust_fps.T, strict=True),
-                         n)
+        gusts = schedule_writes(
+            [] if every_sample else zip(self._gust_setters, gust_fps.T, strict=True), n)
         gust_n, gust_e, gust_d = gust_fps.T.tolist() if every_sample else ([], [], [])
         set_n, set_e, set_d = self._gust_setters
         if np.any(extra[0]):  # (reset left the gusts at zero)
@@ -638,7 +532,7 @@ class Simulation:
         substeps = range(self.substeps - 1)
         a_lo, a_hi, v_lo, v_hi = self._envelope
         i_alpha, i_vt = col["aero/alpha-rad"], col["velocities/vt-fps"]
-        i_h, h_guard = col["position/h-sl-ft"], trim.terrain_m / FT + _NEAR_GROUND_FT
+        i_h, h_guard = col["position/h-sl-ft"], trim.terrain_m / FT + NEAR_GROUND_FT
         every = max(1, int(round(rate_hz)))
         k = 1
         while departure is None and k < n:
@@ -669,7 +563,7 @@ class Simulation:
             self._fill_calm(raw, gust_fps[:k])
         channels = self.convert(raw)
         if turbulence is not None and np.any(turbulence):
-            _book_turbulence(channels, np.asarray(turbulence, dtype=float)[:k])
+            book_turbulence(channels, np.asarray(turbulence, dtype=float)[:k])
         record = FlightRecord(np.arange(k) / rate_hz, channels, self.meta(scenario))
         if departure is not None:
             raise DepartureError(departure, (k - 1) / rate_hz, record)
@@ -681,14 +575,14 @@ class Simulation:
         Checked against JSBSim's own values at the last sample, so that a JSBSim whose
         winds work otherwise fails loudly instead of recording wrong winds.
         """
-        steady = [self.get(p) for p in _STEADY_WIND]
+        steady = [self.get(p) for p in STEADY_WIND]
         n = len(gust_fps)
-        for p, aero in zip(_RATES, _AERO_RATES, strict=True):
+        for p, aero in zip(RATES, AERO_RATES, strict=True):
             raw[aero] = raw[p]
         for i in range(3):
-            raw[_TURB[i]] = np.zeros(n)
-            raw[_TOTAL_WIND[i]] = steady[i] + gust_fps[:, i]
-        for p in _CALM_FILLED:
+            raw[TURB[i]] = np.zeros(n)
+            raw[TOTAL_WIND[i]] = steady[i] + gust_fps[:, i]
+        for p in CALM_FILLED:
             actual, filled = self.get(p), float(raw[p][-1])
             if not (actual == filled or (math.isnan(actual) and math.isnan(filled))):
                 raise RuntimeError(f"{p} is {actual!r} in JSBSim but {filled!r} as filled in "
@@ -715,8 +609,8 @@ class Simulation:
             return f"state is not finite ({', '.join(bad[:4])})"
         alpha, vt = row[col["aero/alpha-rad"]], row[col["velocities/vt-fps"]]
         a_lo, a_hi, v_lo, v_hi = self._envelope
-        agl = row[col[_AGL]] if _AGL in col else self._agl_node.get_double_value()
-        wow = row[col[_WOW]] if _WOW in col else self._wow_node.get_double_value()
+        agl = row[col[AGL]] if AGL in col else self._agl_node.get_double_value()
+        wow = row[col[WOW]] if WOW in col else self._wow_node.get_double_value()
         if agl <= 0 or wow > 0:
             return f"ground contact (altitude AGL {agl * FT:.1f} m)"
         if not a_lo <= alpha <= a_hi:
@@ -733,7 +627,7 @@ class Simulation:
         """Canonical SI channels of one raw sample (all columns), as floats."""
         raw = dict(zip(self.columns, row, strict=True))
         try:
-            return _channels(raw, self._table, self._lat0, self._lon0, self._rpm,
+            return channels_from_raw(raw, self._table, self._lat0, self._lon0, self._rpm,
                              math.sin, math.cos)
         except ZeroDivisionError:  # qbar or V = 0: let numpy give inf / nan as in a record
             arrays = {k: np.array([v]) for k, v in raw.items()}
@@ -742,7 +636,7 @@ class Simulation:
     def convert(self, raw: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Canonical SI channels from raw JSBSim columns (property -> array), vectorised."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            return _channels(raw, self._table, self._lat0, self._lon0, self._rpm,
+            return channels_from_raw(raw, self._table, self._lat0, self._lon0, self._rpm,
                              np.sin, np.cos)
 
     def meta(self, scenario: dict[str, Any] | None = None) -> RecordMeta:
@@ -762,155 +656,6 @@ class Simulation:
                                   "severity": a.severity, "seed": a.seed},
                    "aircraft_file": str(self.model.xml_path)},
         )
-
-
-def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
-    """The channels that are one raw JSBSim property times a constant, or over a second one:
-    channel -> (property, factor, divisor property or None); SI value = raw * factor [/ divisor].
-
-    ``_channels`` converts them with this table, and ``Simulation.stepper`` reads only the
-    properties of the channels it is asked for.
-    """
-    qs = PSF * ref.area  # N per psf of dynamic pressure
-    two_ft = 2.0 * FT  # phat = p b / 2V = p (b / 2 FT) / vt
-    table: dict[str, tuple[str, float, str | None]] = {
-        "u": ("velocities/u-aero-fps", FT, None), "v": ("velocities/v-aero-fps", FT, None),
-        "w": ("velocities/w-aero-fps", FT, None),
-        "p": ("velocities/p-rad_sec", 1.0, None), "q": ("velocities/q-rad_sec", 1.0, None),
-        "r": ("velocities/r-rad_sec", 1.0, None),
-        "phi": ("attitude/phi-rad", 1.0, None), "theta": ("attitude/theta-rad", 1.0, None),
-        "psi": ("attitude/psi-rad", 1.0, None),
-        "alpha": ("aero/alpha-rad", 1.0, None), "beta": ("aero/beta-rad", 1.0, None),
-        "V": ("velocities/vt-fps", FT, None), "qbar": ("aero/qbar-psf", PSF, None),
-        "rho": ("atmosphere/rho-slugs_ft3", SLUG_FT3, None),
-        "h": ("position/h-sl-ft", FT, None), "mach": ("velocities/mach", 1.0, None),
-        # specific force = non-gravitational force / mass (what an accelerometer reads)
-        "ax": ("forces/fbx-total-lbs", FT, "inertia/mass-slugs"),
-        "ay": ("forces/fby-total-lbs", FT, "inertia/mass-slugs"),
-        "az": ("forces/fbz-total-lbs", FT, "inertia/mass-slugs"),
-        "pdot": ("accelerations/pdot-rad_sec2", 1.0, None),
-        "qdot": ("accelerations/qdot-rad_sec2", 1.0, None),
-        "rdot": ("accelerations/rdot-rad_sec2", 1.0, None),
-        "de": ("fcs/elevator-pos-rad", SURFACES["de"][1], None),
-        "da": ("fcs/left-aileron-pos-rad", SURFACES["da"][1], None),
-        "dr": ("fcs/rudder-pos-rad", SURFACES["dr"][1], None),
-        "throttle": ("fcs/throttle-pos-norm", 1.0, None),
-        "thrust": ("forces/fbx-prop-lbs", LBF, None),
-        "L_prop": ("moments/l-prop-lbsft", LBF * FT, None),
-        "M_prop": ("moments/m-prop-lbsft", LBF * FT, None),
-        "N_prop": ("moments/n-prop-lbsft", LBF * FT, None),
-        "mass": ("inertia/mass-slugs", SLUG, None),
-        "Ixx": ("inertia/ixx-slugs_ft2", SLUG_FT2, None),
-        "Iyy": ("inertia/iyy-slugs_ft2", SLUG_FT2, None),
-        "Izz": ("inertia/izz-slugs_ft2", SLUG_FT2, None),
-        # JSBSim reports the tensor element -Ixz; the channel is Etkin's Ixz
-        "Ixz": ("inertia/ixz-slugs_ft2", -SLUG_FT2, None),
-        "CX": ("forces/fbx-aero-lbs", LBF / qs, "aero/qbar-psf"),
-        "CY": ("forces/fby-aero-lbs", LBF / qs, "aero/qbar-psf"),
-        "CZ": ("forces/fbz-aero-lbs", LBF / qs, "aero/qbar-psf"),
-        "Cl": ("moments/l-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
-        "Cm": ("moments/m-aero-lbsft", LBF * FT / (qs * ref.chord), "aero/qbar-psf"),
-        "Cn": ("moments/n-aero-lbsft", LBF * FT / (qs * ref.span), "aero/qbar-psf"),
-        "phat": ("velocities/p-aero-rad_sec", ref.span / two_ft, "velocities/vt-fps"),
-        "qhat": ("velocities/q-aero-rad_sec", ref.chord / two_ft, "velocities/vt-fps"),
-        "rhat": ("velocities/r-aero-rad_sec", ref.span / two_ft, "velocities/vt-fps"),
-        "latitude": ("position/lat-geod-rad", 1.0, None),
-        "longitude": ("position/long-gc-rad", 1.0, None),
-    }
-    return table
-
-
-def _channels(c: Mapping[str, Any], table: Mapping[str, tuple[str, float, str | None]],
-              lat0: float, lon0: float, rpm: str | None, sin: Callable, cos: Callable
-              ) -> dict[str, Any]:
-    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy);
-    ``table`` is ``scaled_channels`` of the aircraft's reference."""
-    out = {ch: c[p] * k if d is None else c[p] * k / c[d] for ch, (p, k, d) in table.items()}
-    alpha, fx, fz = out["alpha"], out["CX"], out["CZ"]
-    out["CL"] = fx * sin(alpha) - fz * cos(alpha)
-    out["CD"] = -fx * cos(alpha) - fz * sin(alpha)
-    for axis, total, turb in zip(_AXES, _TOTAL_WIND, _TURB, strict=True):
-        out[f"wind_{axis}"] = (c[total] - c[turb]) * FT
-    out["turb_u"], out["turb_v"], out["turb_w"] = _rotate_to_body(
-        *(c[p] * FT for p in _TURB), out["phi"], out["theta"], out["psi"], sin, cos)
-    out["north"] = (out["latitude"] - lat0) * EARTH_RADIUS_M
-    out["east"] = (out["longitude"] - lon0) * EARTH_RADIUS_M * math.cos(lat0)
-    if _FLAP in c:
-        out["df"] = c[_FLAP]
-    if rpm is not None:
-        out["rpm"] = c[rpm]
-    return out
-
-
-def _changes(schedules: Iterable[tuple[Callable[[float], None], np.ndarray]], n: int
-             ) -> list[tuple[tuple[Callable[[float], None], float], ...]]:
-    """Per sample k, the (setter, value) pairs to write before it: those whose value
-    differs from sample k - 1, or every sample for a schedule that changes most of them."""
-    dense = []
-    sparse: dict[int, list[tuple[Callable[[float], None], float]]] = {}
-    for setter, values in schedules:
-        values = np.asarray(values, dtype=float)
-        changed = np.flatnonzero(values[1:] != values[:-1]) + 1
-        if len(changed) > n // 4:
-            dense.append(zip(itertools.repeat(setter), values.tolist(), strict=False))
-        else:
-            for k in changed.tolist():
-                sparse.setdefault(k, []).append((setter, float(values[k])))
-    out: list[tuple[tuple[Callable[[float], None], float], ...]]
-    out = list(zip(*dense, strict=True)) if dense else [()] * n
-    for k, pairs in sparse.items():
-        out[k] = out[k] + tuple(pairs)
-    return out
-
-
-def _rotate_to_body(n: Any, e: Any, d: Any, phi: Any, theta: Any, psi: Any,
-                    sin: Callable, cos: Callable) -> tuple[Any, Any, Any]:
-    """NED components into body axes with the 3-2-1 Euler angles (Etkin); floats or arrays."""
-    cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(theta), sin(theta), cos(psi), sin(psi)
-    x = ct * cp * n + ct * sp * e - st * d
-    y = (sf * st * cp - cf * sp) * n + (sf * st * sp + cf * cp) * e + sf * ct * d
-    z = (cf * st * cp + sf * sp) * n + (cf * st * sp - sf * cp) * e + cf * ct * d
-    return x, y, z
-
-
-def _ned_to_body(vec: np.ndarray, phi: np.ndarray, theta: np.ndarray,
-                 psi: np.ndarray) -> np.ndarray:
-    """Rotate NED vectors (3 x n) into body axes with the 3-2-1 Euler angles (Etkin)."""
-    return np.stack(_rotate_to_body(*vec, phi, theta, psi, np.sin, np.cos))
-
-
-def _book_turbulence(ch: dict[str, np.ndarray], turb_ned: np.ndarray) -> None:
-    """Book a turbulence schedule (n x 3 NED, m/s) under turb_u/v/w, not wind_*."""
-    for i, axis in enumerate(_AXES):
-        ch[f"wind_{axis}"] = ch[f"wind_{axis}"] - turb_ned[:, i]
-    body = _rotate_to_body(*turb_ned.T, ch["phi"], ch["theta"], ch["psi"], np.sin, np.cos)
-    for axis, b in zip("uvw", body, strict=True):
-        ch[f"turb_{axis}"] = ch[f"turb_{axis}"] + b
-
-
-def _sampled(controls: Mapping[str, Control], n: int, rate_hz: float) -> dict[str, np.ndarray]:
-    """Control increments sampled at the record times (arrays checked, callables evaluated)."""
-    out: dict[str, np.ndarray] = {}
-    t = np.arange(n) / rate_hz
-    for name, c in controls.items():
-        if name not in ("de", "da", "dr", "throttle"):
-            raise ValueError(f"unknown control {name!r}; use de, da, dr, throttle")
-        if callable(c):
-            arr = np.array([float(c(ti)) for ti in t])
-        elif np.isscalar(c):
-            arr = np.full(n, float(c))
-        else:
-            arr = np.asarray(c, dtype=float)
-            if arr.ndim != 1 or arr.size < n:
-                raise ValueError(
-                    f"control {name!r} has {arr.size} samples; {n} needed for the flight "
-                    f"({(n - 1) / rate_hz:g} s at {rate_hz:g} Hz, both ends included)"
-                )
-            arr = arr[:n]
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"control {name!r} has non-finite values")
-        out[name] = arr
-    return out
 
 
 def fly(model: Model | str, trim: Trim, controls: Mapping[str, Control] | None = None,
