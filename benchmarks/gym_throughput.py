@@ -16,9 +16,7 @@ best of ``--repeats``, interleaved, median beside it):
   the default reward (``valid-information``: the linear-range weight of each sample);
 - env-information: the same under ``reward="information"`` (no weight);
 - make: the same through ``gymnasium.make`` (its PassiveEnvChecker and OrderEnforcing
-  wrappers);
-- no-update: diagnostic, ``ExcitationEnv.step`` with the information update (the reward's
-  rank-one updates) replaced by a no-op: what the rest of the step costs.
+  wrappers).
 
 Resets are outside the timed part.
 """
@@ -76,10 +74,8 @@ def main(out: Path, repeats: int = 5) -> str:
             advance((inc["de"], inc["da"], inc["dr"]))
         return time.process_time() - t0
 
-    def stepping(e, update: bool = True) -> float:
+    def stepping(e) -> float:
         e.reset(seed=0)
-        if not update:
-            e.unwrapped._info_state.add = lambda *sample: None
         step = e.step
         t0 = time.process_time()
         for a in actions:
@@ -88,7 +84,7 @@ def main(out: Path, repeats: int = 5) -> str:
 
     cases = {"bare": bare, "core": core, "lean": lean, "env": lambda: stepping(env),
              "env-information": lambda: stepping(env_information),
-             "make": lambda: stepping(made), "no-update": lambda: stepping(env, False)}
+             "make": lambda: stepping(made)}
     times: dict[str, list[float]] = {k: [] for k in cases}
     for _ in range(repeats):
         for k, fn in cases.items():
