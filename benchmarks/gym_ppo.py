@@ -1,7 +1,8 @@
 """A trained baseline for flightid/Excitation-v0: PPO (stable-baselines3) against the
 hand-designed inputs on held-out seeds; writes a results file and a plot.
 
-Usage: python benchmarks/gym_ppo.py [--timesteps N] [--out FILE]
+Usage: python benchmarks/gym_ppo.py [--timesteps N] [--out FILE] [--save MODEL]
+       python benchmarks/gym_ppo.py --load MODEL [--out FILE]
 
 Needs the optional extra: ``pip install -e ".[rl]"`` (stable-baselines3; install the CPU
 build of torch first).
@@ -15,6 +16,10 @@ environments' own seed sequence, disjoint from the held-out 0-3). Evaluation: th
 deterministic policy on the held-out seeds through ``baselines.evaluate``, beside the
 baselines, with the same measures (returns under each reward, relative bound and error).
 The training budget (timesteps, CPU seconds) is written with the results.
+
+``--load MODEL`` evaluates a saved agent without training (``gym_ppo_eval.txt``): its
+deterministic policy and its stochastic one (actions sampled, torch seeded per episode
+with the episode's seed), with each episode's end (the departure, if any).
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ from flightid.scenarios.gym.baselines import (
     multisine,
     per_target,
     plot,
+    run_episode,
 )
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_ppo.txt"
@@ -91,6 +97,37 @@ def train(timesteps: int, seed: int = 0) -> tuple[PPO, float, list[tuple[int, fl
     return model, time.process_time() - t0, curve.points
 
 
+def evaluate_saved(model_path: Path, out: Path) -> str:
+    """The saved agent's deterministic and stochastic policies on the held-out seeds."""
+    torch.set_num_threads(1)
+    model = PPO.load(model_path, device="cpu")
+    env = ExcitationEnv()
+    others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
+    seeds = list(HELD_OUT_SEEDS)
+    results, ends = [], []
+    for deterministic in (True, False):
+        name = f"PPO ({'deterministic' if deterministic else 'stochastic'})"
+
+        def schedule(e: ExcitationEnv, s: int, deterministic: bool = deterministic
+                     ) -> np.ndarray:
+            torch.manual_seed(s)
+            return closed_loop(lambda obs: model.predict(
+                obs.astype(np.float32), deterministic=deterministic)[0])(e, s)
+
+        results.append(evaluate(env, name, schedule, seeds, others))
+        for s in seeds:
+            info = run_episode(env, schedule(env, s), s)[1]
+            ends.append(f"{name}, seed {s}: {info.get('departure', 'no departure')} at "
+                        f"{info['time']:.2f} s")
+    lines = [f"flightid/Excitation-v0, the saved PPO agent {model_path.name} "
+             f"({model.num_timesteps} timesteps), {datetime.date.today().isoformat()}, "
+             f"held-out seeds {seeds}", "", HEADER, *(r.line() for r in results), "", *ends]
+    text = "\n".join(lines) + "\n"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    return text
+
+
 def main(timesteps: int, out: Path, save: Path | None = None) -> str:
     model, cpu, curve = train(timesteps)
     if save is not None:
@@ -132,5 +169,11 @@ if __name__ == "__main__":
     parser.add_argument("--timesteps", type=int, default=400_000)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     parser.add_argument("--save", type=Path, default=None, help="save the trained model here")
+    parser.add_argument("--load", type=Path, default=None,
+                        help="evaluate this saved model, no training")
     args = parser.parse_args()
-    print(main(args.timesteps, args.out, args.save))
+    if args.load is not None:
+        out = args.out if args.out != DEFAULT_OUT else DEFAULT_OUT.with_name("gym_ppo_eval.txt")
+        print(evaluate_saved(args.load, out))
+    else:
+        print(main(args.timesteps, args.out, args.save))
