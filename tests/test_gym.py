@@ -12,7 +12,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from flightid.identification.identify import identify
-from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
+from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, DecisionChunks, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
     closed_loop,
     doublet,
@@ -114,6 +114,30 @@ def test_vector_envs_step_the_same_episodes_as_one_env(vector):
     np.testing.assert_array_equal(r, 0.0)
     np.testing.assert_allclose(obs[:, 0], 0.0, atol=1e-12)  # t = 0: a fresh episode
     venv.close()
+
+
+def test_decision_chunks_fly_the_same_episode():
+    """``DecisionChunks``: 50 decisions in chunks of 7 (the last chunk ends the episode
+    after its first row) are the decision-by-decision flight: the same final observation
+    and info, the same return to rounding; a bad chunk size or shape is refused."""
+    actions = three211(ExcitationEnv(episode_s=1.0), 0)[:50].astype(np.float32) * 4.0
+    one = ExcitationEnv(episode_s=1.0)
+    one.reset(seed=5)
+    single = [one.step(a) for a in actions]
+    chunked = DecisionChunks(ExcitationEnv(episode_s=1.0), 7)
+    chunked.reset(seed=5)
+    padded = np.vstack([actions, np.zeros((6, 3), np.float32)]).reshape(8, 7, 3)
+    steps = [chunked.step(c) for c in padded]
+    assert [s[3] for s in steps] == [False] * 7 + [True]  # truncated in the last chunk
+    assert sum(s[1] for s in steps) == pytest.approx(sum(r[1] for r in single), rel=1e-12)
+    assert single[-1][3] and not any(r[3] for r in single[:-1])
+    np.testing.assert_array_equal(steps[-1][0], single[-1][0])
+    np.testing.assert_array_equal(steps[-1][4]["estimate"], single[-1][4]["estimate"])
+    assert chunked.unwrapped._k == one.unwrapped._k == 50
+    with pytest.raises(ValueError, match=r"k \(decisions per call\) must be an integer >= 1"):
+        DecisionChunks(ExcitationEnv(episode_s=1.0), 0)
+    with pytest.raises(ValueError, match=r"action must be 7 rows of \(de, da, dr\)"):
+        chunked.step(np.zeros(3, np.float32))
 
 
 def test_a_feedback_policy_flown_open_loop_is_the_same_flight(env):
