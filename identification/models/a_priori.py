@@ -15,7 +15,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from flightid.identification import linear_models as lm
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord
 
 META_KEY = "a_priori"
