@@ -25,6 +25,7 @@ from typer.exceptions import TyperException
 
 from flightid import __version__
 from flightid.cli import bridge
+from flightid.cli.campaign import campaign_command
 from flightid.cli.compatibility import compatibility_command
 from flightid.cli.demo import demo_command
 from flightid.cli.design_compare import design_compare_command
@@ -175,6 +176,7 @@ app.command("gap-benchmark")(gap_benchmark_command)
 app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
 app.command("design-compare")(design_compare_command)
+app.command("campaign")(campaign_command)
 
 
 def main() -> None:
