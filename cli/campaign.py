@@ -32,6 +32,26 @@ def points_table(scores: list[PointScore]) -> Table:
     return table
 
 
+def update_table(update: dict) -> Table:
+    """The corrections kept and the held-out gap per axis, before and after."""
+    table = add_columns(Table(title="database update"), ("derivative", "form", "shift",
+                                                         "scale", "slope per x unit"))
+    for c in update["corrections"]:
+        if c["form"] != "none":
+            table.add_row(c["name"], c["form"], f"{c['shift']:+.4g}", f"{c['scale']:.4g}",
+                          f"{c['slope']:+.4g}")
+    for axis, shrink in update["shrink"].items():
+        if update["mean"]:
+            m, above = update["mean"], update["shrink_above_floor"][axis]
+            table.add_row(f"held-out gap {axis}", f"floor {m['floor'][axis]:.4f}",
+                          f"{m['before'][axis]:.4f} before", f"{m['after'][axis]:.4f} after",
+                          f"{100 * shrink:.0f} % smaller ({100 * above:.0f} % above floor)")
+    for name, g in update["derivative_gap"].items():
+        table.add_row(f"held-out {name}", "RMS error", f"{g['model']:.4g} before",
+                      f"{g['updated']:.4g} after", "")
+    return table
+
+
 def campaign_command(
     card: Annotated[str, typer.Argument(help="campaign card file or library campaign name")],
     output: Annotated[str, typer.Option(
@@ -41,6 +61,10 @@ def campaign_command(
     dask_scheduler_file: Annotated[str | None, typer.Option(
         help="Dask scheduler file")] = None,
     quiet: opts.Quiet = False,
+    update_aircraft: Annotated[str | None, typer.Option(
+        help="write the model aircraft with its tables relocated to the flight points in "
+             "this folder, and report the gap on the held-out points before and after")]
+        = None,
 ) -> None:
     """Fly every test point of a campaign card, identify each, and write per-point
     estimates (Parquet) and an HTML report of the derivatives against the condition."""
@@ -49,11 +73,16 @@ def campaign_command(
     if workers is not None and workers < 1:
         raise ValueError(f"--workers must be at least 1, got {workers}")
     check_paths({"--dask-scheduler-file": dask_scheduler_file},
-                [Output("--output", output, folder=True)])
+                [Output("--output", output, folder=True),
+                 Output("--update-aircraft", update_aircraft, folder=True)])
     loaded = campaigns.load_campaign(card)
     with count_progress(f"campaign {loaded.name}", show=not quiet) as update:
         progress = (lambda done, total: update(done, total)) if update else None
         result = campaigns.run(loaded, output, workers=workers, dask_address=dask,
-                               dask_scheduler_file=dask_scheduler_file, progress=progress)
+                               dask_scheduler_file=dask_scheduler_file, progress=progress,
+                               update_aircraft=update_aircraft)
     Console().print(points_table(result.scores))
+    if result.update is not None:
+        Console().print(update_table(result.update))
+        typer.echo(f"wrote {result.aircraft}")
     typer.echo(f"wrote {result.folder / campaigns.ESTIMATES} and {result.report}")
