@@ -6,7 +6,7 @@ and 1.1; every point is reduced and identified by output error (``--method``, de
 oe6dof: 6-DOF output error, 24 derivatives; oe: the linear lateral model), in ``workers``
 local processes, into a fresh folder. The wall time includes everything ``run`` does
 (worker start-up, flights, trims, fits, Parquet rows, the model curve and the report).
-Writes benchmarks/results/campaign_speed.txt and .json.
+Writes benchmarks/results/campaign_speed-<method>.txt and .json.
 
     .venv/bin/python benchmarks/campaign_speed.py [--workers 2] [--method oe6dof]
 """
@@ -64,7 +64,7 @@ def main() -> None:
            "note": "measured on a machine shared with other users' jobs (load average "
                    "above)"}
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "campaign_speed.json").write_text(json.dumps(out, indent=2) + "\n")
+    (RESULTS / f"campaign_speed-{args.method}.json").write_text(json.dumps(out, indent=2) + "\n")
     lines = [f"20-point campaign (twinotter-id maneuvers, {args.method}), {args.workers} "
              f"workers, {out['date']}",
              f"python {out['python']}, {out['machine']}, {out['cpus']} CPUs; shared machine, "
@@ -74,7 +74,7 @@ def main() -> None:
              f"failed points: {failed or 'none'}; share of estimates within 3 sigma per "
              f"point: min {out['min_share_within_3_sigma']:.2f}, mean "
              f"{out['mean_share_within_3_sigma']:.2f}"]
-    (RESULTS / "campaign_speed.txt").write_text("\n".join(lines) + "\n")
+    (RESULTS / f"campaign_speed-{args.method}.txt").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
