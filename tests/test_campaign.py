@@ -11,6 +11,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from dask import distributed
 
 from flightid.scenarios import campaign
 from flightid.scenarios.campaign.card import TestPoint as Point
@@ -113,3 +114,17 @@ def test_command_exits_2_on_a_bad_card(tmp_path):
                           str(tmp_path / "out")], capture_output=True, text=True)
     assert run.returncode == 2, run.stderr
     assert "no test point" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_dask_gives_the_numbers_of_local_processes(flown, tmp_path):
+    # the first point of the library campaign on a one-worker Dask cluster: the same
+    # rows as the local run (a point is a pure function of the campaign and its index)
+    one = campaign_from_dict({"card": "twinotter-id", "method": "oe6dof", "model": "6dof",
+                              "options": {"propulsive_moments": True}, "seed": 1,
+                              "point": [{"altitude": 1897.0, "speed": 61.733333}]})
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        on_dask = campaign.run(one, tmp_path / "dask", dask_address=cluster.scheduler_address)
+    local = flown.estimates[flown.estimates["index"] == 0].reset_index(drop=True)
+    cols = ["name", "estimate", "std", "truth", "speed_flown"]
+    pd.testing.assert_frame_equal(on_dask.estimates[cols], local[cols])
