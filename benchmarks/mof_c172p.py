@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.reduction import reduce_record
 from flightid.identification.estimate import Estimate
+from flightid.identification.evaluation.validation import r_squared, theil_inequality
 from flightid.identification.identify import identify
 from flightid.identification.methods import equation_error as ee
-from flightid.identification.validation import r_squared, theil_inequality
 from flightid.scenarios.cards import card_from_dict, fly_card
 
 RESULTS = Path(__file__).resolve().parent / "results"

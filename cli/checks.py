@@ -20,10 +20,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
-from flightid.identification import resources, time_base
-from flightid.identification.convergence import NotConvergedWarning
+from flightid.identification import nuisance
+from flightid.identification.data import time_base
+from flightid.identification.data.unit_sanity import check_units
+from flightid.identification.engine import resources
+from flightid.identification.engine.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
-from flightid.identification.unit_sanity import check_units
 from flightid.record import FlightRecord, read
 
 # a command refuses to write more than this without --force (bytes)
@@ -250,7 +252,8 @@ def check_aircraft_xml(aircraft: str) -> None:
 
 
 # warnings of the data a command prints as "flightid <command>: warning: ..." lines
-DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning)
+DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning,
+                 nuisance.ImplausibleBiasWarning)
 
 
 @contextmanager

@@ -10,9 +10,9 @@ import json
 import pytest
 
 from flightid.scenarios import campaign
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 
 # the hidden table: +0.015 at 50 m/s to -0.015 at 75 m/s
 SLOPE = -0.03 / 25.0

@@ -9,9 +9,9 @@ import pytest
 from flightid.scenarios.cards import augmented_aircraft, card_from_dict, load_card, trim_card
 from flightid.sim.effects.airframe import DerivativeTable
 from flightid.sim.effects.catalogue import CATALOGUE
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 
 TABLE = DerivativeTable(derivative="Cn_beta", axes="body", delta_low=0.02, delta_high=-0.01,
                         low=50.0, high=72.0)

@@ -5,7 +5,7 @@ The points are ordered by the campaign's x (speed, altitude, flaps, mass, cg_x, 
 trim alpha) and joined by straight lines in condition space (altitude, speed, flaps,
 mass, CG); ``STEPS`` conditions are taken on each segment. At each, the model aircraft
 (the flight card's aircraft with the condition's mass and CG, without the campaign's
-other effects) is trimmed and its exact derivatives taken (``sim.truth.derivatives``,
+other effects) is trimmed and its exact derivatives taken (``sim.jsbsim.truth.derivatives``,
 body axes), so the curve is what the aircraft's tables say between the flight points.
 """
 
@@ -19,7 +19,7 @@ import pandas as pd
 
 from flightid.scenarios.campaign.card import Campaign, TestPoint, point_card
 from flightid.scenarios.campaign.point import model_values
-from flightid.sim.trim import TrimError
+from flightid.sim.jsbsim.trim import TrimError
 
 STEPS = 3  # conditions per segment between two neighbouring points (the first included)
 MAX_CONDITIONS = 40  # the curve's conditions at most (fewer steps for many points)

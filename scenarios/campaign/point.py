@@ -18,14 +18,14 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED, record_truth, score
 from flightid.identification.identify import identify
-from flightid.identification.scoring import STATUS_ESTIMATED, record_truth, score
 from flightid.scenarios.campaign.card import Campaign, TestPoint, point_card
 from flightid.scenarios.cards import Card, fly_card, sub_seed, trim_card
 from flightid.scenarios.montecarlo.study import FLOAT_COLUMNS, REALIZATION_ERRORS
-from flightid.sim.model import quiet
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import quiet
+from flightid.sim.jsbsim.truth import derivatives
 
 STATUS_FAILED = "failed"
 
@@ -37,7 +37,7 @@ def point_seed(campaign: Campaign, index: int) -> int:
 
 def model_values(card: Card) -> tuple[float, dict[str, float]]:
     """(trim alpha in rad, the exact body-axis derivatives) of ``card``'s aircraft at its
-    condition: the JSBSim tables' derivatives (``sim.truth.derivatives``)."""
+    condition: the JSBSim tables' derivatives (``sim.jsbsim.truth.derivatives``)."""
     with quiet(), contextlib.redirect_stdout(io.StringIO()):
         model, trimmed = trim_card(card)
         values = derivatives(model, trimmed, axes="body").values

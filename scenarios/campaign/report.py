@@ -20,7 +20,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
-from flightid.identification.scoring import STATUS_ESTIMATED
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign
 
 REPORT = "report.html"

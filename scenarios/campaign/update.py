@@ -29,11 +29,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.reduction import reduce_record
 from flightid.identification.envelope_fit import Correction, fit_correction
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.identification.gap.correct import fly_record, gap_fractions
 from flightid.identification.gap.linearise import AXIS_OUTPUTS
-from flightid.identification.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign, point_card
 from flightid.scenarios.campaign.point import model_values
 from flightid.scenarios.cards import augmented, card_from_dict, fly_card, sub_seed
@@ -44,7 +44,7 @@ from flightid.sim.effects.airframe import (
     DerivativeDelta,
     DerivativeTable,
 )
-from flightid.sim.model import quiet
+from flightid.sim.jsbsim.model import quiet
 
 SCHEDULES = {"speed": "airspeed", "alpha": "alpha"}
 # the condition each estimate stands for (point.flown_condition), by the campaign's x

@@ -8,7 +8,7 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
   JSBSim properties (``aero/qbar-area``, ``metrics/bw-ft``, ``aero/alpha-rad``, ...). The
   delta is stated in stability or body axes and rotated with the current alpha into the
   frame the aircraft's axes use (LIFT/DRAG/SIDE, X/Y/Z in BODY or STABILITY frame), so the
-  numerical truth (``flightid.sim.truth.derivatives``) in the stated axes moves by exactly
+  numerical truth (``flightid.sim.jsbsim.truth.derivatives``) in the stated axes moves by exactly
   the delta. (Exact for every derivative but the alpha derivatives of a rotated lateral
   moment when an added lateral term is nonzero at trim.)
 - ``derivative_table``: the same term with a ``<table>`` in the true airspeed or alpha in
@@ -33,7 +33,7 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
 usual); set to 1, the positions follow ``fcs/drive/de-rad``, ``-da-rad`` and ``-dr-rad``
 (project signs, rad), bypassing the actuator. A record's *measured* surfaces have already
 passed the real actuator: an aircraft flown from them must not lag them again
-(``sim.flight.Simulation(..., surfaces="driven")`` writes them there).
+(``sim.flight.simulation.Simulation(..., surfaces="driven")`` writes them there).
 
 The result loads in plain JSBSim: ``FGFDMExec(root_dir=folder).load_model(name)``.
 """
@@ -67,7 +67,7 @@ from flightid.sim.effects.airframe import (
     TailIce,
     ThrustMoment,
 )
-from flightid.sim.model import DRIVE, DRIVE_ON, PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
+from flightid.sim.jsbsim.model import DRIVE, DRIVE_ON, PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
 
 ET.register_namespace("xsi", "http://www.w3.org/2001/XMLSchema-instance")
 FT_PER_M = 1 / 0.3048
@@ -134,7 +134,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
     ``aircraft``: a name (project or jsbsim) or an XML path; the original stays untouched.
     ``name``: the new aircraft's name (default ``<aircraft>-augmented``). Effects at their
     neutral value are only noted in a comment. ``surface_drive``: add the switches that let
-    a flight set the surface positions directly (module note). ``flightid.sim.model.load``
+    a flight set the surface positions directly (module note). ``flightid.sim.jsbsim.model.load``
     takes the path.
     """
     old, xml, _ = locate(str(aircraft))
@@ -346,8 +346,10 @@ def _targets(axes: str, coef: str, force: str, moment: str) -> list[tuple[str, s
 
 
 def _derivative_delta(doc: _Doc, e: DerivativeDelta) -> None:
+    form = " x abs(variable)" if e.form == "even" else ""
     _derivative_term(doc, e.derivative, e.axes, lambda s: [_val(s * e.delta)],
-                     f"derivative_delta {e.derivative} {e.delta:+.6g} per rad")
+                     f"derivative_delta {e.derivative} {e.delta:+.6g} per rad{form}",
+                     even=e.form == "even")
 
 
 # what a derivative_table reads, and the factor from the card's unit to the property's
@@ -369,12 +371,16 @@ def _derivative_table(doc: _Doc, e: DerivativeTable) -> None:
                      f"{e.low:g} {unit} to {e.delta_high:+.6g} at {e.high:g} {unit} per rad")
 
 
-def _derivative_term(doc: _Doc, derivative: str, axes: str, value, what: str) -> None:
+def _derivative_term(doc: _Doc, derivative: str, axes: str, value, what: str,
+                     even: bool = False) -> None:
     """Add ``value(sign)`` (the delta's elements, times the sign) x the derivative's
-    variable as a term of the derivative's coefficient, rotated into the model's axes."""
+    variable (its absolute value when ``even``) as a term of the derivative's
+    coefficient, rotated into the model's axes."""
     coef, var = derivative[1:].split("_", 1)
     force, moment = doc.frames()
     factors, sign = _variable(var, axes)
+    if even:  # delta x |variable|: its sign no longer matters
+        factors, sign = [*factors[:-1], _el("abs", factors[-1])], 1.0
     length = {"l": "metrics/bw-ft", "n": "metrics/bw-ft", "m": "metrics/cbarw-ft"}.get(coef)
     n = sum(1 for _ in doc.aero().iter("function"))
     for axis, trig, s in _targets(axes, coef, force, moment):

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from flightid.identification import compatibility
+from flightid.identification.compatibility import reconstruction as compatibility
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 

@@ -15,7 +15,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from flightid.identification import linear_models as lm
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord
 
 META_KEY = "a_priori"
@@ -48,7 +48,7 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
             where = "the record's a priori table" if a_priori is None else "option a_priori"
             raise ValueError(f"{where}: {name} = {value!r} is not a finite number; give "
                              "the value it is held at")
-    full = _preset_derivatives(preset)
+    full = preset_derivatives(preset)
     held = {n: float(v) for n, v in held_all.items() if n in full}
     base = lm.preset_for_record(preset, record, derivatives, method)
     names = [p for p in base.parameters if p not in lm_biases(base)]
@@ -64,7 +64,8 @@ def lm_biases(model: lm.LinearModel) -> list[str]:
     return [p for p in model.parameters if p.startswith("bias_")]
 
 
-def _preset_derivatives(preset: str) -> tuple[str, ...]:
+def preset_derivatives(preset: str) -> tuple[str, ...]:
+    """Every derivative a linear-model preset can take; () for another model."""
     return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
             "longitudinal": lm.LONGITUDINAL_DERIVATIVES}.get(preset, ())
 
