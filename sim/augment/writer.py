@@ -11,6 +11,8 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
   numerical truth (``flightid.sim.jsbsim.truth.derivatives``) in the stated axes moves by exactly
   the delta. (Exact for every derivative but the alpha derivatives of a rotated lateral
   moment when an added lateral term is nonzero at trim.)
+- ``derivative_table``: the same term with a ``<table>`` in the true airspeed or alpha in
+  place of the constant delta (a condition-dependent model error).
 - ``control_effectiveness``: every aerodynamic term that reads the surface (directly or
   through a helper function of the aerodynamics section) multiplied by the factor.
 - ``cg_offset``, ``mass_scale``, ``inertia_scale``: the ``<mass_balance>`` section (the CG
@@ -58,6 +60,7 @@ from flightid.sim.effects.airframe import (
     ControlEffectiveness,
     Deadband,
     DerivativeDelta,
+    DerivativeTable,
     InertiaScale,
     MassScale,
     RateLimit,
@@ -170,7 +173,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
 def _check_unique(effects: Sequence[AugmentEffect]) -> None:
     seen: set[tuple] = set()
     for e in effects:
-        if isinstance(e, DerivativeDelta | ControlEffectiveness):
+        if isinstance(e, DerivativeDelta | DerivativeTable | ControlEffectiveness):
             continue  # these add up
         key = (e.name, e.options().get("surface", ""))
         if key in seen:
@@ -343,25 +346,53 @@ def _targets(axes: str, coef: str, force: str, moment: str) -> list[tuple[str, s
 
 
 def _derivative_delta(doc: _Doc, e: DerivativeDelta) -> None:
-    coef, var = e.derivative[1:].split("_", 1)
+    form = " x abs(variable)" if e.form == "even" else ""
+    _derivative_term(doc, e.derivative, e.axes, lambda s: [_val(s * e.delta)],
+                     f"derivative_delta {e.derivative} {e.delta:+.6g} per rad{form}",
+                     even=e.form == "even")
+
+
+# what a derivative_table reads, and the factor from the card's unit to the property's
+SCHEDULE_PROPERTY = {"airspeed": ("velocities/vt-fps", FT_PER_M), "alpha": ("aero/alpha-rad", 1.0)}
+
+
+def _derivative_table(doc: _Doc, e: DerivativeTable) -> None:
+    prop, scale = SCHEDULE_PROPERTY[e.schedule]
+
+    def table(s: float) -> list[ET.Element]:
+        rows = (f"\n{e.low * scale!r} {s * e.delta_low!r}\n"
+                f"{e.high * scale!r} {s * e.delta_high!r}\n")
+        return [_el("table", _el("independentVar", text=prop, lookup="row"),
+                    _el("tableData", text=rows))]
+
+    unit = "m/s" if e.schedule == "airspeed" else "rad"
+    _derivative_term(doc, e.derivative, e.axes, table,
+                     f"derivative_table {e.derivative} {e.delta_low:+.6g} at {e.schedule} "
+                     f"{e.low:g} {unit} to {e.delta_high:+.6g} at {e.high:g} {unit} per rad")
+
+
+def _derivative_term(doc: _Doc, derivative: str, axes: str, value, what: str,
+                     even: bool = False) -> None:
+    """Add ``value(sign)`` (the delta's elements, times the sign) x the derivative's
+    variable (its absolute value when ``even``) as a term of the derivative's
+    coefficient, rotated into the model's axes."""
+    coef, var = derivative[1:].split("_", 1)
     force, moment = doc.frames()
-    factors, sign = _variable(var, e.axes)
-    if e.form == "even":  # delta x |variable|: its sign no longer matters
+    factors, sign = _variable(var, axes)
+    if even:  # delta x |variable|: its sign no longer matters
         factors, sign = [*factors[:-1], _el("abs", factors[-1])], 1.0
     length = {"l": "metrics/bw-ft", "n": "metrics/bw-ft", "m": "metrics/cbarw-ft"}.get(coef)
     n = sum(1 for _ in doc.aero().iter("function"))
-    for axis, trig, s in _targets(e.axes, coef, force, moment):
+    for axis, trig, s in _targets(axes, coef, force, moment):
         product = [_prop("aero/qbar-area"), *([_prop(length)] if length else []),
                    *[_clone(f) for f in factors], *([_trig(trig)] if trig else []),
-                   _val(s * sign * e.delta)]
-        form = " x abs(variable)" if e.form == "even" else ""
-        fn = _el("function", _el("description", text=f"augment: {e.derivative} delta "
-                                 f"{e.delta:g}{form} ({e.axes} axes)"),
-                 _el("product", *product), name=f"aero/augment/{e.derivative}-{n}-{axis}")
+                   *value(s * sign)]
+        fn = _el("function", _el("description", text=f"augment: {what} ({axes} axes)"),
+                 _el("product", *product), name=f"aero/augment/{derivative}-{n}-{axis}")
         n += 1
         rot = f" x {trig}(alpha), rotated into this {axis} axis" if trig else ""
-        doc.add_term(axis, f"added by flightid augment: derivative_delta {e.derivative} "
-                     f"{e.delta:+.6g} per rad{form} ({e.axes} axes){rot}: model mismatch", fn)
+        doc.add_term(axis, f"added by flightid augment: {what} ({axes} axes){rot}: "
+                     "model mismatch", fn)
 
 
 def _clone(el: ET.Element) -> ET.Element:
@@ -670,6 +701,7 @@ def _surface_drive(doc: _Doc) -> None:
 
 _APPLY = {
     DerivativeDelta: _derivative_delta,
+    DerivativeTable: _derivative_table,
     ControlEffectiveness: _control_effectiveness,
     CgOffset: _cg_offset,
     MassScale: _mass_scale,
