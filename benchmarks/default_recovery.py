@@ -66,6 +66,7 @@ def run_one(record, axis: str, reduced: bool) -> dict:
     rows = score(est, record).rows
     done = [r for r in rows if r.status == "estimated"]
     return {"estimated": len(done), "withheld": len(rows) - len(done),
+            "start": est.fit.get("start", ""),
             "inside": sum(abs(r.sigmas) <= 3 for r in done),
             "misses": [f"{r.name} {r.sigmas:+.1f}" for r in done if abs(r.sigmas) > 3]}
 
