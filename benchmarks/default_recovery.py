@@ -78,6 +78,8 @@ def main() -> None:
     parser.add_argument("--name", default="", help="results file suffix (e.g. heldout)")
     parser.add_argument("--cache", default="", help="folder keeping the flown records")
     parser.add_argument("--fly-only", action="store_true")
+    parser.add_argument("--reductions", default="raw,standard",
+                        help="raw, standard or both (comma-separated)")
     args = parser.parse_args()
     cards = args.cards.split(",") if args.cards else [c for c in library_cards()
                                                       if c not in SKIP]
@@ -98,7 +100,7 @@ def main() -> None:
                              "refused": "no maneuver on the elevator, aileron or rudder"})
                 continue
             for axis in axes:
-                for reduced in (False, True):
+                for reduced in [r == "standard" for r in args.reductions.split(",")]:
                     row = {"card": card, "seed": seed, "axis": axis,
                            "reduction": "standard" if reduced else "raw",
                            **run_one(record, axis, reduced)}

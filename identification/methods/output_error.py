@@ -30,6 +30,7 @@ import scipy.linalg
 from flightid.derivatives import is_derivative, split
 from flightid.identification import a_priori, model_structure
 from flightid.identification import identifiability as ident
+from flightid.identification import linear_models as lm
 from flightid.identification.coefficients import THRUST_COEFFICIENTS
 from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
@@ -474,6 +475,10 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
         "output error")
     if options.free is not None:
         free = list(options.free)
+    unmeasured = [o for o in linear.outputs
+                  if o in model_structure.OPTIONAL_OUTPUTS and o not in record]
+    if unmeasured:
+        linear = lm.without_outputs(linear, unmeasured)
     start, start_note = options.start, ""
     if start == "equation_error":
         try:  # the free parameters' start values; the held ones keep theirs
@@ -502,6 +507,9 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
     est.method = ID
     est.fit["a_priori"] = a_priori.describe(record, held)
     est.fit["start"] = note
+    if unmeasured:
+        est.fit["outputs_left_out"] = {o: "not in the record (state integrated from the "
+                                          "rates)" for o in unmeasured}
     return est
 
 
@@ -534,7 +542,7 @@ METHOD = Method(
               "2nd ed., 2016, ch. 6; Jategaonkar, Flight Vehicle System Identification, "
               "2nd ed., 2015, ch. 4",
     options=Options, models=model_structure.LINEAR, default_model="lateral",
-    channels=model_structure.linear_channels, run=run, contract_model="lateral",
+    channels=model_structure.output_error_channels, run=run, contract_model="lateral",
 )
 
 
