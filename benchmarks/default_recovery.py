@@ -128,6 +128,9 @@ def table(rows: list[dict], seeds: str) -> str:
         cells = []
         for reduction in ("raw", "standard"):
             sel = [r for r in rs if r["reduction"] == reduction]
+            if not sel and any(r["reduction"] != "-" for r in rs):
+                cells += ["not run", "not run"]
+                continue
             est = sum(r.get("estimated", 0) for r in sel)
             inside = sum(r.get("inside", 0) for r in sel)
             withheld = sum(r.get("withheld", 0) for r in sel)
