@@ -28,6 +28,7 @@ from flightid.cli import bridge
 from flightid.cli.compatibility import compatibility_command
 from flightid.cli.demo import demo_command
 from flightid.cli.design_compare import design_compare_command
+from flightid.cli.design_optimize import design_optimize_command
 from flightid.cli.effects import effects_command
 from flightid.cli.frequency_response import frequency_response_command
 from flightid.cli.gap import gap_command
@@ -37,6 +38,7 @@ from flightid.cli.importing import import_command
 from flightid.cli.methods import methods_command
 from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
 from flightid.cli.simulate import simulate_command
+from flightid.cli.study_compare import study_compare_command
 from flightid.cli.trim_truth import trim_command, truth_command
 from flightid.identification.convergence import NotConvergedError
 from flightid.scenarios.cards import CardError
@@ -175,6 +177,8 @@ app.command("gap-benchmark")(gap_benchmark_command)
 app.command("montecarlo")(montecarlo_command)
 app.command("montecarlo-report")(montecarlo_report_command)
 app.command("design-compare")(design_compare_command)
+app.command("design-optimize")(design_optimize_command)
+app.command("study-compare")(study_compare_command)
 
 
 def main() -> None:

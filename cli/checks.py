@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
-from flightid.identification import resources, time_base
+from flightid.identification import nuisance, resources, time_base
 from flightid.identification.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
 from flightid.identification.unit_sanity import check_units
@@ -250,7 +250,8 @@ def check_aircraft_xml(aircraft: str) -> None:
 
 
 # warnings of the data a command prints as "flightid <command>: warning: ..." lines
-DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning)
+DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning,
+                 nuisance.ImplausibleBiasWarning)
 
 
 @contextmanager

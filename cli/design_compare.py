@@ -18,7 +18,14 @@ from rich.table import Table
 from flightid.api import design_compare
 from flightid.channels import CONTROLS
 from flightid.cli import study_options as opts
-from flightid.cli.checks import Output, check_choice, check_number, check_paths, check_study
+from flightid.cli.checks import (
+    Output,
+    check_choice,
+    check_number,
+    check_paths,
+    check_study,
+    check_unique,
+)
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
 from flightid.cli.tables import add_columns
@@ -69,7 +76,8 @@ def _tables(comparison: Comparison) -> list[Table]:
                           for k in kinds)] for name in wide.index]))
     if ratio_rows(comparison):
         out.append(add_columns(
-            Table(title=f"scatter 3211 / doublet, {level} interval (F distribution)"),
+            Table(title=f"scatter 3211 / doublet, {level} interval (paired bootstrap where "
+                        "both n are 20 or more, else F)"),
             ["derivative", "ratio", f"{level} interval", "n 3211", "n doublet", "smaller"],
             rows=ratio_rows(comparison)))
     return out
@@ -105,7 +113,9 @@ def design_compare_command(
         "-o", "--output", help="study folder (continued when it exists)")] = "design-compare",
     method: opts.Method = "oe",
     model: opts.Model = "lon",
-    surface: Annotated[str, typer.Option(help="the surface every design moves")] = "de",
+    surface: Annotated[list[str] | None, typer.Option(
+        help="the surface every built-in design moves (default de); repeated: each is "
+             "flown on every surface given, one after another (da, then dr)")] = None,
     amplitude_deg: Annotated[float, typer.Option(
         help="peak amplitude (deg) of every design (equal amplitude) or of the reference "
              "(equal energy)")] = 3.0,
@@ -145,7 +155,10 @@ def design_compare_command(
     check_choice("--reference", reference, (*DESIGNS, *own))
     for d in design or ():
         check_choice("--design", d, DESIGNS)
-    check_choice("--surface", surface, SURFACES)
+    surfaces = tuple(surface or ("de",))
+    for s in surfaces:
+        check_choice("--surface", s, SURFACES)
+    check_unique("--surface", surfaces)
     check_number("--amplitude-deg", amplitude_deg, low=0.0, low_open=True, high=90.0,
                  unit="deg")
     check_number("--base", base, low=0.0, low_open=True, high=60.0, unit="s")
@@ -158,8 +171,8 @@ def design_compare_command(
     check_paths({"--card": card, "--design-file": design_file},
                 [Output("--output", output, folder=True)])
     card = card_with_overrides(card, output, set_ or (), turbulence, sensors)
-    settings = DesignSettings(surface=surface, amplitude=amplitude_deg * DEG, base=base,
-                              multisine_band=tuple(multisine_band))
+    settings = DesignSettings(surface=surfaces[0], amplitude=amplitude_deg * DEG, base=base,
+                              multisine_band=tuple(multisine_band), then=surfaces[1:])
     kinds = tuple(design or DESIGNS)
     if "multisine" in kinds:  # a band without harmonics fails here, before any study
         try:

@@ -17,10 +17,11 @@ from flightid.api import gap
 from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_paths, read_record
 from flightid.identification.gap import write_aircraft
-from flightid.identification.gap.correct import refly
 from flightid.identification.gap.diagnose import GapResult, injected
+from flightid.identification.gap.refly import refly
 from flightid.identification.gap.report import write_report
 from flightid.identification.gap.shrink import shrink_text
+from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import p_text
 
 
@@ -97,19 +98,39 @@ def gap_command(
         console.print(result.refine_note)
     if written:
         console.print(f"corrected aircraft: {written}")
-        o = (again or {}).get("overall")
-        if o:
-            console.print(f"flown again in JSBSim with the records' inputs (open loop from "
-                          f"trim): gap {o['before']:.3f} (as is) -> {o['after']:.3f} "
-                          f"(corrected), {shrink_text(o['shrink'])} shrink. Beside the "
-                          "linear held-out shrink: the re-fly flies the full nonlinear "
-                          "aircraft from trim with no bias or initial state refitted, so "
-                          "trim offsets, drift and nonlinearity count in it too.")
-        for r in (again or {}).get("records", []):
-            for key, name in (("before", "the aircraft as is"), ("after", "the corrected one")):
-                if f"{key}_departed" in r:
-                    console.print(f"flown again in JSBSim, record {r['record']}: {name} "
-                                  f"departed ({r[f'{key}_departed']})")
+        if again:
+            _print_refly(console, again)
+
+
+def _print_refly(console: Console, again: dict) -> None:
+    """The re-fly's windows: gap before and after, bank error, departures."""
+    t = Table(title="flown again in JSBSim, each window from the record's state, "
+                    "surface offsets refitted (gap: residual / measured energy)")
+    for col in ("window", "as is", "corrected", "bank err. deg"):
+        t.add_column(col, overflow="fold", justify="left" if col == "window" else "right")
+    for w in again["windows"]:
+        cells = []
+        for key in ("before", "after"):
+            gaps = [v for v in w[key].values() if v == v]
+            cells.append(f"departed {_departure_time(w[f'{key}_departed'])}"
+                         if f"{key}_departed" in w else f"{sum(gaps) / len(gaps):.3f}"
+                         if gaps else "-")
+        bank = [w.get(f"{k}_bank_error_deg") for k in ("before", "after")]
+        cells.append(" -> ".join("-" if b is None else f"{b:.1f}" for b in bank))
+        t.add_row(f"{w['axis'][:3]} {w['window']}", *cells)
+    console.print(t)
+    o = again.get("overall")
+    if o:
+        console.print(f"overall: gap {o['before']:.3f} (as is) -> {o['after']:.3f} "
+                      f"(corrected), {shrink_text(o['shrink'])} shrink, over the windows "
+                      "where neither departs. Beside the linear held-out shrink: the "
+                      "full nonlinear aircraft, open loop over each whole window.")
+
+
+def _departure_time(text: str) -> str:
+    """'at t = 8.5 s' from a DepartureError's message."""
+    head = text.split(":", 1)[0]
+    return head.replace("departure ", "")
 
 
 VERDICT_TEXT = {
@@ -125,6 +146,8 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     """One axis: its verdict, gap map, ranked effects and how far the gap shrinks."""
     console.rule(f"{axis} axis")
     console.print(f"verdict: {VERDICT_TEXT.get(g.verdict, g.verdict)}")
+    for term in even_terms(g.linearised.kinks, g.linearised.axes):
+        console.print(f"model note: {term.text()}; removed from a written aircraft")
     if g.null_before is not None:
         tests = g.null_before.channels
         console.print("null-level test of the model as is (p-value, held-out input-"

@@ -20,12 +20,17 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.cli.tables import estimate_table, print_score
-from flightid.identification import convergence
+from flightid.identification import convergence, nuisance
+from flightid.identification.agreement import Agreement
+from flightid.identification.agreement import compare as compare_estimates
 from flightid.identification.data_reduction import reduce_record
+from flightid.identification.estimate import Estimate
 from flightid.identification.identify import identify
 from flightid.identification.input_denoising import denoise_channels
+from flightid.identification.methods import registry
 from flightid.identification.report import write_html
 from flightid.identification.scoring import load_truth, record_truth, score
+from flightid.record import FlightRecord
 
 
 def parse_options(texts: list[str]) -> dict[str, str]:
@@ -80,6 +85,9 @@ def identify_command(
         help="input flown as a multistep whose measurement is noisy: --method oe estimates "
              "its levels and edge times, the other methods take it made piecewise "
              "constant (repeatable)")] = None,
+    compare: Annotated[list[str] | None, typer.Option(
+        help="also fit this method (repeatable) with the same model and window, and say "
+             "whether the methods agree within their bounds, or why not")] = None,
     strict: opts.Strict = False,
     force: opts.Force = False,
     raw: Annotated[bool, typer.Option(
@@ -91,6 +99,9 @@ def identify_command(
     span = parse_window(window)
     options: dict[str, Any] = read_options(method, parse_options(option or []))
     check_model("--model", method, model)
+    for other in compare or []:
+        check_choice("--compare", other, list(registry.methods()))
+        check_model("--compare", other, model)
     check_paths({"RECORD": record, "--truth": truth}, [Output("--report", report, "html")],
                 force)
     with printed_warnings("identify"):
@@ -110,6 +121,7 @@ def identify_command(
         if coefficient:
             options["coefficients"] = list(coefficient)
         est = identify(data, method, model, window=span, strict=strict, **options)
+        agreement = compared(data, est, compare or [], span) if compare else None
     not_converged = convergence.verdict_line(est, f"method {method}")
     truth_values = load_truth(truth) if truth else record_truth(data)
     scored = score(est, truth_values, scope="all" if all_rows else "estimated") \
@@ -128,14 +140,37 @@ def identify_command(
         if scored is not None:
             out["score"] = scored.as_dict()
         out["data_reduction"] = "skipped (--raw)" if raw else reduction.applied
+        if agreement is not None:
+            out["agreement"] = agreement.to_json()
         print(json.dumps(out, indent=2, default=str))
         return
     console = Console()
     for line in ["skipped (--raw)"] if raw else reduction.applied:
         typer.echo(f"data reduction: {line}")
     console.print(estimate_table(est))
+    biases = nuisance.from_fit(est)
+    if biases:
+        typer.echo("nuisance biases (the trim's part and the excess over it):")
+        for line in nuisance.describe(biases):
+            typer.echo(f"  {line}")
     for part in (est.fit.get("coefficients") or {}).values():
         for step in part.get("steps", []):
             console.print(f"  {step['action']:>6} {step['term']}: {step['why']}")
     if scored is not None:
         print_score(scored, console)
+    if agreement is not None:
+        for line in agreement.lines():
+            typer.echo(line)
+
+
+def compared(data: FlightRecord, est: Estimate, methods: list[str],
+             span: str | tuple[float, float]) -> Agreement:
+    """``est`` compared with each of ``methods`` fitted to ``data`` with its model and
+    window (``agreement.compare``); a method that cannot fit them is refused, named."""
+    others = []
+    for method in methods:
+        try:
+            others.append(identify(data, method, est.fit["model"], window=span))
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"--compare {method}: {exc}") from None
+    return compare_estimates([est, *others])

@@ -49,7 +49,7 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
             where = "the record's a priori table" if a_priori is None else "option a_priori"
             raise ValueError(f"{where}: {name} = {value!r} is not a finite number; give "
                              "the value it is held at")
-    full = _preset_derivatives(preset)
+    full = preset_derivatives(preset)
     held = {n: float(v) for n, v in held_all.items() if n in full}
     if derivatives is None:  # the preset's, with its rate derivatives (RATE_DERIVATIVES)
         derivatives = _default_derivatives(preset)
@@ -76,10 +76,11 @@ def _default_derivatives(preset: str) -> tuple[str, ...] | None:
     if defaults is None:
         return None
     wanted = {*defaults, *lm.RATE_DERIVATIVES.get(preset, ())}
-    return tuple(n for n in _preset_derivatives(preset) if n in wanted)
+    return tuple(n for n in preset_derivatives(preset) if n in wanted)
 
 
-def _preset_derivatives(preset: str) -> tuple[str, ...]:
+def preset_derivatives(preset: str) -> tuple[str, ...]:
+    """Every derivative a linear-model preset can take; () for another model."""
     return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
             "longitudinal": lm.LONGITUDINAL_DERIVATIVES}.get(preset, ())
 

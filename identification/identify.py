@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from flightid.identification import convergence, model_structure, time_base, windows
+from flightid.identification import convergence, model_structure, nuisance, time_base, windows
 from flightid.identification import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import registry
@@ -81,6 +81,10 @@ def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto
     strict: an iterative fit that does not converge raises
     ``convergence.NotConvergedError`` instead of warning (``NotConvergedWarning``).
 
+    A linear model's nuisance biases are split into their trim part and the excess
+    (``nuisance.bias_budget``, in ``fit['biases']``); an excess beyond what an instrument
+    can have is warned about (``ImplausibleBiasWarning``).
+
     Every method sees a uniformly sampled record: time jitter below 1 % of the step is
     re-gridded (``time_base``, with a ``RegriddedWarning``), gaps are refused.
     """
@@ -107,6 +111,10 @@ def identify(record: FlightRecord, method: str = "oe", model: str | None = "auto
             f"({'; '.join(quiet.values())}); fly a maneuver on {', '.join(inputs)}")
     estimate = spec.run(record, model, opts)
     (convergence.require if strict else convergence.warn)(estimate, f"method {spec.id}")
+    biases = nuisance.bias_budget(estimate, record, model)
+    if biases:
+        estimate.fit["biases"] = [t.to_json() for t in biases]
+        nuisance.warn_implausible(biases, f"method {spec.id}")
     estimate.fit.setdefault("model", model)
     if span is not None:
         estimate.fit["window"] = [float(span[0]), float(span[1])]

@@ -27,7 +27,7 @@ from flightid.scenarios.input_design import (
     require,
 )
 from flightid.scenarios.maneuvers import BankToBank, FigureEight, PullUpPushOver, ThrottleCut
-from flightid.scenarios.multisine import Multisine, OrthogonalMultisine
+from flightid.scenarios.multisine import Harmonics, Multisine, OrthogonalMultisine
 
 __all__ = [
     "INPUT_KINDS",
@@ -293,6 +293,7 @@ INPUT_KINDS: dict[str, type[InputDesign]] = {
         Sweep,
         Multisine,
         OrthogonalMultisine,
+        Harmonics,
         PullUpPushOver,
         ThrottleCut,
         BankToBank,

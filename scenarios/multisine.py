@@ -276,3 +276,51 @@ class OrthogonalMultisine(InputDesign):
         t = check_time(t)
         on = _window(t, self.start, self.period, self.cycles)
         return {s: np.where(on, c(t - self.start), 0.0) for s, c in self.components.items()}
+
+
+@dataclass(kw_only=True)
+class Harmonics(InputDesign):
+    """A multisine given component by component on one surface: the sum of
+    ``amplitudes[k] cos(2 pi frequencies[k] (t - start) + phases[k])`` (rad or fraction,
+    Hz, rad) for ``cycles`` periods of ``period`` s from ``start``, zero outside. The form
+    ``flightid design-optimize`` writes its optimised spectra in (Morelli & Klein 2016,
+    9.5); with harmonics of 1/``period`` and phases that start the sum at zero it also
+    ends at zero."""
+
+    kind: ClassVar[str] = "harmonics"
+    surface: str = "da"
+    frequencies: tuple[float, ...] = ()
+    amplitudes: tuple[float, ...] = dataclasses.field(default=(), metadata={"unit": "rad"})
+    phases: tuple[float, ...] = ()
+    period: float = 10.0
+    cycles: int = 1
+
+    def __post_init__(self) -> None:
+        check_surface(self.surface, "surface")
+        n = len(self.frequencies)
+        require(n >= 1, "frequencies", "needs at least one frequency (Hz)")
+        require(len(self.amplitudes) == n, "amplitudes",
+                f"{len(self.amplitudes)} amplitudes for {n} frequencies")
+        require(len(self.phases) == n, "phases", f"{len(self.phases)} phases for {n} "
+                "frequencies")
+        require(all(f > 0 for f in self.frequencies), "frequencies", "must be > 0 Hz")
+        require(self.period > 0, "period", f"must be > 0 s, got {self.period}")
+        require(self.cycles >= 1, "cycles", f"must be >= 1, got {self.cycles}")
+
+    def surfaces(self) -> tuple[str, ...]:
+        return (self.surface,)
+
+    @property
+    def components(self) -> Components:
+        """The components as arrays (Hz, rad or fraction, rad)."""
+        return Components(np.asarray(self.frequencies, float),
+                          np.asarray(self.amplitudes, float), np.asarray(self.phases, float))
+
+    @property
+    def end(self) -> float:
+        return self.start + self.cycles * self.period
+
+    def shapes(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        t = check_time(t)
+        on = _window(t, self.start, self.period, self.cycles)
+        return {self.surface: np.where(on, self.components(t - self.start), 0.0)}

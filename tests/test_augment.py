@@ -66,6 +66,27 @@ def test_dhc6_derivative_deltas_show_up_exactly_in_truth(tmp_path, axes):
     assert _value(d1, "Cm_alpha") == pytest.approx(_value(d0, "Cm_alpha"), rel=1e-9)
 
 
+def test_even_form_moves_the_one_sided_slopes_apart(tmp_path):
+    """``form = "even"`` writes delta x abs(beta): the one-sided slopes move by -delta and
+    +delta and the central one stays. The stock DHC6's Clb table is even in beta at low
+    alpha (slopes -0.42 / +0.40 per rad); the even term of minus half their difference
+    leaves two equal one-sided slopes, the kink gone (what the gap diagnosis writes)."""
+    base = load("DHC6")
+    t0 = trim(base, 1890.0, 72.2)
+    kink = derivatives(base, t0, axes="body").flags["Cl_beta"]
+    even = 0.5 * (kink.plus - kink.minus)
+    assert even == pytest.approx(0.036 / np.radians(5.0), rel=0.05)  # the table's 0.036
+    xml = augment("DHC6", [DerivativeDelta(derivative="Cl_beta", delta=-even, axes="body",
+                                           form="even")], tmp_path)
+    assert "x abs(variable)" in xml.read_text(encoding="utf-8")
+    aug = load(str(xml))
+    d1 = derivatives(aug, trim(aug, 1890.0, 72.2), axes="body")
+    assert "Cl_beta" not in d1.flags  # no kink left: one slope on both sides
+    assert d1.values["Cl_beta"] == pytest.approx(kink.central, abs=2e-3)
+    with pytest.raises(ValueError, match="form"):
+        DerivativeDelta(derivative="Cl_beta", form="odd")
+
+
 def test_augmented_xml_loads_in_plain_jsbsim(tmp_path):
     augment("DHC6", [DerivativeDelta(derivative="Cn_beta", delta=-0.4),
                      RateLimit(rate=20 * DEG, surface="de")], tmp_path)

@@ -12,11 +12,8 @@ beside each check (measured values in docs/gap.md).
 
 from __future__ import annotations
 
-import dataclasses
-
-import numpy as np
 import pytest
-from lateral_card import maneuvers
+from lateral_card import commands, maneuvers
 
 from flightid.identification.gap import diagnose
 from flightid.identification.gap.candidates import catalogue_candidates
@@ -26,9 +23,7 @@ from flightid.identification.gap.ranges import out_of_range
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT
-from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
-from flightid.sim.effects.sensor import Sample
 from flightid.sim.sensors import research_suite
 
 DROPPED = ["vanes", "lever_arm"]  # calibrated to the CG, as the blind check's cards
@@ -204,24 +199,6 @@ def test_hobby_record_diagnosed_on_the_outputs_it_has(hobby):
 # -- each family named from a flight ----------------------------------------------------------
 
 
-def _commands(measured: FlightRecord, truth: FlightRecord, surfaces) -> FlightRecord:
-    """``measured`` with its surface channels replaced by the commands (the trim plus the
-    card's designed inputs, on the flight's own time grid) through the same 50 Hz sampling
-    and 10 Hz anti-alias filter as the other channels (a recorder that filters every
-    channel alike), and marked so in a copy of its metadata."""
-    designs = [input_from_dict(d) for d in truth.meta.extra["inputs"]]
-    signals = total_signals(designs, truth.time)
-    antialias = Sample(rate=50.0, antialias=10.0, order=4.0)
-    rng = np.random.default_rng(0)
-    channels = {**measured.channels, **{
-        s: np.interp(measured.time, truth.time,
-                     antialias.apply(truth.time, truth[s][0] + signals[s], rng))
-        for s in surfaces}}
-    meta = dataclasses.replace(measured.meta, extra={**measured.meta.extra,
-                                                     "surfaces": "command"})
-    return FlightRecord(measured.time, channels, meta)
-
-
 @pytest.mark.parametrize("entry", ["delay", "lag"])
 def test_sensor_delay_and_lag_named(entry):
     """0.05 s on the roll-rate gyro (delay) or the yaw-rate gyro (lag), before the research
@@ -271,7 +248,7 @@ def test_actuator_lag_named_on_commands_only():
     positions the actuator has acted on what was recorded: no actuator candidate."""
     measured, truth = _lateral("telemaster", effects=[{"name": "actuator_lag", "surface": "dr",
                                                        "tau": 0.1}])
-    result = _diagnosed(_commands(measured, truth, ("da", "dr")), "telemaster")
+    result = _diagnosed(commands(measured, truth, ("da", "dr")), "telemaster")
     assert result.linearised.surfaces == "command"
     top = _first(result, "actuator_lag", surface="dr")
     assert abs(top.parameters["tau"]["value"] - 0.1) < 0.15 * 0.1

@@ -217,3 +217,76 @@ def test_a_csv_with_units_in_its_names_needs_no_map(tmp_path):
     np.testing.assert_allclose(rec["q"], np.array([0.5, 1.0, -0.5]) * DEG)
     assert rec.unit("OAT") == "degC" and list(rec["OAT"]) == [15.0] * 3
     assert rec.meta.extra["import"]["kept"] == ["OAT"]
+
+
+# -- the methods on the imported record: agreement and nuisance biases ---------------------
+
+
+def _identify_json(path, *args: str) -> dict:
+    result = CliRunner().invoke(app, ["identify", str(path), "--window", WINDOW,
+                                      "--format", "json", *args])
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+def test_the_methods_disagreement_is_said_with_its_reasons(imported):
+    """Output error (short-period model) against equation error and frequency-domain
+    output error on the imported file, over the card's window. Measured: oe and ee differ
+    on CL_de by -4.3 sigma of the difference (ee estimates CL_q, oe holds it at zero), oe
+    and fdoe on CL_de and Cm_de (-4.2, -3.1; fdoe did not converge), ee and fdoe on every
+    derivative (13.8-40.8). Each reason must be named; with CL_q estimated by both, oe and
+    ee agree, so the model structure is the reason they differ."""
+    out = _identify_json(imported[1], "--compare", "ee", "--compare", "fdoe")
+    agreement = out["agreement"]
+    assert agreement["verdict"] == "disagree"
+    pairs = {(c["parameter"], *c["methods"]): c for c in agreement["comparisons"]}
+    assert not pairs[("CL_de", "oe", "ee")]["agree"]
+    for name in ("Cm_alpha", "Cm_q", "Cm_de"):  # measured: 0.3, 2.1, 0.1 sigma
+        assert pairs[(name, "oe", "ee")]["agree"], name
+    reasons = " | ".join(agreement["reasons"])
+    assert "fdoe did not converge" in reasons
+    assert "CL_q estimated by ee, held by oe" in reasons
+    assert "measured states as exact regressors" in reasons
+    same = _identify_json(imported[1], "--model", "short_period", "--option",
+                          "derivatives=CL_alpha,CL_q,CL_de,Cm_alpha,Cm_q,Cm_de",
+                          "--compare", "ee")
+    assert same["agreement"]["verdict"] == "agree"
+
+
+def test_nuisance_biases_are_split_and_a_wrong_accelerometer_is_flagged(flight, imported,
+                                                                      tmp_path):
+    """The longitudinal model's az bias on the imported file is the trim's lift and
+    gravity (the model takes absolute states): measured 15.35 m/s^2, of it 15.32 the trim,
+    0.037 left, under the 0.2 g an accelerometer can have. Mapping the file's load factor
+    NZ (g, positive up) to az instead of AZCG flips az's sign: the unit check passes it,
+    the fit absorbs it in the bias, and the excess is 2 g cos(theta) (measured 19.4 m/s^2):
+    flagged."""
+    est = _identify_json(imported[1], "--model", "longitudinal")
+    az = next(t for t in est["fit"]["biases"] if t["name"] == "bias_az")
+    assert abs(az["value"]) > G0  # the fitted bias alone looks like more than 1 g
+    assert abs(az["excess"]) < 0.2 * G0 and not az["implausible"]
+    # the mapping error: NZ (in g, up) mapped to az, AZCG kept under its own name
+    data, mapping, out = tmp_path / "f.asc", tmp_path / "map.toml", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    entries = ['T = "time"', 'NZ = "az"',
+               *(f'{c} = "{ch}"' for c, _, ch, _ in COLUMNS if ch != "az")]
+    mapping.write_text("[columns]\n" + "\n".join(entries) + "\n")
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--aircraft", "twinotter"])
+    assert result.exit_code == 0, result.output  # the unit check cannot see a sign
+    result = CliRunner().invoke(app, ["identify", str(out), "--window", WINDOW, "--model",
+                                      "longitudinal"])
+    assert result.exit_code == 0, result.output
+    assert "bias_az" in result.output and "beyond any instrument" in result.output
+    flipped = next(t for t in _identify_json(out, "--model", "longitudinal")["fit"]["biases"]
+                   if t["name"] == "bias_az")
+    theta = np.mean(flight.measured.slice(1.0, 11.5)["theta"])
+    assert flipped["implausible"]
+    assert flipped["excess"] == pytest.approx(2 * G0 * np.cos(theta), rel=0.05)
+
+
+def test_an_unknown_method_to_compare_is_refused_naming_the_valid_ones(imported):
+    result = CliRunner().invoke(app, ["identify", str(imported[1]), "--compare", "magic"])
+    assert result.exit_code == 2
+    assert "--compare 'magic' is not accepted; use one of ee, swr, oe" in result.output
+    assert "Traceback" not in result.output

@@ -103,3 +103,20 @@ def test_a_log_without_the_needed_topics_is_refused_naming_them(flight, tmp_path
     with pytest.raises(ValueError, match=r"lacks the topic\(s\) vehicle_attitude, "
                                          r"actuator_outputs or actuator_servos"):
         read_ulog(path, SERVOS)
+
+
+def test_without_a_mapping_the_logs_px4_parameters_give_outputs_and_trims(flight, tmp_path):
+    # outputs off ArduPlane's order, offset trims, a reversed elevator, a 1100-1900 us
+    # throttle; throws of 30 deg, the value assumed without a mapping
+    servos = ServoMapping({"da": Servo(5, 1490), "de": Servo(6, 1520, -30 * DEG),
+                           "dr": Servo(7, 1505)}, Throttle(8, 1100, 1900))
+    path = write_ulog(flight, tmp_path / "params.ulg", servos=servos)
+    params = ULog(str(path)).initial_parameters  # pyulog reads what PX4 would log
+    assert params["PWM_MAIN_FUNC6"] == 202 and params["CA_SV_CS1_TYPE"] == 3  # elevator
+    assert params["PWM_MAIN_FUNC8"] == 101 and params["PWM_MAIN_REV"] == 1 << 5
+    back, given = read_ulog(path), read_ulog(path, servos)
+    # the trims go through float32 CA_SV_CS{i}_TRIM: under 1e-6 us, 1e-9 rad
+    for name in ("da", "de", "dr", "throttle"):
+        np.testing.assert_allclose(back[name], given[name], rtol=0, atol=1e-8)
+    assert back.meta.extra["ulog"]["servos"]["de"]["channel"] == 6
+    assert any("30 deg assumed" in n for n in back.meta.extra["ulog"]["notes"])

@@ -31,8 +31,16 @@ from pyulog import ULog
 
 from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
-from flightid.importers.servos import HALF_RANGE_US, ServoMapping
-from flightid.importers.ulog_topics import TOPICS
+from flightid.importers.dataflash import DEFAULT_THROW
+from flightid.importers.servos import HALF_RANGE_US, Servo, ServoMapping, Throttle
+from flightid.importers.ulog_topics import (
+    PX4_MOTOR_FUNCTION,
+    PX4_OUTPUTS,
+    PX4_RIGHT_AILERON,
+    PX4_SERVO_FUNCTION,
+    PX4_SURFACE_TYPES,
+    TOPICS,
+)
 
 REQUIRED = ("vehicle_attitude", "sensor_combined", "airspeed")
 COMMANDS = ("actuator_outputs", "actuator_servos")  # one of them
@@ -49,7 +57,50 @@ def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     return phi, theta, psi
 
 
-def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str]]:
+def servos_from_params(params: dict[str, float], notes: list[str]) -> ServoMapping | None:
+    """The servo mapping PX4's control allocation parameters give (``ulog_topics``:
+    PWM_MAIN_FUNCn, CA_SV_CS{i}_TYPE and _TRIM, PWM_MAIN_MINn, _MAXn, PWM_MAIN_REV), with
+    the throws :data:`~flightid.importers.dataflash.DEFAULT_THROW`; None when no output is
+    a control surface or motor 1. What is assumed or not read goes to ``notes``."""
+    reversed_mask = int(params.get("PWM_MAIN_REV", 0))
+    surfaces: dict[str, Servo] = {}
+    throttle = None
+    right_aileron = None
+    for n in range(1, PX4_OUTPUTS + 1):
+        function = int(params.get(f"PWM_MAIN_FUNC{n}", 0))
+        low = float(params.get(f"PWM_MAIN_MIN{n}", 1000.0))
+        high = float(params.get(f"PWM_MAIN_MAX{n}", 2000.0))
+        reverse = bool(reversed_mask >> (n - 1) & 1)
+        if function == PX4_MOTOR_FUNCTION:
+            throttle = Throttle(n, high, low) if reverse else Throttle(n, low, high)
+            continue
+        index = function - PX4_SERVO_FUNCTION
+        if not 0 <= index < PX4_OUTPUTS:
+            continue
+        kind = int(params.get(f"CA_SV_CS{index}_TYPE", 0))
+        trim = (low + high) / 2 + float(params.get(f"CA_SV_CS{index}_TRIM", 0.0)) * \
+            (high - low) / 2
+        servo = Servo(n, trim, -DEFAULT_THROW if reverse else DEFAULT_THROW)
+        if kind == PX4_RIGHT_AILERON:
+            right_aileron = right_aileron or servo
+        elif kind in PX4_SURFACE_TYPES and PX4_SURFACE_TYPES[kind] not in surfaces:
+            surfaces[PX4_SURFACE_TYPES[kind]] = servo
+    if "da" not in surfaces and right_aileron is not None:
+        surfaces["da"] = right_aileron
+        notes.append("da is the right aileron's output (no left aileron is set)")
+    elif right_aileron is not None:
+        notes.append("da is the left aileron's output; the right aileron's is not read")
+    if not surfaces and throttle is None:
+        return None
+    notes.append("servo outputs, trims, reversals and throttle range from the log's PX4 "
+                 f"parameters (PWM_MAIN_*, CA_SV_CS*); throws are in no parameter: "
+                 f"{DEFAULT_THROW / np.pi * 180:g} deg assumed (give a servo mapping for the "
+                 "real ones)")
+    return ServoMapping(surfaces, throttle)
+
+
+def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str],
+                                 dict[str, float]]:
     with captured_output():
         try:
             log = ULog(str(path), list(TOPICS))
@@ -70,7 +121,9 @@ def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int
     if cut:
         notes.append(f"the file ends in a cut message: {cut} byte(s) after the last whole "
                      "message dropped")
-    return topics, counts, notes
+    params = {str(k): float(v) for k, v in log.initial_parameters.items()
+              if isinstance(v, int | float)}
+    return topics, counts, notes, params
 
 
 HEADER_BYTES = 16  # ULog file header: magic, version, timestamp
@@ -101,7 +154,8 @@ def read_ulog(path: str | Path, servos: ServoMapping | None = None,
     Parameters
     ----------
     path : the ``.ulg`` file.
-    servos : servo outputs to surfaces (actuator_outputs index = channel; default
+    servos : servo outputs to surfaces (actuator_outputs index = channel; default: the
+        log's PX4 output parameters with 30 deg throws (:func:`servos_from_params`), else
         ArduPlane's order with 30 deg throws, as for DataFlash).
     rate : output rate (Hz); default the rate topic's (vehicle_angular_velocity, else
         sensor_combined).
@@ -114,12 +168,14 @@ def read_ulog(path: str | Path, servos: ServoMapping | None = None,
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
-    topics, counts, notes = _topics(path)
+    topics, counts, notes, params = _topics(path)
+    if servos is None:
+        servos = servos_from_params(params, notes)
     if servos is None:
         servos = ServoMapping()
-        notes.append("no servo mapping given: ArduPlane's output order (1 aileron, 2 "
-                     "elevator, 3 throttle, 4 rudder) with 1500 us trims and 30 deg throws "
-                     "assumed")
+        notes.append("no servo mapping given and no PX4 output parameter in the log: "
+                     "ArduPlane's output order (1 aileron, 2 elevator, 3 throttle, 4 rudder) "
+                     "with 1500 us trims and 30 deg throws assumed")
     missing = [k for k in REQUIRED if k not in topics]
     if not any(k in topics for k in COMMANDS):
         missing.append(" or ".join(COMMANDS))

@@ -42,3 +42,16 @@ TOPICS: dict[str, tuple[tuple[str, str], ...]] = {
         ("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("double", "lat"),
         ("double", "lon"), ("float", "alt")),
 }
+
+# PX4's control allocation parameters that say which output drives which surface
+# (PX4 v1.13 and later): PWM_MAIN_FUNCn is an output's function, 201 + i for the control
+# surface i (``CA_SV_CS{i}_TYPE``, trim ``CA_SV_CS{i}_TRIM`` in -1..1 of the output's
+# half range), 101 for motor 1; PWM_MAIN_MINn and PWM_MAIN_MAXn the output's range (us);
+# PWM_MAIN_REV a bit mask of reversed outputs (bit n - 1)
+PX4_SERVO_FUNCTION = 201  # output function of control surface 0 ("Servo 1")
+PX4_MOTOR_FUNCTION = 101  # output function of motor 1, the throttle of a single-engine airplane
+PX4_OUTPUTS = 16  # actuator_outputs' outputs
+# CA_SV_CS{i}_TYPE -> flightid control (1 left aileron, 3 elevator, 4 rudder); 2 (right
+# aileron) is read only when no left aileron is set
+PX4_SURFACE_TYPES = {1: "da", 3: "de", 4: "dr"}
+PX4_RIGHT_AILERON = 2

@@ -12,6 +12,7 @@ import numpy as np
 
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.gap.linearise import AXIS_OUTPUTS, start_condition
+from flightid.identification.gap.symmetry import even_terms
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
@@ -24,7 +25,7 @@ from flightid.sim.effects.airframe import (
     TailIce,
     ThrustMoment,
 )
-from flightid.sim.flight import DepartureError, fly
+from flightid.sim.flight import fly
 from flightid.sim.model import load
 from flightid.sim.trim import trim
 
@@ -62,21 +63,26 @@ def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
 
 
 def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> Path:
-    """Write ``result.aircraft`` with the airframe effects of ``result.named`` (the named
-    effect or pair; the top one at its refined values when the diagnosis refined it)
-    under ``folder``; the new XML's path. Sensor effects are not
-    written (they belong to the measurement, not the aircraft)."""
-    if not result.named:
-        raise ValueError("the diagnosis named no effect: nothing to write")
-    effects = airframe_effects(result.named)
-    if not effects:
-        raise ValueError(f"the named effect {result.named[0].candidate.label} is not an "
-                         "airframe effect: nothing to write into the aircraft")
+    """Write ``result.aircraft`` with the airframe effects named on every diagnosed axis
+    (the top one at its refined values when the diagnosis refined it) and with the model's
+    even terms in sideslip, roll or yaw rate removed (``symmetry``: the aircraft flown
+    again is then the model the diagnosis tested), under ``folder``; the new XML's path.
+    Sensor effects are not written (they belong to the measurement, not the aircraft)."""
+    named = result.named_all()
+    effects = airframe_effects(named)
     refined = getattr(result, "refined", None)
-    if refined is not None:  # the top named effect (refine.refinable) as the refit has it
+    if refined is not None and effects:  # the top named effect as the refit has it
         effects[0] = refined.effect
+    even = [e.straightening() for g in result.axes().values()
+            for e in even_terms(g.linearised.kinks, g.linearised.axes)]
+    if not effects and not even:
+        if not named:
+            raise ValueError("the diagnosis named no effect: nothing to write")
+        raise ValueError(f"the named effect {named[0].candidate.label} is not an "
+                         "airframe effect: nothing to write into the aircraft")
     stem = Path(str(result.aircraft)).stem
-    return augment(result.aircraft, effects, folder, name=name or f"{stem}-corrected")
+    return augment(result.aircraft, [*effects, *even], folder,
+                   name=name or f"{stem}-corrected")
 
 
 def gap_fractions(record: FlightRecord, flown: FlightRecord,
@@ -108,42 +114,3 @@ def fly_record(aircraft: str | Path, record: FlightRecord) -> FlightRecord:
     controls = {s: record[s] - record[s][0] for s in INPUTS if s in record}
     return fly(model, trimmed, controls, duration_s=float(t[-1]), rate_hz=rate,
                surfaces="driven")
-
-
-def refly(result: Any, records: FlightRecord | list[FlightRecord], folder: str | Path,
-          written: str | Path | None = None) -> dict[str, Any]:
-    """The JSBSim shrink: the aircraft as is and the corrected one (``written``, else
-    written now under ``folder``) flown with each record's measured inputs from trim at the
-    record's condition; per record and channel the gap (residual / measured energy, means
-    removed) before and after, and the overall (mean over channels). Open loop from trim:
-    a record that does not start in trim, or a slow mode (spiral, phugoid) the model gets
-    a little wrong, leaves a gap no effect of the catalogue closes."""
-    records = [records] if isinstance(records, FlightRecord) else list(records)
-    outputs = OUTPUTS[getattr(result, "axis", "lateral")]
-    path = Path(written) if written is not None else write_aircraft(result, folder)
-    out: dict[str, Any] = {"aircraft": str(path), "records": []}
-    for k, record in enumerate(records):
-        row: dict[str, Any] = {"record": k + 1}
-        for key, model in (("before", result.aircraft), ("after", path)):
-            try:
-                row[key] = gap_fractions(record, fly_record(model, record), outputs)
-            except DepartureError as exc:
-                row[key] = None
-                row[f"{key}_departed"] = str(exc)
-        if row["before"] and row["after"]:
-            row["channels"] = {c: {"before": row["before"][c], "after": row["after"][c],
-                                   "shrink": _shrink(row["before"][c], row["after"][c])}
-                               for c in row["before"] if c in row["after"]}
-            b, a = (float(np.nanmean(list(row[x].values()))) for x in ("before", "after"))
-            row["overall"] = {"before": b, "after": a, "shrink": _shrink(b, a)}
-        out["records"].append(row)
-    done = [r["overall"] for r in out["records"] if "overall" in r]
-    if done:
-        b = float(np.mean([d["before"] for d in done]))
-        a = float(np.mean([d["after"] for d in done]))
-        out["overall"] = {"before": b, "after": a, "shrink": _shrink(b, a)}
-    return out
-
-
-def _shrink(before: float, after: float) -> float:
-    return (before - after) / before if before > 0 else float("nan")

@@ -39,6 +39,7 @@ from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
 from flightid.identification.gap.shrink import shrinkage
+from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import NullTest, axis_verdict, null_test, worst
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
@@ -166,6 +167,9 @@ class GapResult:
         """This axis's verdict, its null-level tests and what it named."""
         return {"verdict": self.verdict, "evidence": self.evidence,
                 "not_identifiable": self.not_identifiable,
+                "even_terms": [{"derivative": e.derivative, "minus": e.minus, "plus": e.plus,
+                                "even": e.even, "axes": e.axes, "note": e.text()}
+                               for e in even_terms(self.linearised.kinks, self.linearised.axes)],
                 "null_before": self.null_before.to_json() if self.null_before else None,
                 "null_after": self.null_after.to_json() if self.null_after else None,
                 "named": [r.candidate.label for r in self.named]}

@@ -32,7 +32,7 @@ aircraft's own actuator lags (``sim.actuators.actuator_lags``), as in the JSBSim
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -52,7 +52,7 @@ from flightid.record import FlightRecord
 from flightid.sim.actuators import actuator_lags
 from flightid.sim.model import load
 from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import derivatives
+from flightid.sim.truth import Kink, derivatives
 
 AXES = "body"  # the lateral model's derivative axes
 PROPULSION = True  # total derivatives: what a flight (and a flight test) sees
@@ -79,6 +79,9 @@ class Linearised:
     axes: str = AXES
     axis: str = "lateral"
     surfaces: str = "position"  # what the records' surface channels hold (or "command")
+    # the axis's derivatives whose one-sided slopes differ at the trim (``truth.Kink``):
+    # the model uses their mean
+    kinks: dict[str, Kink] = field(default_factory=dict)
 
 
 def nuisance(model: LinearModel) -> tuple[str, ...]:
@@ -207,4 +210,5 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
     linear = restricted(linear, outputs)
     if kind == "command":  # the commands pass through the aircraft's own actuators
         linear = with_actuators(linear, actuator_lags(aircraft))
-    return Linearised(aircraft, linear, values, trimmed, frame, axis, kind)
+    kinks = {d: k for d, k in truth.flags.items() if d in names}
+    return Linearised(aircraft, linear, values, trimmed, frame, axis, kind, kinks)

@@ -181,19 +181,29 @@ def _histories(result: GapResult, records: Records | None, validate: Records | N
 
 
 def _refly(refly: dict | None) -> str:
-    if not refly or "overall" not in refly:
+    if not refly or not refly.get("windows"):
         return ""
     rows = "".join(
-        f"<tr><td>record {r['record']}</td><td>{c}</td><td>{_f(v['before'], '.3f')}</td>"
-        f"<td>{_f(v['after'], '.3f')}</td><td>{_f(v['shrink'], '.1%')}</td></tr>"
-        for r in refly["records"] for c, v in (r.get("channels") or {}).items())
-    o = refly["overall"]
+        f"<tr><td>{html.escape(w['axis'])} {html.escape(w['window'])}</td><td>{c}</td>"
+        f"<td>{_f(v['before'], '.3f')}</td><td>{_f(v['after'], '.3f')}</td>"
+        f"<td>{_f(v['shrink'], '.1%')}</td></tr>"
+        for w in refly["windows"] for c, v in (w.get("channels") or {}).items())
+    departed = "".join(
+        f"<li>{html.escape(w['window'])}: {who} departed ({html.escape(w[f'{k}_departed'])})</li>"
+        for w in refly["windows"]
+        for k, who in (("before", "the aircraft as is"), ("after", "the corrected one"))
+        if f"{k}_departed" in w)
+    o = refly.get("overall")
+    total = (f"gap (residual / measured energy, means removed) {_f(o['before'], '.3f')} "
+             f"&rarr; {_f(o['after'], '.3f')} ({_f(o['shrink'], '.1%')} shrink)" if o else
+             "no window flown by both without a departure")
     name = html.escape(refly["aircraft"])
     return (f"<h2>The corrected aircraft flown again in JSBSim</h2><p>{name}"
-            " and the aircraft as is, trimmed at each record's condition and flown open loop "
-            "with its measured surfaces: gap (residual / measured energy, means removed) "
-            f"{_f(o['before'], '.3f')} &rarr; {_f(o['after'], '.3f')} "
-            f"({_f(o['shrink'], '.1%')} shrink).</p><table><tr><th>record</th><th>channel</th>"
+            " and the aircraft as is, each maneuver window flown open loop from the "
+            "record's state at its start with its measured surfaces, a constant offset of "
+            f"each surface refitted on the window: {total}.</p>"
+            f"{'<ul>' + departed + '</ul>' if departed else ''}"
+            "<table><tr><th>window</th><th>channel</th>"
             f"<th>before</th><th>after</th><th>shrink</th></tr>{rows}</table>")
 
 

@@ -19,7 +19,7 @@ import json
 import math
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -38,8 +38,15 @@ from flightid.scenarios.inputs import (
     scale_amplitude,
     scale_to_energy,
 )
+from flightid.scenarios.montecarlo import load
 from flightid.scenarios.montecarlo import run as run_study
-from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_ratio_interval
+from flightid.scenarios.montecarlo.intervals import (
+    LEVEL,
+    PAIRED_MIN,
+    paired_mean_relative_interval,
+    paired_ratio_interval,
+    scatter_ratio_interval,
+)
 from flightid.scenarios.montecarlo.summary import Summary
 from flightid.scenarios.multisine import Multisine
 from flightid.units import DEG
@@ -47,6 +54,7 @@ from flightid.units import DEG
 DESIGNS = ("doublet", "211", "3211", "sweep", "multisine")
 EQUAL = ("amplitude", "energy")
 START_S = 2.0  # s of trimmed flight before the input
+GAP_S = 4.0  # s between one surface's input and the next one's (DesignSettings.then)
 SETTLE_S = 8.0  # s of free response after it (the identification window keeps 8 s)
 CARDS = "cards"
 
@@ -54,7 +62,10 @@ CARDS = "cards"
 @dataclass(frozen=True)
 class DesignSettings:
     """What the designs share: ``surface``, peak ``amplitude`` (rad), multi-step ``base``
-    (s), the sweep's band (Hz) and duration (s), the multisine's band (Hz) and period (s)."""
+    (s), the sweep's band (Hz) and duration (s), the multisine's band (Hz) and period (s),
+    and ``then``: further surfaces each design is flown on in turn after ``surface``, the
+    next GAP_S s after the previous input ends (as the library cards fly an aileron and a
+    rudder input)."""
 
     surface: str = "de"
     amplitude: float = 3.0 * DEG
@@ -63,11 +74,19 @@ class DesignSettings:
     sweep_duration: float = 12.0
     multisine_band: tuple[float, float] = (0.2, 2.0)
     multisine_period: float = 10.0
+    then: tuple[str, ...] = ()
 
 
 def make_design(kind: str, settings: DesignSettings = DesignSettings(),
                 start: float = START_S) -> InputDesign:
-    """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude."""
+    """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude, on the
+    settings' surface and then on each of ``settings.then`` in turn (a Maneuvers)."""
+    if settings.then:
+        parts = [make_design(kind, replace(settings, then=()), start)]
+        for surface in settings.then:
+            parts.append(make_design(kind, replace(settings, surface=surface, then=()),
+                                     parts[-1].end + GAP_S))
+        return Maneuvers(parts=tuple(parts))
     s = settings
     common = dict(surface=s.surface, amplitude=s.amplitude, start=start)
     if kind == "doublet":
@@ -219,6 +238,31 @@ class Comparison:
     reference: str
     settings: DesignSettings
     results: list[DesignResult] = field(default_factory=list)
+    _errors: dict[str, pd.DataFrame] = field(default_factory=dict, repr=False, compare=False)
+
+    def errors(self, kind: str) -> pd.DataFrame:
+        """Design ``kind``'s estimated errors (estimate - truth), realization index (rows)
+        by derivative (columns), from its study's stored rows."""
+        if kind not in self._errors:
+            study = next(r.study_dir for r in self.results if r.kind == kind)
+            rows = load(study, ["index", "name", "error", "status"])
+            rows = rows[rows["status"] == "estimated"]
+            self._errors[kind] = rows.pivot_table(index="index", columns="name",
+                                                  values="error", observed=True)
+        return self._errors[kind]
+
+    def paired_interval(self, a: str, b: str, name: str, level: float = LEVEL
+                        ) -> tuple[float, float, int]:
+        """The paired-bootstrap ``level`` interval of design ``a``'s scatter over ``b``'s
+        for derivative ``name`` over the realizations both estimated (the same seeds):
+        (low, high, pairs); NaN bounds under ``intervals.PAIRED_MIN`` pairs."""
+        ea, eb = self.errors(a), self.errors(b)
+        if name not in ea.columns or name not in eb.columns:
+            return math.nan, math.nan, 0
+        both = pd.concat([ea[name], eb[name]], axis=1, join="inner").dropna()
+        low, high = paired_ratio_interval(both.iloc[:, 0].to_numpy(),
+                                          both.iloc[:, 1].to_numpy(), level)
+        return low, high, len(both)
 
     def frame(self) -> pd.DataFrame:
         """One row per (derivative, design): truth, bias, scatter, mean_bound, ratio,
@@ -241,14 +285,36 @@ class Comparison:
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
 
+    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL
+                              ) -> dict[str, Any]:
+        """Design ``a`` against ``b`` over every derivative with a non-zero truth that both
+        estimated in every shared realization: the ratio of their mean scatter / |truth|
+        and its paired-bootstrap ``level`` interval (``intervals.
+        paired_mean_relative_interval``), the derivatives and realizations used, and the
+        winner ("" when the interval contains 1)."""
+        truth = self.frame().drop_duplicates("derivative").set_index("derivative")["truth"]
+        ea, eb = self.errors(a), self.errors(b)
+        names = [n for n in ea.columns if n in eb.columns and truth.get(n, 0.0) != 0.0]
+        both = pd.concat([ea[names], eb[names]], axis=1, keys=["a", "b"],
+                         join="inner").dropna()
+        xa, xb = both["a"].to_numpy(), both["b"].to_numpy()
+        ratio, low, high = paired_mean_relative_interval(
+            xa, xb, truth[names].to_numpy(float), level)
+        return {"ratio": ratio, "low": low, "high": high, "level": level,
+                "derivatives": names, "realizations": len(both),
+                "winner": a if high < 1 else b if low > 1 else ""}
+
     def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
         """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the
-        ratio of their scatters a / b, its ``level`` interval (``intervals.
-        scatter_ratio_interval``: F distribution), the realizations that estimated it
-        with each (n_a, n_b), and the winner: ``a`` when the interval lies below 1, ``b``
-        when above, "" when it contains 1 (the data do not tell them apart)."""
+        ratio of their scatters a / b, its ``level`` interval, the realizations that
+        estimated it with each (n_a, n_b), the interval's kind (``paired``: the paired
+        bootstrap over the realizations both estimated, ``paired_interval``, when there
+        are ``intervals.PAIRED_MIN`` pairs or more; else ``F``: ``intervals.
+        scatter_ratio_interval``, conservative for the same seeds) and the winner: ``a``
+        when the interval lies below 1, ``b`` when above, "" when it contains 1 (the data
+        do not tell them apart)."""
         df = self.frame()
-        cols = ["ratio", "low", "high", "n_a", "n_b", "winner"]
+        cols = ["ratio", "low", "high", "n_a", "n_b", "interval", "winner"]
         if df.empty:
             return pd.DataFrame(columns=cols)
         scatter = df.pivot(index="derivative", columns="design", values="scatter")
@@ -260,8 +326,14 @@ class Comparison:
                 continue
             na, nb = int(count.loc[name, a]), int(count.loc[name, b])
             low, high = scatter_ratio_interval(sa / sb, na, nb, level)
+            kind = "F"
+            if min(na, nb) >= PAIRED_MIN:
+                plow, phigh, _ = self.paired_interval(a, b, str(name), level)
+                if math.isfinite(plow):
+                    low, high, kind = plow, phigh, "paired"
             rows[str(name)] = {"ratio": sa / sb, "low": low, "high": high, "n_a": na,
-                               "n_b": nb, "winner": a if high < 1 else b if low > 1 else ""}
+                               "n_b": nb, "interval": kind,
+                               "winner": a if high < 1 else b if low > 1 else ""}
         return pd.DataFrame.from_dict(rows, orient="index", columns=cols)
 
     def best(self, level: float = LEVEL) -> dict[str, str]:

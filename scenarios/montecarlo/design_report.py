@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
 from flightid.scenarios.montecarlo.design import Comparison, compare
+from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
 
 PNG = "design-compare.png"
@@ -98,7 +99,8 @@ def markdown(comparison: Comparison) -> str:
     rows = ratio_rows(comparison)
     if rows:
         lines += ["", f"scatter 3211 / doublet with its {100 * LEVEL:.0f} % interval "
-                  "(F distribution, Montgomery & Runger 2014, 10-5):", "",
+                  "(paired bootstrap over the same seeds where both n are 20 or more, Efron & "
+                  "Tibshirani 1993; else F distribution, Montgomery & Runger 2014, 10-5):", "",
                   "| " + " | ".join(RATIO_HEAD) + " |", "|" + "---|" * len(RATIO_HEAD)]
         lines += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join(lines) + "\n"
@@ -120,10 +122,12 @@ def ratio_rows(comparison: Comparison) -> list[list[str]]:
 
 def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
     """Write FOLDER/design-compare.png, FOLDER/design-compare.html and beside them
-    FOLDER/design-compare.csv (``Comparison.frame``); return the PNG and HTML paths."""
+    FOLDER/design-compare.csv, .md and .tex (``Comparison.frame``); return the PNG and
+    HTML paths."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     comparison.frame().to_csv(folder / CSV, index=False)
+    write_tables(comparison.frame(), folder / CSV, index=False)
     png = folder / PNG
     figure(comparison).savefig(png)
     data = base64.b64encode(png.read_bytes()).decode()

@@ -20,6 +20,7 @@ from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
 from flightid.identification.scoring import STATUS_ESTIMATED
+from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.summary import Summary
 
 REPORT = "report.html"
@@ -120,10 +121,11 @@ def histograms(df: pd.DataFrame, summary: Summary) -> dict[str, bytes]:
 def write_report(study_dir: str | Path, df: pd.DataFrame, summary: Summary,
                  title: str = "Monte Carlo study") -> Path:
     """Write STUDY/report.html, each histogram beside it (``histogram_name``) and the
-    summary's rows as STUDY/summary.csv (the columns of ``Summary.frame``); return the
-    report's path."""
+    summary's rows as STUDY/summary.csv, .md and .tex (the columns of ``Summary.frame``);
+    return the report's path."""
     if summary.rows:
         summary.frame().to_csv(Path(study_dir) / CSV)
+        write_tables(summary.frame(), Path(study_dir) / CSV)
     pngs = histograms(df, summary)
     for name, png in pngs.items():
         (Path(study_dir) / histogram_name(name)).write_bytes(png)

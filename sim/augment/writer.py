@@ -346,19 +346,22 @@ def _derivative_delta(doc: _Doc, e: DerivativeDelta) -> None:
     coef, var = e.derivative[1:].split("_", 1)
     force, moment = doc.frames()
     factors, sign = _variable(var, e.axes)
+    if e.form == "even":  # delta x |variable|: its sign no longer matters
+        factors, sign = [*factors[:-1], _el("abs", factors[-1])], 1.0
     length = {"l": "metrics/bw-ft", "n": "metrics/bw-ft", "m": "metrics/cbarw-ft"}.get(coef)
     n = sum(1 for _ in doc.aero().iter("function"))
     for axis, trig, s in _targets(e.axes, coef, force, moment):
         product = [_prop("aero/qbar-area"), *([_prop(length)] if length else []),
                    *[_clone(f) for f in factors], *([_trig(trig)] if trig else []),
                    _val(s * sign * e.delta)]
+        form = " x abs(variable)" if e.form == "even" else ""
         fn = _el("function", _el("description", text=f"augment: {e.derivative} delta "
-                                 f"{e.delta:g} ({e.axes} axes)"),
+                                 f"{e.delta:g}{form} ({e.axes} axes)"),
                  _el("product", *product), name=f"aero/augment/{e.derivative}-{n}-{axis}")
         n += 1
         rot = f" x {trig}(alpha), rotated into this {axis} axis" if trig else ""
         doc.add_term(axis, f"added by flightid augment: derivative_delta {e.derivative} "
-                     f"{e.delta:+.6g} per rad ({e.axes} axes){rot}: model mismatch", fn)
+                     f"{e.delta:+.6g} per rad{form} ({e.axes} axes){rot}: model mismatch", fn)
 
 
 def _clone(el: ET.Element) -> ET.Element:

@@ -23,8 +23,13 @@ import numpy as np
 
 from flightid.atmosphere import isa, isa_density
 from flightid.files import atomic_path
-from flightid.importers.servos import ServoMapping
-from flightid.importers.ulog_topics import TOPICS
+from flightid.importers.servos import HALF_RANGE_US, ServoMapping
+from flightid.importers.ulog_topics import (
+    PX4_MOTOR_FUNCTION,
+    PX4_SERVO_FUNCTION,
+    PX4_SURFACE_TYPES,
+    TOPICS,
+)
 from flightid.record import FlightRecord
 from flightid.sim.bridge.dataflash import BOOT_S, message_times, sampled
 from flightid.units import DEG
@@ -62,6 +67,39 @@ def quaternion_from_euler(phi: np.ndarray, theta: np.ndarray, psi: np.ndarray) -
     cy, sy = np.cos(psi / 2), np.sin(psi / 2)
     return np.column_stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
                             cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
+
+
+def px4_params(servos: ServoMapping) -> dict[str, int | float]:
+    """PX4's output parameters for ``servos`` (``ulog_topics``): each surface a control
+    surface of its type on its output, over 1000-2000 us, its trim as CA_SV_CS{i}_TRIM, a
+    negative throw as a reversed output; the throttle as motor 1 over its low and high.
+    (The throws themselves are in no PX4 parameter.)"""
+    types = {name: kind for kind, name in PX4_SURFACE_TYPES.items()}
+    params: dict[str, int | float] = {}
+    reversed_mask = 0
+    surfaces = sorted(servos.surfaces.items(), key=lambda item: item[1].channel)
+    for index, (name, servo) in enumerate(surfaces):
+        n = servo.channel
+        params[f"CA_SV_CS{index}_TYPE"] = types.get(name, 0)
+        params[f"CA_SV_CS{index}_TRIM"] = (servo.trim - 1500.0) / HALF_RANGE_US
+        params[f"PWM_MAIN_FUNC{n}"] = PX4_SERVO_FUNCTION + index
+        params[f"PWM_MAIN_MIN{n}"], params[f"PWM_MAIN_MAX{n}"] = 1000, 2000
+        reversed_mask |= (servo.throw < 0) << (n - 1)
+    params["CA_SV_CS_COUNT"] = len(surfaces)
+    if servos.throttle is not None:
+        n, low, high = servos.throttle.channel, servos.throttle.low, servos.throttle.high
+        params[f"PWM_MAIN_FUNC{n}"] = PX4_MOTOR_FUNCTION
+        params[f"PWM_MAIN_MIN{n}"], params[f"PWM_MAIN_MAX{n}"] = round(min(low, high)), \
+            round(max(low, high))
+        reversed_mask |= (high < low) << (n - 1)
+    params["PWM_MAIN_REV"] = reversed_mask
+    return params
+
+
+def _parameter(key: str, value: int | float) -> bytes:
+    name = f"{'float' if isinstance(value, float) else 'int32_t'} {key}".encode()
+    packed = struct.pack("<f" if isinstance(value, float) else "<i", value)
+    return _message("P", bytes([len(name)]) + name + packed)
 
 
 def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping | None = None,
@@ -163,6 +201,8 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
         for key, value in (("sys_name", "flightid bridge"), ("ver_hw", "JSBSIM")):
             name = f"char[{len(value)}] {key}".encode()
             fh.write(_message("I", bytes([len(name)]) + name + value.encode()))
+        for key, value in px4_params(servos).items():
+            fh.write(_parameter(key, value))
         for msg_id, topic in enumerate(topics):
             fh.write(_message("A", struct.pack("<BH", 0, msg_id) + topic.encode()))
         for _, _, message in data:

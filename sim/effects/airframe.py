@@ -25,6 +25,9 @@ SURFACE_CHOICES = ("de", "da", "dr")
 AXES_CHOICES = ("stability", "body")
 # coefficient letters (flightid.derivatives) per axes and variables a delta can act on
 COEFS = {"stability": ("L", "D", "Y", "l", "m", "n"), "body": ("X", "Y", "Z", "l", "m", "n")}
+# a delta's dependence on its variable: linear, or even (on |variable|: the one-sided slopes
+# differ by 2 delta, as a table written for |beta| has them)
+FORM_CHOICES = ("linear", "even")
 VARIABLES = ("0", "alpha", "beta", "p", "q", "r", "alphadot", "de", "da", "dr")
 DERIVATIVES: tuple[str, ...] = tuple(dict.fromkeys(
     f"C{c}_{v}" for axes in AXES_CHOICES for c in COEFS[axes] for v in VARIABLES))
@@ -74,9 +77,11 @@ class DerivativeDelta(AugmentEffect):
     delta: float = 0.02
     derivative: str = "Cn_beta"
     axes: str = "stability"
+    form: str = "linear"  # "linear": delta x variable; "even": delta x |variable|
 
     def __post_init__(self) -> None:
         self._choice("axes", AXES_CHOICES)
+        self._choice("form", FORM_CHOICES)
         self._finite("delta")
         ok = tuple(f"C{c}_{v}" for c in COEFS[self.axes] for v in VARIABLES)
         if self.derivative not in ok:

@@ -39,6 +39,7 @@ from typing import Any
 from flightid.sim.effects.airframe import (
     AXES_CHOICES,
     DERIVATIVES,
+    FORM_CHOICES,
     SURFACE_CHOICES,
     ActuatorBias,
     ActuatorLag,
@@ -566,7 +567,10 @@ CATALOGUE = Catalogue((
                           "the derivative, C<coef>_<var> (flightid.derivatives)"),
                    Option("axes", AXES_CHOICES, "stability",
                           "axes of the delta: stability (CL CD CY, Cl Cm Cn, stability-axis "
-                          "rates) or body (CX CY CZ, body rates)"))),
+                          "rates) or body (CX CY CZ, body rates)"),
+                   Option("form", FORM_CHOICES, "linear",
+                          "linear: delta x variable; even: delta x abs(variable), a term "
+                          "even in the variable (one-sided slopes apart by 2 delta)"))),
     Entry("control_effectiveness", ActsOn.AIRFRAME, "every aerodynamic term reading a "
           "surface scaled (effectiveness loss, tail ice)",
           (_p("factor", "1", "scale of the surface's terms", 0.8, 0.0, neutral=1.0),),

@@ -105,6 +105,7 @@ def generate(busy_port: int) -> list[Case]:
     cases += _values("identify", base, "--method", WORDS)
     cases += _values("identify", base, "--model", ("zz", "", "Cn=", "lat;lon"))
     cases += _values("identify", base, "--format", WORDS)
+    cases += _values("identify", base, "--compare", WORDS)
     cases += _values("identify", base, "--window", ("-1,0", "5,1", "nan,1", "abc", "",
                                                     "0,inf", "1,1"))
     cases += _values("identify", base, "--option", ("foo=1", "=1", "x", "max_iterations=abc"),
