@@ -65,3 +65,15 @@ def test_output_error_fits_a_hobby_record_without_attitudes():
     done = [r for r in scored.rows if r.status == "estimated"]
     assert len(done) >= 0.8 * 13
     assert all(abs(r.sigmas) <= 3 for r in done), [(r.name, r.sigmas) for r in done]
+
+
+def test_a_failed_fit_from_the_equation_error_start_is_started_again():
+    # navion-sweep-yaw: from the equation-error start every development seed ended with
+    # R^2 < 0 and every derivative withheld; from the typical values seed 1 converges.
+    # Known miss: CY_beta about -1 % (9 bounds), the same on the noise-free record.
+    est, scored = _scored(_flown("navion-sweep-yaw", 1), "lat")
+    assert est.fit["start"].startswith("typical values")
+    assert est.fit["R2"] > 0.5
+    done = [r for r in scored.rows if r.status == "estimated"]
+    assert len(done) == 13
+    assert sum(abs(r.sigmas) <= 3 for r in done) >= 0.8 * len(done)
