@@ -21,8 +21,8 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from flightid.identification import linear_models as lm  # noqa: E402
 from flightid.identification.methods import output_error as oe  # noqa: E402
+from flightid.identification.models import linear as lm  # noqa: E402
 from flightid.record import read  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"

@@ -11,7 +11,8 @@ busy spell slows them alike; the table gives the best (least disturbed) run and 
 spread (median and worst) of the process CPU time, and the best wall time. The
 requirement is judged on the best CPU times (wall times of other processes' spells are
 not the runner's). ``--baseline FILE`` also times ``fly`` and ``step`` of another
-version of ``sim/flight.py`` (e.g. ``git show HEAD:sim/flight.py > /tmp/old_flight.py``).
+version of ``sim/flight/simulation.py``
+(e.g. ``git show HEAD:sim/flight/simulation.py > /tmp/old_flight.py``).
 Writes benchmarks/results/runner.txt.
 
     .venv/bin/python benchmarks/bench_runner.py [--repeats 15] [--baseline FILE]
@@ -34,9 +35,9 @@ import jsbsim
 import numpy as np
 
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
-from flightid.sim.flight import MIN_INTERNAL_HZ
-from flightid.sim.model import load
-from flightid.sim.trim import apply, trim
+from flightid.sim.flight.simulation import MIN_INTERNAL_HZ
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import apply, trim
 
 REPEATS = 15
 DURATION_S = 60.0
@@ -100,7 +101,7 @@ def stepper(flight_module, aircraft: str, altitude: float, speed: float, rate_hz
 
 
 def load_flight_module(path: Path):
-    """Import another version of sim/flight.py under its own name."""
+    """Import another version of sim/flight/simulation.py under its own name."""
     spec = importlib.util.spec_from_file_location("flight_baseline", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up there
@@ -110,7 +111,7 @@ def load_flight_module(path: Path):
 
 def main(repeats: int = REPEATS, baseline: Path | None = None) -> str:
     from flightid.scenarios.inputs import total_signals
-    from flightid.sim import flight
+    from flightid.sim.flight import simulation as flight
 
     demo = load_card("navion-demo")
     data = copy.deepcopy(demo.data)
@@ -178,6 +179,6 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=REPEATS)
     parser.add_argument("--baseline", type=Path, default=None,
-                        help="another sim/flight.py to time fly and step against")
+                        help="another sim/flight/simulation.py to time fly and step against")
     args = parser.parse_args()
     print(main(args.repeats, args.baseline), end="")

@@ -2,12 +2,12 @@
 
 Each run flies the project Navion (JSBSim, 1500 m, 55 m/s, trimmed) through an aileron
 3211 and a rudder 2-1-1 (2 deg) with MIL-F-8785C Dryden turbulence of moderate intensity
-(``flightid.sim.disturbances``), adds white sensor noise of research-grade instruments
+(``flightid.sim.flight.disturbed``), adds white sensor noise of research-grade instruments
 (beta 0.1 deg, p r phi 0.2 deg/s or deg, ay 0.05 m/s^2) and identifies the 13 lateral
 derivatives of Morelli & Klein example 6.1 by output error and by filter error (process
 noise in the sideslip equation: the gust enters the lateral motion through the
 aerodynamic sideslip). Truth: JSBSim's body-axis derivatives at the trim point
-(``flightid.sim.truth``). Two cases, the same seeds:
+(``flightid.sim.jsbsim.truth``). Two cases, the same seeds:
 
 * ``lateral``: only the lateral (v) component of the moderate turbulence, which the
   lateral perturbation model with process noise represents;
@@ -41,15 +41,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from rich.progress import track  # noqa: E402
 
-from flightid.identification import linear_models as lm  # noqa: E402
-from flightid.identification.linear_models import LATERAL_EXAMPLE_6_1  # noqa: E402
 from flightid.identification.methods import filter_error as fe  # noqa: E402
 from flightid.identification.methods import output_error as oe  # noqa: E402
+from flightid.identification.models import linear as lm  # noqa: E402
+from flightid.identification.models.linear import LATERAL_EXAMPLE_6_1  # noqa: E402
 from flightid.record import FlightRecord  # noqa: E402
-from flightid.sim import disturbances as dist  # noqa: E402
-from flightid.sim import truth as truth_mod  # noqa: E402
-from flightid.sim.model import as_model  # noqa: E402
-from flightid.sim.trim import trim as trim_aircraft  # noqa: E402
+from flightid.sim.flight import disturbed as dist  # noqa: E402
+from flightid.sim.jsbsim import truth as truth_mod  # noqa: E402
+from flightid.sim.jsbsim.model import as_model  # noqa: E402
+from flightid.sim.jsbsim.trim import trim as trim_aircraft  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 ALTITUDE_M, SPEED_M_S = 1500.0, 55.0
@@ -158,7 +158,7 @@ def report(table: dict, runs: list[dict], truth: dict[str, float], names: list[s
         "noise beta 0.1 deg, p r phi 0.2 deg(/s), ay 0.05 m/s^2",
         f"{len(runs) // len(CASES)} seeds per case, {workers} worker processes, "
         f"{seconds:.0f} s wall",
-        "truth: JSBSim body-axis derivatives at trim (flightid.sim.truth)",
+        "truth: JSBSim body-axis derivatives at trim (flightid.sim.jsbsim.truth)",
         "bias/CRB: bias over the method's mean Cramer-Rao bound; bias/MC: over the Monte "
         "Carlo scatter; MC/CRB: scatter over mean bound; vs calm: (mean - calm) / CRB, with "
         "calm = output error on the same maneuver flown without turbulence and noise (the "

@@ -24,9 +24,9 @@ import json
 import tempfile
 from pathlib import Path
 
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.evaluation.scoring import score
 from flightid.identification.identify import identify
-from flightid.identification.scoring import score
 from flightid.record import read
 from flightid.scenarios.cards import fly_card, library_cards, load_card
 

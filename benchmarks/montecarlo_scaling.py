@@ -42,8 +42,8 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
+from flightid.identification.evaluation.scoring import record_truth, score
 from flightid.identification.identify import identify
-from flightid.identification.scoring import record_truth, score
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.scenarios.montecarlo.study import REALIZATION_ERRORS, Study

@@ -3,7 +3,7 @@
 Usage: python benchmarks/sim_throughput.py [out.json] [--repeats N]
 
 Bare: FGFDMExec.run() at the internal rate with nothing else. fly(): the same flight
-through flightid.sim.flight (controls mapped, the raw properties read every record
+through flightid.sim.flight.simulation (controls mapped, the raw properties read every record
 sample, departure checks, conversion to a FlightRecord; model copy and reset included).
 step(): one ``Simulation.step`` with two control increments (a controller's call).
 Each case runs ``--repeats`` times, interleaved; the best process CPU time counts (the
@@ -23,9 +23,9 @@ from pathlib import Path
 import jsbsim
 import numpy as np
 
-from flightid.sim.flight import Simulation, fly
-from flightid.sim.model import load
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import Simulation, fly
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "sim_throughput.json"
 STEPS = 1000

@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-from flightid.identification import linear_models as lm
 from flightid.identification.methods import equation_error, frequency_output_error, output_error
+from flightid.identification.models import linear as lm
 from flightid.record import read
 
 HERE = Path(__file__).resolve().parent

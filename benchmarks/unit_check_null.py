@@ -1,4 +1,4 @@
-"""False alarms of the unit check (``flightid.identification.unit_sanity``) on null cases:
+"""False alarms of the unit check (``flightid.identification.data.unit_sanity``) on null cases:
 every library card (``flightid simulate --list``) flown with seeds 1, 2, 3 in calm air (its
 disturbances removed) and in light turbulence (its disturbances replaced by one
 ``turbulence`` of intensity ``light``), plus the real NASA Twin Otter record. Every one
@@ -15,10 +15,10 @@ import dataclasses
 import json
 from pathlib import Path
 
-from flightid.identification.unit_sanity import RATIO_BANDS, implausible, unit_ratios
+from flightid.identification.data.unit_sanity import RATIO_BANDS, implausible, unit_ratios
 from flightid.record import FlightRecord, read
 from flightid.scenarios.cards import fly_card, library_cards, load_card
-from flightid.sim.disturbances import disturbance_from_dict
+from flightid.sim.flight.disturbed import disturbance_from_dict
 
 SEEDS = (1, 2, 3)
 RESULTS = Path(__file__).parent / "results" / "unit_check_null.json"

@@ -3,7 +3,8 @@ and the one error policy of the command line (docs/errors.md).
 
 The command bodies live in one module per command group (``flightid.cli.trim_truth``,
 ``simulate``, ``bridge``, ``frequency_response``, ``compatibility``); ``identify`` and
-``demo`` still call the ``run_cli`` of their library modules.
+``demo`` still call the ``run_cli`` of their library modules. ``COMMANDS`` lists them; a
+command's module is imported only when it runs, so ``flightid --help`` stays light.
 
 Exit codes: 0 success; 1 internal error (a bug: one line naming the exception); 2 bad input
 or usage (a missing or unreadable file, a bad option, a malformed card, an output that
@@ -14,36 +15,59 @@ with the full traceback; without it no traceback is ever printed.
 
 from __future__ import annotations
 
+import ast
+import functools
 import os
 import sys
+from difflib import get_close_matches
+from importlib import import_module
+from importlib.util import find_spec
+from pathlib import Path
 from types import TracebackType
 
 import numpy as np
 import typer
-from typer.core import TyperGroup
+import typer.main
+from typer.core import TyperCommand, TyperGroup
 from typer.exceptions import TyperException
+from typer.models import CommandInfo
 
 from flightid import __version__
-from flightid.cli import bridge
-from flightid.cli.compatibility import compatibility_command
-from flightid.cli.demo import demo_command
-from flightid.cli.design_compare import design_compare_command
-from flightid.cli.design_optimize import design_optimize_command
-from flightid.cli.effects import effects_command
-from flightid.cli.frequency_response import frequency_response_command
-from flightid.cli.gap import gap_command
-from flightid.cli.gap_benchmark import gap_benchmark_command
-from flightid.cli.identify import identify_command
-from flightid.cli.importing import import_command
-from flightid.cli.methods import methods_command
-from flightid.cli.montecarlo import montecarlo_command, montecarlo_report_command
-from flightid.cli.simulate import simulate_command
-from flightid.cli.study_compare import study_compare_command
-from flightid.cli.trim_truth import trim_command, truth_command
-from flightid.identification.convergence import NotConvergedError
-from flightid.scenarios.cards import CardError
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError, TrimInputError
+
+# every command but ``version``, in the order of ``flightid --help``: {name: (module,
+# attribute)}. A command's module is imported only when the command runs; ``--help`` reads
+# the commands' help from their source (the function's docstring, the group's ``help=``)
+COMMANDS = {
+    "demo": ("flightid.cli.demo", "demo_command"),
+    "identify": ("flightid.cli.identify", "identify_command"),
+    "methods": ("flightid.cli.methods", "methods_command"),
+    "frequency-response": ("flightid.cli.frequency_response", "frequency_response_command"),
+    "trim": ("flightid.cli.trim_truth", "trim_command"),
+    "truth": ("flightid.cli.trim_truth", "truth_command"),
+    "convert": ("flightid.cli.bridge", "convert_command"),
+    "import": ("flightid.cli.importing", "import_command"),
+    "simulate": ("flightid.cli.simulate", "simulate_command"),
+    "compatibility": ("flightid.cli.compatibility", "compatibility_command"),
+    "effects": ("flightid.cli.effects", "effects_command"),
+    "gap": ("flightid.cli.gap", "gap_command"),
+    "gap-benchmark": ("flightid.cli.gap_benchmark", "gap_benchmark_command"),
+    "montecarlo": ("flightid.cli.montecarlo", "montecarlo_command"),
+    "montecarlo-report": ("flightid.cli.montecarlo", "montecarlo_report_command"),
+    "design-compare": ("flightid.cli.design_compare", "design_compare_command"),
+    "design-optimize": ("flightid.cli.design_optimize", "design_optimize_command"),
+    "study-compare": ("flightid.cli.study_compare", "study_compare_command"),
+    "bridge": ("flightid.cli.bridge", "app"),
+}
+# the exceptions of the library that the policy classifies: {name: module}. An exception
+# of a module that is not loaded cannot have been raised, so the policy looks them up in
+# sys.modules instead of importing the simulator and the methods for every command
+_CLASSIFIED = {
+    "DepartureError": "flightid.sim.flight.simulation",
+    "TrimInputError": "flightid.sim.jsbsim.trim",
+    "TrimError": "flightid.sim.jsbsim.trim",
+    "NotConvergedError": "flightid.identification.engine.convergence",
+    "CardError": "flightid.scenarios.cards",
+}
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_PHYSICAL = 0, 1, 2, 3
 EXIT_NOT_CONVERGED = 4  # --strict and an iterative fit that did not converge
@@ -57,15 +81,21 @@ _PATH_ERRORS = (FileNotFoundError, FileExistsError, IsADirectoryError, NotADirec
 _CONTEXT = ("info_name", "parent", "command", "params")
 
 
+def _is(exc: BaseException, name: str) -> bool:
+    """Whether ``exc`` is a ``name`` of ``_CLASSIFIED`` (False while its module is not loaded)."""
+    cls = getattr(sys.modules.get(_CLASSIFIED[name]), name, None)
+    return cls is not None and isinstance(exc, cls)
+
+
 def classify(exc: BaseException) -> tuple[int, str]:
     """The exit code and the one-line message for an exception a command raised."""
-    if isinstance(exc, DepartureError):
+    if _is(exc, "DepartureError"):
         return EXIT_PHYSICAL, f"the flight departed: {exc}"
-    if isinstance(exc, TrimInputError):
+    if _is(exc, "TrimInputError"):
         return EXIT_BAD_INPUT, str(exc)
-    if isinstance(exc, TrimError):
+    if _is(exc, "TrimError"):
         return EXIT_PHYSICAL, str(exc)
-    if isinstance(exc, NotConvergedError):
+    if _is(exc, "NotConvergedError"):
         return EXIT_NOT_CONVERGED, str(exc)
     if isinstance(exc, TimeoutError):  # a bridge link that never delivered
         return EXIT_PHYSICAL, str(exc)
@@ -73,7 +103,7 @@ def classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_INTERNAL, _internal(exc)
     if isinstance(exc, UnicodeDecodeError):
         return EXIT_BAD_INPUT, f"not a UTF-8 text file ({exc})"
-    if isinstance(exc, CardError | ValueError):
+    if _is(exc, "CardError") or isinstance(exc, ValueError):
         return EXIT_BAD_INPUT, str(exc)
     if isinstance(exc, KeyError):
         return EXIT_BAD_INPUT, str(exc.args[0]) if exc.args else "missing key"
@@ -129,6 +159,67 @@ class PolicyGroup(TyperGroup):
                        err=True)
             raise typer.Exit(code) from None
 
+    def list_commands(self, ctx: typer.Context) -> list[str]:
+        return [*super().list_commands(ctx), *COMMANDS]
+
+    def get_command(self, ctx: typer.Context, cmd_name: str):
+        if cmd_name not in COMMANDS:
+            return super().get_command(ctx, cmd_name)
+        if getattr(self, "_listing", False):  # --help: the help text, nothing imported
+            return TyperCommand(cmd_name, help=_help_in_source(*COMMANDS[cmd_name]))
+        return _load_command(cmd_name)
+
+    def format_help(self, ctx: typer.Context, formatter) -> None:
+        self._listing = True
+        try:
+            super().format_help(ctx, formatter)
+        finally:
+            self._listing = False
+
+    def resolve_command(self, ctx: typer.Context, args: list[str]):
+        try:
+            return super().resolve_command(ctx, args)
+        except TyperException as e:  # "No such command": suggest the lazy commands too
+            matches = get_close_matches(args[0], self.list_commands(ctx)) if args else []
+            if matches and hasattr(e, "message") and "Did you mean" not in e.message:
+                suggestions = ", ".join(f"{m!r}" for m in matches)
+                e.message = f"{e.message.rstrip('.')}. Did you mean {suggestions}?"
+            raise
+
+
+def _load_command(name: str):
+    """The click command (or group) of ``COMMANDS[name]``, its module imported now."""
+    module, attribute = COMMANDS[name]
+    target = getattr(import_module(module), attribute)
+    if isinstance(target, typer.Typer):
+        command = typer.main.get_group(target)
+        command.name = name
+        return command
+    return typer.main.get_command_from_info(
+        CommandInfo(name=name, callback=target),
+        pretty_exceptions_short=app.pretty_exceptions_short,
+        rich_markup_mode=app.rich_markup_mode)
+
+
+@functools.cache
+def _source_tree(module: str) -> ast.Module:
+    """The syntax tree of ``module``'s source, read without importing it."""
+    return ast.parse(Path(find_spec(module).origin).read_text(encoding="utf-8"))
+
+
+def _help_in_source(module: str, attribute: str) -> str:
+    """The help of a command without importing it: the docstring of function ``attribute``
+    of ``module``, or the ``help=`` of the typer app assigned to ``attribute``."""
+    for node in _source_tree(module).body:
+        if isinstance(node, ast.FunctionDef) and node.name == attribute:
+            return ast.get_docstring(node) or ""
+        if (isinstance(node, ast.Assign) and isinstance(node.value, ast.Call)
+                and any(getattr(t, "id", None) == attribute for t in node.targets)):
+            for keyword in node.value.keywords:
+                if keyword.arg == "help":
+                    return ast.literal_eval(keyword.value)
+    return ""
+
 
 app = typer.Typer(
     cls=PolicyGroup,
@@ -154,31 +245,6 @@ def _main(debug: bool = typer.Option(
 def version() -> None:
     """Print the flightid version."""
     typer.echo(__version__)
-
-
-app.command("demo")(demo_command)
-
-
-app.command("identify")(identify_command)
-app.command("methods")(methods_command)
-
-
-app.command("frequency-response")(frequency_response_command)
-app.command("trim")(trim_command)
-app.command("truth")(truth_command)
-app.add_typer(bridge.app, name="bridge")
-app.command("convert")(bridge.convert_command)
-app.command("import")(import_command)
-app.command("simulate")(simulate_command)
-app.command("compatibility")(compatibility_command)
-app.command("effects")(effects_command)
-app.command("gap")(gap_command)
-app.command("gap-benchmark")(gap_benchmark_command)
-app.command("montecarlo")(montecarlo_command)
-app.command("montecarlo-report")(montecarlo_report_command)
-app.command("design-compare")(design_compare_command)
-app.command("design-optimize")(design_optimize_command)
-app.command("study-compare")(study_compare_command)
 
 
 def main() -> None:

@@ -56,8 +56,8 @@ from flightid.sim.bridge.recorder import (
 )
 from flightid.sim.bridge.schedule import PROFILES
 from flightid.sim.bridge.signing import SenderFilter, read_key, state_path
-from flightid.sim.flight import Simulation
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import Simulation
+from flightid.sim.jsbsim.trim import trim
 
 RECORD_SUFFIXES = (".parquet", ".csv", ".mat")
 _AIRCRAFT_HELP = "project aircraft, jsbsim aircraft or XML path"

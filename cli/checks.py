@@ -20,10 +20,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightid import files
-from flightid.identification import nuisance, resources, time_base
-from flightid.identification.convergence import NotConvergedWarning
+from flightid.identification import nuisance
+from flightid.identification.data import time_base
+from flightid.identification.data.unit_sanity import check_units
+from flightid.identification.engine import resources
+from flightid.identification.engine.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
-from flightid.identification.unit_sanity import check_units
 from flightid.record import FlightRecord, read
 
 # a command refuses to write more than this without --force (bytes)

@@ -1,6 +1,6 @@
 """``flightid compatibility``: flight path reconstruction printed as a table or JSON, the
 corrected record optionally written (printing only; the work is
-``flightid.identification.compatibility``)."""
+``flightid.identification.compatibility.reconstruction``)."""
 
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ from flightid.cli.checks import (
     printed_warnings,
     read_record,
 )
-from flightid.identification import convergence
-from flightid.identification.compatibility import PARAMETERS, reconstruct
+from flightid.identification.compatibility.reconstruction import PARAMETERS, reconstruct
+from flightid.identification.engine import convergence
 
 # display factors to deg, deg/s and g
 _DISPLAY = {"rad": 180 / math.pi, "rad/s": 180 / math.pi, "m/s^2": 1 / 9.80665}

@@ -1,6 +1,6 @@
 """``flightid frequency-response``: a frequency response with coherence and random error
 printed as a table, optionally a Bode/coherence PNG (printing only; the work is
-``flightid.identification.frequency_response``)."""
+``flightid.identification.frequency.response``)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.files import atomic_path
-from flightid.identification.frequency_response import (
+from flightid.identification.frequency.response import (
     bode_figure,
     default_windows,
     frequency_response,

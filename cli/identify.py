@@ -20,16 +20,17 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.cli.tables import estimate_table, print_score
-from flightid.identification import convergence, nuisance
+from flightid.identification import nuisance
 from flightid.identification.agreement import Agreement
 from flightid.identification.agreement import compare as compare_estimates
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.input_denoising import denoise_channels
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.engine import convergence
 from flightid.identification.estimate import Estimate
+from flightid.identification.evaluation.report import write_html
+from flightid.identification.evaluation.scoring import load_truth, record_truth, score
 from flightid.identification.identify import identify
-from flightid.identification.input_denoising import denoise_channels
 from flightid.identification.methods import registry
-from flightid.identification.report import write_html
-from flightid.identification.scoring import load_truth, record_truth, score
 from flightid.record import FlightRecord
 
 

@@ -11,8 +11,8 @@ from typing import Annotated
 import typer
 
 from flightid.cli.checks import check_suffix, check_writable, printed_warnings
-from flightid.identification import time_base
-from flightid.identification.unit_sanity import check_units
+from flightid.identification.data import time_base
+from flightid.identification.data.unit_sanity import check_units
 from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import AircraftConstants, read_constants
 from flightid.importers.dataflash import read_dataflash
@@ -20,7 +20,7 @@ from flightid.importers.mapping import ColumnMap, parse_map, read_map
 from flightid.importers.servos import read_servo_map
 from flightid.importers.ulog import read_ulog
 from flightid.record import FlightRecord
-from flightid.sim.model import load
+from flightid.sim.jsbsim.model import load
 
 RECORD_SUFFIXES = (".parquet", ".csv")
 LOG_READERS = {".bin": (read_dataflash, "dataflash"), ".ulg": (read_ulog, "ulog")}

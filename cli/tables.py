@@ -9,9 +9,9 @@ from collections.abc import Sequence
 from rich.console import Console
 from rich.table import Table
 
-from flightid.identification import convergence
+from flightid.identification.engine import convergence
 from flightid.identification.estimate import Estimate
-from flightid.identification.scoring import STATUS_ESTIMATED, Score
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED, Score
 
 
 def add_columns(table: Table, heads: Sequence[str], left: int = 1,

@@ -1,6 +1,6 @@
 """``flightid trim`` and ``flightid truth``: trim a JSBSim aircraft, print its trim or its
-truth derivatives (printing only; the work is ``flightid.sim.trim`` and
-``flightid.sim.truth``)."""
+truth derivatives (printing only; the work is ``flightid.sim.jsbsim.trim`` and
+``flightid.sim.jsbsim.truth``)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from rich.console import Console
 from rich.table import Table
 
 from flightid.cli.checks import check_aircraft_xml
-from flightid.sim.model import Model, load
-from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import Model, load
+from flightid.sim.jsbsim.trim import Trim, trim
+from flightid.sim.jsbsim.truth import derivatives
 
 _AIRCRAFT_HELP = "project aircraft, jsbsim aircraft or XML path"
 _FORMATS = ("table", "json")

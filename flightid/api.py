@@ -1,37 +1,70 @@
-"""The public API: ``fly``, ``identify``, ``score``, ``truth``, ``methods``, ``effects``.
+"""The public API of flightid, re-exported by the ``flightid`` package:
+
+- ``fly(card, seed)`` -> ``Flight``: fly a flight card in JSBSim;
+- ``truth(aircraft, altitude, speed, ...)``: the exact derivatives of a JSBSim aircraft;
+- ``identify(record, method, model, **options)`` -> ``Estimate``; ``methods()``: the
+  registered methods;
+- ``score(estimate, truth)`` -> ``Score``;
+- ``gap(...)``: the model-gap diagnosis of a record; ``gap_benchmark(...)``: its blind check;
+- ``montecarlo(...)``: a Monte Carlo study; ``design_compare(...)``: input designs compared;
+- ``FlightRecord`` and ``read(path)``: the flight record and its reader;
+- ``EXCITATION_ENV``: the id of the gymnasium excitation environment.
 
     import flightid
     flight = flightid.fly("navion-demo", seed=1)
     est = flightid.identify(flight.measured, method="oe", model="lon")
     print(flightid.score(est, flight.truth).verdict)
 
-Every command of the command line is a thin call of these functions.
+Every command of the command line is a thin call of these functions. ``gap``,
+``gap_benchmark``, ``montecarlo`` and ``design_compare`` (Dask, matplotlib) are loaded on
+first use (PEP 562).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from importlib import import_module
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from flightid.identification.gap import diagnose as gap
+from flightid.identification.estimate import Estimate
+from flightid.identification.evaluation.scoring import Score, record_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.methods import registry
 from flightid.identification.methods.protocol import Method
-from flightid.identification.scoring import Score, record_truth, score
-from flightid.record import FlightRecord
+from flightid.record import FlightRecord, read
 from flightid.scenarios.cards import Card, fly_card, load_card
-from flightid.scenarios.gap_benchmark import benchmark as gap_benchmark
-from flightid.scenarios.gym import ENV_ID as EXCITATION_ENV  # registers it with gymnasium
-from flightid.scenarios.montecarlo import run as montecarlo
-from flightid.scenarios.montecarlo.design_report import compare_and_report as design_compare
-from flightid.sim.model import load
-from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import Truth, derivatives
+from flightid.scenarios.gym.registration import ENV_ID as EXCITATION_ENV
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import Trim, trim
+from flightid.sim.jsbsim.truth import Truth, derivatives
 
-__all__ = ["EXCITATION_ENV", "Flight", "fly", "gap", "identify", "methods", "montecarlo", "score",
-           "truth", "gap_benchmark"]
-__all__ += ["design_compare"]  # design.compare + its PNG/HTML report (docs/montecarlo.md)
+if TYPE_CHECKING:  # loaded on first use by __getattr__ below
+    from flightid.identification.gap import diagnose as gap
+    from flightid.scenarios.gap_benchmark import benchmark as gap_benchmark
+    from flightid.scenarios.montecarlo import run as montecarlo
+    from flightid.scenarios.montecarlo.design_report import compare_and_report as design_compare
+
+__all__ = ["EXCITATION_ENV", "Estimate", "Flight", "FlightRecord", "Score", "design_compare",
+           "fly", "gap", "gap_benchmark", "identify", "methods", "montecarlo", "read", "score",
+           "truth"]
+# loaded on first use: {name: (package, attribute)}, as ``from package import attribute``
+_LAZY = {
+    "gap": ("flightid.identification.gap", "diagnose"),
+    "gap_benchmark": ("flightid.scenarios.gap_benchmark", "benchmark"),
+    "montecarlo": ("flightid.scenarios.montecarlo", "run"),
+    "design_compare": ("flightid.scenarios.montecarlo.design_report", "compare_and_report"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """``gap``, ``gap_benchmark``, ``montecarlo``, ``design_compare``, imported on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'flightid.api' has no attribute {name!r}")
+    package, attribute = _LAZY[name]
+    value = getattr(import_module(package), attribute)
+    globals()[name] = value
+    return value
 
 
 @dataclass
@@ -86,8 +119,3 @@ def truth(aircraft: str, altitude: float, speed: float, *, gamma: float = 0.0,
 def methods() -> dict[str, Method]:
     """{id: Method} of every registered identification method (built-in and plug-ins)."""
     return registry.methods()
-
-
-# re-exported: identify(record, method, model, **options) -> Estimate;
-# score(estimate, truth) -> Score
-_ = (identify, score, Score)

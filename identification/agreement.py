@@ -32,7 +32,8 @@ from itertools import combinations
 import numpy as np
 
 from flightid.derivatives import is_derivative
-from flightid.identification import convergence, nuisance
+from flightid.identification import nuisance
+from flightid.identification.engine import convergence
 from flightid.identification.estimate import Estimate, StdKind
 
 AGREE_SIGMAS = 3.0  # a difference beyond 3 sigma: 0.27 % by chance for Gaussian estimates

@@ -3,7 +3,7 @@
 Output error with JSBSim itself as the model (Jategaonkar 2015, ch. 4; Morelli & Klein
 2016, ch. 6): for trial parameter values the catalogue effect is written into a copy of
 the aircraft (``sim.augment``), the copy is trimmed at the record's flight condition and
-flown with the record's commanded inputs (``sim.flight``), and the measured outputs are
+flown with the record's commanded inputs (``sim.flight.simulation``), and the measured outputs are
 compared with the flown ones. The project's maximum-likelihood engine
 (``identification.engine``: R concentrated out, damped Gauss-Newton, Cramer-Rao bounds)
 does the rest; only the output sensitivities are finite differences of whole flights.
@@ -49,12 +49,12 @@ from flightid.identification.engine.likelihood import (
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
-from flightid.sim import flight
 from flightid.sim.augment import augment_cached
 from flightid.sim.effects.airframe import AugmentEffect
 from flightid.sim.effects.catalogue import CATALOGUE, Parameter
-from flightid.sim.model import Model, load
-from flightid.sim.trim import Trim, trim
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim.model import Model, load
+from flightid.sim.jsbsim.trim import Trim, trim
 
 METHOD = "effect_fit"
 CACHE = Path(tempfile.gettempdir()) / "flightid-effect-fit"

@@ -16,11 +16,14 @@ from typing import Any
 
 import numpy as np
 
-from flightid.identification import convergence, model_structure, nuisance, time_base, windows
-from flightid.identification import identifiability as ident
+from flightid.identification import nuisance
+from flightid.identification.data import time_base, windows
+from flightid.identification.data.unit_sanity import check_units
+from flightid.identification.engine import convergence
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import registry
-from flightid.identification.unit_sanity import check_units
+from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")

@@ -33,9 +33,9 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from flightid.identification import linear_models as lm
-from flightid.identification.a_priori import preset_derivatives
 from flightid.identification.estimate import Estimate
+from flightid.identification.models import linear as lm
+from flightid.identification.models.a_priori import preset_derivatives
 from flightid.record import FlightRecord
 from flightid.units import DEG, G0
 

@@ -25,7 +25,7 @@ degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a co
 
     [sensors]                   # optional; without it the measured record is the truth
     suite = "research"          # built-in suite (hobby, research, ideal) to start from
-    output_rate = 50.0          # other keys as flightid.sim.sensors.suite_from_dict
+    output_rate = 50.0          # other keys as flightid.sim.sensors.suites.suite_from_dict
     drop = ["rpm"]              # channels or mounting effects to remove from the suite
     mounting = [{effect = "lever_arm", x = 0.3}]  # lever_arm, vanes, engine_vibration
     [sensors.channels]          # per-channel overrides replace that channel's chain
@@ -81,8 +81,9 @@ from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.scenarios.toml_locate import line_index, line_of
 from flightid.sim.augment import augment_cached
-from flightid.sim.condition import FlightCondition
-from flightid.sim.disturbances import (
+from flightid.sim.effects.catalogue import CATALOGUE, SECTIONS
+from flightid.sim.effects.vibration import EngineVibration
+from flightid.sim.flight.disturbed import (
     Gust,
     atmosphere_for,
     disturbance_from_dict,
@@ -90,12 +91,11 @@ from flightid.sim.disturbances import (
     vibration_of,
     wind_schedule,
 )
-from flightid.sim.effects.catalogue import CATALOGUE, SECTIONS
-from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.flight import DepartureError
-from flightid.sim.model import available, load
-from flightid.sim.sensors import SUITES, measure, suite_from_dict
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.condition import FlightCondition
+from flightid.sim.jsbsim.model import available, load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.sensors.suites import SUITES, measure, suite_from_dict
 from flightid.units import DEG
 
 LIBRARY = Path(__file__).resolve().parent / "library"
@@ -122,7 +122,7 @@ class CardError(ValueError):
 
 
 # a card's [condition] table (altitude, speed, gamma, bank, flaps in card units) is read
-# into the one flight-condition type of flightid.sim.condition
+# into the one flight-condition type of flightid.sim.jsbsim.condition
 Condition = FlightCondition
 
 
@@ -137,7 +137,7 @@ class Card:
     rate: float
     seed: int
     maneuvers: tuple[InputDesign, ...] = ()
-    sensors: Any = None  # flightid.sim.sensors.SensorSuite or None
+    sensors: Any = None  # flightid.sim.sensors.suites.SensorSuite or None
     disturbances: tuple[Any, ...] = ()
     # airframe and actuator effects ([[effect]]), flown in an augmented aircraft
     augmentation: tuple[Any, ...] = ()

@@ -19,11 +19,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightid.identification import linear_models as lm
 from flightid.identification.estimate import Estimate
+from flightid.identification.evaluation.report import write_html
+from flightid.identification.evaluation.scoring import Score, record_truth, score
 from flightid.identification.identify import identify
-from flightid.identification.report import write_html
-from flightid.identification.scoring import Score, record_truth, score
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import load_card
 from flightid.scenarios.simulate import fly_with_progress, plot_record

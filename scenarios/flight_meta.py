@@ -10,9 +10,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from flightid.scenarios.input_design import InputDesign
-from flightid.sim.model import Model
-from flightid.sim.trim import Trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import Model
+from flightid.sim.jsbsim.trim import Trim
+from flightid.sim.jsbsim.truth import derivatives
 
 
 def maneuver_list(designs: Sequence[InputDesign]) -> list[dict[str, Any]]:

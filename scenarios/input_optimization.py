@@ -33,13 +33,13 @@ from scipy.linalg import expm
 from scipy.optimize import minimize
 from scipy.signal import welch
 
-from flightid.identification.linear_models import (
+from flightid.identification.evaluation.scoring import record_truth
+from flightid.identification.models.linear import (
     LinearModel,
     matrix_sensitivities,
     model_for_record,
 )
-from flightid.identification.model_structure import linear
-from flightid.identification.scoring import record_truth
+from flightid.identification.models.structure import linear
 from flightid.record import FlightRecord
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import Maneuvers

@@ -1,6 +1,6 @@
 """The project aircraft (aircraft/<name>/): trim, truth = truth.toml, hands-off flight, modes.
 
-Truth: flightid.sim.truth's central differences of JSBSim's aerodynamic coefficients must
+Truth: flightid.sim.jsbsim.truth's central differences of JSBSim's aerodynamic coefficients must
 reproduce every derivative of the truth file. The build-up is exactly linear around trim,
 so the only error is floating point: the tolerance is 0.1 % (the lead asks for 2 %).
 Modes: eigenvalues of JSBSim's FGLinearization at trim, compared with the sources' modes
@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from flightid import aircraft
-from flightid.sim import truth as T
-from flightid.sim.model import load
-from flightid.sim.trim import apply, trim
+from flightid.sim.jsbsim import truth as T
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import apply, trim
 from flightid.units import DEG, FT, SLUG, SLUG_FT2
 
 NAMES = ("telemaster", "navion", "twinotter", "twinotter-iced")

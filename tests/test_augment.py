@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 
 from flightid.scenarios.cards import CardError, card_from_dict, fly_card, load_card
-from flightid.sim import disturbances as dist
 from flightid.sim.augment import augment
 from flightid.sim.effects.airframe import DerivativeDelta, RateLimit
-from flightid.sim.flight import Simulation, fly, hold_center
-from flightid.sim.model import PACKAGE_AIRCRAFT, load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.flight import disturbed as dist
+from flightid.sim.flight.simulation import Simulation, fly, hold_center
+from flightid.sim.jsbsim.model import PACKAGE_AIRCRAFT, load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 from flightid.units import DEG
 
 matplotlib.use("Agg")

@@ -15,8 +15,8 @@ import pytest
 
 from flightid.sim.bridge.air import BridgeConfig, FlightCoreAdapter, serve_simulation
 from flightid.sim.bridge.link import open_pty_pair
-from flightid.sim.flight import Simulation, fly
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import Simulation, fly
+from flightid.sim.jsbsim.trim import trim
 from flightid.units import DEG
 
 CLIENT = r'''

@@ -32,8 +32,8 @@ from flightid.sim.bridge.signing import (
     signing_timestamp,
     state_path,
 )
-from flightid.sim.flight import fly
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import fly
+from flightid.sim.jsbsim.trim import trim
 
 KEY = bytes(range(7, 39))
 RATE, DURATION = 50.0, 3.0

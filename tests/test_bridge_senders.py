@@ -26,8 +26,8 @@ from flightid.sim.bridge.signing import (
     setup_outgoing,
     signature_valid,
 )
-from flightid.sim.flight import Simulation, fly
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import Simulation, fly
+from flightid.sim.jsbsim.trim import trim
 from flightid.units import DEG
 
 CLIENT = r'''

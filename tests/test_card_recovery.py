@@ -4,7 +4,7 @@ Each aircraft's identification card (``scenarios/library/<aircraft>-id.toml``) i
 in JSBSim on two fixed seeds, the measured record is processed as a flight-test engineer
 would, identified by output error (initial states estimated, colored-residual bounds, M&K
 2016 eq. 6.54) and scored against the JSBSim aerodynamic truth
-``sim.truth.derivatives(..., axes="body")`` at the card's trim:
+``sim.jsbsim.truth.derivatives(..., axes="body")`` at the card's trim:
 - Twin Otter: the nonlinear 6-DOF model on the whole record, body axes, with the engine
   model's thrust and propulsive moments (L_prop, M_prop, N_prop) as inputs. The two
   propellers at y = +-2.78 m make a differential thrust in yaw rate and sideslip
@@ -49,16 +49,16 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from flightid.identification import compatibility as compat
-from flightid.identification import input_denoising, windows
-from flightid.identification import linear_models as lm
+from flightid.identification.compatibility import reconstruction as compat
+from flightid.identification.data import input_denoising, windows
 from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.identification.methods import output_error
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 
 IMU = ("p", "q", "r", "ax", "ay", "az")
 DAS_RATE = 25.0  # Hz, Sofyan (RMIT thesis, c. 1997) ch. 6
@@ -195,10 +195,10 @@ def flight(request):
 # found and removed (16-seed Monte Carlo of the card, research noise, 6-DOF fit):
 # - JSBSim's rectangular-Euler attitude integrator (Euler angles 1.25 ms behind the
 #   rates): Cl_beta, Cl_p, Cl_da -0.53 to -0.60 %, CY_beta -0.28 % -> -0.02 to -0.05 %
-#   with Adams-Bashforth 2 (sim/model.py);
+#   with Adams-Bashforth 2 (sim/jsbsim/model.py);
 # - the thrust and propulsive moments copied past the 10 Hz anti-alias filters (0.04 s
 #   ahead of every other channel): Cn_beta, Cn_r, Cn_dr +0.10 to +0.20 % -> +0.01 to
-#   +0.03 % through the same filter (sim/sensors.py research_suite).
+#   +0.03 % through the same filter (sim/sensors/suites.py research_suite).
 # What is left: the corrected bounds are 0.6-1.0 of the Monte Carlo scatter (Cl_p 0.92,
 # Cn_r 0.62, Cm_alpha 0.66, Cl_r 0.44), and CZ_q +1.3 % (+-0.4 %, bound 1.0 %).
 # Telemaster (hobby suite, linear models): no exception on the two seeds. Over seeds 1-20
@@ -235,7 +235,7 @@ def flight(request):
 # Not causes (10 seeds each): the engine vibration (aliases at 19.8 and 39.7 Hz, 1400
 # times down after the 8 Hz filter), the gyro random walk, the sensor biases.
 # Twin Otter seed 2 Cn_r -3.02 sigma (-0.1911 against -0.1906, 0.3 %) since the JSBSim
-# actuators run at the model's own 400 Hz step (sim/model.py sets the step before the
+# actuators run at the model's own 400 Hz step (sim/jsbsim/model.py sets the step before the
 # aircraft loads; they ran at JSBSim's default 120 Hz, 3.3 times too fast, before): the
 # surface responses changed by a few ms and moved this one estimate past the line.
 # Since 2026-11-27 the colored bounds put back what the fit took out of the residual

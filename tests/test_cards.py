@@ -9,7 +9,7 @@ import pytest
 
 from flightid.record import read
 from flightid.scenarios.cards import CardError, fly_card, library_cards, load_card
-from flightid.sim.flight import DepartureError
+from flightid.sim.flight.simulation import DepartureError
 from flightid.units import DEG
 
 BASE = """\

@@ -1,26 +1,25 @@
-"""Flight path reconstruction (identification/compatibility.py) on JSBSim flights with
-known sensor errors, and on the real NASA Twin Otter record."""
+"""Flight path reconstruction (identification/compatibility/reconstruction.py) on JSBSim
+flights with known sensor errors, and on the real NASA Twin Otter record."""
 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification import compatibility as compat
+from flightid.identification.compatibility import reconstruction as compat
 from flightid.record import FlightRecord, read
 from flightid.scenarios.inputs import Multistep, total_signals
-from flightid.sim import flight, sensors
-from flightid.sim import trim as trimming
 from flightid.sim.effects import Bias, Quantization, WhiteNoise
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.sensors import suites as sensors
 from flightid.units import DEG, G0
 
-TWIN_OTTER = str(Path(__file__).resolve().parents[2]
-                 / "shared/data/twin_otter/totter_f1_017_data.mat")
 # injected sensor errors (SI): of the order that Table 1 of Cooper, Drobik & Martin (ARL
 # Flight Mechanics Report 187, 1990) allows for each sensor
 BIASES = {"p": 0.3 * DEG, "q": -0.2 * DEG, "r": 0.25 * DEG, "ax": 0.05, "ay": -0.04,
@@ -194,7 +193,7 @@ def test_bad_input_errors(truth_flight):
 
 def test_cli_writes_corrected_record(tmp_path):
     out = tmp_path / "corrected.parquet"
-    result = CliRunner().invoke(app, ["compatibility", TWIN_OTTER, "-o", str(out),
+    result = CliRunner().invoke(app, ["compatibility", str(TWIN_OTTER), "-o", str(out),
                                       "--format", "json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output)

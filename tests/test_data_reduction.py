@@ -12,14 +12,14 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.data_reduction import NO_POSITIONS, reduce_record
+from flightid.identification.data.reduction import NO_POSITIONS, reduce_record
+from flightid.identification.evaluation.scoring import score
 from flightid.identification.identify import identify
-from flightid.identification.scoring import score
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card, overridden_card
 
 runner = CliRunner()
-# the research suite's mounting (sim/sensors.py): IMU 0.3 m ahead and 0.2 m below the CG,
+# the research suite's mounting (sim/sensors/suites.py): IMU 0.3 m ahead and 0.2 m below the CG,
 # nose-boom vanes 4.5 m ahead with flow amplification 1.06 (alpha) and 1.10 (beta)
 MOUNTING = ('sensors.mounting=[{effect="lever_arm", x=0.3, z=0.2}, {effect="vanes", '
             'alpha_x=4.5, beta_x=4.5, upwash=0.06, sidewash=0.10}]')

@@ -17,9 +17,9 @@ import warnings
 
 import pytest
 
-from flightid.identification.data_reduction import reduce_record
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.evaluation.scoring import score
 from flightid.identification.identify import identify
-from flightid.identification.scoring import score
 from flightid.scenarios.cards import fly_card, load_card
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.sim import disturbances as dist
 from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.model import load
-from flightid.sim.trim import trim
+from flightid.sim.flight import disturbed as dist
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
 from flightid.units import DEG, FT, KT
 
 

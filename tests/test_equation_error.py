@@ -3,21 +3,16 @@ identifiability, coefficients from measured data, validation metrics."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 
-from flightid.identification import coefficients as coef
-from flightid.identification import validation as va
+from flightid.identification.data import coefficients as coef
 from flightid.identification.estimate import StdKind
+from flightid.identification.evaluation import validation as va
 from flightid.identification.methods import equation_error as ee
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.sidpac import read_mat
-
-TWIN_OTTER = (
-    Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
-)
 
 # Morelli & Klein example 5.1 (data/twin_otter/README.md): value, standard error
 PUBLISHED = {

@@ -20,8 +20,8 @@ from flightid.cli.app import app, classify, main
 from flightid.files import atomic_path, atomic_write, write_text
 from flightid.record import FlightRecord, RecordMeta, read
 from flightid.scenarios.cards import CardError
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.trim import TrimError
 
 
 def run(*args, cwd=None, env=None):

@@ -23,15 +23,15 @@ from test_output_error import (
     multistep,
 )
 
-from flightid.identification import linear_models as lm
 from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
 from flightid.identification.methods import output_error as oe
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference, read
-from flightid.sim import disturbances as dist
-from flightid.sim import trim as trimming
-from flightid.sim import truth
-from flightid.sim.model import as_model
+from flightid.sim.flight import disturbed as dist
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.jsbsim import truth
+from flightid.sim.jsbsim.model import as_model
 
 PROCESS_NOISE = {"beta": 0.01, "p": 0.03, "r": 0.01}
 

@@ -1,23 +1,21 @@
 """Frequency-domain equation error and output error; CIFER state-space fit; verification."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 from scipy import signal
 
-from flightid.identification.frequency_domain import (
+from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.state_space_fit import (
     default_frequencies,
     equation_error,
     fit_state_space,
     output_error,
     verify_time_domain,
 )
-from flightid.identification.frequency_response import frequency_response_arrays
-from flightid.identification.linear_models import ReferenceCondition, lateral, model_for_record
+from flightid.identification.models.linear import ReferenceCondition, lateral, model_for_record
 from flightid.record import FlightRecord, read
-
-TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
 
 # Morelli & Klein (2016) example 7.1: frequency-domain output error, 0.1-1.5 Hz
 PUBLISHED_7_1 = {

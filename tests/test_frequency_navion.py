@@ -5,26 +5,24 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification import frequency_domain as fd
-from flightid.identification import linear_models as lm
-from flightid.identification.frequency_response import (
+from flightid.identification.frequency import state_space_fit as fd
+from flightid.identification.frequency.response import (
     bode_overlay_figure,
     frequency_response_arrays,
 )
 from flightid.identification.methods import frequency_response_fit as frf
+from flightid.identification.models import linear as lm
 from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed
-from flightid.sim import trim as trimming
-from flightid.sim import truth
-from flightid.sim.sensors import measure, research_suite
-
-TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.jsbsim import truth
+from flightid.sim.sensors.suites import measure, research_suite
 
 
 def navion_sweeps(seed: int):

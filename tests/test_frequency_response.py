@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from flightid.identification.frequency_response import (
+from flightid.identification.frequency.response import (
     FrequencyResponse,
     composite,
     cross_spectra,

@@ -13,7 +13,7 @@ from flightid.identification.gap.refly import refly
 from flightid.identification.gap.symmetry import even_terms
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
-from flightid.sim.model import load
+from flightid.sim.jsbsim.model import load
 
 INJECTED = 0.03  # Cn_beta delta (per rad, stability axes) flown into the navion
 TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"

@@ -13,9 +13,9 @@ from flightid.identification.gap.refly import refly
 from flightid.identification.gap.report import html_report
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 from flightid.units import DEG
 
 TWIN_OTTER = Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"

@@ -16,7 +16,7 @@ from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import read_constants
 from flightid.importers.mapping import ColumnMap
 from flightid.record import read
-from flightid.sim.model import load
+from flightid.sim.jsbsim.model import load
 from flightid.units import DEG, FT, G0, KT, LBM, SLUG_FT2
 
 # DLR-style columns: (name, unit in the file, flightid channel, factor SI -> file unit)

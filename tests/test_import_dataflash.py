@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from flightid.api import fly
 from flightid.cli.app import app
-from flightid.identification.windows import window
+from flightid.identification.data.windows import window
 from flightid.importers.dataflash import read_dataflash
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.record import read

@@ -1,4 +1,5 @@
-"""Total-variation denoising of multistep surface measurements (identification/input_denoising).
+"""Total-variation denoising of multistep surface measurements
+(identification/data/input_denoising.py).
 
 Synthetic multisteps from ``scenarios.inputs`` at several sample rates, amplitudes and noise
 levels (fixed seeds); the errors-in-variables effect on a JSBSim flight is in
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from flightid.identification import input_denoising as den
+from flightid.identification.data import input_denoising as den
 from flightid.scenarios.inputs import Multistep
 from flightid.units import DEG
 

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from flightid.identification.scoring import STATUS_ESTIMATED
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.intervals import (
     binomial_band,
     binomial_interval,

@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 from test_output_error import LATERAL_TRUTH, NAVION
 
-from flightid.identification import linear_models as lm
-from flightid.identification import multistep_input as ms
+from flightid.identification.data import multistep_input as ms
 from flightid.identification.methods import output_error as oe
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 DEG = np.pi / 180

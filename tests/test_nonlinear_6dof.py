@@ -2,11 +2,11 @@
 
 Flights: the Navion at Teper's condition (sea level, 53.6 m/s) and the Twin Otter at
 TM-4099's (1,897 m, 61.7 m/s), 50 Hz, an elevator 3211, an aileron doublet and a rudder
-2-1-1 one after the other. Truth: ``sim.truth.derivatives`` in the axes of the model.
+2-1-1 one after the other. Truth: ``sim.jsbsim.truth.derivatives`` in the axes of the model.
 
 What limited the noise-free agreement (tests/test_truth_recovery.py has the numbers):
 JSBSim's default rectangular-Euler rate integrator (a half-step lag, now replaced by
-Adams-Bashforth 2 in sim/model.py) and, for the Navion, lateral moments written about
+Adams-Bashforth 2 in sim/jsbsim/model.py) and, for the Navion, lateral moments written about
 the stability axes in its XML (``moment_axes="stability"``).
 """
 
@@ -15,13 +15,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.identification import rigid_body as rb
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import nonlinear_6dof as n6
+from flightid.identification.models import rigid_body as rb
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
-from flightid.sim import flight, truth
-from flightid.sim import trim as trimming
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.jsbsim import truth
 from flightid.units import DEG
 
 RATE = 50.0

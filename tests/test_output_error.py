@@ -9,22 +9,17 @@ Synthetic flights are made by the linear models themselves, with two parameter s
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER as TWIN_OTTER_FILE
 
-from flightid.identification import linear_models as lm
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
 from flightid.identification.methods.output_error import simulate
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
-
-TWIN_OTTER_FILE = (
-    Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
-)
 
 TWIN_OTTER = lm.ReferenceCondition(
     V=237.02 * FT, qbar=2696.6, alpha=0.0040, theta=0.0286, mass=339.30 * SLUG,

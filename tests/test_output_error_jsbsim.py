@@ -6,11 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.identification import linear_models as lm
 from flightid.identification.methods import output_error as oe
+from flightid.identification.models import linear as lm
 from flightid.scenarios.inputs import Multistep, total_signals
-from flightid.sim import flight, truth
-from flightid.sim import trim as trimming
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.jsbsim import truth
 from flightid.units import DEG
 
 # aileron 3211 (1.5-1-0.5-0.5 s) and rudder 2-1-1 (1-0.5-0.5 s), 0.035 rad

@@ -3,23 +3,20 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.cli.tables import print_score
 from flightid.identification.estimate import Estimate, StdKind
+from flightid.identification.evaluation.scoring import load_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.methods.registry import methods
-from flightid.identification.model_structure import regression
-from flightid.identification.scoring import load_truth, score
+from flightid.identification.models.structure import regression
 
-TWIN_OTTER = (
-    Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
-)
 # output-error values of the README (Morelli & Klein example 6.1) as an independent truth
 OE_TRUTH = {"Cn_beta": 0.08638, "Cn_p": -0.06441, "Cn_r": -0.19059, "Cn_da": -0.00298,
             "Cn_dr": -0.13548}

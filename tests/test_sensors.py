@@ -13,7 +13,7 @@ from flightid.record import FlightRecord, RecordMeta
 from flightid.record import read as read_record
 from flightid.sim.effects import CATALOGUE, EFFECTS, Lag, SecondOrder, effect_from_dict
 from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.sensors import (
+from flightid.sim.sensors.suites import (
     LeverArm,
     SensorSuite,
     Vanes,

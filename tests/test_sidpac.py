@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.io
+from conftest import TWIN_OTTER
 
 from flightid import record as record_io
 from flightid.sidpac import read_mat
 from flightid.units import DEG, FT, G0, SLUG, SLUG_FT2
 
-# shared/ sits beside the repository (locally and in CI); a missing file fails, not skips
-TWIN_OTTER = (
-    Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
-)
-
+# the record in shared/ beside the repository (tests/conftest.py); a missing file fails, not skips
 
 @pytest.fixture(scope="module")
 def rec():

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from flightid.channels import CHANNELS
-from flightid.sim.flight import Atmosphere, DepartureError, Simulation, _divide, fly
-from flightid.sim.model import load
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import Atmosphere, DepartureError, Simulation, _divide, fly
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
 from flightid.units import FT
 
 RATE = 100.0
@@ -216,7 +216,7 @@ def test_bad_atmosphere_settings_are_named():
 def test_attitude_is_the_integral_of_the_recorded_rates(aircraft, speed):
     # Euler kinematics phidot = p + tan(theta) (q sin(phi) + r cos(phi)): with JSBSim's
     # default rectangular-Euler attitude integrator the angles lag the rates by half a
-    # 400 Hz step (fitted shift -1.25 ms); the project's AB2 (sim/model.py) gives 0.00 ms.
+    # 400 Hz step (fitted shift -1.25 ms); the project's AB2 (sim/jsbsim/model.py) gives 0.00 ms.
     # 0.3 ms is a quarter of that lag and 30 times the fitted shift's scatter here.
     tr = trim(aircraft, 500.0, speed)
     t = np.arange(0.0, 6.0 + 0.005, 0.01)

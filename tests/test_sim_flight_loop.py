@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from flightid.sim import disturbances as dist
-from flightid.sim.flight import Atmosphere, Simulation, _interp, fly
-from flightid.sim.model import load
-from flightid.sim.sensors import hobby_suite, measure
-from flightid.sim.trim import trim
+from flightid.sim.flight import disturbed as dist
+from flightid.sim.flight.simulation import Atmosphere, Simulation, _interp, fly
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.sensors.suites import hobby_suite, measure
 from flightid.units import DEG, FT
 
 RATE = 50.0

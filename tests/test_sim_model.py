@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from flightid import aircraft
-from flightid.sim.model import UnknownAircraftError, available, load
+from flightid.sim.jsbsim.model import UnknownAircraftError, available, load
 from flightid.units import FT
 
 LINEAR = Path(__file__).parent / "aircraft" / "linear_test" / "linear_test.xml"

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from flightid.sim.model import load
-from flightid.sim.trim import TrimError, trim
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import TrimError, trim
 from flightid.units import FT
 
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from flightid import aircraft
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import (
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import (
     compare_to_file,
     derivatives,
     linearization,
@@ -209,7 +209,7 @@ def test_project_aircraft_reproduce_their_truth_files(name):
 
 def test_truth_is_a_pure_function_of_aircraft_and_trim(dhc6):
     model, t, truth = dhc6
-    from flightid.sim.flight import fly
+    from flightid.sim.flight.simulation import fly
 
     fly(model, t, {"de": np.full(101, 0.05)}, 1.0)  # whatever happened to the model before
     again = derivatives(model, t, axes="body")
@@ -235,7 +235,7 @@ def _thruster_y_m(model) -> list[float]:
 
 def _thrust_slope_n_per_m_s(model, t, engine: int) -> float:
     """dT/du (N per m/s) of one engine at its trim rpm: forward speed +- 0.5 m/s, run_ic."""
-    from flightid.sim.trim import apply
+    from flightid.sim.jsbsim.trim import apply
     from flightid.units import FT, LBF
 
     thrust, du_span = [], 1.0
@@ -293,7 +293,7 @@ def test_twinotter_total_keeps_the_aerodynamic_derivatives_thrust_cannot_change(
 
 def test_engine_rpm_is_frozen_during_a_truth_evaluation(twinotter_both):
     """run_ic evaluates at dt = 0: the propeller rpm stays at trim whatever the state."""
-    from flightid.sim.truth import _Evaluator
+    from flightid.sim.jsbsim.truth import _Evaluator
 
     model, t, _, _ = twinotter_both
     ev = _Evaluator(model.copy(), t, propulsion=True)

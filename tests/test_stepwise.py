@@ -2,18 +2,14 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import TWIN_OTTER
 
 from flightid.identification.methods import stepwise as sw
 from flightid.record import FlightRecord, RecordMeta
 from flightid.sidpac import read_mat
 
-TWIN_OTTER = (
-    Path(__file__).resolve().parents[2] / "shared/data/twin_otter/totter_f1_017_data.mat"
-)
 TRUE = {"Cm_alpha": -1.3, "Cm_q": -34.0, "Cm_de": -1.7, "Cm_alpha^2": 12.0}
 
 

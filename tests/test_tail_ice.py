@@ -5,8 +5,8 @@ magnitude has the numerical truth of ``twinotter-iced``.
 (aircraft/README.md, from the text of Batterson & O'Mara, NASA TM-4099, 1989); the
 ``tail_ice`` effect scales the pitching-moment terms that read the elevator, alpha and the
 pitch rate by those factors. Both are linear build-ups, so the match is exact up to the
-central differences of ``flightid.sim.truth`` (measured: largest relative miss 1e-7, Cm_alpha;
-the 5 % of the issue is a loose upper bound).
+central differences of ``flightid.sim.jsbsim.truth`` (measured: largest relative miss 1e-7,
+Cm_alpha; the 5 % of the issue is a loose upper bound).
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ import pytest
 from flightid.sim.augment import augment
 from flightid.sim.effects.airframe import TailIce
 from flightid.sim.effects.catalogue import CATALOGUE
-from flightid.sim.model import load
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
 
 # the source condition of both truth files: 120 kt, flaps 0, 1,897 m (aircraft/README.md)
 ALTITUDE_M, SPEED_M_S = 1897.0, 61.733333

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from flightid.identification.frequency_response import (
+from flightid.identification.frequency.response import (
     FrequencyResponse,
     frequency_response_arrays,
 )
-from flightid.identification.transfer_function import (
+from flightid.identification.frequency.transfer_function import (
     cifer_cost,
     coherence_weight,
     fit_transfer_function,

@@ -17,7 +17,7 @@
      rad/s on the Twin Otter card; 3.8e-5 with AB2, no shift), which the exact kinematics
      of the model cannot follow; on research-grade data (phi noise 0.0066 deg) it biased
      the Twin Otter's Cl derivatives by -0.6 % and CY_beta by -0.3 % (16 noise seeds:
-     -0.02 to -0.05 % with AB2). Both use Adams-Bashforth 2 (sim/model.py INTEGRATORS).
+     -0.02 to -0.05 % with AB2). Both use Adams-Bashforth 2 (sim/jsbsim/model.py INTEGRATORS).
    - the record rate: 50 Hz point samples without an anti-alias filter put the
      surfaces' actuator corners between samples (Telemaster Cl derivatives +1.9 %, Navion
      Cm_alphadot +1.5 %, Twin Otter Cm_q -0.37 %); at 100 Hz they are within the figures
@@ -53,8 +53,9 @@ import pytest
 
 from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
-from flightid.sim import flight, truth
-from flightid.sim import trim as trimming
+from flightid.sim.flight import simulation as flight
+from flightid.sim.jsbsim import trim as trimming
+from flightid.sim.jsbsim import truth
 from flightid.units import DEG
 
 RATE = 100.0
@@ -83,7 +84,7 @@ def _fly_noise_free(aircraft: str):
     designs = [ThreeTwoOneOne(surface="de", start=1.0, base=0.4, amplitude=amplitude * DEG),
                Doublet(surface="da", start=6.0, base=0.8, amplitude=2 * amplitude * DEG),
                TwoOneOne(surface="dr", start=11.0, base=0.6, amplitude=2 * amplitude * DEG)]
-    sim = flight.Simulation(aircraft, rate_hz=RATE)  # AB2 rate integrator: sim/model.py
+    sim = flight.Simulation(aircraft, rate_hz=RATE)  # AB2 rate integrator: sim/jsbsim/model.py
     record = sim.fly(tr, total_signals(designs, t), duration_s=DURATION)
     return record, truth.derivatives(aircraft, tr, axes=axes).values
 

@@ -17,7 +17,7 @@ sensor positions, as a weight-and-balance sheet gives them. A TOML file::
     accelerometer = ["1.2 ft", "0 ft", "0 ft"]
 
 The same constants from a project or JSBSim aircraft name are the command line's
-(``flightid.sim.model``, a layer above this one).
+(``flightid.sim.jsbsim.model``, a layer above this one).
 """
 
 from __future__ import annotations

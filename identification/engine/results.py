@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from flightid.identification import identifiability as ident
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import output_error_covariance, standard_errors
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.estimate import Estimate

@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from flightid.identification.gap.effect_model import Candidate, extended, lagged_input
-from flightid.identification.linear_models import LinearModel
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
 SURFACE_KINDS = ("position", "command")

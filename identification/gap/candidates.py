@@ -36,7 +36,7 @@ from flightid.identification.gap.effect_model import Candidate, extended, identi
 from flightid.identification.gap.linearise import AXIS_DERIVATIVES, AXIS_OUTPUTS, TRIM_TERMS
 from flightid.identification.gap.mass_candidates import mass_candidates
 from flightid.identification.gap.sensor_candidates import sensor_candidates
-from flightid.identification.linear_models import LinearModel
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
 SURFACES = ("da", "dr", "de")

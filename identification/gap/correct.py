@@ -25,9 +25,9 @@ from flightid.sim.effects.airframe import (
     TailIce,
     ThrustMoment,
 )
-from flightid.sim.flight import fly
-from flightid.sim.model import load
-from flightid.sim.trim import trim
+from flightid.sim.flight.simulation import fly
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
 
 OUTPUTS = AXIS_OUTPUTS  # the channels compared, by the axis diagnosed
 INPUTS = ("da", "dr", "de")  # the record's surfaces flown (increments on their first value)

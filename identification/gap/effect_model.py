@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification.linear_models import LinearModel, Matrices
+from flightid.identification.models.linear import LinearModel, Matrices
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.identification.gap.linearise import nuisance
-from flightid.identification.linear_models import LinearModel
 from flightid.identification.methods import output_error
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
 MAX_ITERATIONS = 15  # from the model's values a window converges in a few steps

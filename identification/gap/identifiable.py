@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 from flightid.identification.gap.actuator_candidates import SURFACES_KEY, surfaces_of
 from flightid.identification.gap.candidates import catalogue_candidates
-from flightid.identification.linear_models import LinearModel
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 from flightid.sim.effects.catalogue import CATALOGUE, ActsOn
 

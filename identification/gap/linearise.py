@@ -36,9 +36,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification import windows
+from flightid.identification.data import windows
 from flightid.identification.gap.actuator_candidates import surfaces_of, with_actuators
-from flightid.identification.linear_models import (
+from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
     LONGITUDINAL_BIASES,
@@ -49,10 +49,10 @@ from flightid.identification.linear_models import (
     longitudinal,
 )
 from flightid.record import FlightRecord
-from flightid.sim.actuators import actuator_lags
-from flightid.sim.model import load
-from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import Kink, derivatives
+from flightid.sim.augment.actuators import actuator_lags
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import Trim, trim
+from flightid.sim.jsbsim.truth import Kink, derivatives
 
 AXES = "body"  # the lateral model's derivative axes
 PROPULSION = True  # total derivatives: what a flight (and a flight test) sees

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from flightid.identification.gap.effect_model import Candidate
-from flightid.identification.linear_models import LinearModel
+from flightid.identification.models.linear import LinearModel
 from flightid.sim.effects.catalogue import CATALOGUE, DERIVATIVE_RANGES
 
 # the tail-ice factors outside (0, 1]: what the fitted scaling is then

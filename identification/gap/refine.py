@@ -30,8 +30,8 @@ from flightid.identification.gap.correct import OUTPUTS, airframe_effects
 from flightid.identification.gap.linearise import AXIS_INPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.trim import TrimError
 
 # the re-fly's channels without the specific forces (they add little and cost flights)
 FITTED = {axis: tuple(c for c in chans if c not in ("ay", "az")) for axis, chans in OUTPUTS.items()}

@@ -28,9 +28,9 @@ from flightid.identification.gap.linearise import AXIS_INPUTS, AXIS_OUTPUTS, sta
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment_cached
-from flightid.sim.flight import DepartureError, fly
-from flightid.sim.model import Model, load
-from flightid.sim.trim import Trim, trim
+from flightid.sim.flight.simulation import DepartureError, fly
+from flightid.sim.jsbsim.model import Model, load
+from flightid.sim.jsbsim.trim import Trim, trim
 from flightid.units import FT
 
 OFFSET_LIMIT = math.radians(5.0)  # a surface offset beyond +-5 deg is no trim offset

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from flightid.identification import windows
+from flightid.identification.data import windows
 from flightid.record import FlightRecord
 
 INPUTS = ("da", "dr")

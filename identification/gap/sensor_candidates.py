@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from flightid.identification.gap.effect_model import Candidate, extended, lagged_output
-from flightid.identification.linear_models import LinearModel
+from flightid.identification.models.linear import LinearModel
 
 TAU_START = 0.02  # s: start of a delay or lag fit (the catalogue's default is 0.05)
 

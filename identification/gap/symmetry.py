@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from flightid.sim.effects.airframe import DerivativeDelta
-from flightid.sim.truth import Kink
+from flightid.sim.jsbsim.truth import Kink
 
 ODD_IN = ("beta", "p", "r")  # the variables a symmetric airframe's CY, Cl, Cn are odd in
 LATERAL_COEFFICIENTS = ("CY", "Cl", "Cn")

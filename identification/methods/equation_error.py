@@ -33,14 +33,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import fftconvolve
 
-from flightid.identification import a_priori, model_structure
-from flightid.identification.coefficients import (
+from flightid.identification.data.coefficients import (
     channel_values,
     differentiated,
     smoothed,
 )
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
+from flightid.identification.models import a_priori
+from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 ID = "ee"
@@ -62,7 +63,7 @@ VIF_LIMIT = 1.0 / (1.0 - COLLINEAR_R**2)
 REFERENCES = ("mean", "initial", "none")
 # A control that moves less than this (peak to peak, SI unit) carries no excitation: below
 # the resolution of control-position sensors (about 0.1 deg = 1.7e-3 rad) and far below
-# any test input; the same limit as identification/identifiability.py MIN_INPUT_RANGE.
+# any test input; the same limit as identification/engine/identifiability.py MIN_INPUT_RANGE.
 MIN_CONTROL_RANGE = {"de": 1e-3, "da": 1e-3, "dr": 1e-3, "df": 1e-3, "throttle": 1e-3}
 CONTROL_CHANNELS = tuple(MIN_CONTROL_RANGE)
 _TERM = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\^[1-9])?$")
@@ -265,7 +266,7 @@ def estimate(
     sec. 5.5, a priori information), and they leave the regressors.
 
     The coefficient is the record's channel of that name, or is computed from the
-    record (flightid.identification.coefficients). ``colored`` selects the standard
+    record (flightid.identification.data.coefficients). ``colored`` selects the standard
     errors corrected for colored residuals (fit['std_kind'] 'corrected') or the plain
     OLS ones ('OLS').
     """

@@ -49,16 +49,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from flightid.identification import a_priori, model_structure
-from flightid.identification import identifiability as ident
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import cramer_rao_covariance, standard_errors
 from flightid.identification.engine.gauss_newton import damped_newton_step
 from flightid.identification.engine.refit import refit_without_unidentifiable
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.estimate import Estimate
-from flightid.identification.linear_models import LinearModel
 from flightid.identification.methods import output_error as oe
 from flightid.identification.methods.protocol import HeldOptions, Method, option
+from flightid.identification.models import a_priori
+from flightid.identification.models import structure as model_structure
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
 ID = "fem"

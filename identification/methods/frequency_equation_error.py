@@ -8,9 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification import frequency_domain, model_structure
 from flightid.identification.estimate import Estimate, merge
+from flightid.identification.frequency import state_space_fit as frequency_domain
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
+from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 ID = "fdee"

@@ -8,9 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification import a_priori, frequency_domain, model_structure
 from flightid.identification.estimate import Estimate
+from flightid.identification.frequency import state_space_fit as frequency_domain
 from flightid.identification.methods.protocol import HeldOptions, Method, option
+from flightid.identification.models import a_priori
+from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 ID = "fdoe"

@@ -12,13 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification import frequency_domain, model_structure
-from flightid.identification import linear_models as lm
 from flightid.identification.estimate import Estimate
-from flightid.identification.frequency_response import frequency_response_arrays
-from flightid.identification.linear_models import condition_from_record
+from flightid.identification.frequency import state_space_fit as frequency_domain
+from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.transfer_function import COHERENCE_MIN
 from flightid.identification.methods.protocol import LinearModelOptions, Method, option
-from flightid.identification.transfer_function import COHERENCE_MIN
+from flightid.identification.models import linear as lm
+from flightid.identification.models import structure as model_structure
+from flightid.identification.models.linear import condition_from_record
 from flightid.record import FlightRecord
 
 ID = "fr"

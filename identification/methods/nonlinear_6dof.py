@@ -57,9 +57,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from flightid.identification import identifiability as ident
-from flightid.identification import rigid_body as rb
-from flightid.identification.coefficients import mass_properties
+from flightid.identification.data.coefficients import mass_properties
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
@@ -67,6 +66,7 @@ from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
 from flightid.identification.methods.equation_error import channel_values
 from flightid.identification.methods.protocol import Method, OutputErrorOptions, option
+from flightid.identification.models import rigid_body as rb
 from flightid.record import FlightRecord, Reference
 from flightid.units import G0
 

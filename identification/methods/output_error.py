@@ -28,10 +28,9 @@ import numpy as np
 import scipy.linalg
 
 from flightid.derivatives import is_derivative, split
-from flightid.identification import a_priori, model_structure
-from flightid.identification import identifiability as ident
-from flightid.identification import linear_models as lm
-from flightid.identification.coefficients import THRUST_COEFFICIENTS
+from flightid.identification.data.coefficients import THRUST_COEFFICIENTS
+from flightid.identification.data.multistep_input import MultistepParameters, from_measurement
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
 )
@@ -39,7 +38,6 @@ from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, ma
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
-from flightid.identification.linear_models import LinearModel, matrix_sensitivities
 from flightid.identification.methods import equation_error
 from flightid.identification.methods.protocol import (
     HeldOptions,
@@ -47,7 +45,10 @@ from flightid.identification.methods.protocol import (
     OutputErrorOptions,
     option,
 )
-from flightid.identification.multistep_input import MultistepParameters, from_measurement
+from flightid.identification.models import a_priori
+from flightid.identification.models import linear as lm
+from flightid.identification.models import structure as model_structure
+from flightid.identification.models.linear import LinearModel, matrix_sensitivities
 from flightid.record import FlightRecord
 
 ID = "oe"

@@ -18,8 +18,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from flightid.identification import convergence
-from flightid.identification import identifiability as ident
+from flightid.identification.engine import convergence
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 

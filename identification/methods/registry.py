@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from importlib.metadata import entry_points
 
-from flightid.identification import model_structure
 from flightid.identification.methods import (
     equation_error,
     filter_error,
@@ -24,6 +23,7 @@ from flightid.identification.methods import (
     stepwise,
 )
 from flightid.identification.methods.protocol import Method
+from flightid.identification.models import structure as model_structure
 
 ENTRY_POINT_GROUP = "flightid.methods"
 BUILTIN: tuple[Method, ...] = (

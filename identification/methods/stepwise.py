@@ -35,10 +35,10 @@ from itertools import combinations_with_replacement
 
 import numpy as np
 
-from flightid.identification import model_structure
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
+from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 ID = "swr"

@@ -47,12 +47,12 @@ from flightid.scenarios.gap_benchmark.cases import (
     Effect,
 )
 from flightid.scenarios.gap_benchmark.outside import RECORD, cm_alpha_break
-from flightid.sim.condition import FlightCondition
 from flightid.sim.effects.catalogue import CATALOGUE
-from flightid.sim.model import load
-from flightid.sim.sensors import measure
-from flightid.sim.trim import trim
-from flightid.sim.truth import derivatives
+from flightid.sim.jsbsim.condition import FlightCondition
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.truth import derivatives
+from flightid.sim.sensors.suites import measure
 from flightid.units import DEG
 
 # (kind, surface, start s): the lateral surfaces twice each, 10 s apart, then the elevator

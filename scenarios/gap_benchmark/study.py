@@ -26,8 +26,8 @@ from flightid.scenarios.gap_benchmark.cases import (
 from flightid.scenarios.gap_benchmark.run import CaseResult, run_case, truths
 from flightid.scenarios.gap_benchmark.summary import summary
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
-from flightid.sim.flight import DepartureError
-from flightid.sim.trim import TrimError
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.trim import TrimError
 
 CASES_FILE = "cases.jsonl"
 STUDY_FILE = "study.json"

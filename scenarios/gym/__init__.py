@@ -1,14 +1,29 @@
 """The gymnasium environment for excitation-policy research (``flightid/Excitation-v0``).
 
-Importing this package registers the environment; gymnasium 1.x has no plugin entry
-points, so without an import use its module form::
+Importing this package (or ``flightid``) registers the environment by its entry-point
+string; the environment module itself (``env``: JSBSim, the flight core) is loaded on
+first use of ``ExcitationEnv``, ``OBS_CHANNELS`` or ``PRESETS`` (PEP 562) or by
+``gymnasium.make``. gymnasium 1.x has no plugin entry points, so without an import use
+its module form::
 
     gymnasium.make("flightid.scenarios.gym:flightid/Excitation-v0")
 """
 
-from flightid.scenarios.gym.env import OBS_CHANNELS, PRESETS, ExcitationEnv
+from importlib import import_module
+from typing import Any
+
 from flightid.scenarios.gym.registration import ENV_ID, register_envs
 
 register_envs()
 
 __all__ = ["ENV_ID", "OBS_CHANNELS", "PRESETS", "ExcitationEnv", "register_envs"]
+_FROM_ENV = ("OBS_CHANNELS", "PRESETS", "ExcitationEnv")
+
+
+def __getattr__(name: str) -> Any:
+    """``ExcitationEnv``, ``OBS_CHANNELS`` and ``PRESETS``, imported on first use (PEP 562)."""
+    if name in _FROM_ENV:
+        value = getattr(import_module("flightid.scenarios.gym.env"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'flightid.scenarios.gym' has no attribute {name!r}")

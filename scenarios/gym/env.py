@@ -37,7 +37,7 @@ updates; an episode's return is therefore log det of the final target informatio
 penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
 order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y (updated
 recursively), with y the simulator's aerodynamic coefficient plus white noise of
-``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.truth at the trim, body axes);
+``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.jsbsim.truth at the trim, body axes);
 ``info['validity']``: the last sample's weight w (below); docs/gym.md lists every key.
 
 ``reward="valid-information"`` (default): each sample enters M with a weight w (weighted
@@ -83,14 +83,14 @@ from matplotlib.figure import Figure
 
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, augmented_aircraft, load_card, sub_seed
-from flightid.sim.condition import FlightCondition
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
-from flightid.sim.flight import Atmosphere, DepartureError, Simulation
-from flightid.sim.model import Model, load
-from flightid.sim.sensors import SUITES, SensorSuite, builtin_suite, measure
-from flightid.sim.trim import Trim, trim
-from flightid.sim.truth import derivatives
+from flightid.sim.flight.simulation import Atmosphere, DepartureError, Simulation
+from flightid.sim.jsbsim.condition import FlightCondition
+from flightid.sim.jsbsim.model import Model, load
+from flightid.sim.jsbsim.trim import Trim, trim
+from flightid.sim.jsbsim.truth import derivatives
+from flightid.sim.sensors.suites import SUITES, SensorSuite, builtin_suite, measure
 from flightid.units import G0
 
 OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",

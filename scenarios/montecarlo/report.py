@@ -19,7 +19,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
-from flightid.identification.scoring import STATUS_ESTIMATED
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.summary import Summary
 

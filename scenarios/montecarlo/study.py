@@ -19,14 +19,14 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from flightid.identification.evaluation.scoring import record_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.methods import registry
-from flightid.identification.scoring import record_truth, score
 from flightid.scenarios.cards import Card, fly_card, load_card, sub_seed, trim_card
 from flightid.scenarios.montecarlo.disperse import COLUMN_PREFIX, dispersed_card, draw, parse_all
-from flightid.sim.flight import DepartureError
-from flightid.sim.model import quiet
-from flightid.sim.trim import TrimError
+from flightid.sim.flight.simulation import DepartureError
+from flightid.sim.jsbsim.model import quiet
+from flightid.sim.jsbsim.trim import TrimError
 
 # the columns of a result row, in order
 COLUMNS = ("index", "seed", "name", "truth", "estimate", "std", "error", "sigmas",

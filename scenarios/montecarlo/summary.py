@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from flightid.identification.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED, STATUS_UNIDENTIFIABLE
 from flightid.scenarios.montecarlo.intervals import binomial_band, binomial_interval
 from flightid.scenarios.montecarlo.study import STATUS_FAILED
 

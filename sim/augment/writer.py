@@ -8,7 +8,7 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
   JSBSim properties (``aero/qbar-area``, ``metrics/bw-ft``, ``aero/alpha-rad``, ...). The
   delta is stated in stability or body axes and rotated with the current alpha into the
   frame the aircraft's axes use (LIFT/DRAG/SIDE, X/Y/Z in BODY or STABILITY frame), so the
-  numerical truth (``flightid.sim.truth.derivatives``) in the stated axes moves by exactly
+  numerical truth (``flightid.sim.jsbsim.truth.derivatives``) in the stated axes moves by exactly
   the delta. (Exact for every derivative but the alpha derivatives of a rotated lateral
   moment when an added lateral term is nonzero at trim.)
 - ``control_effectiveness``: every aerodynamic term that reads the surface (directly or
@@ -31,7 +31,7 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
 usual); set to 1, the positions follow ``fcs/drive/de-rad``, ``-da-rad`` and ``-dr-rad``
 (project signs, rad), bypassing the actuator. A record's *measured* surfaces have already
 passed the real actuator: an aircraft flown from them must not lag them again
-(``sim.flight.Simulation(..., surfaces="driven")`` writes them there).
+(``sim.flight.simulation.Simulation(..., surfaces="driven")`` writes them there).
 
 The result loads in plain JSBSim: ``FGFDMExec(root_dir=folder).load_model(name)``.
 """
@@ -64,7 +64,7 @@ from flightid.sim.effects.airframe import (
     TailIce,
     ThrustMoment,
 )
-from flightid.sim.model import DRIVE, DRIVE_ON, PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
+from flightid.sim.jsbsim.model import DRIVE, DRIVE_ON, PACKAGE_ENGINES, PACKAGE_SYSTEMS, locate
 
 ET.register_namespace("xsi", "http://www.w3.org/2001/XMLSchema-instance")
 FT_PER_M = 1 / 0.3048
@@ -131,7 +131,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
     ``aircraft``: a name (project or jsbsim) or an XML path; the original stays untouched.
     ``name``: the new aircraft's name (default ``<aircraft>-augmented``). Effects at their
     neutral value are only noted in a comment. ``surface_drive``: add the switches that let
-    a flight set the surface positions directly (module note). ``flightid.sim.model.load``
+    a flight set the surface positions directly (module note). ``flightid.sim.jsbsim.model.load``
     takes the path.
     """
     old, xml, _ = locate(str(aircraft))

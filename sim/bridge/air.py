@@ -315,7 +315,7 @@ class _ControlReader:
 
 
 class FlightCoreAdapter:
-    """The flight core (``flightid.sim.flight.Simulation``) flown by absolute controls.
+    """The flight core (``flightid.sim.flight.simulation.Simulation``) flown by absolute controls.
 
     The link carries absolute surface positions (rad) and throttle (0..1), as an onboard
     computer commands them; the flight core takes increments on its trim. Increments

@@ -30,7 +30,7 @@ from flightid.sim.bridge.align import ClockMap, timesync_map, xcorr_map
 from flightid.sim.bridge.frames import Frame, FrameScanner, TlogWriter, read_tlog
 from flightid.sim.bridge.link import Link, SerialLink, UdpLink, open_pty_pair
 from flightid.sim.bridge.messages import CHANNEL_SOURCES, ServoMap, decode, message_time
-from flightid.sim.model import load
+from flightid.sim.jsbsim.model import load
 
 Source = tuple[int, int]
 

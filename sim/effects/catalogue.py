@@ -10,8 +10,8 @@ attribute and parameter mapping) for the bridge's link faults and recorder clock
 Where an effect acts decides how it is injected (docs/effects.md, "Where effects act"):
 ``sensor`` on one measured channel in the sensor chain, ``mounting`` on several channels
 from where the sensors sit, ``vibration`` on the IMU from the engine speed (both in
-``flightid.sim.sensors.measure``), ``disturbance`` in the atmosphere JSBSim flies through
-(``flightid.sim.disturbances``), ``link`` and ``clock`` in the bridge, ``airframe`` and
+``flightid.sim.sensors.suites.measure``), ``disturbance`` in the atmosphere JSBSim flies through
+(``flightid.sim.flight.disturbed``), ``link`` and ``clock`` in the bridge, ``airframe`` and
 ``actuator`` written into a copy of the aircraft's JSBSim XML (``flightid.sim.augment``).
 
 Cards name effects in three places (``SECTIONS``): a sensor channel's chain
@@ -650,7 +650,7 @@ CATALOGUE = Catalogue((
 # nondimensional rate for p q r alphadot; project control signs, body or stability axes) a
 # ``derivative_delta`` may move the model's value to. A judgement with wide margins: the
 # bounds enclose the project's aircraft and the stock JSBSim DHC6 and c172p at their test
-# conditions (measured with flightid.sim.truth.derivatives; e.g. Cm_alphadot -8.0 to 0,
+# conditions (measured with flightid.sim.jsbsim.truth.derivatives; e.g. Cm_alphadot -8.0 to 0,
 # Cm_q -34.8 to -9.96, CL_alpha 4.01 to 5.62) and the light-aircraft to jet-transport
 # values compiled by Heffley & Jewell (NASA CR-2144, 1972); a lift slope above 7.5 per
 # rad exceeds thin-aerofoil theory's 2 pi of an infinite wing (Anderson 2017, §4.7) plus

@@ -1,7 +1,7 @@
 """Atmospheric disturbances (catalogue ``disturbance``): steady wind, discrete gusts and
 continuous turbulence, each a named dataclass of float parameters (SI).
 
-How they reach JSBSim is ``flightid.sim.disturbances``: ``wind`` through the flight core's
+How they reach JSBSim is ``flightid.sim.flight.disturbed``: ``wind`` through the flight core's
 ``Atmosphere``; ``gust`` (1-cosine, MIL-F-8785C 3.7.5) and ``turbulence`` (Dryden or von
 Karman, MIL-F-8785C 3.7.2-3.7.4; von Karman by the rational fits of MIL-HDBK-1797) as
 time series written into JSBSim's gust properties; ``model = "jsbsim"`` uses JSBSim's own

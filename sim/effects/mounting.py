@@ -1,7 +1,7 @@
 """Mounting effects (catalogue ``mounting``): where a sensor sits changes what it measures.
 
 They act on several channels of the truth record at once, before the per-channel chains
-of ``flightid.sim.sensors.measure``: ``LeverArm`` (accelerometers away from the CG) and
+of ``flightid.sim.sensors.suites.measure``: ``LeverArm`` (accelerometers away from the CG) and
 ``Vanes`` (alpha and beta vanes on a boom, with upwash and sidewash).
 """
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from flightid.sim.model import load
+from flightid.sim.jsbsim.model import load
 
 GOOD = """name = "ok"
 duration = 10.0

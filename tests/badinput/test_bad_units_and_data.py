@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flightid.identification.data.unit_sanity import implausible
 from flightid.identification.methods import registry
-from flightid.identification.unit_sanity import implausible
 from flightid.record import FlightRecord, read
 from flightid.units import DEG, KT
 

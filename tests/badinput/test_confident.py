@@ -13,16 +13,17 @@ import pyarrow.parquet as pq
 import pytest
 from conftest import TWIN_OTTER
 
-from flightid.identification import resources, time_base
-from flightid.identification.compatibility import reconstruct
-from flightid.identification.convergence import NotConvergedWarning
+from flightid.identification.compatibility.reconstruction import reconstruct
+from flightid.identification.data import time_base
+from flightid.identification.data.unit_sanity import implausible, unit_ratios
+from flightid.identification.engine import resources
+from flightid.identification.engine.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
-from flightid.identification.unit_sanity import implausible, unit_ratios
 from flightid.record import FlightRecord, read
 from flightid.scenarios.cards import fly_card, library_cards, load_card
 from flightid.sim.bridge.air import BridgeConfig
 from flightid.sim.bridge.recorder import record_bridged
-from flightid.sim.disturbances import disturbance_from_dict
+from flightid.sim.flight.disturbed import disturbance_from_dict
 from flightid.units import DEG, FT, G0, KT, PSF, SLUG
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")

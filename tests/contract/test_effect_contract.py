@@ -32,9 +32,8 @@ from typer.testing import CliRunner
 
 from flightid.channels import CHANNELS
 from flightid.cli.effects import effects_command
-from flightid.identification.compatibility import CATALOGUE_EFFECTS
+from flightid.identification.compatibility.reconstruction import CATALOGUE_EFFECTS
 from flightid.record import FlightRecord
-from flightid.sim import disturbances as dist
 from flightid.sim.augment import augment
 from flightid.sim.bridge.air import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import FrameScanner
@@ -54,9 +53,10 @@ from flightid.sim.effects.catalogue import (
     listing,
     markdown_table,
 )
-from flightid.sim.model import load
-from flightid.sim.sensors import SensorSuite, measure
-from flightid.sim.trim import trim
+from flightid.sim.flight import disturbed as dist
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import trim
+from flightid.sim.sensors.suites import SensorSuite, measure
 from flightid.units import DEG
 
 ENTRIES = list(CATALOGUE.values())

@@ -12,7 +12,8 @@ default magnitude). How each is fitted:
   derivative held at the plain model's truth. ``derivative_delta`` is injected in body axes
   (the axes the gap's candidates fit in).
 - sensor effects (a channel's chain in ``[sensors.channels]``): flight path reconstruction
-  (``identification.compatibility.reconstruct``), whose ``fit["effects"]`` names the entry.
+  (``identification.compatibility.reconstruction.reconstruct``), whose ``fit["effects"]``
+  names the entry.
 - the other airframe effects and the actuator effects: output error with the augmented
   JSBSim aircraft as the model (``identification.effect_fit.fit_effect``), on a 6 s card
   with the elevator 3211 of the issue (5 deg, 0.3 s pulses), the research suite's white
@@ -36,7 +37,7 @@ import math
 
 import pytest
 
-from flightid.identification import compatibility as compat
+from flightid.identification.compatibility import reconstruction as compat
 from flightid.identification.effect_fit import fit_effect, parameter_scale
 from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.fit import fit
@@ -45,7 +46,7 @@ from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
-from flightid.sim.sensors import research_suite
+from flightid.sim.sensors.suites import research_suite
 
 BOUNDS = 3.0  # recovered within this many standard errors
 LIKELIHOOD_RATIO = BOUNDS**2  # chi-square(1) at 3 sigma: "no effect" for one-sided parameters

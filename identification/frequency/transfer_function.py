@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from flightid.identification.frequency_response import FrequencyResponse
+from flightid.identification.frequency.response import FrequencyResponse
 
 W_GAIN = 1.0
 W_PHASE = 0.01745

@@ -19,9 +19,9 @@ from typing import Any
 
 import jsbsim
 
-from flightid.sim.coefficients import coefficients
-from flightid.sim.condition import FlightCondition
-from flightid.sim.model import COMMANDS, Model, as_model, quiet
+from flightid.sim.jsbsim.aero_coefficients import coefficients
+from flightid.sim.jsbsim.condition import FlightCondition
+from flightid.sim.jsbsim.model import COMMANDS, Model, as_model, quiet
 from flightid.units import DEG, FT, LBF
 
 CLEARANCE_M = 300.0

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification.compatibility import white_noise_std
-from flightid.identification.input_denoising import DEFAULT_WEIGHT, STEP_SIGNIFICANCE, runs
+from flightid.identification.compatibility.reconstruction import white_noise_std
+from flightid.identification.data.input_denoising import DEFAULT_WEIGHT, STEP_SIGNIFICANCE, runs
 
 HOLD_OFFSET = {"foh": 0.5, "zoh": 1.0}
 

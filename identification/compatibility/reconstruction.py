@@ -27,7 +27,7 @@ Instrument models (each measured channel m of a true quantity x):
     phi theta psi h north east: m(t) = x(t - delay_<c>) + bias_<c>
 where alpha_v, beta_v are the exact flow angles at the vane positions (vane_alpha_x, ...,
 m from the CG, body axes): local velocity = [u, v, w] + omega x r_vane (the ``Vanes``
-effect of ``flightid.sim.sensors`` in reverse). Time shifts are relative to the inertial
+effect of ``flightid.sim.sensors.suites`` in reverse). Time shifts are relative to the inertial
 inputs, which are the time reference (only relative shifts are observable).
 
 The parameters are estimated by output error (maximum likelihood with the noise
@@ -56,12 +56,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.channels import CHANNELS
-from flightid.identification import convergence
-from flightid.identification import identifiability as ident
+from flightid.identification.engine import convergence
+from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine.bounds import colored_residual_covariance
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
 from flightid.identification.estimate import Estimate
-from flightid.identification.rigid_body import local_gravity
+from flightid.identification.models.rigid_body import local_gravity
 from flightid.record import FlightRecord
 
 METHOD = "compatibility"
@@ -863,7 +863,7 @@ def correct(record: FlightRecord, values: Mapping[str, float],
             ch[f"{s}_reconstructed"] = states[:, j]
             units[f"{s}_reconstructed"] = CHANNELS[s].unit
         extra["compatibility"] = {
-            "method": "flight path reconstruction (identification/compatibility.py)",
+            "method": "flight path reconstruction (identification/compatibility/reconstruction.py)",
             "estimates": {n: {"value": float(v), "std": float(s), "unit": PARAMETERS[n].unit}
                           for n, v, s in zip(estimate.names, estimate.values, estimate.std,
                                              strict=True)},

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from flightid.sim.model import Model
+from flightid.sim.jsbsim.model import Model
 
 
 def coefficients(model: Model, propulsion: bool = False) -> dict[str, float]:

@@ -37,7 +37,7 @@ from matplotlib.figure import Figure
 from scipy.signal import czt
 from scipy.signal.windows import tukey
 
-from flightid.identification import identifiability as ident
+from flightid.identification.engine import identifiability as ident
 
 TAPERS = ("hann", "hamming", "rectangular")
 

@@ -15,7 +15,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from flightid.identification import linear_models as lm
+from flightid.identification.models import linear as lm
 from flightid.record import FlightRecord
 
 META_KEY = "a_priori"
@@ -40,7 +40,7 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
                  ) -> tuple[lm.LinearModel, list[str], dict[str, float]]:
     """(model, free parameters, held values): the preset at the record's condition with
     its ``derivatives`` (default: the preset's with its rate derivatives,
-    ``linear_models.RATE_DERIVATIVES``) plus every a priori parameter the preset has,
+    ``models.linear.RATE_DERIVATIVES``) plus every a priori parameter the preset has,
     held at its value. ``a_priori`` None takes the record's table."""
     held_all = from_record(record) if a_priori is None else dict(a_priori)
     for name, value in held_all.items():
@@ -69,7 +69,7 @@ def lm_biases(model: lm.LinearModel) -> list[str]:
 
 def _default_derivatives(preset: str) -> tuple[str, ...] | None:
     """The derivatives a method estimates by default: the preset's default set and the
-    rate derivatives it leaves out (``linear_models.RATE_DERIVATIVES``), in the preset's
+    rate derivatives it leaves out (``models.linear.RATE_DERIVATIVES``), in the preset's
     order; None for a name that is not a preset (the error comes from the builder)."""
     defaults = {"lateral": lm.LATERAL_EXAMPLE_6_1, "short_period": lm.SHORT_PERIOD_DEFAULT,
                 "longitudinal": lm.LONGITUDINAL_DEFAULT}.get(preset)

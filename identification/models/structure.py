@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from flightid.identification import linear_models as lm
+from flightid.identification.models import linear as lm
 
 ALIASES = {"lat": "lateral", "lon": "longitudinal"}
 

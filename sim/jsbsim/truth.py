@@ -63,10 +63,10 @@ import numpy as np
 from flightid import aircraft as project_aircraft
 from flightid.derivatives import is_derivative
 from flightid.record import Reference
-from flightid.sim.coefficients import coefficients
-from flightid.sim.model import COMMANDS, Model, as_model
-from flightid.sim.trim import Trim, apply
-from flightid.sim.trim import trim as do_trim
+from flightid.sim.jsbsim.aero_coefficients import coefficients
+from flightid.sim.jsbsim.model import COMMANDS, Model, as_model
+from flightid.sim.jsbsim.trim import Trim, apply
+from flightid.sim.jsbsim.trim import trim as do_trim
 from flightid.units import FT, PSF, SLUG, SLUG_FT2
 
 BODY = ("X", "Y", "Z", "l", "m", "n", "L", "D")

@@ -3,7 +3,7 @@
 ``Simulation`` is the stepping core: ``reset(trim)``, then either ``step(controls)`` once
 per record interval (a controller, the bridge, a gym environment) or ``fly(...)`` for a
 whole scripted flight. ``Simulation.fly`` is the one flight loop of the project: the
-module-level ``fly``, the disturbance runner (``sim.disturbances.fly_disturbed``) and the
+module-level ``fly``, the disturbance runner (``sim.flight.disturbed.fly_disturbed``) and the
 flight cards all go through it. Its hooks: control increments (arrays, callables or
 constants), a gust schedule and a turbulence schedule (n x 3 NED, m/s, written into
 JSBSim's ``atmosphere/gust-*-fps``), and a ``progress(k, n)`` callback.
@@ -48,7 +48,7 @@ it reads only their properties and keeps nothing (0.9 of bare JSBSim stepping, a
 ``fly``.
 
 Property nodes belong to one FGFDMExec, and ``reset`` after the first gives the model a
-fresh one (bit-identical restarts): nodes taken from ``sim.model`` before a reset are
+fresh one (bit-identical restarts): nodes taken from ``sim.jsbsim.model`` before a reset are
 stale afterwards. ``Simulation.get`` / ``Simulation.set`` resolve on the current one.
 """
 
@@ -65,7 +65,7 @@ from typing import Any
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta, Reference
-from flightid.sim.model import (
+from flightid.sim.jsbsim.model import (
     COMMANDS,
     DRIVE,
     DRIVE_ON,
@@ -75,8 +75,8 @@ from flightid.sim.model import (
     quiet,
     set_integrators,
 )
-from flightid.sim.trim import _IC_STATE as _IC_ORDER
-from flightid.sim.trim import Trim, apply
+from flightid.sim.jsbsim.trim import _IC_STATE as _IC_ORDER
+from flightid.sim.jsbsim.trim import Trim, apply
 from flightid.units import EARTH_RADIUS_M, FT, LBF, PSF, SLUG, SLUG_FT2, SLUG_FT3
 
 MIN_INTERNAL_HZ = 400.0

@@ -15,7 +15,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 from flightid.sim.augment.writer import POSITIONS
-from flightid.sim.model import locate
+from flightid.sim.jsbsim.model import locate
 
 MAX_CHAIN = 8  # actuators followed in series
 

@@ -24,11 +24,11 @@ JSBSim (this module):
   4) returns NaN from the first step (tan(0) at the zero-dt initialisation).
 - ``engine_vibration``: ``flightid.sim.effects.vibration.EngineVibration``, one catalogue
   entry (acts on ``vibration``) that cards accept here or in the sensor suite's mounting
-  list; it acts on the IMU inside ``sim.sensors.measure``, so it joins the suite's
+  list; it acts on the IMU inside ``sim.sensors.suites.measure``, so it joins the suite's
   mounting effects and leaves the truth alone.
 
 Time series are generated on the record grid and held over the JSBSim substeps.
-``fly_disturbed`` flies them through the flight core's one loop (``sim.flight.fly`` with
+``fly_disturbed`` flies them through the flight core's one loop (``sim.flight.simulation.fly`` with
 its ``wind`` and ``turbulence`` schedules); the truth channels ``turb_u/v/w`` carry all
 turbulence (JSBSim's and ours, body axes) and ``wind_north/east/down`` the steady wind
 plus gusts.
@@ -56,9 +56,9 @@ from flightid.sim.effects.disturbance import (
     mil_f_8785c,
 )
 from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.flight import Atmosphere, Limits, fly
-from flightid.sim.model import Model
-from flightid.sim.trim import Trim
+from flightid.sim.flight.simulation import Atmosphere, Limits, fly
+from flightid.sim.jsbsim.model import Model
+from flightid.sim.jsbsim.trim import Trim
 from flightid.units import KT
 
 # the [[disturbance]] section's effects: disturbances and engine vibration, from the catalogue
@@ -152,7 +152,8 @@ def fly_disturbed(model: Model, trim: Trim, controls: Mapping[str, np.ndarray],
                   wind: np.ndarray | None = None, turbulence: np.ndarray | None = None,
                   limits: Limits | None = None, scenario: dict[str, Any] | None = None,
                   progress: Callable[[int, int], None] | None = None) -> FlightRecord:
-    """Fly from trim through the flight core's loop (``sim.flight.fly``) with wind schedules.
+    """Fly from trim through the flight core's loop (``sim.flight.simulation.fly``) with wind
+    schedules.
 
     ``wind`` (gusts) and ``turbulence`` (n x 3 NED, m/s, e.g. from ``wind_schedule``) are
     written into JSBSim's gust properties before each record step and held over its

@@ -29,8 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from flightid.identification import compatibility
-from flightid.identification.coefficients import smoothed_derivative
+from flightid.identification.compatibility import reconstruction as compatibility
+from flightid.identification.data.coefficients import smoothed_derivative
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 

@@ -47,18 +47,18 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import StateSpace, lsim
 
-from flightid.identification.coefficients import channel_values, nondimensional_rates
+from flightid.identification.data.coefficients import channel_values, nondimensional_rates
 from flightid.identification.estimate import Estimate
-from flightid.identification.frequency_response import (
+from flightid.identification.frequency.response import (
     FrequencyResponse,
     finite_fourier_transform,
 )
-from flightid.identification.linear_models import LinearModel
-from flightid.identification.transfer_function import (
+from flightid.identification.frequency.transfer_function import (
     COHERENCE_MIN,
     central_jacobian,
     cifer_residuals,
 )
+from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 from flightid.units import DEG, FT
 

@@ -1,0 +1,3 @@
+"""Data preparation before identification: windows, coefficients, unit checks, time bases, input
+denoising, multistep inputs, data reduction.
+"""

@@ -1,0 +1,1 @@
+"""Evaluation of estimates: scoring against truth, validation metrics, HTML reports."""

@@ -1,0 +1,2 @@
+"""Frequency-domain identification: frequency responses, transfer-function fits, state-space fits.
+"""

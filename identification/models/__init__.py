@@ -1,0 +1,3 @@
+"""Model structures: the --model table, linear perturbation models, rigid-body equations, a priori
+values.
+"""

@@ -1,0 +1,1 @@
+"""Flying a trimmed JSBSim aircraft: the simulation loop and flights with disturbances."""

@@ -1,0 +1,1 @@
+"""The JSBSim aircraft: loading, flight condition, trim, truth derivatives, coefficients."""

@@ -1,0 +1,1 @@
+"""Sensor suites: from the truth record to the measured record."""
