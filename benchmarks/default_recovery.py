@@ -66,6 +66,7 @@ def run_one(record, axis: str, reduced: bool) -> dict:
     rows = score(est, record).rows
     done = [r for r in rows if r.status == "estimated"]
     return {"estimated": len(done), "withheld": len(rows) - len(done),
+            "start": est.fit.get("start", ""),
             "inside": sum(abs(r.sigmas) <= 3 for r in done),
             "misses": [f"{r.name} {r.sigmas:+.1f}" for r in done if abs(r.sigmas) > 3]}
 
@@ -77,6 +78,8 @@ def main() -> None:
     parser.add_argument("--name", default="", help="results file suffix (e.g. heldout)")
     parser.add_argument("--cache", default="", help="folder keeping the flown records")
     parser.add_argument("--fly-only", action="store_true")
+    parser.add_argument("--reductions", default="raw,standard",
+                        help="raw, standard or both (comma-separated)")
     args = parser.parse_args()
     cards = args.cards.split(",") if args.cards else [c for c in library_cards()
                                                       if c not in SKIP]
@@ -97,7 +100,7 @@ def main() -> None:
                              "refused": "no maneuver on the elevator, aileron or rudder"})
                 continue
             for axis in axes:
-                for reduced in (False, True):
+                for reduced in [r == "standard" for r in args.reductions.split(",")]:
                     row = {"card": card, "seed": seed, "axis": axis,
                            "reduction": "standard" if reduced else "raw",
                            **run_one(record, axis, reduced)}
@@ -125,6 +128,9 @@ def table(rows: list[dict], seeds: str) -> str:
         cells = []
         for reduction in ("raw", "standard"):
             sel = [r for r in rs if r["reduction"] == reduction]
+            if not sel and any(r["reduction"] != "-" for r in rs):
+                cells += ["not run", "not run"]
+                continue
             est = sum(r.get("estimated", 0) for r in sel)
             inside = sum(r.get("inside", 0) for r in sel)
             withheld = sum(r.get("withheld", 0) for r in sel)

@@ -56,6 +56,7 @@ COMMANDS = {
     "design-compare": ("flightid.cli.design_compare", "design_compare_command"),
     "design-optimize": ("flightid.cli.design_optimize", "design_optimize_command"),
     "study-compare": ("flightid.cli.study_compare", "study_compare_command"),
+    "campaign": ("flightid.cli.campaign", "campaign_command"),
     "bridge": ("flightid.cli.bridge", "app"),
 }
 # the exceptions of the library that the policy classifies: {name: module}. An exception

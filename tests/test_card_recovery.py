@@ -126,17 +126,6 @@ def process(card, measured: FlightRecord) -> FlightRecord:
                                    "sidewash_beta": vanes.sidewash})
 
 
-def _without_outputs(model: lm.LinearModel, drop: tuple[str, ...]) -> lm.LinearModel:
-    keep = [i for i, o in enumerate(model.outputs) if o not in drop]
-
-    def build(values):
-        A, B, C, D = model.build(values)
-        return A, B, C[keep], D[keep]
-
-    return dataclasses.replace(model, outputs=tuple(model.outputs[i] for i in keep),
-                               build=build)
-
-
 # full longitudinal model of the hobby card: CL_q and Cm_alphadot a priori (as the demo),
 # CL_0 and CD_0 at the trim force balance (linear_models.longitudinal)
 LONGITUDINAL = ("CL_0", "CL_alpha", "CL_q", "CL_de", "CD_0", "CD_alpha",
@@ -159,7 +148,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
                             start={n: truth[n] for n in A_PRIORI},
                             thrust_input="thrust" in lon)
     if "theta" not in lon:
-        model = _without_outputs(model, ("theta",))
+        model = lm.without_outputs(model, ("theta",))
     free = [p for p in model.parameters if p not in (*A_PRIORI, *TRIM_BALANCE)]
     lo = output_error.estimate(lon, model, free=free, start="equation_error",
                                initial_state="estimate", colored=True)
@@ -168,7 +157,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     model = lm.lateral(lm.condition_from_record(lat, **override),
                        derivatives=lm.LATERAL_DERIVATIVES)
     if "phi" not in lat:
-        model = _without_outputs(model, ("phi",))
+        model = lm.without_outputs(model, ("phi",))
     la = output_error.estimate(lat, model, start="equation_error", initial_state="estimate",
                                colored=True, multistep_inputs=MULTISTEP_INPUTS)
     return [lo, la]

@@ -12,8 +12,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from flightid.identification.identify import identify
-from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, ExcitationEnv
+from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, DecisionChunks, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
+    closed_loop,
     doublet,
     evaluate,
     full_rudder,
@@ -73,25 +74,91 @@ def test_make_in_fresh_interpreter_by_module_form():
     assert out.stdout.strip() == "Cl_beta"
 
 
-def test_sync_vector_env_of_four():
-    venv = gymnasium.vector.SyncVectorEnv(
-        [lambda: ExcitationEnv(episode_s=1.0) for _ in range(4)])
-    obs, info = venv.reset(seed=[0, 1, 2, 3])
-    assert obs.shape == (4, len(OBS_CHANNELS))
-    for _ in range(60):  # past the end of the 50-step episodes: autoreset
-        obs, r, term, trunc, info = venv.step(venv.action_space.sample())
-    assert r.shape == (4,) and np.all(np.isfinite(obs))
+def _single_episodes(actions: np.ndarray, seeds) -> tuple[np.ndarray, np.ndarray]:
+    """Observations (steps, envs, channels) and rewards (steps, envs) of one environment
+    stepped in this process, episode by episode."""
+    obs, rewards = [], []
+    for s in seeds:
+        e = ExcitationEnv(episode_s=1.0)
+        o, _ = e.reset(seed=s)
+        ep_obs, ep_r = [o], []
+        for a in actions:
+            o, r, *_ = e.step(a)
+            ep_obs.append(o)
+            ep_r.append(r)
+        obs.append(ep_obs)
+        rewards.append(ep_r)
+    return np.swapaxes(obs, 0, 1), np.array(rewards).T
+
+
+@pytest.mark.parametrize("vector", [gymnasium.vector.SyncVectorEnv,
+                                    gymnasium.vector.AsyncVectorEnv])
+def test_vector_envs_step_the_same_episodes_as_one_env(vector):
+    """Sync (one process) and async (a worker process each) vector environments give the
+    single environment's episodes bit for bit on the same seeds, then reset themselves
+    after the 50-decision episodes end (gymnasium's next-step autoreset: a reward of 0)."""
+    seeds = [0, 1, 2]
+    actions = three211(ExcitationEnv(episode_s=1.0), 0)[:50].astype(np.float32) * 4.0
+    want_obs, want_r = _single_episodes(actions, seeds)
+    venv = vector([lambda: ExcitationEnv(episode_s=1.0)] * len(seeds))
+    obs, info = venv.reset(seed=seeds)
+    got_obs, got_r = [obs], []
+    for a in actions:
+        obs, r, term, trunc, info = venv.step(np.repeat(a[None], len(seeds), axis=0))
+        got_obs.append(obs)
+        got_r.append(r)
+    assert trunc.all() and not term.any() and info["crb"].shape == (len(seeds), 10)
+    np.testing.assert_array_equal(np.array(got_obs), want_obs)
+    np.testing.assert_array_equal(np.array(got_r), want_r)
+    obs, r, term, trunc, _ = venv.step(np.zeros((len(seeds), 3), np.float32))  # autoreset
+    np.testing.assert_array_equal(r, 0.0)
+    np.testing.assert_allclose(obs[:, 0], 0.0, atol=1e-12)  # t = 0: a fresh episode
     venv.close()
 
 
-def test_async_vector_env_of_two():
-    venv = gymnasium.vector.AsyncVectorEnv(
-        [lambda: ExcitationEnv(episode_s=1.0) for _ in range(2)])
-    obs, _ = venv.reset(seed=[0, 1])
-    for _ in range(10):
-        obs, r, term, trunc, info = venv.step(venv.action_space.sample())
-    assert obs.shape == (2, len(OBS_CHANNELS)) and np.all(np.isfinite(r))
-    venv.close()
+def test_decision_chunks_fly_the_same_episode():
+    """``DecisionChunks``: 50 decisions in chunks of 7 (the last chunk ends the episode
+    after its first row) are the decision-by-decision flight: the same final observation
+    and info, the same return to rounding; a bad chunk size or shape is refused."""
+    actions = three211(ExcitationEnv(episode_s=1.0), 0)[:50].astype(np.float32) * 4.0
+    one = ExcitationEnv(episode_s=1.0)
+    one.reset(seed=5)
+    single = [one.step(a) for a in actions]
+    chunked = DecisionChunks(ExcitationEnv(episode_s=1.0), 7)
+    chunked.reset(seed=5)
+    padded = np.vstack([actions, np.zeros((6, 3), np.float32)]).reshape(8, 7, 3)
+    steps = [chunked.step(c) for c in padded]
+    assert [s[3] for s in steps] == [False] * 7 + [True]  # truncated in the last chunk
+    assert sum(s[1] for s in steps) == pytest.approx(sum(r[1] for r in single), rel=1e-12)
+    assert single[-1][3] and not any(r[3] for r in single[:-1])
+    np.testing.assert_array_equal(steps[-1][0], single[-1][0])
+    np.testing.assert_array_equal(steps[-1][4]["estimate"], single[-1][4]["estimate"])
+    assert chunked.unwrapped._k == one.unwrapped._k == 50
+    with pytest.raises(ValueError, match=r"k \(decisions per call\) must be an integer >= 1"):
+        DecisionChunks(ExcitationEnv(episode_s=1.0), 0)
+    with pytest.raises(ValueError, match=r"action must be 7 rows of \(de, da, dr\)"):
+        chunked.step(np.zeros(3, np.float32))
+
+
+def test_a_feedback_policy_flown_open_loop_is_the_same_flight(env):
+    """``closed_loop``: a feedback law (yaw damper and roll-rate feedback on the scaled
+    observation, plus a rudder pulse) flown on a seed, then its actions flown open loop on
+    the same seed, give the same return and estimate: the environment is deterministic,
+    so a learned policy is evaluated beside the schedules by the same code."""
+    def law(obs: np.ndarray) -> np.ndarray:
+        t, p, r = obs[0], obs[OBS_CHANNELS.index("p")], obs[OBS_CHANNELS.index("r")]
+        return np.array([0.0, -2.0 * p, (1.0 if 0.05 < t < 0.1 else 0.0) - r])
+
+    schedule = closed_loop(law)
+    actions = schedule(env, 4)
+    assert np.abs(actions).max() == pytest.approx(0.2)  # scaled to the baselines' travel
+    flown = env.unwrapped._actions[1:]
+    np.testing.assert_array_equal(np.array(flown, dtype=np.float32),
+                                  actions[:len(flown)].astype(np.float32))
+    logdet = env.unwrapped._logdet
+    total, info, terminated = run_episode(env, actions, 4)
+    assert not terminated and info["logdet"] == logdet
+    assert total > run_episode(env, zero(env, 4), 4)[0]
 
 
 def test_same_seed_same_observations():

@@ -33,7 +33,7 @@ from flightid.identification.gap.linearise import (
     excited_axes,
     linearise,
 )
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
 from flightid.identification.gap.refine import NotRefined, Refined
 from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import Segment, segments, split
@@ -314,6 +314,7 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
                          verdict="no_gap", null_before=before, evidence=evidence,
                          not_identifiable=unseen)
+    ranker.above = before.above()
     ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
     both = pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
@@ -328,8 +329,16 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
 
     after = None
     if named:
+        tests: dict[int, tuple[Linearised, NullTest]] = {}  # the model kept: its id stays
+
+        def cached(current: Linearised) -> NullTest:
+            if id(current) not in tests:
+                tests[id(current)] = (current, tested(current))
+            return tests[id(current)][1]
+
         named += following(lin, folds, named[0], steps - 1,
-                           at_null=lambda current: not tested(current).gap)
+                           at_null=lambda current: not cached(current).gap,
+                           above=lambda current: cached(current).above())
         corrected = lin
         for effect in named:
             corrected = fixed(corrected, effect)
@@ -353,7 +362,7 @@ def _merged(results: dict[str, GapResult]) -> GapResult:
     where = GapMap(main.where.bands, [row for g in results.values() for row in g.where.rows],
                    [row for g in results.values() for row in g.where.regimes])
     effects = sorted((r for g in results.values() for r in g.effects),
-                     key=lambda r: (not r.confirmed, r.delta_bic))
+                     key=rank_key)
     windows = {k: list(dict.fromkeys(w for g in results.values() for w in g.windows[k]))
                for k in ("fit", "held_out")}
     return GapResult(main.aircraft, main.linearised, where, effects, main.pairs, main.named,

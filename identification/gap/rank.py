@@ -9,9 +9,12 @@ parameters are the inverse-variance mean over the windows. Held out: each window
 is predicted with the parameters of the other windows (or every fitted window predicts
 the ``validate`` records): an effect is confirmed when it lowers the held-out cost and
 shrinks the held-out gap (mean over channels of residual / measured energy) by at least
-``MIN_SHRINK`` (relative) and ``MIN_GAIN`` (absolute: a model that already reproduces
-the data to a fraction of a percent has no gap to name). Confirmed effects rank first,
-each group by delta BIC.
+``MIN_GAIN`` (absolute: a model that already reproduces the data to a fraction of a
+percent has no gap to name) and by ``MIN_EXCESS_SHRINK`` of the gap above the null level
+(``Ranker.above``: the input-explained share of the null test; turbulence and noise are
+no part of what an effect can close), or ``MIN_SHRINK`` of the whole held-out gap when
+that level is not known. Confirmed effects rank first, by their held-out cost change
+(``rank_key``), the others by delta BIC.
 """
 
 from __future__ import annotations
@@ -29,6 +32,9 @@ from flightid.identification.gap.ranges import out_of_range
 from flightid.identification.gap.segments import Segment
 
 MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect
+# with the null level known (``Ranker.above``): the held-out gain that confirms an effect,
+# relative to the gap above the null level (turbulence and noise do not count)
+MIN_EXCESS_SHRINK = 0.25
 # and absolute: this fraction of the measured energy explained. Above what the
 # linearisation's own misfit gives on null flights (the plain model on its own flight):
 # 0.0013 for Cn_beta on navion-demo without turbulence, below 0 on the blind check's cards
@@ -40,6 +46,9 @@ SCREEN_ITERATIONS = 2
 SCREEN_KEEP = 12
 PAIR_LEVEL = 0.05  # held-out gap (mean fraction) above which pairs of effects are tried
 PAIR_TOP = 4  # pairs: the top effect with the next ones of the ranking
+# with the null level known: pairs are tried when the top effect closes less than this
+# share of the gap above it
+PAIR_SHARE = 0.7
 
 
 def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
@@ -144,8 +153,13 @@ class Folds:
 class Ranker:
     """Fits candidates on the windows and checks them on the held-out ones (cached)."""
 
-    def __init__(self, lin: Linearised, folds: Folds) -> None:
+    def __init__(self, lin: Linearised, folds: Folds,
+                 above: dict[str, float] | None = None) -> None:
         self.lin, self.folds = lin, folds
+        # per channel: the gap above the null level (the input-explained share of the null
+        # test, ``verdict.null_test``), against which an effect's shrink is judged; None:
+        # the whole held-out gap
+        self.above = above
         self.base = {s.label: fit(lin.model, s.record) for s in folds.fit}
         self.base_held: dict[str, WindowFit] = {}
         for _, test in folds.folds:
@@ -211,8 +225,10 @@ class Ranker:
             r.heldout_before, r.heldout_after = pooled_fractions(before), pooled_fractions(after)
             r.heldout_cost_change, r.heldout_windows = dheld, labels
             gain = overall(r.heldout_before) - overall(r.heldout_after)
-            r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and r.shrink >= MIN_SHRINK
-                               and gain >= MIN_GAIN)
+            level = (MIN_EXCESS_SHRINK * overall(self.above) if self.above
+                     else MIN_SHRINK * overall(r.heldout_before))
+            r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and gain >= MIN_GAIN
+                               and gain >= level)
         else:
             r.note = "no held-out window: not confirmed"
         if family := out_of_range(cand, r.parameters, self.lin.model):
@@ -225,8 +241,8 @@ def rank(ranker: Ranker, candidates: list[Candidate],
          keep: int | None = SCREEN_KEEP) -> list[Ranked]:
     """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
     the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
-    check, the physical range; all of them when ``keep`` is None); confirmed first, each
-    group by delta BIC, after the held-out Occam rule of ``nested``."""
+    check, the physical range; all of them when ``keep`` is None); sorted by ``rank_key``
+    after the held-out Occam rule of ``nested``."""
     if keep is not None and len(candidates) > keep:
         scores = [ranker.screen(c) for c in candidates]
         order = sorted(range(len(candidates)), key=scores.__getitem__)
@@ -234,7 +250,15 @@ def rank(ranker: Ranker, candidates: list[Candidate],
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
     nested(out)
     prefer_model_terms(out, MIN_SHRINK)
-    return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))
+    return sorted(out, key=rank_key)
+
+
+def rank_key(r: Ranked) -> tuple[bool, float]:
+    """The ranking's sort key: confirmed effects first, by their held-out cost change
+    (the cross-validated evidence: Stone 1974; an effect that fits the fitted windows a
+    little better by fitting their turbulence does no better on held-out ones), the others
+    by delta BIC."""
+    return (not r.confirmed, r.heldout_cost_change if r.confirmed else r.delta_bic)
 
 
 def nested(ranked: list[Ranked]) -> None:
@@ -259,9 +283,16 @@ def nested(ranked: list[Ranked]) -> None:
 
 def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
     """The top effect paired with the next ``PAIR_TOP`` ones, when it alone leaves a held-out
-    gap above ``PAIR_LEVEL``; a pair is confirmed when it shrinks the top effect's held-out
-    gap by ``MIN_SHRINK`` more and improves its BIC."""
-    if not ranked or not ranked[0].confirmed or overall(ranked[0].heldout_after) < PAIR_LEVEL:
+    gap above ``PAIR_LEVEL`` (with the null level known, ``Ranker.above``: when it closes
+    less than ``PAIR_SHARE`` of the gap above that level); a pair
+    is confirmed when it improves the top effect's BIC and shrinks its held-out gap by
+    ``MIN_SHRINK`` more (of that gap; with the null level known, of the gap above it)."""
+    if not ranked or not ranked[0].confirmed:
+        return []
+    if ranker.above is None and overall(ranked[0].heldout_after) < PAIR_LEVEL:
+        return []
+    gain = overall(ranked[0].heldout_before) - overall(ranked[0].heldout_after)
+    if ranker.above is not None and gain >= PAIR_SHARE * overall(ranker.above):
         return []
     top = ranked[0]
     out = []
@@ -271,7 +302,8 @@ def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
             continue
         single_after = overall(top.heldout_after)
         pair_after = overall(r.heldout_after) if r.heldout_after else float("nan")
-        r.confirmed = bool(r.confirmed and r.delta_bic < top.delta_bic
-                           and pair_after <= (1 - MIN_SHRINK) * single_after)
+        better = (single_after - pair_after >= MIN_SHRINK * overall(ranker.above)
+                  if ranker.above else pair_after <= (1 - MIN_SHRINK) * single_after)
+        r.confirmed = bool(r.confirmed and r.delta_bic < top.delta_bic and better)
         out.append(r)
-    return sorted(out, key=lambda r: (not r.confirmed, r.delta_bic))
+    return sorted(out, key=rank_key)

@@ -49,11 +49,13 @@ def _open(c: Candidate, params: set[str], surfaces: set[str]) -> bool:
 
 
 def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
-              at_null: Callable[[Linearised], bool] | None = None) -> list[Ranked]:
+              at_null: Callable[[Linearised], bool] | None = None,
+              above: Callable[[Linearised], dict[str, float]] | None = None) -> list[Ranked]:
     """Up to ``steps`` more effects after ``first``, each confirmed with the ones before it
     fixed in the model; stops at the first step that confirms nothing, or as soon as the
     model with the effects named so far passes ``at_null`` (its residual is at the null
-    level of noise and turbulence: ``verdict.null_test``)."""
+    level of noise and turbulence: ``verdict.null_test``). ``above``: the gap above the
+    null level of the model with the effects so far (``Ranker.above``)."""
     named = [first]
     current = fixed(lin, first)
     out: list[Ranked] = []
@@ -64,7 +66,7 @@ def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
         cands = [c for c in catalogue_candidates(current.model, current.axes,
                                                  surfaces=current.surfaces)
                  if _open(c, params, surfaces)]
-        ranked = rank(Ranker(current, folds), cands)
+        ranked = rank(Ranker(current, folds, above(current) if above else None), cands)
         if not ranked or not ranked[0].confirmed:
             break
         named.append(ranked[0])

@@ -18,6 +18,7 @@ from flightid.identification.methods import (
     frequency_equation_error,
     frequency_output_error,
     frequency_response_fit,
+    mof,
     nonlinear_6dof,
     output_error,
     stepwise,
@@ -29,7 +30,7 @@ ENTRY_POINT_GROUP = "flightid.methods"
 BUILTIN: tuple[Method, ...] = (
     equation_error.METHOD, stepwise.METHOD, output_error.METHOD, nonlinear_6dof.METHOD,
     filter_error.METHOD, frequency_equation_error.METHOD, frequency_output_error.METHOD,
-    frequency_response_fit.METHOD,
+    frequency_response_fit.METHOD, mof.METHOD,
 )
 _REGISTRY: dict[str, Method] = {m.id: m for m in BUILTIN}
 _loaded_entry_points = False

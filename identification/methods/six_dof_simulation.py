@@ -11,8 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification.data.coefficients import mass_properties
-from flightid.identification.methods.equation_error import channel_values
+from flightid.identification.data.coefficients import channel_values, mass_properties
 from flightid.identification.models import rigid_body as rb
 from flightid.identification.models.six_dof import (
     COLUMNS,

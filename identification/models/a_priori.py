@@ -39,8 +39,9 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
                  a_priori: Mapping[str, float] | None, method: str
                  ) -> tuple[lm.LinearModel, list[str], dict[str, float]]:
     """(model, free parameters, held values): the preset at the record's condition with
-    its ``derivatives`` (default: the preset's) plus every a priori parameter the preset
-    has, held at its value. ``a_priori`` None takes the record's table."""
+    its ``derivatives`` (default: the preset's with its rate derivatives,
+    ``models.linear.RATE_DERIVATIVES``) plus every a priori parameter the preset has,
+    held at its value. ``a_priori`` None takes the record's table."""
     held_all = from_record(record) if a_priori is None else dict(a_priori)
     for name, value in held_all.items():
         if isinstance(value, bool) or not isinstance(value, int | float) \
@@ -50,6 +51,8 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
                              "the value it is held at")
     full = preset_derivatives(preset)
     held = {n: float(v) for n, v in held_all.items() if n in full}
+    if derivatives is None:  # the preset's, with its rate derivatives (RATE_DERIVATIVES)
+        derivatives = _default_derivatives(preset)
     base = lm.preset_for_record(preset, record, derivatives, method)
     names = [p for p in base.parameters if p not in lm_biases(base)]
     names += [n for n in held if n not in names]
@@ -62,6 +65,18 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
 def lm_biases(model: lm.LinearModel) -> list[str]:
     """The bias parameters of a linear model (``bias_<equation>``)."""
     return [p for p in model.parameters if p.startswith("bias_")]
+
+
+def _default_derivatives(preset: str) -> tuple[str, ...] | None:
+    """The derivatives a method estimates by default: the preset's default set and the
+    rate derivatives it leaves out (``models.linear.RATE_DERIVATIVES``), in the preset's
+    order; None for a name that is not a preset (the error comes from the builder)."""
+    defaults = {"lateral": lm.LATERAL_EXAMPLE_6_1, "short_period": lm.SHORT_PERIOD_DEFAULT,
+                "longitudinal": lm.LONGITUDINAL_DEFAULT}.get(preset)
+    if defaults is None:
+        return None
+    wanted = {*defaults, *lm.RATE_DERIVATIVES.get(preset, ())}
+    return tuple(n for n in preset_derivatives(preset) if n in wanted)
 
 
 def preset_derivatives(preset: str) -> tuple[str, ...]:

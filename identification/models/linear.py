@@ -298,6 +298,19 @@ LONGITUDINAL_DEFAULT: tuple[str, ...] = (
 LONGITUDINAL_BIASES: tuple[str, ...] = (
     "bias_Vdot", "bias_alphadot", "bias_qdot", "bias_thetadot", "bias_az",
 )
+# the rate derivatives a preset leaves out, which the identification methods estimate
+# unless the record holds them a priori (``a_priori``): left at zero they are not absent
+# from the aircraft but folded into the others. On the Navion (Cm_alphadot -4.36, Teper
+# 1969) output error without it put Cm_q at -14.5 for a truth of -9.96 (52 sigma) on
+# navion-doublets; on the Twin Otter (CZ_q -20, NASA TM-4099) without CL_q it put CL_de
+# 74 % low (6 sigma) on twinotter-21-elevator. Estimated, they come with bounds that
+# carry their correlation with Cm_q and CL_alpha (Morelli & Klein 2016 sec. 6.3). Not in
+# the short-period model: its alphadot is a combination of its states and input, so
+# Cm_alphadot cannot be told from Cm_alpha and Cm_q (twinotter-21-elevator seed 2:
+# Cm_alpha withheld as unidentifiable when Cm_alphadot was free).
+RATE_DERIVATIVES: dict[str, tuple[str, ...]] = {
+    "longitudinal": ("CL_q", "Cm_alphadot"),
+}
 
 # plausible a priori values (light aircraft, per rad), used only as start values
 LATERAL_TYPICAL: dict[str, float] = {
@@ -500,10 +513,43 @@ def preset_for_record(preset: str, record: FlightRecord, derivatives: Sequence[s
 
 
 def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
-    """Model ``kind`` ('lateral', 'short_period', 'longitudinal') at the record's condition."""
+    """Model ``kind`` ('lateral', 'short_period', 'longitudinal') at the record's condition.
+
+    A record without a pitch attitude channel (a hobby recorder) takes the reference pitch
+    attitude from the mean specific force, theta0 = atan2(ax, -az) (unaccelerated flight;
+    ``level_pitch_attitude``)."""
     if kind not in MODELS:
         raise ValueError(f"unknown model {kind!r}; known: {', '.join(MODELS)}")
-    return MODELS[kind](condition_from_record(record), **kwargs)
+    override = {}
+    if "theta" not in record:
+        override["theta"] = level_pitch_attitude(record)
+    return MODELS[kind](condition_from_record(record, **override), **kwargs)
+
+
+def level_pitch_attitude(record: FlightRecord) -> float:
+    """The pitch attitude (rad) of unaccelerated flight from the record's mean specific
+    forces: theta0 = atan2(ax, -az) (the accelerometers read -g sin(theta), g cos(theta)
+    in steady wings-level flight, Morelli & Klein 2016 eq. 10.13)."""
+    missing = [c for c in ("ax", "az") if c not in record]
+    if missing:
+        raise ValueError(f"record has no channel theta for the reference condition, nor "
+                         f"{', '.join(missing)} to take the pitch attitude from")
+    return float(np.arctan2(np.mean(record["ax"]), -np.mean(record["az"])))
+
+
+def without_outputs(model: LinearModel, drop: Sequence[str]) -> LinearModel:
+    """``model`` with the outputs in ``drop`` removed (rows of C and D); the states stay,
+    so an unmeasured attitude is still integrated from the rates."""
+    keep = [i for i, o in enumerate(model.outputs) if o not in drop]
+
+    def build(values: Mapping[str, complex]) -> Matrices:
+        A, B, C, D = model.build(values)
+        return A, B, C[keep], D[keep]
+
+    return LinearModel(model.name, model.states, model.inputs,
+                       tuple(model.outputs[i] for i in keep), model.parameters,
+                       dict(model.start), build, model.condition, model.description,
+                       dict(model.state_channels))
 
 
 def _check_names(names: Sequence[str], allowed: Sequence[str], model: str) -> None:

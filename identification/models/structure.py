@@ -101,6 +101,18 @@ def linear_channels(model: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys((*preset[0], *preset[1], *lm.CONDITION_CHANNELS)))
 
 
+# outputs output error fits without: attitudes a hobby recorder does not measure (the
+# states stay, integrated from the rates; the reference pitch attitude then comes from
+# the specific force, ``lm.level_pitch_attitude``)
+OPTIONAL_OUTPUTS = ("phi", "theta")
+
+
+def output_error_channels(model: str) -> tuple[str, ...]:
+    """``linear_channels`` without the attitudes (``OPTIONAL_OUTPUTS``), which output error
+    leaves out of the outputs when the record has none."""
+    return tuple(c for c in linear_channels(model) if c not in OPTIONAL_OUTPUTS)
+
+
 # inputs and outputs of each linear preset (checked against the models in the tests)
 _PRESET_SIGNALS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "lateral": (LATERAL_INPUTS, ("beta", "p", "r", "phi", "ay")),

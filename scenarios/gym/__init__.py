@@ -16,14 +16,18 @@ from flightid.scenarios.gym.registration import ENV_ID, register_envs
 
 register_envs()
 
-__all__ = ["ENV_ID", "OBS_CHANNELS", "PRESETS", "ExcitationEnv", "register_envs"]
-_FROM_ENV = ("OBS_CHANNELS", "PRESETS", "ExcitationEnv")
+__all__ = ["ENV_ID", "OBS_CHANNELS", "PRESETS", "DecisionChunks", "ExcitationEnv",
+           "register_envs"]
+# public name -> its module, imported on first use
+_LAZY = {"OBS_CHANNELS": "env", "PRESETS": "env", "ExcitationEnv": "env",
+         "DecisionChunks": "chunks"}
 
 
 def __getattr__(name: str) -> Any:
-    """``ExcitationEnv``, ``OBS_CHANNELS`` and ``PRESETS``, imported on first use (PEP 562)."""
-    if name in _FROM_ENV:
-        value = getattr(import_module("flightid.scenarios.gym.env"), name)
+    """``ExcitationEnv``, ``OBS_CHANNELS``, ``PRESETS`` and ``DecisionChunks``, imported on
+    first use (PEP 562)."""
+    if name in _LAZY:
+        value = getattr(import_module(f"flightid.scenarios.gym.{_LAZY[name]}"), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'flightid.scenarios.gym' has no attribute {name!r}")

@@ -97,6 +97,33 @@ def random_policy(env: ExcitationEnv, seed: int) -> np.ndarray:
     return np.array([env.action_space.sample() for _ in range(env.n_decisions)])
 
 
+def closed_loop(predict: Callable[[np.ndarray], np.ndarray], scale: float = AMPLITUDE
+                ) -> Schedule:
+    """A feedback policy as a ``Schedule``.
+
+    ``predict`` maps a scaled observation (``observation="scaled"``: (value - trim) /
+    ``obs_scale``) to an action in [-1, 1], e.g. a trained agent's; it flies each seed's
+    episode in the environment it is given, with its actions times ``scale`` (the
+    baselines' travel limit), and the actions taken are the schedule (0 after a
+    termination). The environment is deterministic given the seed, so the schedule flown
+    open loop on the same seed is the same flight.
+    """
+
+    def schedule(env: ExcitationEnv, seed: int) -> np.ndarray:
+        obs, _ = env.reset(seed=seed)
+        actions = np.zeros((env.n_decisions, 3))
+        for k in range(env.n_decisions):
+            if env.observation == "si":
+                obs = (obs - env.obs_center) / env.obs_scale
+            actions[k] = scale * np.clip(np.asarray(predict(obs), dtype=float), -1.0, 1.0)
+            obs, _, terminated, truncated, _ = env.step(actions[k].astype(np.float32))
+            if terminated or truncated:
+                break
+        return actions
+
+    return schedule
+
+
 POLICIES: dict[str, Schedule] = {"zero": zero, "doublet": doublet, "3211": three211,
                                  "multisine": multisine, "random": random_policy,
                                  "full rudder": full_rudder}

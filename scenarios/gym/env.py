@@ -55,7 +55,9 @@ Speed
 -----
 A step reads from JSBSim only the observed channels and the target coefficients (the
 flight core's lean ``Simulation.stepper``) and keeps no sample: ``record()`` flies the
-episode again from its actions, bit for bit the same flight (tested).
+episode again from its actions, bit for bit the same flight (tested). The per-decision
+work after the read (measured vector, regressors, weight, information update, bounds and
+estimate) is one compiled call (``kernels.decide``).
 
 Termination
 -----------
@@ -70,7 +72,6 @@ ValueError naming it.
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
@@ -83,6 +84,7 @@ from matplotlib.figure import Figure
 
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, augmented_aircraft, load_card, sub_seed
+from flightid.scenarios.gym.kernels import decide, pack, rank_one
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.flight.simulation import Atmosphere, DepartureError, Simulation
@@ -171,7 +173,7 @@ def _designs(spec: Sequence[tuple[str, tuple[str, ...]]]
 
 
 class _Information:
-    """Information, inverse and estimate of every coefficient's regression, in floats.
+    """Information, inverse and estimate of every coefficient's regression.
 
     Coefficients with the same regressors and residual std (Cl and Cn of the lateral
     preset) share one information matrix: ``design[g]`` is coefficient g's, and a shared
@@ -179,52 +181,44 @@ class _Information:
     with regressors that stay zero: with the prior I their entries stay decoupled
     (information 1, no contribution to log det). Each sample is a rank-one update of
     P = M^-1 (Sherman-Morrison) and of the estimate (recursive least squares, Ljung &
-    Soderstrom 1983, which with P_0 = I and theta_0 = 0 is exactly M^-1 X^T W y).
-    Plain lists of floats: at 6 x 6 numpy's per-call overhead is most of the cost, and its
-    work between JSBSim runs slows JSBSim itself (benchmarks/gym_throughput.py).
+    Soderstrom 1983, which with P_0 = I and theta_0 = 0 is exactly M^-1 X^T W y), compiled
+    (``kernels.rank_one``).
     """
 
     def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
         design, unique = _designs(spec)
-        self.design = design
         k = 1 + max(len(v) for _, v in spec)
-        self.inv = [[[float(i == j) for j in range(k)] for i in range(k)] for _ in unique]
-        self.w = [1.0 / s**2 for _, s in unique]  # per design
-        self.count = [design.count(d) for d in range(len(unique))]
-        self.members = [[g for g, dg in enumerate(design) if dg == d]
-                        for d in range(len(unique))]
-        self.theta = [[0.0] * k for _ in spec]
-        self._w_coef = [1.0 / SIGMA[c] ** 2 for c, _ in spec]
-        self.logdet_m = 0.0  # sum over coefficients of log det M (prior I)
-        self.n = 0.0  # the samples' summed weights
+        nd, ng = len(unique), len(spec)
+        self.design = np.array(design, dtype=np.int64)
+        self.w = np.array([1.0 / s**2 for _, s in unique])  # per design
+        self.count = np.array([design.count(d) for d in range(nd)], dtype=float)
+        self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
+        # one flat array (the compiled step's ``state``) and its views: inv (D, k, k),
+        # theta (G, k), acc = [sum over coefficients of log det M (prior I), the samples'
+        # summed weights]
+        self.state = np.zeros(nd * k * k + ng * k + 2)
+        self.inv = self.state[:nd * k * k].reshape(nd, k, k)
+        self.inv[:] = np.eye(k)
+        self.theta = self.state[nd * k * k:nd * k * k + ng * k].reshape(ng, k)
+        self.acc = self.state[nd * k * k + ng * k:]
+
+    @property
+    def logdet_m(self) -> float:
+        """Sum over the coefficients of log det M."""
+        return float(self.acc[0])
 
     @property
     def logdet(self) -> float:
         """Sum of log det of the targets' information (Schur complements of the biases)."""
-        return self.logdet_m - sum(math.log1p(self.n * w) for w in self._w_coef)
+        return float(self.acc[0] - np.sum(np.log1p(self.acc[1] * self.w_coef)))
 
     def add(self, x: Sequence[Sequence[float]], y: Sequence[float], weight: float = 1.0
             ) -> None:
         """One sample: regressors x (per design, bias first), dependent variables y (per
         coefficient), with ``weight`` in [0, 1] on its information (weighted least squares:
         the residual's variance sigma^2 / weight)."""
-        theta = self.theta
-        for d, xd in enumerate(x):
-            inv = self.inv[d]
-            v = [sum(map(operator.mul, row, xd)) for row in inv]
-            wd = self.w[d] * weight
-            wq = wd * sum(map(operator.mul, xd, v))
-            # matrix determinant lemma; Sherman-Morrison gain P x w / (1 + w x' P x)
-            self.logdet_m += self.count[d] * math.log1p(wq)
-            c = wd / (1.0 + wq)
-            gain = [c * vi for vi in v]
-            self.inv[d] = [[a - gi * vj for a, vj in zip(row, v, strict=True)]
-                           for row, gi in zip(inv, gain, strict=True)]
-            for g in self.members[d]:
-                th = theta[g]
-                e = y[g] - sum(map(operator.mul, th, xd))
-                theta[g] = [a + e * b for a, b in zip(th, gain, strict=True)]
-        self.n += weight
+        rank_one(self.inv, self.theta, self.design, self.w, self.count,
+                 np.asarray(x, dtype=float), np.asarray(y, dtype=float), float(weight), self.acc)
 
 
 def _one_of(option: str, value: Any, choices: Sequence[str]) -> None:
@@ -370,8 +364,8 @@ class ExcitationEnv(gymnasium.Env):
         where = [(coefs.index(n.partition("_")[0]),
                   1 + groups[n.partition("_")[0]].index(n.partition("_")[2]))
                  for n in self.targets]
-        self._crb_at = [(design[g], j) for g, j in where]
-        self._est_at = where
+        self._places = np.array([(design[g], j, g) for g, j in where])
+        self._est_at = tuple(np.array(where).T)
         # regressor slots of each design: (measured entry, scaling at V = 1 m/s, scaling
         # over V): 1 for angles and surfaces, b/2 or c/2 over V for the rates (phat, qhat,
         # rhat); a padding slot reads the time with scaling 0
@@ -388,8 +382,11 @@ class ExcitationEnv(gymnasium.Env):
             ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"), ("q", "q_deg_s"),
             ("r", "r_deg_s"))]
         self._range.append((self._i_v, 1.0 / (lr["speed_ratio"] * self.trim.speed_m_s)))
-        self._range_trim: list[tuple[int, float, float]] = []
+        self._slot_idx = np.array([[i for i, _, _ in row] for row in self._slots],
+                                  dtype=np.int64)
+        self._range_idx = np.array([i for i, _ in self._range], dtype=np.int64)
         self._truth_vec = [self.truth.get(n, math.nan) for n in self.targets]
+        self._truth = np.array(self._truth_vec)
         if reward == "accuracy" and not all(math.isfinite(t) and t != 0.0
                                             for t in self._truth_vec):
             raise ValueError("reward 'accuracy' needs a finite, nonzero truth for every target "
@@ -437,18 +434,29 @@ class ExcitationEnv(gymnasium.Env):
         y_noise = self._sigma_y * self.np_random.standard_normal((n, len(self._coefs)))
         # measured = [t, *read] + noise - (0 for the observation, y at trim for y)
         self._y0 = np.array([sample[c] for c in self._coefs])
-        self._noise = np.hstack([obs_noise, y_noise - self._y0]).tolist()
+        self._noise = np.hstack([obs_noise, y_noise - self._y0])
         self._logdet = 0.0
         self._score = 0.0  # the return so far before penalties
         self._k = 0
         self._h0 = sample["h"]
         trim_measured = [0.0, *(sample[c] for c in self._read)]
         # each slot as (entry, trim value, scaling, scaling over V)
-        self._slot_trim = [[(i, trim_measured[i], f, pv) for i, f, pv in row]
-                           for row in self._slots]
+        slot_par = np.array([[(trim_measured[i], f, pv) for i, f, pv in row]
+                             for row in self._slots])
         self._values = [sample[c] for c in self._read]
-        self._range_trim = [(i, self._values[i], inv) for i, inv in self._range]
+        range_par = np.array([(self._values[i], inv) for i, inv in self._range])
+        inf = self._info_state
+        m = len(trim_measured)
+        self._layout, self._par = pack(
+            inf.design, self._slot_idx, self._range_idx, self._places, inf.w, inf.count,
+            inf.w_coef, slot_par, range_par, m, self._at["V"], self._n_obs,
+            self.reward == "valid-information")
+        nt = len(self.targets)
+        # the compiled step's output: measured, crb, estimate, weight, log det
+        self._crb_slice, self._est_slice = slice(m, m + nt), slice(m + nt, m + 2 * nt)
+        self._out_size = m + 2 * nt + 2
         self._weight = 1.0
+        self._out: np.ndarray | None = None
         obs = np.add(self._noise[0][:self._n_obs], trim_measured[:self._n_obs])
         self._obs_hist = [obs]
         if self._scaled:
@@ -478,26 +486,25 @@ class ExcitationEnv(gymnasium.Env):
         k = self._k
         # (past the episode's end, as a caller may step on, the last noise row repeats)
         noise = self._noise[min(k, self.n_decisions)]
-        measured = [v + e for v, e in zip((k / self.decision_hz, *values), noise, strict=True)]
-        obs = np.array(measured[:self._n_obs])
-        self._obs_hist.append(obs)
-        if self._scaled:
-            obs = (obs - self.obs_center) / self.obs_scale
         reward = 0.0
         if departure is None:
-            speed = measured[self._at["V"]]
-            x = [[1.0, *((measured[i] - t0) * (f + pv / speed) for i, t0, f, pv in row)]
-                 for row in self._slot_trim]
-            if self.reward == "valid-information":
-                d = max(abs(values[i] - v0) * inv for i, v0, inv in self._range_trim)
-                self._weight = 1.0 if d <= 1.0 else max(0.0, 2.0 - d)
-            if self._weight > 0.0:
-                self._info_state.add(x, measured[self._n_obs:], self._weight)
-            self._logdet = self._info_state.logdet
+            out = np.empty(self._out_size)
+            decide(np.array(values), noise, k / self.decision_hz, self._layout, self._par,
+                   self._info_state.state, out)
+            self._weight, self._logdet = float(out[-2]), float(out[-1])
+            self._out = out
+            obs = out[:self._n_obs]
             score = self._accuracy() if self.reward == "accuracy" else self._logdet
             reward = score - self._score
             self._score = score
             departure = self._envelope(values)
+        else:  # the values of the last interval flown
+            self._out = None
+            obs = np.add((k / self.decision_hz, *values[:self._n_obs - 1]),
+                         noise[:self._n_obs])
+        self._obs_hist.append(obs)
+        if self._scaled:
+            obs = (obs - self.obs_center) / self.obs_scale
         terminated = departure is not None
         if terminated:
             # "valid-information", "accuracy": a flight that left the envelope delivers no
@@ -604,20 +611,22 @@ class ExcitationEnv(gymnasium.Env):
     def _accuracy(self) -> float:
         """ACCURACY_SCALE x (1 - the mean over the targets of min(|estimate - truth| /
         |truth|, 1)): 0 for the prior's estimate (0), ACCURACY_SCALE for the truth."""
-        theta = self._info_state.theta
-        rel = sum(min(abs(theta[g][j] - t) / abs(t), 1.0)
-                  for (g, j), t in zip(self._est_at, self._truth_vec, strict=True))
-        return ACCURACY_SCALE * (1.0 - rel / len(self._truth_vec))
+        est = self._info_state.theta[self._est_at]
+        rel = np.minimum(np.abs(est - self._truth) / np.abs(self._truth), 1.0)
+        return float(ACCURACY_SCALE * (1.0 - np.mean(rel)))
 
     def _info(self, departure: str | None) -> dict[str, Any]:
         inf = self._info_state
         # S^-1 is the derivative block of M^-1 (the bias a nuisance parameter)
         # (rounding could make a variance that is 0 in exact arithmetic slightly negative)
-        crb = [math.sqrt(max(0.0, inf.inv[d][j][j])) for d, j in self._crb_at]
-        est = [inf.theta[g][j] for g, j in self._est_at]
-        error = [e - t for e, t in zip(est, self._truth_vec, strict=True)]
-        info: dict[str, Any] = {"crb": np.array(crb), "estimate": np.array(est),
-                                "error": np.array(error), "logdet": self._logdet,
+        if self._out is None:  # at reset, or after a step that departed
+            g, j = self._est_at
+            crb = np.sqrt(np.maximum(inf.inv[self._places[:, 0], j, j], 0.0))
+            est = inf.theta[g, j]
+        else:
+            crb, est = self._out[self._crb_slice], self._out[self._est_slice]
+        info: dict[str, Any] = {"crb": crb, "estimate": est,
+                                "error": est - self._truth, "logdet": self._logdet,
                                 "time": self._k / self.decision_hz,
                                 "validity": self._weight}
         if departure is not None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 from flightid.sim.augment.document import (
+    FT_PER_M,
     MASS_KEYWORD,
     POSITIONS,
     AugmentError,
@@ -18,6 +19,7 @@ from flightid.sim.augment.document import (
 from flightid.sim.effects.airframe import (
     ControlEffectiveness,
     DerivativeDelta,
+    DerivativeTable,
     TailIce,
 )
 
@@ -80,25 +82,53 @@ def _targets(axes: str, coef: str, force: str, moment: str) -> list[tuple[str, s
 
 
 def derivative_delta(doc: Document, e: DerivativeDelta) -> None:
-    coef, var = e.derivative[1:].split("_", 1)
+    form = " x abs(variable)" if e.form == "even" else ""
+    _derivative_term(doc, e.derivative, e.axes, lambda s: [val_el(s * e.delta)],
+                     f"derivative_delta {e.derivative} {e.delta:+.6g} per rad{form}",
+                     even=e.form == "even")
+
+
+# what a derivative_table reads, and the factor from the card's unit to the property's
+SCHEDULE_PROPERTY = {"airspeed": ("velocities/vt-fps", FT_PER_M), "alpha": ("aero/alpha-rad", 1.0)}
+
+
+def derivative_table(doc: Document, e: DerivativeTable) -> None:
+    prop, scale = SCHEDULE_PROPERTY[e.schedule]
+
+    def table(s: float) -> list[ET.Element]:
+        rows = (f"\n{e.low * scale!r} {s * e.delta_low!r}\n"
+                f"{e.high * scale!r} {s * e.delta_high!r}\n")
+        return [xml_el("table", xml_el("independentVar", text=prop, lookup="row"),
+                       xml_el("tableData", text=rows))]
+
+    unit = "m/s" if e.schedule == "airspeed" else "rad"
+    _derivative_term(doc, e.derivative, e.axes, table,
+                     f"derivative_table {e.derivative} {e.delta_low:+.6g} at {e.schedule} "
+                     f"{e.low:g} {unit} to {e.delta_high:+.6g} at {e.high:g} {unit} per rad")
+
+
+def _derivative_term(doc: Document, derivative: str, axes: str, value, what: str,
+                     even: bool = False) -> None:
+    """Add ``value(sign)`` (the delta's elements, times the sign) x the derivative's
+    variable (its absolute value when ``even``) as a term of the derivative's
+    coefficient, rotated into the model's axes."""
+    coef, var = derivative[1:].split("_", 1)
     force, moment = doc.frames()
-    factors, sign = _variable(var, e.axes)
-    if e.form == "even":  # delta x |variable|: its sign no longer matters
+    factors, sign = _variable(var, axes)
+    if even:  # delta x |variable|: its sign no longer matters
         factors, sign = [*factors[:-1], xml_el("abs", factors[-1])], 1.0
     length = {"l": "metrics/bw-ft", "n": "metrics/bw-ft", "m": "metrics/cbarw-ft"}.get(coef)
     n = sum(1 for _ in doc.aero().iter("function"))
-    for axis, trig, s in _targets(e.axes, coef, force, moment):
+    for axis, trig, s in _targets(axes, coef, force, moment):
         product = [prop_el("aero/qbar-area"), *([prop_el(length)] if length else []),
                    *[_clone(f) for f in factors], *([trig_el(trig)] if trig else []),
-                   val_el(s * sign * e.delta)]
-        form = " x abs(variable)" if e.form == "even" else ""
-        fn = xml_el("function", xml_el("description", text=f"augment: {e.derivative} delta "
-                                 f"{e.delta:g}{form} ({e.axes} axes)"),
-                 xml_el("product", *product), name=f"aero/augment/{e.derivative}-{n}-{axis}")
+                   *value(s * sign)]
+        fn = xml_el("function", xml_el("description", text=f"augment: {what} ({axes} axes)"),
+                    xml_el("product", *product), name=f"aero/augment/{derivative}-{n}-{axis}")
         n += 1
         rot = f" x {trig}(alpha), rotated into this {axis} axis" if trig else ""
-        doc.add_term(axis, f"added by flightid augment: derivative_delta {e.derivative} "
-                     f"{e.delta:+.6g} per rad{form} ({e.axes} axes){rot}: model mismatch", fn)
+        doc.add_term(axis, f"added by flightid augment: {what} ({axes} axes){rot}: "
+                     "model mismatch", fn)
 
 
 def _clone(el: ET.Element) -> ET.Element:

@@ -11,6 +11,8 @@ JSBSim's own means, each preceded by an XML comment naming the effect and its ma
   numerical truth (``flightid.sim.jsbsim.truth.derivatives``) in the stated axes moves by exactly
   the delta. (Exact for every derivative but the alpha derivatives of a rotated lateral
   moment when an added lateral term is nonzero at trim.)
+- ``derivative_table``: the same term with a ``<table>`` in the true airspeed or alpha in
+  place of the constant delta (a condition-dependent model error).
 - ``control_effectiveness``: every aerodynamic term that reads the surface (directly or
   through a helper function of the aerodynamics section) multiplied by the factor.
 - ``cg_offset``, ``mass_scale``, ``inertia_scale``: the ``<mass_balance>`` section (the CG
@@ -46,7 +48,12 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
-from flightid.sim.augment.aero import control_effectiveness, derivative_delta, tail_ice
+from flightid.sim.augment.aero import (
+    control_effectiveness,
+    derivative_delta,
+    derivative_table,
+    tail_ice,
+)
 from flightid.sim.augment.document import (
     AugmentError,
     Document,
@@ -64,6 +71,7 @@ from flightid.sim.effects.airframe import (
     ControlEffectiveness,
     Deadband,
     DerivativeDelta,
+    DerivativeTable,
     InertiaScale,
     MassScale,
     RateLimit,
@@ -160,7 +168,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
 def _check_unique(effects: Sequence[AugmentEffect]) -> None:
     seen: set[tuple] = set()
     for e in effects:
-        if isinstance(e, DerivativeDelta | ControlEffectiveness):
+        if isinstance(e, DerivativeDelta | DerivativeTable | ControlEffectiveness):
             continue  # these add up
         key = (e.name, e.options().get("surface", ""))
         if key in seen:
@@ -171,6 +179,7 @@ def _check_unique(effects: Sequence[AugmentEffect]) -> None:
 
 _APPLY = {
     DerivativeDelta: derivative_delta,
+    DerivativeTable: derivative_table,
     ControlEffectiveness: control_effectiveness,
     CgOffset: cg_offset,
     MassScale: mass_scale,

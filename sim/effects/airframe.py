@@ -92,6 +92,49 @@ class DerivativeDelta(AugmentEffect):
         return self.delta == 0.0
 
 
+SCHEDULE_CHOICES = ("airspeed", "alpha")
+
+
+@dataclass(kw_only=True)
+class DerivativeTable(AugmentEffect):
+    """A delta to one derivative that depends on the condition: a JSBSim <table> in the
+    true airspeed (m/s) or the angle of attack (rad), ``delta_low`` at ``low`` and below,
+    ``delta_high`` at ``high`` and above, linear between (a table clamps at its ends)."""
+
+    name: ClassVar[str] = "derivative_table"
+    delta_low: float = 0.02
+    delta_high: float = -0.02
+    low: float = 50.0
+    high: float = 75.0
+    derivative: str = "Cn_beta"
+    axes: str = "stability"
+    schedule: str = "airspeed"
+
+    def __post_init__(self) -> None:
+        self._choice("axes", AXES_CHOICES)
+        self._choice("schedule", SCHEDULE_CHOICES)
+        self._finite("delta_low", "delta_high", "low", "high")
+        ok = tuple(f"C{c}_{v}" for c in COEFS[self.axes] for v in VARIABLES)
+        if self.derivative not in ok:
+            raise ValueError(f"{self.name}: field 'derivative': {self.derivative!r} is not a "
+                             f"derivative in {self.axes} axes; one of {', '.join(ok)}")
+        if not self.high > self.low:
+            raise ValueError(f"{self.name}: field 'high' ({self.high:g}) must be above "
+                             f"'low' ({self.low:g})")
+        if self.schedule == "alpha" and self.derivative.endswith(("_alpha", "_alphadot")):
+            # the term delta(alpha) alpha would have the slope delta + alpha delta'(alpha)
+            raise ValueError(f"{self.name}: field 'schedule': {self.derivative} cannot be "
+                             "scheduled in alpha (its own variable); schedule it in airspeed")
+
+    def neutral(self) -> bool:
+        return self.delta_low == 0.0 and self.delta_high == 0.0
+
+    def at(self, x: float) -> float:
+        """The delta at ``x`` (m/s or rad, as ``schedule``): the table's value."""
+        w = min(1.0, max(0.0, (x - self.low) / (self.high - self.low)))
+        return self.delta_low + w * (self.delta_high - self.delta_low)
+
+
 @dataclass(kw_only=True)
 class ControlEffectiveness(AugmentEffect):
     """Every aerodynamic term that depends on a surface scaled by a factor."""
@@ -261,8 +304,8 @@ class ActuatorBias(_Surface):
         return self.bias == 0.0
 
 
-AIRFRAME_EFFECTS = (DerivativeDelta, ControlEffectiveness, CgOffset, MassScale, InertiaScale,
-                    ThrustMoment, TailIce)
+AIRFRAME_EFFECTS = (DerivativeDelta, DerivativeTable, ControlEffectiveness, CgOffset, MassScale,
+                    InertiaScale, ThrustMoment, TailIce)
 ACTUATOR_EFFECTS = (ActuatorLag, RateLimit, Deadband, Backlash, ActuatorBias)
 # in series at the surface position (what the record's de/da/dr shows)
 DYNAMIC = (ActuatorLag, RateLimit)

@@ -31,6 +31,7 @@ from flightid.sim.effects.airframe import (
     AXES_CHOICES,
     DERIVATIVES,
     FORM_CHOICES,
+    SCHEDULE_CHOICES,
     SURFACE_CHOICES,
     ActuatorBias,
     ActuatorLag,
@@ -39,6 +40,7 @@ from flightid.sim.effects.airframe import (
     ControlEffectiveness,
     Deadband,
     DerivativeDelta,
+    DerivativeTable,
     InertiaScale,
     MassScale,
     RateLimit,
@@ -237,6 +239,22 @@ CATALOGUE = Catalogue((
                    Option("form", FORM_CHOICES, "linear",
                           "linear: delta x variable; even: delta x abs(variable), a term "
                           "even in the variable (one-sided slopes apart by 2 delta)"))),
+    Entry("derivative_table", ActsOn.AIRFRAME, "delta to one derivative as a table in "
+          "airspeed or alpha (a JSBSim <table> term): a condition-dependent error",
+          (_p("delta_low", "1/rad", "delta at and below 'low', per rad (per unit "
+              "nondimensional rate for p q r alphadot)", 0.02),
+           _p("delta_high", "1/rad", "delta at and above 'high' (linear between)", -0.02),
+           # breakpoints shape the table without sizing it: no neutral value
+           _p("low", "m/s or rad", "first breakpoint (airspeed m/s, or alpha rad)", 50.0,
+              neutral=None),
+           _p("high", "m/s or rad", "last breakpoint, above 'low'", 75.0, neutral=None)),
+          DerivativeTable, ("r", "beta"),
+          options=(Option("derivative", DERIVATIVES, "Cn_beta",
+                          "the derivative, C<coef>_<var> (flightid.derivatives)"),
+                   Option("axes", AXES_CHOICES, "stability",
+                          "axes of the delta, as derivative_delta"),
+                   Option("schedule", SCHEDULE_CHOICES, "airspeed",
+                          "what the table reads: true airspeed (m/s) or alpha (rad)"))),
     Entry("control_effectiveness", ActsOn.AIRFRAME, "every aerodynamic term reading a "
           "surface scaled (effectiveness loss, tail ice)",
           (_p("factor", "1", "scale of the surface's terms", 0.8, 0.0, neutral=1.0),),

@@ -1,0 +1,82 @@
+"""Wall time of a 20-point campaign (``flightid.scenarios.campaign.run``) on 2 cores.
+
+The campaign flies the twinotter-id card's maneuvers (28 s each, research sensors) at 20
+test points: altitude 1500 and 1900 m x airspeed 50, 55, 60, 65, 70 m/s x mass scale 1.0
+and 1.1; every point is reduced and identified by output error (``--method``, default
+oe6dof: 6-DOF output error, 24 derivatives; oe: the linear lateral model), in ``workers``
+local processes, into a fresh folder. The wall time includes everything ``run`` does
+(worker start-up, flights, trims, fits, Parquet rows, the model curve and the report).
+Writes benchmarks/results/campaign_speed-<method>.txt and .json.
+
+    .venv/bin/python benchmarks/campaign_speed.py [--workers 2] [--method oe6dof]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+from flightid.scenarios import campaign
+from flightid.scenarios.campaign.card import campaign_from_dict
+
+RESULTS = Path(__file__).resolve().parent / "results"
+TARGET_S = 300.0  # issue 35: a 20-point campaign with output error on 2 cores <= 5 min
+MODELS = {"oe6dof": ("6dof", {"propulsive_moments": True}), "oe": ("lat", {})}
+
+
+def card(method: str) -> dict:
+    model, options = MODELS[method]
+    return {"name": "bench-20", "card": "twinotter-id", "method": method, "model": model,
+            "options": options, "seed": 1, "x": "speed",
+            "matrix": {"altitude": [1500.0, 1900.0], "speed": [50.0, 55.0, 60.0, 65.0, 70.0],
+                       "mass": [1.0, 1.1]}}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--method", choices=sorted(MODELS), default="oe6dof")
+    args = ap.parse_args()
+    c = campaign_from_dict(card(args.method), "bench-20")
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        result = campaign.run(c, Path(tmp) / "campaign", workers=args.workers)
+        wall = time.perf_counter() - t0
+    scores = result.scores
+    failed = [s.index for s in scores if not s.estimated]
+    shares = [s.share for s in scores if s.estimated]
+    load = os.getloadavg()
+    out = {"date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+           "points": c.n, "method": args.method, "workers": args.workers,
+           "wall_s": round(wall, 1), "per_point_s": round(wall / c.n, 2),
+           "target_s": TARGET_S, "meets_target": wall <= TARGET_S,
+           "failed_points": failed,
+           "min_share_within_3_sigma": min(shares) if shares else None,
+           "mean_share_within_3_sigma": sum(shares) / len(shares) if shares else None,
+           "cpus": os.cpu_count(), "load_average_after": [round(x, 2) for x in load],
+           "machine": platform.machine(), "python": platform.python_version(),
+           "note": "measured on a machine shared with other users' jobs (load average "
+                   "above)"}
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / f"campaign_speed-{args.method}.json").write_text(json.dumps(out, indent=2) + "\n")
+    lines = [f"20-point campaign (twinotter-id maneuvers, {args.method}), {args.workers} "
+             f"workers, {out['date']}",
+             f"python {out['python']}, {out['machine']}, {out['cpus']} CPUs; shared machine, "
+             f"load average after the run {out['load_average_after']}",
+             f"wall {out['wall_s']} s ({out['per_point_s']} s per point), target "
+             f"<= {TARGET_S:g} s: {'met' if out['meets_target'] else 'missed'}",
+             f"failed points: {failed or 'none'}; share of estimates within 3 sigma per "
+             f"point: min {out['min_share_within_3_sigma']:.2f}, mean "
+             f"{out['mean_share_within_3_sigma']:.2f}"]
+    (RESULTS / f"campaign_speed-{args.method}.txt").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,143 @@
+"""Flight-test campaigns: a matrix of test points flown with one flight card's maneuvers,
+every point identified, the estimates set against the model's tables across the envelope.
+
+    from flightid.scenarios import campaign
+    result = campaign.run("twinotter-envelope", "campaigns/twinotter")
+
+Modules: ``card`` (the campaign card), ``point`` (fly, reduce, identify, score one point),
+``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html).
+The points run on the Monte Carlo executors (local processes or Dask) and are stored as
+the Monte Carlo store stores realizations (one Parquet file per point, atomically), so a
+rerun continues. docs/campaign.md.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from flightid.scenarios.campaign.card import Campaign, TestPoint, load_campaign, point_card
+from flightid.scenarios.campaign.curve import model_curve
+from flightid.scenarios.campaign.point import run_point
+from flightid.scenarios.campaign.report import PointScore, point_scores, write_report
+from flightid.scenarios.campaign.update import (
+    correction_effects,
+    corrections,
+    held_out_gaps,
+    summary,
+    write_updated,
+)
+from flightid.scenarios.montecarlo import store
+from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
+
+ESTIMATES = "estimates.parquet"
+CURVE = "model_curve.parquet"
+UPDATE = "update.json"
+
+__all__ = ["Campaign", "CampaignResult", "TestPoint", "load_campaign", "point_card", "run"]
+
+
+@dataclass
+class CampaignResult:
+    """A finished campaign: its folder, the per-point rows, the model curve, the scores."""
+
+    folder: Path
+    campaign: Campaign
+    estimates: pd.DataFrame
+    curve: pd.DataFrame
+    scores: list[PointScore]
+    report: Path
+    update: dict | None = None  # corrections and held-out gaps (``update.summary``)
+    aircraft: Path | None = None  # the updated aircraft's XML
+
+
+def run(card: str | Path | Campaign, output: str | Path, workers: int | None = None,
+        dask_address: str | None = None, dask_scheduler_file: str | None = None,
+        progress: Callable[[int, int], None] | None = None,
+        update_aircraft: str | Path | None = None) -> CampaignResult:
+    """Fly and identify every test point of ``card`` not yet stored in ``output``, then
+    write OUTPUT/estimates.parquet (one row per point and derivative), OUTPUT/
+    model_curve.parquet and OUTPUT/report.html. ``workers`` local processes (default one
+    per CPU) or a Dask scheduler; ``progress(done, total)`` after each point. A folder
+    holding another campaign is refused (``store.StudyMismatch``). ``update_aircraft``:
+    write the model aircraft with its tables relocated to the flight points there, fly the
+    held-out points and put the gap before and after into OUTPUT/update.json."""
+    campaign = card if isinstance(card, Campaign) else load_campaign(card)
+    folder = Path(output)
+
+    def keep(index: int, rows: list[dict]) -> None:
+        store.write_realization(folder, index, rows)
+
+    if dask_address is not None or dask_scheduler_file is not None:
+        with dask_client(dask_address, dask_scheduler_file) as client:
+            store.open_study(folder, campaign)  # type: ignore[arg-type]
+            todo = sorted(set(range(campaign.n)) - store.done(folder))
+            run_dask(campaign, todo, keep, client, progress, task=run_point,
+                     key=f"flightid-campaign-{campaign.identity()['card_sha256'][:12]}")
+    else:
+        store.open_study(folder, campaign)  # type: ignore[arg-type]
+        todo = sorted(set(range(campaign.n)) - store.done(folder))
+        run_local(campaign, todo, keep, workers, progress, task=run_point)
+    df = store.load(folder)
+    df = df[df["index"] < campaign.n].reset_index(drop=True)
+    df.to_parquet(folder / ESTIMATES, index=False)
+    curve = _curve(campaign, df, folder)
+    if update_aircraft is None:
+        report = write_report(folder, campaign, df, curve)
+        return CampaignResult(folder, campaign, df, curve, point_scores(df), report)
+    fitted = corrections(campaign, df)
+    effects = correction_effects(campaign, df, fitted)
+    xml = write_updated(campaign, effects, update_aircraft)
+    result = summary(fitted, held_out_gaps(campaign, effects))
+    result["aircraft"] = str(xml)
+    result["effects"] = [e.to_dict() for e in effects]
+    (folder / UPDATE).write_text(json.dumps(result, indent=2, default=str) + "\n")
+    report = write_report(folder, campaign, df, curve, notes=_notes(result),
+                          updated=updated_curve(campaign, curve, effects))
+    return CampaignResult(folder, campaign, df, curve, point_scores(df), report, result, xml)
+
+
+def updated_curve(campaign: Campaign, curve: pd.DataFrame, effects: list) -> pd.DataFrame:
+    """The model curve with the correction effects' deltas added (what the updated
+    aircraft's tables say along the campaign's path)."""
+    out = curve.copy()
+    for e in effects:
+        rows = out["name"] == e.derivative
+        if hasattr(e, "at"):
+            x = out.loc[rows, "speed" if e.schedule == "airspeed" else "alpha"]
+            out.loc[rows, "model"] += [e.at(float(v)) for v in x]
+        else:
+            out.loc[rows, "model"] += e.delta
+    return out
+
+
+def _notes(result: dict) -> list[str]:
+    kept = [c for c in result["corrections"] if c["form"] != "none"]
+    lines = [f"database update: {len(kept)} derivative(s) corrected: " + ", ".join(
+        f"{c['name']} ({c['form']})" for c in kept)]
+    for axis, shrink in result["shrink"].items():
+        if result["mean"]:
+            m = result["mean"]
+            lines.append(f"held-out gap, {axis}: {m['before'][axis]:.4f} before, "
+                         f"{m['after'][axis]:.4f} after ({100 * shrink:.0f} % smaller); the "
+                         f"flown aircraft itself {m['floor'][axis]:.4f}: the model's part "
+                         f"{100 * result['shrink_above_floor'][axis]:.0f} % smaller")
+    for name, g in result["derivative_gap"].items():
+        lines.append(f"held-out {name}: RMS error {g['model']:.4g} before, {g['updated']:.4g} "
+                     "after")
+    return lines
+
+
+def _curve(campaign: Campaign, df: pd.DataFrame, folder: Path) -> pd.DataFrame:
+    """The model curve, computed once per campaign folder (it depends on the card only)."""
+    path = folder / CURVE
+    if path.is_file():
+        return pd.read_parquet(path)
+    alphas = df.groupby("index")["alpha"].first().to_dict()
+    curve = model_curve(campaign, alphas)
+    curve.to_parquet(path, index=False)
+    return curve

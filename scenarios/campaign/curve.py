@@ -1,0 +1,81 @@
+"""The model's curve between the test points: the JSBSim tables' derivatives along the
+campaign's path through the envelope.
+
+The points are ordered by the campaign's x (speed, altitude, flaps, mass, cg_x, or the
+trim alpha) and joined by straight lines in condition space (altitude, speed, flaps,
+mass, CG); ``STEPS`` conditions are taken on each segment. At each, the model aircraft
+(the flight card's aircraft with the condition's mass and CG, without the campaign's
+other effects) is trimmed and its exact derivatives taken (``sim.jsbsim.truth.derivatives``,
+body axes), so the curve is what the aircraft's tables say between the flight points.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from flightid.scenarios.campaign.card import Campaign, TestPoint, point_card
+from flightid.scenarios.campaign.point import model_values
+from flightid.sim.jsbsim.trim import TrimError
+
+STEPS = 3  # conditions per segment between two neighbouring points (the first included)
+MAX_CONDITIONS = 40  # the curve's conditions at most (fewer steps for many points)
+CURVE_COLUMNS = ("condition", "altitude", "speed", "flaps", "mass", "cg_x", "alpha", "name",
+                 "model")
+
+
+def ordered_points(campaign: Campaign, alphas: dict[int, float] | None = None
+                   ) -> list[TestPoint]:
+    """The campaign's points ordered by its x (the trim alpha from ``alphas``, {point
+    index: rad}, when x is alpha), duplicates of a condition once."""
+    def key(item: tuple[int, TestPoint]) -> float:
+        i, p = item
+        if campaign.x == "alpha":
+            return (alphas or {}).get(i, math.nan)
+        return float(getattr(p, campaign.x))
+
+    items = [it for it in enumerate(campaign.points) if math.isfinite(key(it))]
+    out: list[TestPoint] = []
+    for _, p in sorted(items, key=key):
+        if p not in out:
+            out.append(p)
+    return out
+
+
+def path_conditions(points: list[TestPoint], steps: int = STEPS) -> list[TestPoint]:
+    """Conditions on the straight segments between consecutive ``points``: ``steps`` per
+    segment (the segment's first point included) and the last point."""
+    if len(points) < 2:
+        return list(points)
+    steps = max(1, min(steps, (MAX_CONDITIONS - 1) // (len(points) - 1)))
+    out = []
+    for a, b in zip(points[:-1], points[1:], strict=True):
+        for s in np.arange(steps) / steps:
+            out.append(TestPoint(*(float(x + s * (y - x)) for x, y in
+                                   zip(_values(a), _values(b), strict=True))))
+    out.append(points[-1])
+    return out
+
+
+def _values(p: TestPoint) -> tuple[float, ...]:
+    return p.altitude, p.speed, p.flaps, p.mass, p.cg_x
+
+
+def model_curve(campaign: Campaign, alphas: dict[int, float] | None = None,
+                steps: int = STEPS) -> pd.DataFrame:
+    """The model's derivatives along the campaign's path: one row per (condition,
+    derivative), columns ``CURVE_COLUMNS`` (``alpha`` the model's trim alpha, rad). A
+    condition the model cannot be trimmed at is left out."""
+    rows: list[dict[str, Any]] = []
+    for k, cond in enumerate(path_conditions(ordered_points(campaign, alphas), steps)):
+        try:
+            alpha, values = model_values(point_card(campaign, cond, with_effects=False))
+        except TrimError:
+            continue
+        for name, value in values.items():
+            rows.append({"condition": k, **cond.as_dict(), "alpha": alpha, "name": name,
+                         "model": float(value)})
+    return pd.DataFrame(rows, columns=list(CURVE_COLUMNS))

@@ -1,0 +1,179 @@
+"""``--update-aircraft OUT/``: the model aircraft with its tables relocated to the flight
+points, written as a JSBSim aircraft, and the gap on held-out test points before and after.
+
+Per derivative, ``identification.envelope_fit.fit_correction`` relocates the model curve
+to the campaign's estimates (the F-111C approach). Each kept correction becomes a catalogue
+effect: a ``shift`` a ``derivative_delta``; a ``scale`` or ``shift+slope`` a
+``derivative_table`` in the campaign's x (airspeed or alpha) between the outermost points
+(the table holds its end values beyond them), a ``scale`` a ``derivative_delta`` when x
+cannot carry a table. ``sim.augment.augment`` writes them into OUT/aircraft/<name>/.
+
+The held-out points (``[[held_out]]``) are flown with the flown aircraft (the campaign's
+effects included) and its sensors; the measured record, reduced as at the test points, is
+flown again open loop with its measured surfaces by the model and by the updated aircraft
+(``identification.gap.correct.fly_record``), and the gap is the gap diagnosis's: per
+channel, residual over measured energy, means removed (``gap_fractions``), averaged over
+each axis's channels. The flown aircraft re-flown the same way gives the floor: the gap a
+perfect model would leave (open loop from trim, the slow modes drift; sensor noise).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from flightid.identification.data.reduction import reduce_record
+from flightid.identification.envelope_fit import Correction, fit_correction
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
+from flightid.identification.gap.correct import fly_record, gap_fractions
+from flightid.identification.gap.linearise import AXIS_OUTPUTS
+from flightid.scenarios.campaign.card import Campaign, point_card
+from flightid.scenarios.campaign.point import model_values
+from flightid.scenarios.cards import augmented, card_from_dict, fly_card, sub_seed
+from flightid.sim.augment import augment
+from flightid.sim.effects.airframe import (
+    DERIVATIVES,
+    AugmentEffect,
+    DerivativeDelta,
+    DerivativeTable,
+)
+from flightid.sim.jsbsim.model import quiet
+
+SCHEDULES = {"speed": "airspeed", "alpha": "alpha"}
+# the condition each estimate stands for (point.flown_condition), by the campaign's x
+FLOWN = {"speed": "speed_flown", "alpha": "alpha_flown"}
+
+
+def _x(campaign: Campaign, rows: pd.DataFrame) -> np.ndarray:
+    """The x of each estimate: its flown condition where the campaign's x has one."""
+    column = FLOWN.get(campaign.x, campaign.x)
+    return rows[column if column in rows else campaign.x].to_numpy()
+
+
+def corrections(campaign: Campaign, df: pd.DataFrame) -> list[Correction]:
+    """Per estimated derivative, its model curve relocated to the flight points."""
+    est = df[df["status"] == STATUS_ESTIMATED]
+    out = []
+    for name, rows in est.groupby("name", sort=True):
+        trend = campaign.x in SCHEDULES and not (
+            campaign.x == "alpha" and str(name).endswith(("_alpha", "_alphadot")))
+        out.append(fit_correction(str(name), _x(campaign, rows),
+                                  rows["estimate"].to_numpy(), rows["std"].to_numpy(),
+                                  rows["model"].to_numpy(), trend=trend))
+    return out
+
+
+def correction_effects(campaign: Campaign, df: pd.DataFrame, fitted: list[Correction]
+                       ) -> list[AugmentEffect]:
+    """The catalogue effects that write the kept corrections into the model aircraft."""
+    effects: list[AugmentEffect] = []
+    est = df[df["status"] == STATUS_ESTIMATED]
+    for c in fitted:
+        if c.form == "none" or c.name not in DERIVATIVES:
+            continue
+        rows = est[est["name"] == c.name]
+        order = np.argsort(_x(campaign, rows))
+        x, m = _x(campaign, rows)[order], rows["model"].to_numpy()[order]
+        if c.form == "shift" or campaign.x not in SCHEDULES or np.ptp(x) == 0:
+            delta = float(np.mean(c.delta(x, m)))
+            effects.append(DerivativeDelta(delta=delta, derivative=c.name, axes="body"))
+            continue
+        effects.append(DerivativeTable(
+            derivative=c.name, axes="body", schedule=SCHEDULES[campaign.x],
+            low=float(x[0]), high=float(x[-1]), delta_low=float(c.delta(x[0], m[0])),
+            delta_high=float(c.delta(x[-1], m[-1]))))
+    return effects
+
+
+def write_updated(campaign: Campaign, effects: list[AugmentEffect], folder: str | Path
+                  ) -> Path:
+    """OUT/aircraft/<aircraft>-updated/<aircraft>-updated.xml: the model aircraft with the
+    corrections (plain JSBSim loads it from OUT)."""
+    return augment(campaign.aircraft, effects, folder, name=f"{campaign.aircraft}-updated")
+
+
+@dataclass
+class HeldOutGap:
+    """One held-out point: its condition and, per axis, the gap (residual over measured
+    energy, mean over the axis's channels) of the model and of the updated aircraft."""
+
+    index: int
+    altitude: float
+    speed: float
+    before: dict[str, float] = field(default_factory=dict)
+    after: dict[str, float] = field(default_factory=dict)
+    # the flown aircraft itself re-flown: the gap a perfect model leaves (open loop from
+    # trim, measured surfaces and channels; known only in simulation)
+    floor: dict[str, float] = field(default_factory=dict)
+    # per corrected derivative: the exact values of the flown, model and updated aircraft
+    derivatives: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def shrink(self, axis: str) -> float:
+        """(before - after) / before on ``axis``."""
+        b, a = self.before.get(axis, math.nan), self.after.get(axis, math.nan)
+        return (b - a) / b if b > 0 else math.nan
+
+
+def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[HeldOutGap]:
+    """Fly every held-out point and its gap with the model and with the model plus the
+    correction ``effects`` (the updated aircraft, with the point's mass and CG)."""
+    out = []
+    for i, p in enumerate(campaign.held_out):
+        gap = HeldOutGap(i, p.altitude, p.speed)
+        with quiet(), contextlib.redirect_stdout(io.StringIO()):
+            measured, _ = fly_card(point_card(campaign, p), sub_seed(campaign.seed,
+                                                                       f"held_out:{i}"))
+            record = reduce_record(measured).record
+            model = point_card(campaign, p, with_effects=False)
+            data = dict(model.data)
+            data["effect"] = [*data.get("effect", []), *(e.to_dict() for e in effects)]
+            updated = card_from_dict(data, f"{campaign.path} (held-out point {i}, updated)")
+            real = point_card(campaign, p)
+            for key, card in (("before", model), ("after", updated), ("floor", real)):
+                flown = fly_record(augmented(card) if card.augmentation else card.aircraft,
+                                   record)
+                for axis, outputs in AXIS_OUTPUTS.items():
+                    fractions = gap_fractions(record, flown, outputs)
+                    getattr(gap, key)[axis] = float(np.nanmean(list(fractions.values())))
+            values = {k: model_values(c)[1] for k, c in
+                      (("flown", real), ("model", model), ("updated", updated))}
+        gap.derivatives = {e.derivative: {k: float(v[e.derivative]) for k, v in values.items()}
+                           for e in effects}
+        out.append(gap)
+    return out
+
+
+def summary(fitted: list[Correction], gaps: list[HeldOutGap]) -> dict[str, Any]:
+    """The corrections and the held-out gaps as plain data (update.json): per axis the
+    mean gap before, after and of the flown aircraft itself (floor), the shrink
+    (before - after) / before and the shrink of the model's part of the gap,
+    (before - after) / (before - floor); per corrected derivative the RMS over the
+    held-out points of model minus flown and updated minus flown."""
+    axes = list(AXIS_OUTPUTS)
+    mean = {key: {a: float(np.nanmean([getattr(g, key).get(a, math.nan) for g in gaps]))
+                  for a in axes} for key in ("before", "after", "floor")} if gaps else {}
+
+    def ratio(a: str, floor: bool) -> float:
+        if not mean:
+            return math.nan
+        b, f = mean["before"][a], mean["floor"][a] if floor else 0.0
+        return (b - mean["after"][a]) / (b - f) if b - f > 0 else math.nan
+
+    names = sorted({n for g in gaps for n in g.derivatives})
+    derivative_gap = {n: {k: float(np.sqrt(np.mean([(g.derivatives[n][k]
+                                                      - g.derivatives[n]["flown"]) ** 2
+                                                     for g in gaps if n in g.derivatives])))
+                          for k in ("model", "updated")} for n in names}
+    return {"corrections": [asdict(c) for c in fitted],
+            "held_out": [asdict(g) | {"shrink": {a: g.shrink(a) for a in axes}} for g in gaps],
+            "mean": mean,
+            "shrink": {a: ratio(a, False) for a in axes},
+            "shrink_above_floor": {a: ratio(a, True) for a in axes},
+            "derivative_gap": derivative_gap}

@@ -1,0 +1,130 @@
+"""Flight-test campaigns (issue 35 item 1): the library Twin Otter campaign over three
+conditions, flown, reduced and identified by 6-DOF output error at every point, with
+>= 90 % of the estimates within 3 standard errors of the exact JSBSim truth per point."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from dask import distributed
+
+from flightid.scenarios import campaign
+from flightid.scenarios.campaign.card import TestPoint as Point
+from flightid.scenarios.campaign.card import campaign_from_dict, load_campaign
+from flightid.scenarios.cards import CardError
+from flightid.scenarios.montecarlo.store import StudyMismatch, result_path
+
+# the issue's target: 3 corrected Cramer-Rao bounds hold 99.7 % of a correct estimator's
+# errors; a campaign point may keep the odd structure error (CX_alpha at 72.2 m/s, where
+# the card's alpha leaves the XML's linear drag range: docs/campaign.md)
+SHARE = 0.90
+
+
+@pytest.fixture(scope="module")
+def flown(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("campaign")
+    return campaign.run("twinotter-envelope", folder, workers=2)
+
+
+def test_library_campaign_has_the_three_conditions():
+    c = load_campaign("twinotter-envelope")
+    assert [(p.altitude, round(p.speed, 1)) for p in c.points] == [
+        (1897.0, 61.7), (1890.0, 72.2), (1500.0, 50.0)]
+
+
+def test_every_point_puts_90_percent_within_3_sigma(flown):
+    scores = flown.scores
+    assert len(scores) == 3
+    for s in scores:
+        assert s.estimated == 24, s
+        assert s.share >= SHARE, s
+
+
+def test_estimates_table_has_the_conditions_and_the_model(flown):
+    df = pd.read_parquet(flown.folder / campaign.ESTIMATES)
+    assert set(df["index"]) == {0, 1, 2}
+    assert {"altitude", "speed", "flaps", "mass", "cg_x", "alpha", "model"} <= set(df.columns)
+    # no campaign effect: the model is the flown aircraft
+    assert np.allclose(df["model"], df["truth"], equal_nan=True)
+    # the trim alpha falls with speed (1.98, 0.30, 4.84 deg measured)
+    alpha = df.groupby("index")["alpha"].first()
+    assert alpha[2] > alpha[0] > alpha[1]
+
+
+def test_report_has_one_figure_per_derivative(flown):
+    text = flown.report.read_text()
+    assert text.count("<img") == 24
+    assert (flown.folder / "derivative-Cm_alpha.png").is_file()
+    assert not flown.curve.empty and flown.curve["condition"].nunique() == 7
+
+
+def test_rerun_flies_nothing_again(flown):
+    stamps = {i: os.stat(result_path(flown.folder, i)).st_mtime_ns for i in range(3)}
+    again = campaign.run("twinotter-envelope", flown.folder, workers=1)
+    assert {i: os.stat(result_path(flown.folder, i)).st_mtime_ns for i in range(3)} == stamps
+    pd.testing.assert_frame_equal(again.estimates, flown.estimates)
+
+
+def test_another_campaign_in_the_folder_is_refused(flown):
+    other = load_campaign("twinotter-envelope")
+    data = {"card": "twinotter-id", "point": [{"altitude": 1000.0, "speed": 60.0}]}
+    with pytest.raises(StudyMismatch):
+        campaign.run(campaign_from_dict(data), flown.folder)
+    assert other.n == 3
+
+
+def test_matrix_is_full_factorial():
+    c = campaign_from_dict({"card": "twinotter-id",
+                            "matrix": {"altitude": [1500.0, 1900.0], "speed": [55.0, 60.0, 65.0],
+                                       "mass": [1.0, 1.1]}})
+    assert c.n == 12
+    assert Point(1900.0, 65.0, 0.0, 1.1, 0.0) in c.points
+
+
+@pytest.mark.parametrize("text, where", [
+    ('card = "twinotter-id"\nspeedo = 3\n[[point]]\naltitude = 1.0\nspeed = 50.0\n',
+     ":2: field 'speedo'"),
+    ('card = "twinotter-id"\n[[point]]\naltitude = 1.0\nspede = 50.0\n',
+     ":4: field 'point[0].spede'"),
+    ('card = "twinotter-id"\n[[point]]\naltitude = 1.0\n', "field 'speed' is required"),
+    ('card = "twinotter-id"\n', "no test point"),
+    ('card = "nosuchcard"\n[[point]]\naltitude = 1.0\nspeed = 50.0\n', "field 'card'"),
+    ('card = "twinotter-id"\nmethod = "nope"\n[[point]]\naltitude = 1.0\nspeed = 50.0\n',
+     "unknown method 'nope'"),
+    ('card = "twinotter-id"\nx = "mach"\n[[point]]\naltitude = 1.0\nspeed = 50.0\n',
+     "field 'x'"),
+])
+def test_bad_campaign_cards_name_the_field(tmp_path, text, where):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(CardError) as exc:
+        load_campaign(path)
+    assert where in str(exc.value)
+
+
+def test_command_exits_2_on_a_bad_card(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('card = "twinotter-id"\n')
+    run = subprocess.run([sys.executable, "-m", "flightid.cli.app", "campaign", str(path), "-o",
+                          str(tmp_path / "out")], capture_output=True, text=True)
+    assert run.returncode == 2, run.stderr
+    assert "no test point" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_dask_gives_the_numbers_of_local_processes(flown, tmp_path):
+    # the first point of the library campaign on a one-worker Dask cluster: the same
+    # rows as the local run (a point is a pure function of the campaign and its index)
+    one = campaign_from_dict({"card": "twinotter-id", "method": "oe6dof", "model": "6dof",
+                              "options": {"propulsive_moments": True}, "seed": 1,
+                              "point": [{"altitude": 1897.0, "speed": 61.733333}]})
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        on_dask = campaign.run(one, tmp_path / "dask", dask_address=cluster.scheduler_address)
+    local = flown.estimates[flown.estimates["index"] == 0].reset_index(drop=True)
+    cols = ["name", "estimate", "std", "truth", "speed_flown"]
+    pd.testing.assert_frame_equal(on_dask.estimates[cols], local[cols])
