@@ -15,6 +15,61 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 SHARED = Path(os.environ.get("FLIGHTID_SHARED", Path(__file__).resolve().parents[2] / "shared"))
 TWIN_OTTER = SHARED / "data" / "twin_otter" / "totter_f1_017_data.mat"
 
+# the test modules of several minutes' work, marked ``slow`` here in one place:
+# ``pytest -m "not slow"`` leaves them out (docs/architecture.md, "Tests"). Seconds: the
+# module's setup + call time measured with ``pytest -n 2 --durations=0`` on the shared
+# 2-core machine under load (about 2x an idle machine); a module is listed from 20 s.
+SLOW_MODULES: dict[str, float] = {
+    "contract/test_method_contract.py": 239,
+    "test_aircraft.py": 225,
+    "test_gap_candidates.py": 214,
+    "contract/test_effect_fitback.py": 189,
+    "test_gap_longitudinal.py": 183,
+    "test_gap_report.py": 181,
+    "test_montecarlo.py": 132,
+    "test_gap.py": 126,
+    "test_bridge_badinput.py": 117,
+    "test_card_recovery.py": 102,
+    "test_frequency_navion.py": 96,
+    "test_cli_identify.py": 88,
+    "test_bridge_properties.py": 84,
+    "test_compatibility.py": 82,
+    "test_bridge.py": 79,
+    "test_error_policy.py": 77,
+    "test_bridge_identification.py": 75,
+    "test_demo.py": 73,
+    "test_augment.py": 71,
+    "test_import_gap.py": 66,
+    "test_truth_recovery.py": 62,
+    "test_cli_errors.py": 62,
+    "test_bridge_replay.py": 62,
+    "badinput/test_confident.py": 60,
+    "test_montecarlo_shutdown.py": 59,
+    "test_gap_verdict.py": 58,
+    "test_bridge_loop.py": 54,
+    "test_design_compare.py": 54,
+    "test_campaign.py": 52,
+    "test_reference_outputs.py": 46,
+    "test_nonlinear_6dof.py": 46,
+    "test_gap_benchmark.py": 42,
+    "test_campaign_update.py": 41,
+    "test_default_recovery.py": 38,
+    "test_frequency_response.py": 29,
+    "badinput/test_generated.py": 26,
+    "test_import_ascii.py": 22,
+    "test_import_dataflash.py": 22,
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark every test of a module in ``SLOW_MODULES`` slow."""
+    root = Path(__file__).resolve().parent
+    for item in items:
+        module = Path(str(item.fspath)).resolve().relative_to(root).as_posix()
+        if module in SLOW_MODULES:
+            item.add_marker(pytest.mark.slow)
+
+
 # a card whose elevator doublet is far too big: the Navion departs after about 1.3 s (exit 3)
 DEPARTING_CARD = """name = "departs"
 duration = 6.0
