@@ -25,7 +25,7 @@ degrees with a ``_deg`` suffix). See ``scenarios/library/example.toml`` for a co
 
     [sensors]                   # optional; without it the measured record is the truth
     suite = "research"          # built-in suite (hobby, research, ideal) to start from
-    output_rate = 50.0          # other keys as flightid.sim.sensors.suites.suite_from_dict
+    output_rate = 50.0          # other keys as flightid.sim.sensors.tables.suite_from_dict
     drop = ["rpm"]              # channels or mounting effects to remove from the suite
     mounting = [{effect = "lever_arm", x = 0.3}]  # lever_arm, vanes, engine_vibration
     [sensors.channels]          # per-channel overrides replace that channel's chain
@@ -95,7 +95,9 @@ from flightid.sim.flight.simulation import DepartureError
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.sim.jsbsim.model import available, load
 from flightid.sim.jsbsim.trim import trim
-from flightid.sim.sensors.suites import SUITES, measure, suite_from_dict
+from flightid.sim.sensors.builtin import SUITES
+from flightid.sim.sensors.suites import measure
+from flightid.sim.sensors.tables import suite_from_dict
 from flightid.units import DEG
 
 LIBRARY = Path(__file__).resolve().parent / "library"

@@ -199,7 +199,7 @@ def flight(request):
 #   with Adams-Bashforth 2 (sim/jsbsim/model.py);
 # - the thrust and propulsive moments copied past the 10 Hz anti-alias filters (0.04 s
 #   ahead of every other channel): Cn_beta, Cn_r, Cn_dr +0.10 to +0.20 % -> +0.01 to
-#   +0.03 % through the same filter (sim/sensors/suites.py research_suite).
+#   +0.03 % through the same filter (sim/sensors/builtin.py research_suite).
 # What is left: the corrected bounds are 0.6-1.0 of the Monte Carlo scatter (Cl_p 0.92,
 # Cn_r 0.62, Cm_alpha 0.66, Cl_r 0.44), and CZ_q +1.3 % (+-0.4 %, bound 1.0 %).
 # Telemaster (hobby suite, linear models): no exception on the two seeds. Over seeds 1-20

@@ -18,6 +18,7 @@ from flightid.sim.effects import Bias, Quantization, WhiteNoise
 from flightid.sim.flight import simulation as flight
 from flightid.sim.jsbsim import trim as trimming
 from flightid.sim.sensors import suites as sensors
+from flightid.sim.sensors.builtin import research_suite
 from flightid.units import DEG, G0
 
 # injected sensor errors (SI): of the order that Table 1 of Cooper, Drobik & Martin (ARL
@@ -37,7 +38,7 @@ CONDITIONS = {"navion": (1500.0, 55.0), "twinotter": (2000.0, 70.0)}
 def _suite(errors: bool, noise: bool) -> sensors.SensorSuite:
     """The research suite (50 Hz, anti-aliased, Twin Otter noise levels) with the vanes on
     a 4.5 m boom; ``errors`` adds the biases and flow amplification under test."""
-    suite = sensors.research_suite()
+    suite = research_suite()
     suite.channels["psi"] = list(suite.channels["phi"])
     for c, chain in suite.channels.items():
         chain = [e for e in chain if noise or not isinstance(e, WhiteNoise | Quantization)]

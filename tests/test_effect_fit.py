@@ -25,7 +25,7 @@ from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.airframe import ActuatorLag, RateLimit, TailIce
 from flightid.sim.effects.sensor import Bias, WhiteNoise
-from flightid.sim.sensors.suites import research_suite
+from flightid.sim.sensors.builtin import research_suite
 from flightid.units import DEG
 
 matplotlib.use("Agg")

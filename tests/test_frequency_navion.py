@@ -20,7 +20,8 @@ from flightid.identification.models import linear as lm
 from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed
 from flightid.sim.jsbsim import trim as trimming
 from flightid.sim.jsbsim import truth
-from flightid.sim.sensors.suites import measure, research_suite
+from flightid.sim.sensors.builtin import research_suite
+from flightid.sim.sensors.suites import measure
 
 
 def navion_sweeps(seed: int):

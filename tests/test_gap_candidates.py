@@ -24,7 +24,7 @@ from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT
 from flightid.sim.effects.catalogue import CATALOGUE
-from flightid.sim.sensors.suites import research_suite
+from flightid.sim.sensors.builtin import research_suite
 
 DROPPED = ["vanes", "lever_arm"]  # calibrated to the CG, as the blind check's cards
 # the lateral cards' recorded rate: half the blind check's 50 Hz, so that each diagnosis

@@ -13,14 +13,9 @@ from flightid.record import FlightRecord, RecordMeta
 from flightid.record import read as read_record
 from flightid.sim.effects import CATALOGUE, EFFECTS, Lag, SecondOrder, effect_from_dict
 from flightid.sim.effects.vibration import EngineVibration
-from flightid.sim.sensors.suites import (
-    LeverArm,
-    SensorSuite,
-    Vanes,
-    builtin_suite,
-    measure,
-    suite_from_dict,
-)
+from flightid.sim.sensors.builtin import builtin_suite
+from flightid.sim.sensors.suites import LeverArm, SensorSuite, Vanes, measure
+from flightid.sim.sensors.tables import suite_from_dict
 from flightid.units import G0
 
 

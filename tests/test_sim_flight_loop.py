@@ -12,7 +12,8 @@ from flightid.sim.flight.controls import interp_point
 from flightid.sim.flight.simulation import Atmosphere, Simulation, fly
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
-from flightid.sim.sensors.suites import hobby_suite, measure
+from flightid.sim.sensors.builtin import hobby_suite
+from flightid.sim.sensors.suites import measure
 from flightid.units import DEG, FT
 
 RATE = 50.0

@@ -92,7 +92,8 @@ from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.sim.jsbsim.model import Model, load
 from flightid.sim.jsbsim.trim import Trim, trim
 from flightid.sim.jsbsim.truth import derivatives
-from flightid.sim.sensors.suites import SUITES, SensorSuite, builtin_suite, measure
+from flightid.sim.sensors.builtin import SUITES, builtin_suite
+from flightid.sim.sensors.suites import SensorSuite, measure
 from flightid.units import G0
 
 OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",

@@ -46,7 +46,7 @@ from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
-from flightid.sim.sensors.suites import research_suite
+from flightid.sim.sensors.builtin import research_suite
 
 BOUNDS = 3.0  # recovered within this many standard errors
 LIKELIHOOD_RATIO = BOUNDS**2  # chi-square(1) at 3 sigma: "no effect" for one-sided parameters
