@@ -103,6 +103,9 @@ NOT_YET: dict[str, str] = {
     "vanes": "compatibility estimates it (upwash_alpha, sidewash_beta, vane_*), but the "
              "research suite the card uses has its vanes dropped; not yet in this contract",
     "engine_vibration": "narrowband vibration lines: no fit models them",
+    "derivative_table": "a delta tabulated in airspeed or alpha: recovered across the "
+                        "envelope by a campaign's --update-aircraft (tests/test_campaign_"
+                        "update.py), not by the single-record effect fit",
     "misalignment": "a mounting effect, which this contract's cards do not inject; the gap "
                     "diagnosis fits it back from a flown record (tests/test_gap_candidates.py)",
     "wind": "compatibility estimates a constant wind (wind_*) only from position outputs "
