@@ -45,7 +45,7 @@ import itertools
 import json
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -73,8 +73,7 @@ class TestPoint:
 
     def as_dict(self) -> dict[str, float]:
         """The condition as plain floats (the columns of the estimates table)."""
-        return {"altitude": self.altitude, "speed": self.speed, "flaps": self.flaps,
-                "mass": self.mass, "cg_x": self.cg_x}
+        return asdict(self)
 
 
 @dataclass(frozen=True)
