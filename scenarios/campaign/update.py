@@ -12,14 +12,14 @@ The held-out points (``[[held_out]]``) are flown with the flown aircraft (the ca
 effects included) and its sensors; the measured record, reduced as at the test points, is
 flown again by the model, by the updated aircraft and by the flown aircraft itself (the
 floor: what a perfect model leaves, sensor noise). Each is flown as the gap diagnosis's
-re-fly flies a record (``identification.gap.refly.fly_window``): per maneuver window of
+re-fly flies a record (``identification.gap.jsbsim.refly.fly_window``): per maneuver window of
 the axis, a lateral window from its own start state, a longitudinal one from the trim
 through what precedes it, with the measured surfaces plus constant offsets refitted on the
 window (the bias and initial conditions of a prediction case, Morelli & Klein 2016). The
 gap is the diagnosis's: per channel, residual over measured energy, means removed
 (``gap_fractions``), averaged over the axis's channels and windows. The whole record
-flown open loop from the trim without offsets (``identification.gap.correct.fly_record``)
-is kept as ``open_loop``: its floor is larger (the slow modes drift over 28 s).
+flown open loop from the trim without offsets (``identification.gap.jsbsim.write.fly_record``)
+is kept as ``open_loop`` (the slow modes drift over 28 s).
 """
 
 from __future__ import annotations
@@ -38,9 +38,13 @@ from flightid.identification.data.reduction import reduce_record
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.envelope_fit import Correction, fit_correction
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
-from flightid.identification.gap.correct import fly_record, gap_fractions
-from flightid.identification.gap.linearise import AXIS_INPUTS, AXIS_OUTPUTS, start_condition
-from flightid.identification.gap.refly import fly_window
+from flightid.identification.gap.jsbsim.refly import fly_window
+from flightid.identification.gap.jsbsim.write import fly_record, gap_fractions
+from flightid.identification.gap.model.linearise import (
+    AXIS_INPUTS,
+    AXIS_OUTPUTS,
+    start_condition,
+)
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign, point_card
@@ -169,7 +173,7 @@ def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[Held
 def window_gaps(aircraft: str | Path, record: FlightRecord) -> dict[str, float]:
     """Per axis, the gap of ``aircraft`` on ``record``: the mean over the axis's maneuver
     windows (``identification.gap.segments``) of the mean over its channels, each window
-    flown as the gap diagnosis's re-fly (``identification.gap.refly.fly_window``: start
+    flown as the gap diagnosis's re-fly (``identification.gap.jsbsim.refly.fly_window``: start
     state, offsets refitted); NaN for an axis without a window or where every window
     departs."""
     model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
