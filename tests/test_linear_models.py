@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.identification.methods.output_error import simulate
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 

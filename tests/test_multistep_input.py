@@ -23,6 +23,7 @@ from test_output_error import LATERAL_TRUTH, NAVION
 from flightid.identification.data import multistep_input as ms
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 DEG = np.pi / 180
@@ -89,7 +90,7 @@ def _flight(seed: int) -> tuple[FlightRecord, dict[str, float]]:
     model = lm.lateral(NAVION)
     fine = np.arange(0, 8.0 + 0.5 / FINE, 1 / FINE)
     surfaces = {c: _servo(fine, cmd, SLEW) for c, cmd in DOUBLETS.items()}
-    y = oe.simulate(model, {**model.start, **truth}, fine,
+    y = simulate(model, {**model.start, **truth}, fine,
                     np.column_stack([surfaces[c] for c in model.inputs]), hold="zoh")
     step = int(FINE / DAS)
     rng = np.random.default_rng(seed)

@@ -16,8 +16,8 @@ from conftest import TWIN_OTTER as TWIN_OTTER_FILE
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
-from flightid.identification.methods.output_error import simulate
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 

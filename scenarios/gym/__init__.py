@@ -3,8 +3,8 @@
 Importing this package (or ``flightid``) registers the environment by its entry-point
 string; the environment module itself (``env``: JSBSim, the flight core) is loaded on
 first use of ``ExcitationEnv`` (PEP 562) or by ``gymnasium.make``, its options
-(``options``: ``OBS_CHANNELS``, ``PRESETS``) on first use of theirs. gymnasium 1.x has no plugin entry points, so without an import use
-its module form::
+(``options``: ``OBS_CHANNELS``, ``PRESETS``) on first use of theirs. gymnasium 1.x has no
+plugin entry points, so without an import use its module form::
 
     gymnasium.make("flightid.scenarios.gym:flightid/Excitation-v0")
 """
