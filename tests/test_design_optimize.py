@@ -14,7 +14,8 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.models.linear import ReferenceCondition, lateral
+from flightid.identification.models.linear import lateral
+from flightid.identification.models.reference_condition import ReferenceCondition
 from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.inputs import Maneuvers, scale_amplitude

@@ -24,6 +24,7 @@ from flightid.identification.data import multistep_input as ms
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
 from flightid.identification.models.discrete import simulate
+from flightid.identification.models.reference_condition import CONDITION_CHANNELS
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 DEG = np.pi / 180
@@ -101,7 +102,7 @@ def _flight(seed: int) -> tuple[FlightRecord, dict[str, float]]:
         channels[c] = x[::step] + rng.normal(0, SURFACE_NOISE, x[::step].size)
     # the reference condition as constant channels, for ``flightid identify``
     channels.update({n: np.full(fine[::step].size, getattr(NAVION, n))
-                     for n in lm.CONDITION_CHANNELS})
+                     for n in CONDITION_CHANNELS})
     reference = Reference(NAVION.area, NAVION.span, NAVION.chord)
     record = FlightRecord(fine[::step], channels,
                           RecordMeta(sample_rate=DAS, reference=reference))
