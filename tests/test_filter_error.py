@@ -25,8 +25,8 @@ from test_output_error import (
 
 from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
-from flightid.identification.methods import kalman_filter as kf
 from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.filter_error import kalman_filter as kf
 from flightid.identification.models import linear as lm
 from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord, RecordMeta, Reference, read
