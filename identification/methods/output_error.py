@@ -30,10 +30,11 @@ from flightid.derivatives import is_derivative, split
 from flightid.identification.data.coefficients import THRUST_COEFFICIENTS
 from flightid.identification.data.multistep_input import MultistepParameters, from_measurement
 from flightid.identification.engine import identifiability as ident
+from flightid.identification.engine import problem as problem_skeleton
 from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
 )
-from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
@@ -61,21 +62,16 @@ from flightid.record import FlightRecord
 ID = "oe"
 
 
-@dataclass
-class Problem:
-    """The data and model of one output-error fit, arranged for fast evaluation."""
+@dataclass(kw_only=True)
+class Problem(problem_skeleton.Problem):
+    """The data and model of one output-error fit, arranged for fast evaluation (the
+    skeleton's time, outputs, fixed parameters, initial states and noise floor, and:)."""
 
     model: LinearModel
-    time: np.ndarray
-    dt: float
     u: np.ndarray  # (N, m + 1): inputs and the constant 1
     w: np.ndarray  # per-step input of the discrete model (see hold_inputs)
     hold: str  # 'foh' or 'zoh'
-    z: np.ndarray  # (N, ny): measured outputs
     x0: np.ndarray  # (n,) initial state when it is not estimated
-    fixed: dict[str, float]  # every model parameter not estimated, at its value
-    x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
-    noise_floor: np.ndarray  # smallest admitted noise variance per output
     # multistep inputs estimated as levels and edges (multistep_input): channel -> start
     multistep: dict[str, MultistepParameters] = field(default_factory=dict)
 
@@ -133,10 +129,9 @@ def problem_from_record(
     for c, ms in multistep.items():
         u[:, model.inputs.index(c)] = ms.samples(time, hold)
     z = np.column_stack([z, *(record[c] for c in multistep)])
-    # variance floor: rounding level of each output (1e-10 of its range, squared)
-    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
-    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor,
-                   multistep)
+    return Problem(model=model, time=time, dt=dt, u=u, w=hold_inputs(u, hold), hold=hold, z=z,
+                   x0=x0, fixed={}, x0_names=x0_names,
+                   noise_floor=problem_skeleton.noise_floor(z), multistep=multistep)
 
 
 def _outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
@@ -473,9 +468,9 @@ def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, floa
 
 def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
              full: bool, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
-    """``maximum_likelihood`` on a linear-model problem (outputs from ``_outputs``)."""
-    return maximum_likelihood(
-        problem.z, problem.noise_floor,
+    """``engine.problem.fit`` on a linear-model problem (outputs from ``_outputs``)."""
+    return problem_skeleton.fit(
+        problem,
         lambda current: _outputs_and_sensitivities(problem, current, names),
         lambda trial: _outputs(problem, trial),
         names, values, max_iterations, full, step_tol, cost_tol,
@@ -484,8 +479,6 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_i
 
 def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[str, str]:
     """Unidentifiable parameters of a fit; biases and initial states kept in preference."""
-    values = np.array([fit.values[n] for n in names])
     keep = [n for n in names if n.startswith("bias_") or n.startswith("x0_")]
-    return ident.unidentifiable(names, fit.information, values, prefer_keep=keep,
-                                tolerance=tol)
+    return problem_skeleton.singular(names, fit, tol, keep)
 
