@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from flightid.identification.effect_fit import OFFSET, fit_effect
-from flightid.identification.gap.correct import OUTPUTS, airframe_effects
-from flightid.identification.gap.linearise import AXIS_INPUTS, start_condition
+from flightid.identification.gap.jsbsim.write import OUTPUTS, airframe_effects
+from flightid.identification.gap.model.linearise import AXIS_INPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
 from flightid.sim.flight.simulation import DepartureError

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.data import windows
-from flightid.identification.gap.actuator_candidates import surfaces_of, with_actuators
+from flightid.identification.gap.model.surfaces import surfaces_of, with_actuators
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
@@ -172,7 +172,7 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
     """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
     ``axis`` ("lateral" or "longitudinal"), with the outputs the records carry
     (``carried_outputs``). ``surfaces``: what the records' surface channels hold
-    ("position" or "command"; None: their metadata, ``actuator_candidates.surfaces_of``)."""
+    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``)."""
     if axis not in AXIS_NAMES:
         raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])
