@@ -1,7 +1,7 @@
 """The size limits of the package layout (docs/architecture.md, The tree): no module over
 ``MAX_LINES`` lines and no package folder with more than ``MAX_MODULES`` loose modules
 (modules besides ``__init__.py``). The command line (``cli/``, one module per command) is
-exempt; ``KNOWN_EXCEPTIONS`` lists the folders still waiting for their move (both limits).
+exempt.
 """
 
 from __future__ import annotations
@@ -9,14 +9,10 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 MAX_LINES = 500
 MAX_MODULES = 12
 EXEMPT = {"cli"}
-# folder -> why it is over the limit for now
-KNOWN_EXCEPTIONS: dict[str, str] = {}
 
 
 def package_folders() -> list[Path]:
@@ -36,7 +32,7 @@ def relative(path: Path) -> str:
 
 
 def exempt(folder: Path) -> bool:
-    return relative(folder).split("/")[0] in EXEMPT or relative(folder) in KNOWN_EXCEPTIONS
+    return relative(folder).split("/")[0] in EXEMPT
 
 
 def test_the_package_folders_are_found():
@@ -56,10 +52,3 @@ def test_no_folder_has_too_many_loose_modules():
             if (n := sum(1 for m in folder.glob("*.py") if m.name != "__init__.py"))
             > MAX_MODULES}
     assert over == {}
-
-
-@pytest.mark.parametrize("folder", sorted(KNOWN_EXCEPTIONS))
-def test_each_known_exception_is_still_over_the_limit(folder):
-    """An exception that meets the limit is removed from the list (it cannot go stale)."""
-    n = sum(1 for m in (ROOT / folder).glob("*.py") if m.name != "__init__.py")
-    assert n > MAX_MODULES, f"{folder} has {n} loose modules: remove it from KNOWN_EXCEPTIONS"
