@@ -25,9 +25,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.effect_fit import OFFSET, fit_effect
 from flightid.identification.gap.jsbsim.write import OUTPUTS, airframe_effects
-from flightid.identification.gap.model.linearise import AXIS_INPUTS, start_condition
+from flightid.identification.gap.model.linearise import start_condition
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect
 from flightid.sim.flight.simulation import DepartureError
