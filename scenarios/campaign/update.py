@@ -34,17 +34,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.envelope_fit import Correction, fit_correction
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.identification.gap.jsbsim.refly import fly_window
 from flightid.identification.gap.jsbsim.write import fly_record, gap_fractions
-from flightid.identification.gap.model.linearise import (
-    AXIS_INPUTS,
-    AXIS_OUTPUTS,
-    start_condition,
-)
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_condition
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign, point_card
