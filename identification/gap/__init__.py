@@ -7,10 +7,12 @@ of the catalogue causes it, and how far the gap shrinks on held-out data.
 ``mass_candidates`` on ``effect_model``; ``identifiable`` the entries that are not
 candidates, ``ranges`` the physical ranges, ``classes`` the equivalence classes),
 ``shrink`` (how far), ``correct`` (the corrected aircraft), ``diagnose`` (all of it),
-``report`` (HTML).
+``report`` (HTML); ``envelope`` (records from several conditions: each diagnosed at
+its own, where in the envelope the model departs, and a derivative error's trend).
 """
 
 from flightid.identification.gap.correct import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, diagnose
+from flightid.identification.gap.envelope import EnvelopeResult, envelope
 
-__all__ = ["GapResult", "diagnose", "write_aircraft"]
+__all__ = ["EnvelopeResult", "GapResult", "diagnose", "envelope", "write_aircraft"]

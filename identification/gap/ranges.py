@@ -37,18 +37,25 @@ def _percent(factor: float) -> str:
     return f"{(factor - 1.0) * 100:+.0f} %"
 
 
-def _derivative(cand: Candidate, delta: float, model: LinearModel | None) -> str | None:
-    name = cand.options["derivative"]
-    if name not in DERIVATIVE_RANGES or model is None or name not in model.start:
+def derivative_outside(name: str, value: float) -> str | None:
+    """None when the derivative ``name`` at ``value`` (per rad, or per unit nondimensional
+    rate) is inside ``DERIVATIVE_RANGES`` (or has no range there); else why not."""
+    if name not in DERIVATIVE_RANGES:
         return None
     lo, hi = DERIVATIVE_RANGES[name]
-    value = model.start[name] + delta
     if lo <= value <= hi:
         return None
     what = ("dynamics the model lacks (a lag or delay of a sensor or actuator) fitted as a "
             "damping term" if name.endswith(RATE_TERMS) else
             "a change no airframe has: a sensor scale or the wrong aircraft data")
     return f"{name} {value:+.3g} is outside [{lo:g}, {hi:g}]: {what}"
+
+
+def _derivative(cand: Candidate, delta: float, model: LinearModel | None) -> str | None:
+    name = cand.options["derivative"]
+    if model is None or name not in model.start:
+        return None
+    return derivative_outside(name, model.start[name] + delta)
 
 
 def _family(cand: Candidate, name: str, value: float) -> str:
