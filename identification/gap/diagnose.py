@@ -23,6 +23,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.engine.threads import one_blas_thread
+from flightid.identification.gap.actuator_candidates import actuated
 from flightid.identification.gap.candidates import catalogue_candidates
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.identifiable import not_identifiable
@@ -235,8 +236,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         longest record (``gap.refine``; 5-20 s more): its values are then the ones
         ``write_aircraft`` writes.
     surfaces : what the records' surface channels hold, "position" or "command" (None:
-        their ``meta.extra["surfaces"]``, default "position"); on commands the actuator
-        lags are candidates too.
+        their ``meta.extra["surfaces"]``, default "position"); commands are passed through
+        the aircraft's own actuators first (``actuator_candidates.actuated``), and the
+        actuator lags are candidates too.
 
     Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
     halves of a record without one); an axis with a single window is cut in two halves in
@@ -254,6 +256,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     if not records:
         raise ValueError("gap: no record to diagnose")
     _one_aircraft([*records, *(validate or [])], aircraft)
+    # records of commands: through the aircraft's own actuators (lag, rate limit) first
+    records = actuated(records, aircraft, surfaces)
+    validate = actuated(validate, aircraft, surfaces) if validate is not None else None
     excited = excited_axes(records)
     if axis in ("both", "auto"):
         axes = excited or ["lateral"]

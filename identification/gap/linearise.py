@@ -24,9 +24,9 @@ fitted on every window; the derivatives are the model.
 Records with fewer channels (a hobby suite without attitudes, a record without vanes) are
 diagnosed on the outputs they carry (``carried_outputs``): the model keeps every state
 (phi still drives beta through gravity) and drops the output rows, and the output bias of
-a dropped accelerometer. At least two outputs are needed. On records of surface commands
-(``meta.extra["surfaces"] = "command"``, docs/record.md) the model's inputs pass through the
-aircraft's own actuator lags (``sim.actuators.actuator_lags``), as in the JSBSim aircraft.
+a dropped accelerometer. At least two outputs are needed. Records of surface commands
+(``meta.extra["surfaces"] = "command"``, docs/record.md) reach the model through the
+aircraft's own actuators (``actuator_candidates.actuated``, in ``diagnose``).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.data import windows
-from flightid.identification.gap.actuator_candidates import surfaces_of, with_actuators
+from flightid.identification.gap.actuator_candidates import surfaces_of
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
@@ -49,7 +49,6 @@ from flightid.identification.models.linear import (
     longitudinal,
 )
 from flightid.record import FlightRecord
-from flightid.sim.augment.actuators import actuator_lags
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import Trim, trim
 from flightid.sim.jsbsim.truth import Kink, derivatives
@@ -208,7 +207,5 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
         values = {d: float(linear.start[d]) for d in names}
     kind = surfaces_of(records, surfaces)
     linear = restricted(linear, outputs)
-    if kind == "command":  # the commands pass through the aircraft's own actuators
-        linear = with_actuators(linear, actuator_lags(aircraft))
     kinks = {d: k for d, k in truth.flags.items() if d in names}
     return Linearised(aircraft, linear, values, trimmed, frame, axis, kind, kinks)
