@@ -220,33 +220,50 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
              steps: int = STEPS, axis: str = "both", refine: bool = False,
              surfaces: str | None = None) -> GapResult:
-    """Diagnose ``records`` against the JSBSim ``aircraft``.
-
-    Parameters
-    ----------
-    records, validate : flight records (or paths) of one aircraft; ``validate`` are held
-        out of every fit when given.
-    aircraft : JSBSim aircraft (project name, stock name or XML path).
-    axis : "lateral", "longitudinal", or "both" (default; "auto" is the same): each axis
-        the records excite, each with its own verdict (module docstring); an axis they do
-        not excite is listed in ``undiagnosed`` with the reason.
-    steps : effects named at most per axis (``sequence.following``), fewer when the model
-        with the named ones reaches the null level.
-    refine : refit the top named airframe effect with the JSBSim aircraft flown from the
-        longest record (``gap.refine``; 5-20 s more): its values are then the ones
-        ``write_aircraft`` writes.
-    surfaces : what the records' surface channels hold, "position" or "command" (None:
-        their ``meta.extra["surfaces"]``, default "position"); commands are passed through
-        the aircraft's own actuators first (``actuator_candidates.actuated``), and the
-        actuator lags are candidates too.
+    """Diagnose ``records`` against the JSBSim ``aircraft``: per excited axis, is there a
+    gap above the null level of noise and turbulence, where it lies, which catalogue
+    effects explain it and how far the held-out gap shrinks (module docstring).
 
     Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
     halves of a record without one); an axis with a single window is cut in two halves in
     time (``evidence`` says so: the weaker evidence of one maneuver).
 
+    Parameters
+    ----------
+    records : FlightRecord, path, or a sequence of them
+        Flight records of one aircraft at one condition (``envelope`` takes several).
+    aircraft : str
+        JSBSim aircraft: a project name, a stock JSBSim name or an XML path.
+    validate : FlightRecord, path, a sequence of them, or None
+        Records held out of every fit; None: each window held out in turn.
+    names, validate_names : sequence of str, or None
+        Labels of the records and of the validation records in the windows' names
+        (default: the file stems, or "record k").
+    try_pairs : bool
+        Try pairs of the top effect with the next ones when it alone leaves a gap.
+    steps : int
+        Effects named at most per axis (``sequence.following``), fewer when the model
+        with the named ones reaches the null level.
+    axis : str
+        "lateral", "longitudinal", or "both" (default; "auto" is the same): each axis the
+        records excite, each with its own verdict; an axis they do not excite is listed in
+        ``undiagnosed`` with the reason.
+    refine : bool
+        Refit the top named airframe effect with the JSBSim aircraft flown on the
+        longest record (``gap.refine``; 10-30 s more): its values are then the ones
+        ``write_aircraft`` writes.
+    surfaces : str or None
+        What the records' surface channels hold, "position" or "command" (None: their
+        ``meta.extra["surfaces"]``, default "position"); commands are passed through the
+        aircraft's own actuators first (``actuator_candidates.actuated``), and the
+        actuator lags are candidates too.
+
     Returns
     -------
     GapResult
+        The verdict (``no_gap``, ``explained``, ``partly_unexplained``, ``unexplained``;
+        the worst axis), the gap map, the ranked effects with their parameters in
+        catalogue units, the named ones and the held-out shrink; ``axes()`` per axis.
     """
     records, found = _records(records)
     names = names or found
