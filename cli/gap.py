@@ -23,10 +23,10 @@ from flightid.identification.gap.envelope import (
     envelope,
     write_envelope_aircraft,
 )
-from flightid.identification.gap.refly import refly
+from flightid.identification.gap.jsbsim.refly import refly
+from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.report import write_report
 from flightid.identification.gap.shrink import shrink_text
-from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import p_text
 
 

@@ -248,7 +248,7 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     surface error of 0.005 deg drifts the speed of a 30 s record enough to bias the fit.
     ``condition``: (altitude m, airspeed m/s) to trim at, instead of the record metadata's.
     ``initial``: the flight's start state from the trim (e.g. a window's measured sideslip,
-    bank and rates, ``gap.refly.start_state``; default: the trim itself). ``base``: effects
+    bank and rates, ``gap.jsbsim.refly.start_state``; default: the trim itself). ``base``: effects
     written into the aircraft with ``effect`` and held as they are (other named
     corrections, an even term removed).
     """

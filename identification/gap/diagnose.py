@@ -23,24 +23,24 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.engine.threads import one_blas_thread
-from flightid.identification.gap.actuator_candidates import actuated
-from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.candidates.identifiable import not_identifiable
 from flightid.identification.gap.fit import fit
-from flightid.identification.gap.identifiable import not_identifiable
-from flightid.identification.gap.linearise import (
+from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
+from flightid.identification.gap.jsbsim.refine import refine as refit
+from flightid.identification.gap.jsbsim.symmetry import even_terms
+from flightid.identification.gap.model.linearise import (
     AXIS_INPUTS,
     AXIS_NAMES,
     Linearised,
     excited_axes,
     linearise,
 )
+from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
-from flightid.identification.gap.refine import NotRefined, Refined
-from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
 from flightid.identification.gap.shrink import shrinkage
-from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import NullTest, axis_verdict, null_test, worst
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
@@ -250,12 +250,12 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         ``undiagnosed`` with the reason.
     refine : bool
         Refit the top named airframe effect with the JSBSim aircraft flown on the
-        longest record (``gap.refine``; 10-30 s more): its values are then the ones
+        longest record (``gap.jsbsim.refine``; 10-30 s more): its values are then the ones
         ``write_aircraft`` writes.
     surfaces : str or None
         What the records' surface channels hold, "position" or "command" (None: their
         ``meta.extra["surfaces"]``, default "position"); commands are passed through the
-        aircraft's own actuators first (``actuator_candidates.actuated``), and the
+        aircraft's own actuators first (``model.surfaces.actuated``), and the
         actuator lags are candidates too.
 
     Returns

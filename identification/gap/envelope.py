@@ -42,10 +42,10 @@ from typing import Any
 
 import numpy as np
 
+from flightid.identification.gap.candidates.ranges import derivative_outside
 from flightid.identification.gap.diagnose import GapResult, Records, _finite, _records, diagnose
 from flightid.identification.gap.fit import fit
-from flightid.identification.gap.linearise import AXIS_INPUTS, record_condition
-from flightid.identification.gap.ranges import derivative_outside
+from flightid.identification.gap.model.linearise import AXIS_INPUTS, record_condition
 from flightid.identification.gap.rank import combine, overall
 from flightid.identification.gap.segments import segments, split
 from flightid.identification.gap.sequence import STEPS

@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.gap import GapResult, diagnose
-from flightid.identification.gap.actuator_candidates import SURFACES_KEY
-from flightid.identification.gap.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
+from flightid.identification.gap.model.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
+from flightid.identification.gap.model.surfaces import SURFACES_KEY
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord

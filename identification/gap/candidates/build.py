@@ -1,6 +1,6 @@
 """Candidate effects: entries of the effect catalogue, expressed in the linearised model.
 
-Each candidate (``effect_model.Candidate``) names its catalogue entry
+Each candidate (``model.Candidate``) names its catalogue entry
 (``flightid.sim.effects.catalogue``) and options, says how it changes the linear model (a
 wrapped ``LinearModel`` with the effect's parameters) and which parameters a fit frees;
 ``Candidate.parameters`` gives them in the catalogue's units. The airframe families here:
@@ -19,9 +19,9 @@ wrapped ``LinearModel`` with the effect's parameters) and which parameters a fit
   entry's three factors: ``elevator`` scales Cm_de, ``stability`` Cm_alpha, ``damping``
   Cm_q (and Cm_alphadot); lift and drag are left as they are.
 
-The other families have their own modules: ``sensor_candidates`` (scale, delay, lag,
-misalignment, lever arm, vanes), ``actuator_candidates`` (actuator lag, on records of
-commands) and ``mass_candidates`` (cg offset, mass, inertia, thrust moment). Entries that
+The other families have their own modules: ``sensor`` (scale, delay, lag,
+misalignment, lever arm, vanes), ``actuator`` (actuator lag, on records of
+commands) and ``mass`` (cg offset, mass, inertia, thrust moment). Entries that
 are not candidates for a record are listed with the reason by
 ``identifiable.not_identifiable``; parameters outside the catalogue's physical range are
 named by ``ranges.out_of_range``.
@@ -31,11 +31,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
-from flightid.identification.gap.actuator_candidates import actuator_candidates, surfaces_of
-from flightid.identification.gap.effect_model import Candidate, extended, identity
-from flightid.identification.gap.linearise import AXIS_DERIVATIVES, AXIS_OUTPUTS, TRIM_TERMS
-from flightid.identification.gap.mass_candidates import mass_candidates
-from flightid.identification.gap.sensor_candidates import sensor_candidates
+from flightid.identification.gap.candidates.actuator import actuator_candidates
+from flightid.identification.gap.candidates.mass import mass_candidates
+from flightid.identification.gap.candidates.sensor import sensor_candidates
+from flightid.identification.gap.model.edits import Candidate, extended, identity
+from flightid.identification.gap.model.linearise import AXIS_DERIVATIVES, AXIS_OUTPUTS, TRIM_TERMS
+from flightid.identification.gap.model.surfaces import surfaces_of
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
@@ -79,7 +80,7 @@ def catalogue_candidates(model: LinearModel, axes: str = "body", *,
     derivatives in ``axes``): derivative deltas and control effectiveness, tail ice (a
     longitudinal model), the sensor and mounting candidates of its outputs, the mass
     properties, and the actuator lags when ``surfaces`` (None: from the ``records``'
-    metadata, ``actuator_candidates.surfaces_of``) is "command"."""
+    metadata, ``model.surfaces.surfaces_of``) is "command"."""
     known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
     out = [_derivative(d, axes) for d in model.parameters if d in known]
     out += [_surface(s) for s in SURFACES if s in model.inputs]

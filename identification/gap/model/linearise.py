@@ -26,7 +26,7 @@ diagnosed on the outputs they carry (``carried_outputs``): the model keeps every
 (phi still drives beta through gravity) and drops the output rows, and the output bias of
 a dropped accelerometer. At least two outputs are needed. Records of surface commands
 (``meta.extra["surfaces"] = "command"``, docs/record.md) reach the model through the
-aircraft's own actuators (``actuator_candidates.actuated``, in ``diagnose``).
+aircraft's own actuators (``model.surfaces.actuated``, in ``diagnose``).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.identification.data import windows
-from flightid.identification.gap.actuator_candidates import surfaces_of
+from flightid.identification.gap.model.surfaces import surfaces_of
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
@@ -171,7 +171,7 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
     """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
     ``axis`` ("lateral" or "longitudinal"), with the outputs the records carry
     (``carried_outputs``). ``surfaces``: what the records' surface channels hold
-    ("position" or "command"; None: their metadata, ``actuator_candidates.surfaces_of``)."""
+    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``)."""
     if axis not in AXIS_NAMES:
         raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])

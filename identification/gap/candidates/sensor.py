@@ -3,7 +3,7 @@
 - ``scale`` (sensor): one output scaled, y_measured = factor y;
 - ``delay`` (sensor, tau s): a first-order Pade delay on one output; ``lag`` (sensor, tau
   s): a first-order lag 1/(tau s + 1) on one output; each one state appended
-  (``effect_model.lagged_output``). In the rigid-body band (omega tau << 1) both are
+  (``model.lagged_output``). In the rigid-body band (omega tau << 1) both are
   1 - tau s to first order and differ only in tau^2 terms: a delay and a lag of the same
   channel form one equivalence class (docs/gap.md);
 - ``misalignment`` (mounting, angle rad, axis ``y``): the IMU triad rotated about body y
@@ -31,7 +31,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from flightid.identification.gap.effect_model import Candidate, extended, lagged_output
+from flightid.identification.gap.model.edits import Candidate, extended, lagged_output
 from flightid.identification.models.linear import LinearModel
 
 TAU_START = 0.02  # s: start of a delay or lag fit (the catalogue's default is 0.05)

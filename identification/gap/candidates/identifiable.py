@@ -1,6 +1,6 @@
 """The catalogue entries that are not candidates for a record, each with the reason and
 what would make it identifiable (``not_identifiable``). Every entry of the catalogue is
-either a candidate (``candidates.catalogue_candidates``) or listed here; a test holds the
+either a candidate (``build.catalogue_candidates``) or listed here; a test holds the
 whole catalogue to it.
 """
 
@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from flightid.identification.gap.actuator_candidates import SURFACES_KEY, surfaces_of
-from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.model.surfaces import SURFACES_KEY, surfaces_of
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 from flightid.sim.effects.catalogue import CATALOGUE, ActsOn

@@ -24,7 +24,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from flightid.identification.gap.effect_model import Candidate, extended
+from flightid.identification.gap.model.edits import Candidate, extended
 from flightid.identification.models.linear import LinearModel
 
 _MOMENT = {"Cm": ("CL", "chord"), "Cn": ("CY", "span")}  # moment <- force, length

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from flightid.identification.gap.effect_model import Candidate
+from flightid.identification.gap.model.edits import Candidate
 from flightid.identification.models.linear import LinearModel
 from flightid.sim.effects.catalogue import CATALOGUE, DERIVATIVE_RANGES
 

@@ -1,35 +1,19 @@
-"""Actuator entries of the catalogue as candidates of the linear model, on records whose
-surface channels hold the commands (``surfaces_of``: the record's ``meta.extra["surfaces"]``,
-"command" or "position", default "position"; docs/record.md).
-
-- ``actuator_lag`` (tau, s; option ``surface``): a first-order lag between the recorded
-  command and the surface, one input state per surface (``effect_model.lagged_input``);
-  linear, so it is screened here.
-- ``rate_limit``, ``deadband``, ``backlash``: nonlinear. They are not in the linear
-  screening (a describing function would make their gain depend on the amplitude of each
-  maneuver): ``identifiable.not_identifiable`` lists them, and they are scored with the
-  JSBSim aircraft itself (``identification.effect_fit.fit_effect``) on a record of
-  commands.
-- ``actuator_bias``: a constant surface offset, which the state biases of the linear model
-  absorb (``identifiable``).
-
-On a record of surface positions the actuator has already acted on what was recorded:
-no actuator entry is a candidate there. On a record of commands the diagnosis first
-passes the commands through the aircraft's own actuators, read from its XML (``actuated``:
-each ``<actuator>``'s lag and rate limit, run as JSBSim runs them, the commands held
-between samples), so the plain aircraft flown on its own commands is at the null level
-and an ``actuator_lag`` candidate is the lag the model lacks.
+"""What a record's surface channels hold (``surfaces_of``: positions, or the commands ahead
+of the actuators, ``meta.extra["surfaces"]``; docs/record.md), and on a record of commands
+the surfaces the aircraft's own actuators make of them (``actuated``: each
+``<actuator>``'s lag and rate limit read from its XML and run as JSBSim runs them,
+``run_actuators``, the commands held between updates at ``command_rate``), so that the
+plain aircraft flown on its own commands is at the null level and an ``actuator_lag``
+candidate is the lag the model lacks.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
-from flightid.identification.gap.effect_model import Candidate, extended, lagged_input
-from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 from flightid.sim.augment.actuators import Actuator, actuator_chains
 from flightid.sim.flight.controls import substeps
@@ -37,7 +21,6 @@ from flightid.sim.flight.controls import substeps
 SURFACE_KINDS = ("position", "command")
 SURFACES_KEY = "surfaces"  # the key of FlightRecord.meta.extra
 COMMAND_RATE_KEY = "command_rate_hz"  # meta.extra: the rate the commands were updated at
-TAU_START = 0.02  # s: start of the lag fit
 
 
 def surfaces_of(records: Sequence[FlightRecord], surfaces: str | None = None) -> str:
@@ -130,27 +113,3 @@ def actuated(records: Sequence[FlightRecord], aircraft: str,
                 channels[s] = run_actuators(r.time, r[s], chain, command_rate(r))
         out.append(FlightRecord(r.time, channels, r.meta))
     return out
-
-
-def actuator_lag(surface: str) -> Candidate:
-    """The catalogue's ``actuator_lag`` (tau, s) between the recorded command of
-    ``surface`` and the surface."""
-    name = f"actuator_lag_{surface}"
-
-    def wrap(model: LinearModel) -> LinearModel:
-        column = model.inputs.index(surface)
-
-        def build(v: Mapping[str, complex]) -> tuple:
-            return lagged_input(model.build(v), column, v[name])
-
-        return extended(model, {name: TAU_START}, build, (name,))
-
-    return Candidate("actuator_lag", {"surface": surface}, (name,), wrap, catalogue=("tau",))
-
-
-def actuator_candidates(model: LinearModel, surfaces: str) -> list[Candidate]:
-    """The actuator candidates for ``model``: a lag per surface input when ``surfaces``
-    is "command", none for "position"."""
-    if surfaces != "command":
-        return []
-    return [actuator_lag(s) for s in model.inputs if s in ("da", "dr", "de")]

@@ -1,7 +1,7 @@
 """Equivalence classes: candidates the data of one axis cannot tell apart.
 
 A CG moved forward by x changes every pitching-moment derivative by its lift derivative
-times x/cbar (``mass_candidates.cg_offset``); on the Navion, Cm_alpha moves by 4.4 x/cbar
+times x/cbar (``mass.cg_offset``); on the Navion, Cm_alpha moves by 4.4 x/cbar
 while Cm_de and Cm_q move by under 1 % of their own values, so a ``cg_offset`` and a
 ``derivative_delta(Cm_alpha)`` are one class (and on the lateral axis a ``cg_offset`` and a
 ``derivative_delta(Cn_beta)``, through CY_beta x/b). On the Navion's elevator card a CG
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from flightid.identification.gap.effect_model import Candidate
+from flightid.identification.gap.model.edits import Candidate
 
 # entry -> the derivatives whose delta is its class's member named first
 CLASS_OF: dict[str, tuple[str, ...]] = {"cg_offset": ("Cm_alpha", "Cn_beta")}

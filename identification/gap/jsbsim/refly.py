@@ -23,8 +23,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from flightid.identification.effect_fit import CACHE
-from flightid.identification.gap.correct import gap_fractions, write_aircraft
-from flightid.identification.gap.linearise import AXIS_INPUTS, AXIS_OUTPUTS, start_condition
+from flightid.identification.gap.jsbsim.write import gap_fractions, write_aircraft
+from flightid.identification.gap.model.linearise import AXIS_INPUTS, AXIS_OUTPUTS, start_condition
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment_cached

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.effect_fit import CACHE
-from flightid.identification.gap.linearise import AXIS_OUTPUTS, start_condition
-from flightid.identification.gap.symmetry import even_terms
+from flightid.identification.gap.jsbsim.symmetry import even_terms
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_condition
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
