@@ -88,8 +88,21 @@ def _flaps(record: FlightRecord) -> float | None:
 
 
 def conditions(records: Sequence[FlightRecord], names: Sequence[str]) -> list[Condition]:
-    """The records grouped by condition (module docstring, step 1), sorted by airspeed,
-    each labelled by its airspeed and altitude."""
+    """The records grouped by condition (module docstring, step 1).
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records, each with its airspeed V (m/s) and altitude h (m) as channels or in
+        ``meta.condition``.
+    names : sequence of str
+        Their labels, same order.
+
+    Returns
+    -------
+    list of Condition
+        Sorted by airspeed, each labelled by its airspeed and altitude.
+    """
     groups: list[list[int]] = []
     keys = [(*record_condition(r)[::-1], _flaps(r)) for r in records]  # (V, h, flaps)
     for k, (v, h, f) in enumerate(keys):
@@ -149,8 +162,24 @@ class Line:
 
 
 def line(x: np.ndarray, y: np.ndarray, std: np.ndarray, schedule: str) -> Line:
-    """The weighted straight line through the points (module docstring, step 3); with two
-    points exactly through them, its bounds from theirs."""
+    """The weighted straight line through the points (module docstring, step 3).
+
+    Parameters
+    ----------
+    x : ndarray
+        The schedule's values (m/s, or rad for alpha).
+    y, std : ndarray
+        The deltas and their bounds (per rad, or per unit nondimensional rate).
+    schedule : str
+        "airspeed" or "alpha".
+
+    Returns
+    -------
+    Line
+        Level at the weighted mean x and slope (per m/s or per rad), with bounds scaled
+        by the Birge ratio where the points scatter beyond theirs; with two points,
+        exactly through them, its bounds from theirs.
+    """
     w = 1.0 / std**2
     center = float(np.sum(w * x) / np.sum(w))
     X = np.column_stack([np.ones_like(x), x - center])
@@ -223,7 +252,26 @@ def _x(point: Point, schedule: str) -> float:
 
 def trend(axis: str, derivative: str, axes: str, points: list[Point]) -> Trend:
     """The trend of ``derivative``'s delta over ``points`` and the effect it names
-    (module docstring, step 3)."""
+    (module docstring, step 3).
+
+    Parameters
+    ----------
+    axis : str
+        "lateral" or "longitudinal": the axis whose model the deltas are fitted on.
+    derivative : str
+        The derivative, e.g. "Cn_beta".
+    axes : str
+        Axes of the deltas: "body" (lateral) or "stability" (longitudinal).
+    points : list of Point
+        One per condition.
+
+    Returns
+    -------
+    Trend
+        The lines in airspeed and alpha, the schedule kept, and the catalogue effect
+        named (``derivative_table`` when the slope is beyond ``TREND_SIGMAS`` bounds,
+        else ``derivative_delta``), with a note when outside the physical range.
+    """
     out = Trend(axis, derivative, axes, points)
     d = np.array([p.delta for p in points])
     s = np.array([p.std for p in points])
@@ -305,9 +353,24 @@ def _above(g: GapResult) -> float:
 
 
 def regime_bins(conds: list[Condition], results: list[GapResult]) -> list[dict[str, Any]]:
-    """Per regime variable (airspeed, the model's trim alpha, flaps where they vary) and
-    bin of conditions (up to ``REGIME_BINS``, equal count): per diagnosed axis the
-    conditions' verdicts and their mean gap above the null level."""
+    """Where in the envelope the model departs.
+
+    Parameters
+    ----------
+    conds : list of Condition
+        The conditions.
+    results : list of GapResult
+        Their diagnoses, same order.
+
+    Returns
+    -------
+    list of dict
+        Per regime variable (airspeed m/s, the model's trim alpha deg, flaps deg where
+        they vary), bin of conditions (up to ``REGIME_BINS``, equal count) and diagnosed
+        axis: "variable", "unit", "low", "high", "axis", "conditions", "verdicts" and
+        "above_null" (their mean gap above the null level, a fraction of the measured
+        energy).
+    """
     rows: list[dict[str, Any]] = []
     alphas = [next(iter(r.axes().values())).linearised.trim.alpha for r in results]
     values = {"airspeed": ("m/s", [c.speed_m_s for c in conds]),
@@ -346,9 +409,24 @@ def _named_derivatives(results: list[GapResult]) -> list[tuple[str, str, str]]:
 
 
 def point(cond: Condition, g: GapResult, derivative: str) -> Point | None:
-    """``derivative``'s delta at ``cond``: output error on each of the condition's windows
-    of ``g``'s axis (a single window cut in halves), the rest of the model held, the
-    windows' inverse-variance mean; None when no window identifies it."""
+    """``derivative``'s delta at one condition.
+
+    Parameters
+    ----------
+    cond : Condition
+        The condition and its records.
+    g : GapResult
+        Its diagnosis on one axis (its linearised model).
+    derivative : str
+        The derivative freed, e.g. "Cn_beta".
+
+    Returns
+    -------
+    Point or None
+        Output error on each of the condition's windows of the axis (a single window
+        cut in halves), the rest of the model held, the windows' inverse-variance mean;
+        None when no window identifies it.
+    """
     lin = g.linearised
     if derivative not in lin.model.parameters:
         return None
@@ -406,8 +484,18 @@ def envelope(records: Records, aircraft: str, names: Sequence[str] | None = None
 
 
 def trend_effects(result: EnvelopeResult) -> list[AugmentEffect]:
-    """The catalogue effects the trends name inside their physical range: a
-    ``DerivativeTable`` per trend, a ``DerivativeDelta`` per derivative without one."""
+    """The catalogue effects the trends name inside their physical range.
+
+    Parameters
+    ----------
+    result : EnvelopeResult
+        The diagnosis across the conditions.
+
+    Returns
+    -------
+    list of AugmentEffect
+        A ``DerivativeTable`` per trend, a ``DerivativeDelta`` per derivative without one.
+    """
     out: list[AugmentEffect] = []
     for t in result.trends:
         if t.note and not t.note.startswith("no trend"):
@@ -421,8 +509,22 @@ def trend_effects(result: EnvelopeResult) -> list[AugmentEffect]:
 
 def write_envelope_aircraft(result: EnvelopeResult, folder: str | Path,
                             name: str | None = None) -> Path:
-    """Write ``result.aircraft`` with the effects its trends name (``trend_effects``) under
-    ``folder`` (``sim.augment``); the new XML's path. Raises when no trend names one."""
+    """Write ``result.aircraft`` with the effects its trends name (``trend_effects``).
+
+    Parameters
+    ----------
+    result : EnvelopeResult
+        The diagnosis across the conditions.
+    folder : str or Path
+        Where the aircraft folder is written (``sim.augment``).
+    name : str or None
+        The new aircraft's name (default: "<aircraft>-corrected").
+
+    Returns
+    -------
+    Path
+        The new XML. Raises ValueError when no trend names an effect in range.
+    """
     effects = trend_effects(result)
     if not effects:
         raise ValueError("the diagnosis across the conditions named no derivative error "

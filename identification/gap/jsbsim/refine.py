@@ -98,11 +98,26 @@ class NotRefined(ValueError):
 
 def refine(result: Any, records: list[FlightRecord], *,
            max_iterations: int = 12) -> Refined:
-    """Refit the top named airframe effect of ``result`` (a ``GapResult``) on the longest
-    of ``records`` with the augmented JSBSim aircraft (module docstring: the lateral axis
-    window by window from each window's start state). Raises NotRefined when there is none
-    to refit (``refinable``), the aircraft with the effect does not trim where the record
-    starts, or it departs on every window."""
+    """Refit the top named airframe effect of a diagnosis with the JSBSim aircraft.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis (one axis).
+    records : list of FlightRecord
+        Its records; the longest is flown (module docstring: the lateral axis window by
+        window from each window's start state).
+    max_iterations : int
+        Gauss-Newton steps at most per window.
+
+    Returns
+    -------
+    Refined
+        The effect at the refitted values, their bounds (catalogue units), the
+        ranking's values, the surface offsets, the flights and the windows fitted.
+        Raises NotRefined when there is none to refit (``refinable``), the aircraft with
+        the effect does not trim where the record starts, or it departs on every window.
+    """
     effect = refinable(result)
     if effect is None or not records:
         raise NotRefined("the named entry is not one airframe effect (nothing named, a "
@@ -159,9 +174,19 @@ def _condition(window: FlightRecord | None, record: FlightRecord) -> tuple[float
 
 
 def held(result: Any) -> tuple[AugmentEffect, ...]:
-    """What the refit holds in the aircraft beside the refitted effect, as
-    ``write_aircraft`` writes it: the other named airframe effects of the axis and the
-    model's even terms removed (``symmetry.even_terms``)."""
+    """What the refit holds in the aircraft beside the refitted effect.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis (one axis).
+
+    Returns
+    -------
+    tuple of AugmentEffect
+        As ``write_aircraft`` writes them: the other named airframe effects of the axis
+        and the model's even terms removed (``symmetry.even_terms``).
+    """
     others = airframe_effects(result.named[1:])
     lin = result.linearised
     return (*others, *(e.straightening() for e in even_terms(lin.kinks, lin.axes)))

@@ -24,9 +24,21 @@ COMMAND_RATE_KEY = "command_rate_hz"  # meta.extra: the rate the commands were u
 
 
 def surfaces_of(records: Sequence[FlightRecord], surfaces: str | None = None) -> str:
-    """What the records' surface channels hold: ``surfaces`` when given, else their
-    metadata (``meta.extra["surfaces"]``; "position" when absent). Raises naming the
-    value when it is neither "position" nor "command", or when the records disagree."""
+    """What the records' surface channels hold.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records (their ``meta.extra["surfaces"]``; "position" when absent).
+    surfaces : str or None
+        "position" or "command" to override the metadata.
+
+    Returns
+    -------
+    str
+        "position" or "command". Raises ValueError naming the value when it is neither,
+        or when the records disagree.
+    """
     if surfaces is not None:
         found = {surfaces}
     else:
@@ -45,15 +57,31 @@ def surfaces_of(records: Sequence[FlightRecord], surfaces: str | None = None) ->
 
 def run_actuators(time: np.ndarray, command: np.ndarray, chain: Sequence[Actuator],
                   rate_hz: float | None = None) -> np.ndarray:
-    """The surface position (rad) at ``time`` (s) that the actuators ``chain`` (in series,
-    command first) make of the recorded ``command`` (rad), run as JSBSim runs them.
+    """The surface position that the actuators ``chain`` make of a recorded command.
 
     The command is updated at ``rate_hz`` (default: the record's rate; taken from the
     record between its samples, linearly) and held between updates. Each update is set
     before the last of the FCS steps that end at it (``substeps(rate_hz)`` steps per
     update, as ``sim.flight.simulation`` flies). Each actuator's ``<lag>`` runs by
     Tustin's rule, then its ``<rate_limit>`` acts on the lag's output (JSBSim reference
-    manual, FGActuator: lag, then rate limit). Starts at rest at the first command."""
+    manual, FGActuator: lag, then rate limit). Starts at rest at the first command.
+
+    Parameters
+    ----------
+    time : ndarray
+        The record's times, s.
+    command : ndarray
+        The recorded command, rad.
+    chain : sequence of Actuator
+        The actuators in series, command first (``sim.augment.actuators.actuator_chains``).
+    rate_hz : float or None
+        The rate the command was updated at, Hz (None: the record's).
+
+    Returns
+    -------
+    ndarray
+        The surface position at ``time``, rad.
+    """
     rate = rate_hz or 1.0 / float(np.median(np.diff(time)))
     n = substeps(rate)
     h = 1.0 / (rate * n)
@@ -86,9 +114,20 @@ def run_actuators(time: np.ndarray, command: np.ndarray, chain: Sequence[Actuato
 
 
 def command_rate(record: FlightRecord) -> float | None:
-    """The rate (Hz) the record's commands were updated at: ``meta.extra["command_rate_hz"]``
-    (docs/record.md), else the rate a simulated flight set its controls at (its card's
-    ``rate``), else None (the record's own rate)."""
+    """The rate the record's commands were updated at.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record of commands.
+
+    Returns
+    -------
+    float or None
+        ``meta.extra["command_rate_hz"]`` (Hz; docs/record.md), else the rate a simulated
+        flight set its controls at (its card's ``rate``), else None (the record's own
+        rate).
+    """
     if COMMAND_RATE_KEY in record.meta.extra:
         return float(record.meta.extra[COMMAND_RATE_KEY])
     card = (record.meta.scenario or {}).get("card") or {}
@@ -97,11 +136,26 @@ def command_rate(record: FlightRecord) -> float | None:
 
 def actuated(records: Sequence[FlightRecord], aircraft: str,
              surfaces: str | None = None) -> list[FlightRecord]:
-    """The records as the model's aerodynamics see them: on records of commands
-    (``surfaces_of``) each surface channel passed through the aircraft's own actuators
-    (lag and rate limit, ``sim.augment.actuators.actuator_chains``; ``run_actuators``),
-    so that an aircraft flown on its own commands is at the null level and an
-    ``actuator_lag`` candidate is the lag it lacks; records of positions as they are."""
+    """The records as the model's aerodynamics see them.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+    aircraft : str
+        The JSBSim aircraft whose actuators are read (name or XML path).
+    surfaces : str or None
+        What the surface channels hold ("position", "command"; None: ``surfaces_of``).
+
+    Returns
+    -------
+    list of FlightRecord
+        On records of commands each surface channel passed through the aircraft's own
+        actuators (lag and rate limit, ``sim.augment.actuators.actuator_chains``;
+        ``run_actuators``), so that an aircraft flown on its own commands is at the null
+        level and an ``actuator_lag`` candidate is the lag it lacks; records of
+        positions as they are.
+    """
     if surfaces_of(records, surfaces) != "command":
         return list(records)
     chains = actuator_chains(aircraft)
