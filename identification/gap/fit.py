@@ -63,7 +63,25 @@ def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
 def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
         max_iterations: int = MAX_ITERATIONS) -> WindowFit:
     """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``, in at most
-    ``max_iterations`` Gauss-Newton steps."""
+    ``max_iterations`` Gauss-Newton steps.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft (with a candidate's edits).
+    record : FlightRecord
+        One window.
+    free : sequence of str
+        The model's parameters fitted besides the nuisance ones (none: the model as is).
+    max_iterations : int
+        Gauss-Newton steps at most.
+
+    Returns
+    -------
+    WindowFit
+        The freed parameters with their bounds (colored-residual corrected), the cost
+        N/2 ln det R, and each output's measured, model and residual time history.
+    """
     est = output_error.estimate(
         record, model, free=[*free, *nuisance(model)], initial_state="estimate", hold="foh",
         colored=True, check_identifiability=True, max_iterations=max_iterations)
@@ -81,5 +99,20 @@ def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
 
 
 def held(model: LinearModel, values: dict[str, float], record: FlightRecord) -> WindowFit:
-    """``model`` with ``values`` held, on ``record`` (only the nuisance fitted)."""
+    """``model`` with ``values`` held, on ``record`` (only the nuisance fitted).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft (with a candidate's edits).
+    values : dict of str to float
+        Parameters held at these values (fitted on other windows).
+    record : FlightRecord
+        The held-out window.
+
+    Returns
+    -------
+    WindowFit
+        As ``fit`` with no parameter freed.
+    """
     return fit(model.with_start(**values) if values else model, record, ())

@@ -34,7 +34,22 @@ def band_label(band: tuple[float, float]) -> str:
 
 def band_fractions(residual: np.ndarray, measured: np.ndarray, dt: float,
                    bands: tuple[tuple[float, float], ...] = BANDS) -> list[float]:
-    """Residual energy in each band / measured energy (mean removed), by Parseval."""
+    """Residual energy in each band / measured energy (mean removed), by Parseval.
+
+    Parameters
+    ----------
+    residual, measured : ndarray
+        One output's residual and measured signal on one window.
+    dt : float
+        Sample interval, s.
+    bands : tuple of (float, float)
+        Frequency bands, Hz.
+
+    Returns
+    -------
+    list of float
+        Per band, the residual energy over the measured energy (nan for a constant signal).
+    """
     n = residual.size
     f = np.fft.rfftfreq(n, dt)
     weight = np.full(f.size, 2.0)
@@ -82,7 +97,23 @@ def regime_rows(fits: dict[str, WindowFit], records: dict[str, FlightRecord],
                 bins: int = REGIME_BINS) -> list[dict]:
     """Per regime variable (alpha, V: measured, from each window's record) and bin, each
     output's residual energy / measured energy (window means removed) over the samples in
-    the bin; a variable the records lack is left out."""
+    the bin; a variable the records lack is left out.
+
+    Parameters
+    ----------
+    fits : dict of str to WindowFit
+        The model-as-is fits by window label.
+    records : dict of str to FlightRecord
+        The windows' records, same labels.
+    bins : int
+        Equal-count bins per regime variable.
+
+    Returns
+    -------
+    list of dict
+        Per variable (alpha deg, V m/s), bin and channel: "variable", "unit", "low",
+        "high", "channel", "fraction" and "samples".
+    """
     out: list[dict] = []
     labels = [k for k in fits if k in records]
     for var, (unit, scale) in REGIMES.items():
@@ -109,7 +140,23 @@ def regime_rows(fits: dict[str, WindowFit], records: dict[str, FlightRecord],
 def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] = BANDS,
             records: dict[str, FlightRecord] | None = None) -> GapMap:
     """The gap map of the model-as-is fits of each window (``{window label: fit}``); by
-    regime too when the windows' ``records`` are given."""
+    regime too when the windows' ``records`` are given.
+
+    Parameters
+    ----------
+    fits : dict of str to WindowFit
+        The model-as-is fits by window label.
+    bands : tuple of (float, float)
+        Frequency bands, Hz.
+    records : dict of str to FlightRecord or None
+        The windows' records (for the regime rows).
+
+    Returns
+    -------
+    GapMap
+        Per window and channel the residual fraction and its split by band; by regime when
+        ``records`` are given.
+    """
     out = GapMap(bands, regimes=regime_rows(fits, records) if records else [])
     labels = [band_label(b) for b in bands]
     for window, wf in fits.items():

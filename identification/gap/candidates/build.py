@@ -80,7 +80,24 @@ def catalogue_candidates(model: LinearModel, axes: str = "body", *,
     derivatives in ``axes``): derivative deltas and control effectiveness, tail ice (a
     longitudinal model), the sensor and mounting candidates of its outputs, the mass
     properties, and the actuator lags when ``surfaces`` (None: from the ``records``'
-    metadata, ``model.surfaces.surfaces_of``) is "command"."""
+    metadata, ``model.surfaces.surfaces_of``) is "command".
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    axes : str
+        Axes of its derivatives ("body" lateral, "stability" longitudinal).
+    surfaces : str or None
+        "position" or "command" (None: from ``records``).
+    records : sequence of FlightRecord
+        The records (their metadata says what the surfaces hold).
+
+    Returns
+    -------
+    list of Candidate
+        Every single-effect candidate for the model.
+    """
     known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
     out = [_derivative(d, axes) for d in model.parameters if d in known]
     out += [_surface(s) for s in SURFACES if s in model.inputs]

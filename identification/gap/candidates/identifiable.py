@@ -115,7 +115,22 @@ def not_identifiable(model: LinearModel, records: Sequence[FlightRecord] = (), *
     a candidate for ``model`` (the linearised aircraft of one axis, with the outputs the
     ``records`` carry), with the reason and what would make it identifiable.
     ``surfaces``: what the records' surface channels hold ("position" or "command"; None:
-    their metadata)."""
+    their metadata).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    records : sequence of FlightRecord
+        The records.
+    surfaces : str or None
+        "position" or "command" (None: the records' metadata).
+
+    Returns
+    -------
+    dict of str to str
+        Entry (or entry with options) -> the reason, and what would make it identifiable.
+    """
     kind = surfaces_of(records, surfaces)
     found = {c.entry for c in catalogue_candidates(model, surfaces=kind)}
     out = {name: _reason(name, model, kind) for name in CATALOGUE if name not in found}

@@ -89,7 +89,18 @@ def nuisance(model: LinearModel) -> tuple[str, ...]:
 
 
 def record_condition(record: FlightRecord) -> tuple[float, float]:
-    """(altitude m, true airspeed m/s): the record's means."""
+    """(altitude m, true airspeed m/s): the record's means.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record with V and h as channels or in ``meta.condition``.
+
+    Returns
+    -------
+    tuple of float
+        (altitude m, true airspeed m/s). Raises ValueError naming what is missing.
+    """
     cond = record.meta.condition or {}
     if "V" in record:
         speed = float(np.mean(record["V"]))
@@ -109,7 +120,18 @@ def record_condition(record: FlightRecord) -> tuple[float, float]:
 def start_condition(record: FlightRecord) -> tuple[float, float]:
     """(altitude m, true airspeed m/s) to trim a JSBSim model at before flying it with the
     record's inputs: the metadata's condition where the record has one (a card's trim: an
-    elevator 3211 drifts the mean airspeed away from it), else ``record_condition``."""
+    elevator 3211 drifts the mean airspeed away from it), else ``record_condition``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record.
+
+    Returns
+    -------
+    tuple of float
+        (altitude m, true airspeed m/s).
+    """
     cond = record.meta.condition or {}
     if "altitude_m" in cond and "speed_m_s" in cond:
         return float(cond["altitude_m"]), float(cond["speed_m_s"])
@@ -119,7 +141,18 @@ def start_condition(record: FlightRecord) -> tuple[float, float]:
 def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
     """The axes the records excite: from their maneuver lists (elevator: longitudinal;
     aileron or rudder: lateral), else from the spread of the measured surfaces (an axis
-    whose surface spread reaches ``EXCITED`` of the largest one). Lateral first."""
+    whose surface spread reaches ``EXCITED`` of the largest one). Lateral first.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+
+    Returns
+    -------
+    list of str
+        "lateral" and/or "longitudinal", lateral first.
+    """
     found: set[str] = set()
     for r in records:
         items = windows.maneuvers(r)
@@ -141,7 +174,20 @@ MIN_OUTPUTS = 2
 
 def carried_outputs(records: Sequence[FlightRecord], axis: str) -> tuple[str, ...]:
     """The outputs of ``axis``'s model that every record carries (in the model's order);
-    raises naming the missing ones when fewer than ``MIN_OUTPUTS`` are left."""
+    raises naming the missing ones when fewer than ``MIN_OUTPUTS`` are left.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+    axis : str
+        "lateral" or "longitudinal".
+
+    Returns
+    -------
+    tuple of str
+        The outputs every record carries, in the model's order.
+    """
     outs = tuple(c for c in AXIS_OUTPUTS[axis] if all(c in r for r in records))
     if len(outs) < MIN_OUTPUTS:
         missing = [c for c in AXIS_OUTPUTS[axis] if c not in outs]
@@ -171,7 +217,25 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
     """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
     ``axis`` ("lateral" or "longitudinal"), with the outputs the records carry
     (``carried_outputs``). ``surfaces``: what the records' surface channels hold
-    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``)."""
+    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``).
+
+    Parameters
+    ----------
+    aircraft : str
+        JSBSim aircraft: a project name, a stock JSBSim name or an XML path.
+    records : list of FlightRecord
+        The records of one condition.
+    axis : str
+        "lateral" or "longitudinal".
+    surfaces : str or None
+        "position" or "command" (None: the records' metadata).
+
+    Returns
+    -------
+    Linearised
+        The perturbation model of the axis (its derivatives per rad or per unit
+        nondimensional rate, in the axis's axes), the trim, and the kinks at trim.
+    """
     if axis not in AXIS_NAMES:
         raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])
