@@ -398,7 +398,17 @@ def injected(records: Sequence[FlightRecord]) -> list[str]:
     """The airframe and actuator effects a simulated record's card injected (its
     metadata's ``[[effect]]``), as "name(option=value, ...)" with a derivative delta's
     axes always said (the catalogue's default is stability axes; the lateral diagnosis
-    fits body axes); [] for a real record."""
+    fits body axes); [] for a real record.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+
+    Returns
+    -------
+    list of str
+    """
     out: list[str] = []
     for r in records:
         card = (r.meta.scenario or {}).get("card") or {}

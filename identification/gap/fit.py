@@ -48,14 +48,35 @@ def noise_energy(residual: np.ndarray) -> float:
     Differencing removes what varies slowly (a model's misfit of the rigid-body response)
     and keeps white measurement noise, whose differences have twice its variance (the
     difference-based noise estimate of the residual; Morelli & Klein 2016 ch. 11 estimate
-    noise from the high-frequency part of a residual the same way)."""
+    noise from the high-frequency part of a residual the same way).
+
+    Parameters
+    ----------
+    residual : ndarray
+        One output's residual on one window.
+
+    Returns
+    -------
+    float
+        In the residual's units squared (nan under two samples).
+    """
     if residual.size < 2:
         return float("nan")
     return residual.size * float(np.mean(np.diff(residual) ** 2)) / 2.0
 
 
 def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
-    """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal."""
+    """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal.
+
+    Parameters
+    ----------
+    residual, measured : ndarray
+        One output's residual and measured signal.
+
+    Returns
+    -------
+    float
+    """
     spread = float(np.sum((measured - np.mean(measured)) ** 2))
     return float(np.sum(residual**2) / spread) if spread > 0 else float("nan")
 

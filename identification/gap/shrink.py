@@ -43,7 +43,17 @@ def shrinkage(sequence: Sequence[Ranked]) -> dict:
 
 
 def shrink_text(x: float | None) -> str:
-    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown."""
+    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown.
+
+    Parameters
+    ----------
+    x : float or None
+        A relative shrink (1: the gap closed).
+
+    Returns
+    -------
+    str
+    """
     if x is None or not math.isfinite(x):
         return "-"
     return "worse" if x < 0 else f"{x:.0%}"

@@ -28,6 +28,17 @@ REGIMES = {"alpha": ("deg", 180.0 / math.pi), "V": ("m/s", 1.0)}  # variable: un
 
 
 def band_label(band: tuple[float, float]) -> str:
+    """A band's label for tables ("<0.3 Hz", "1-3 Hz", ">3 Hz").
+
+    Parameters
+    ----------
+    band : tuple of float
+        (low, high), Hz; low 0 or high inf for the open ends.
+
+    Returns
+    -------
+    str
+    """
     lo, hi = band
     return f"<{hi:g} Hz" if lo == 0 else (f">{lo:g} Hz" if math.isinf(hi) else f"{lo:g}-{hi:g} Hz")
 
@@ -170,7 +181,19 @@ def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] =
 
 
 def heat_map(gm: GapMap, title: str = "") -> Figure:
-    """Channels x bands (averaged over windows) and channels x windows (total)."""
+    """Channels x bands (averaged over windows) and channels x windows (total).
+
+    Parameters
+    ----------
+    gm : GapMap
+        The gap map.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    Figure
+    """
     chans = gm.channels()
     labels = [band_label(b) for b in gm.bands]
     per = gm.by_channel()

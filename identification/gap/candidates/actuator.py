@@ -33,7 +33,18 @@ TAU_START = 0.02  # s: start of the lag fit
 
 def actuator_lag(surface: str) -> Candidate:
     """The catalogue's ``actuator_lag`` (tau, s) between the recorded command of
-    ``surface`` and the surface."""
+    ``surface`` and the surface.
+
+    Parameters
+    ----------
+    surface : str
+        "da", "dr" or "de", an input of the model.
+
+    Returns
+    -------
+    Candidate
+        Its catalogue entry, options and the linear-model parameters it frees (tau, s).
+    """
     name = f"actuator_lag_{surface}"
 
     def wrap(model: LinearModel) -> LinearModel:
@@ -49,7 +60,20 @@ def actuator_lag(surface: str) -> Candidate:
 
 def actuator_candidates(model: LinearModel, surfaces: str) -> list[Candidate]:
     """The actuator candidates for ``model``: a lag per surface input when ``surfaces``
-    is "command", none for "position"."""
+    is "command", none for "position".
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    surfaces : str
+        "position" or "command".
+
+    Returns
+    -------
+    list of Candidate
+        One ``actuator_lag`` per surface input on commands; [] on positions.
+    """
     if surfaces != "command":
         return []
     return [actuator_lag(s) for s in model.inputs if s in ("da", "dr", "de")]

@@ -85,7 +85,17 @@ class Refined:
 
 def refinable(result: Any) -> AugmentEffect | None:
     """The airframe effect of the diagnosis's top named entry, or None (nothing named, a
-    pair, or a sensor or mounting effect, which JSBSim's aircraft does not carry)."""
+    pair, or a sensor or mounting effect, which JSBSim's aircraft does not carry).
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+
+    Returns
+    -------
+    AugmentEffect or None
+    """
     if not result.named or result.named[0].candidate.parts:
         return None
     effects = airframe_effects(result.named[:1])

@@ -115,7 +115,21 @@ def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> 
 def gap_fractions(record: FlightRecord, flown: FlightRecord,
                   outputs: tuple[str, ...] = OUTPUTS["lateral"]) -> dict[str, float]:
     """Per channel: residual energy / measured energy, means removed from both (the trim
-    offsets and sensor biases a re-flight from trim cannot know)."""
+    offsets and sensor biases a re-flight from trim cannot know).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The record.
+    flown : FlightRecord
+        The model flown with its inputs.
+    outputs : tuple of str
+        The channels compared.
+
+    Returns
+    -------
+    dict of str to float
+    """
     out = {}
     n = min(len(record.time), len(flown.time))
     for ch in outputs:

@@ -84,7 +84,17 @@ class Linearised:
 
 
 def nuisance(model: LinearModel) -> tuple[str, ...]:
-    """The bias parameters of ``model`` (trim offsets, fitted on every window)."""
+    """The bias parameters of ``model`` (trim offsets, fitted on every window).
+
+    Parameters
+    ----------
+    model : LinearModel
+
+    Returns
+    -------
+    tuple of str
+        The parameters named ``bias_*``.
+    """
     return tuple(p for p in model.parameters if p.startswith("bias_"))
 
 
@@ -198,7 +208,19 @@ def carried_outputs(records: Sequence[FlightRecord], axis: str) -> tuple[str, ..
 
 
 def restricted(model: LinearModel, outputs: Sequence[str]) -> LinearModel:
-    """``model`` with only the output rows ``outputs`` (every state kept)."""
+    """``model`` with only the output rows ``outputs`` (every state kept).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The model.
+    outputs : sequence of str
+        The outputs kept, in order.
+
+    Returns
+    -------
+    LinearModel
+    """
     if tuple(outputs) == model.outputs:
         return model
     rows = [model.outputs.index(c) for c in outputs]
