@@ -12,6 +12,7 @@ research sensors at 25 Hz with the vanes and lever arm corrected to the CG) at 1
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -20,6 +21,7 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.identification.gap.envelope import Point, conditions, envelope, trend
+from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.sim.effects.airframe import DerivativeTable
 from flightid.sim.jsbsim.model import load
@@ -65,6 +67,13 @@ def test_each_airspeed_is_its_own_condition(records):
     assert [round(c.speed_m_s) for c in conds] == [50, 62, 76]
     # one record flown twice at one condition stays one condition
     assert len(conditions([records[0], records[0]], ["a", "b"])) == 1
+    # flaps recorded (channel df, rad): 10 deg apart is another condition, 0.5 deg is not
+    flapped = [FlightRecord(r.time, {**r.channels, "df": np.full(r.time.size, math.radians(f))},
+                            r.meta) for r, f in ((records[0], 0.0), (records[0], 0.5),
+                                                 (records[0], 10.0))]
+    conds = conditions(flapped, ["up", "up too", "down"])
+    assert [c.names for c in conds] == [["up", "up too"], ["down"]]
+    assert conds[1].label.endswith("flaps 10 deg")
 
 
 def test_where_in_the_envelope_the_model_departs(result):
