@@ -20,7 +20,8 @@ from lateral_card import maneuvers
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.gap.envelope import Point, conditions, envelope, trend
+from flightid.identification.gap.envelope import conditions, envelope
+from flightid.identification.gap.trend import Point, trend
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.sim.effects.airframe import DerivativeTable

@@ -8,7 +8,8 @@ error on one window), ``verdict`` (is there a gap), ``where`` (gap map), ``candi
 ``rank`` (which effect), ``sequence`` (several effects), ``shrink`` (how far), ``jsbsim``
 (the corrected aircraft written, refined and flown again), ``diagnose`` (all of it),
 ``report`` (HTML); ``envelope`` (records from several conditions: each diagnosed at
-its own, where in the envelope the model departs, and a derivative error's trend).
+its own, where in the envelope the model departs) and ``trend`` (a derivative error's
+trend over the conditions).
 """
 
 from flightid.identification.gap.diagnose import GapResult, diagnose

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.identification.data.coefficients import channel_values, mass_properties
+from flightid.identification.engine import problem as problem_skeleton
 from flightid.identification.models import rigid_body as rb
 from flightid.identification.models.six_dof import (
     COLUMNS,
@@ -32,23 +33,18 @@ from flightid.record import FlightRecord
 from flightid.units import G0
 
 
-@dataclass
-class Problem:
-    """Data and model of one fit, arranged for fast integration."""
+@dataclass(kw_only=True)
+class Problem(problem_skeleton.Problem):
+    """Data and model of one fit, arranged for fast integration (the skeleton's time,
+    outputs, fixed parameters, initial states and noise floor, and:)."""
 
     model: SixDofModel
-    time: np.ndarray
-    dt: float
     # inputs (de - de_ref, da - da_ref, dr - dr_ref, thrust N, rho kg/m^3, mass kg,
     # L_prop, M_prop, N_prop N m (0 unless the model takes them)), (N, 9)
     inputs: np.ndarray
     # the same at the RK4 stage instants t_i, t_i + dt/2, t_i+1: (3, N - 1, 9)
     stage_inputs: np.ndarray
-    z: np.ndarray  # (N, ny) measured outputs
     x0: np.ndarray  # (9,) measured initial state
-    x0_names: tuple[str, ...]
-    fixed: dict[str, float]
-    noise_floor: np.ndarray
     controls: str
 
     @property
@@ -192,9 +188,9 @@ def problem_from_record(record: FlightRecord, model: SixDofModel,
     x0 = measured_state(record)
     names = [s for s in rb.STATES if s != "psi" or "psi" in model.outputs]
     x0_names = tuple(f"x0_{s}" for s in names) if initial_state == "estimate" else ()
-    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
-    return Problem(model, time, dt, inputs, np.stack([start, mid, end]), z, x0, x0_names, {},
-                   floor, controls)
+    return Problem(model=model, time=time, dt=dt, inputs=inputs,
+                   stage_inputs=np.stack([start, mid, end]), z=z, x0=x0, x0_names=x0_names,
+                   fixed={}, noise_floor=problem_skeleton.noise_floor(z), controls=controls)
 
 
 def cubic_midpoints(x: np.ndarray) -> np.ndarray:

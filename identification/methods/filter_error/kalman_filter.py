@@ -15,6 +15,12 @@ import scipy.linalg
 
 from flightid.identification.engine.gauss_newton import damped_newton_step
 from flightid.identification.methods import output_error as oe
+from flightid.identification.models.discrete import (
+    discretize,
+    hold_inputs,
+    propagate,
+    stacked_product,
+)
 from flightid.identification.models.linear import LinearModel
 
 # Euler angles follow from the rates by kinematics: turbulence does not enter them
@@ -33,7 +39,7 @@ def process_noise_name(state: str) -> str:
 class SteadyStateFilter:
     """Discrete model and steady-state Kalman filter of one parameter set (SI units).
 
-    phi, gamma: discrete state and input matrices (input w_i of ``output_error.hold_inputs``);
+    phi, gamma: discrete state and input matrices (input w_i of ``models.discrete.hold_inputs``);
     C, D: output matrices; Qd: process-noise covariance per sample; P: predicted-state
     covariance; S: innovation covariance; K: Kalman gain.
     """
@@ -73,7 +79,7 @@ def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarr
     Raises numpy.linalg.LinAlgError when the Riccati equation has no stabilising solution.
     """
     n = A.shape[0]
-    phi, gamma, _, _ = oe.discretize(A, B, dt, np.zeros((0, n, n)),
+    phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n, n)),
                                      np.zeros((0, *B.shape)), hold)
     qd = process_noise_covariance(A, F, dt)
     if np.any(qd):
@@ -99,7 +105,7 @@ def innovations(flt: SteadyStateFilter, u: np.ndarray, w: np.ndarray, z: np.ndar
     gain = flt.phi @ flt.K
     closed = flt.phi - gain @ flt.C
     forcing = (z - u @ flt.D.T) @ gain.T + w @ flt.gamma.T
-    x = oe.propagate(closed, forcing, x0)
+    x = propagate(closed, forcing, x0)
     return x, z - x @ flt.C.T - u @ flt.D.T
 
 
@@ -126,15 +132,15 @@ def simulate_process_noise(model: LinearModel, values: Mapping[str, float],
     A, B, C, D = model.matrices(values)
     dt = float(np.mean(np.diff(time)))
     F = np.diag([process_noise.get(s, 0.0) for s in model.states])
-    phi, gamma, _, _ = oe.discretize(A, B, dt, np.zeros((0, n_states, n_states)),
+    phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n_states, n_states)),
                                      np.zeros((0, *B.shape)), hold)
     qd = process_noise_covariance(A, F, dt)
     vals, vecs = np.linalg.eigh(qd)
     root = vecs * np.sqrt(np.clip(vals, 0.0, None))
     noise = np.random.default_rng(seed).standard_normal((len(time), n_states)) @ root.T
-    w = oe.hold_inputs(u, hold)
+    w = hold_inputs(u, hold)
     start = np.zeros(n_states) if x0 is None else np.asarray(x0, dtype=float)
-    x = oe.propagate(phi, w @ gamma.T + noise, start)
+    x = propagate(phi, w @ gamma.T + noise, start)
     return x @ C.T + u @ D.T
 
 
@@ -219,12 +225,12 @@ def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarr
     d_closed = grads["phi"] - d_gain @ C - gain @ grads["C"]
     # sensitivity recursion of the predictor: s_{k+1} = closed s_k + forcing_k
     residual_input = d.z - d.u @ D.T
-    forcing = (oe.stacked_product(d_closed, x) + oe.stacked_product(d_gain, residual_input)
+    forcing = (stacked_product(d_closed, x) + stacked_product(d_gain, residual_input)
                - np.einsum("ab,jbc,ic->iaj", gain, grads["D"], d.u)
-               + oe.stacked_product(grads["gamma"], d.w))
-    s = oe.propagate(closed, forcing, np.zeros((x.shape[1], npar)))
-    dnu = -(np.matmul(C, s) + oe.stacked_product(grads["C"], x)
-            + oe.stacked_product(grads["D"], d.u))
+               + stacked_product(grads["gamma"], d.w))
+    s = propagate(closed, forcing, np.zeros((x.shape[1], npar)))
+    dnu = -(np.matmul(C, s) + stacked_product(grads["C"], x)
+            + stacked_product(grads["D"], d.u))
     S_inv = np.linalg.inv(flt.S)
     n = nu.shape[0]
     weighted = np.einsum("ab,ibj->iaj", S_inv, dnu)

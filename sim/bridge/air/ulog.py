@@ -31,7 +31,7 @@ from flightid.importers.ulog_topics import (
     TOPICS,
 )
 from flightid.record import FlightRecord
-from flightid.sim.bridge.dataflash import BOOT_S, message_times, sampled
+from flightid.sim.bridge.air.dataflash import BOOT_S, message_times, sampled
 from flightid.units import DEG
 
 MAGIC = b"ULog\x01\x12\x35"

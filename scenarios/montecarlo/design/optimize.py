@@ -31,7 +31,7 @@ from flightid.scenarios.input_optimization import (
     problem_from_flight,
 )
 from flightid.scenarios.inputs import scale_to_energy
-from flightid.scenarios.montecarlo.design import (
+from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     SETTLE_S,
     START_S,

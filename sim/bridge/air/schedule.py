@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from flightid.sim.bridge.air.signing import SIGNATURE_BYTES
 from flightid.sim.bridge.messages import TELEMETRY, frame_size
-from flightid.sim.bridge.signing import SIGNATURE_BYTES
 
 #: default importance of each message (0 = never reduced; larger = reduced first)
 PRIORITY = {

@@ -55,7 +55,7 @@ from flightid.identification.engine.refit import refit_without_unidentifiable
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import output_error as oe
-from flightid.identification.methods.kalman_filter import (
+from flightid.identification.methods.filter_error.kalman_filter import (
     PROCESS_NOISE_PREFIX,
     FilterEvaluation,
     FilterProblem,

@@ -36,6 +36,8 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from flightid.record import FlightRecord
+from flightid.sim.bridge.air.schedule import Schedule, StreamSpec, plan_schedule, single_stream
+from flightid.sim.bridge.air.signing import SenderFilter, setup_outgoing
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link, LinkFaults, Transmitter
 from flightid.sim.bridge.messages import (
@@ -45,8 +47,6 @@ from flightid.sim.bridge.messages import (
     TelemetryState,
     encode,
 )
-from flightid.sim.bridge.schedule import Schedule, StreamSpec, plan_schedule, single_stream
-from flightid.sim.bridge.signing import SenderFilter, setup_outgoing
 
 #: unix time of sim time 0 unless told otherwise (June 2008, the Boomerang 60's flight tests)
 DEFAULT_EPOCH = 1_213_488_000.0

@@ -58,19 +58,20 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from flightid.identification.engine import identifiability as ident
-from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine import problem as problem_skeleton
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
-from flightid.identification.methods.protocol import Method, OutputErrorOptions, option
-from flightid.identification.methods.six_dof_simulation import (
+from flightid.identification.methods.nonlinear_6dof.simulation import (
     Problem,
     model_from_record,
     outputs,
     outputs_and_sensitivities,
     problem_from_record,
 )
+from flightid.identification.methods.protocol import Method, OutputErrorOptions, option
 from flightid.identification.models import rigid_body as rb
 from flightid.identification.models.six_dof import (
     CONTROLS,
@@ -160,8 +161,8 @@ def estimate(
             iterations: int = max_iterations) -> MaximumLikelihoodFit:
         problem.fixed = {n: v for n, v in {**model.start, **x0_start}.items() if n not in active}
         with np.errstate(over="ignore", invalid="ignore"):  # rejected diverging trial steps
-            return maximum_likelihood(
-                problem.z, problem.noise_floor,
+            return problem_skeleton.fit(
+                problem,
                 lambda v: outputs_and_sensitivities(problem, v, active),
                 lambda v: outputs(problem, v),
                 active, current, iterations, full_noise_covariance, step_tolerance,
@@ -209,10 +210,8 @@ def _unexcited(problem: Problem, names: Sequence[str], min_range: float) -> dict
 def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[str, str]:
     """Unidentifiable parameters of a fit; biases, initial states and h_engine kept in
     preference."""
-    values = np.array([fit.values[n] for n in names])
     keep = [n for n in names if n.endswith("_0") or n.startswith("x0_") or n == ROTOR]
-    return ident.unidentifiable(names, fit.information, values, prefer_keep=keep,
-                                tolerance=tol)
+    return problem_skeleton.singular(names, fit, tol, keep)
 
 
 # ----------------------------------------------------------------------------- protocol

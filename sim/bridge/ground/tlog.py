@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.bridge.align import ClockMap, timesync_map, xcorr_map
 from flightid.sim.bridge.frames import read_tlog
-from flightid.sim.bridge.gaps import (
+from flightid.sim.bridge.ground.align import ClockMap, timesync_map, xcorr_map
+from flightid.sim.bridge.ground.gaps import (
     MAX_GAP_SAMPLES,
     MIN_RECORD_SAMPLES,
     grid_rate,
@@ -23,8 +23,14 @@ from flightid.sim.bridge.gaps import (
     longest_stretch,
     nominal_interval,
 )
+from flightid.sim.bridge.ground.sources import (
+    Source,
+    SourceLoss,
+    loss_dict,
+    sequence_losses,
+    source_name,
+)
 from flightid.sim.bridge.messages import CHANNEL_SOURCES, ServoMap, decode, message_time
-from flightid.sim.bridge.sources import Source, SourceLoss, loss_dict, sequence_losses, source_name
 from flightid.sim.jsbsim.model import load
 
 
@@ -424,7 +430,7 @@ def convert_tlog(
             extra["bridge"]["read_notes"].append(f"{side}: unreadable report ({exc})")
     meta = RecordMeta(
         aircraft=aircraft, sample_rate=fs,
-        provenance=f"MAVLink tlog {path} converted by flightid.sim.bridge.tlog", extra=extra,
+        provenance=f"MAVLink tlog {path} converted by flightid.sim.bridge.ground.tlog", extra=extra,
     )
     if aircraft:
         # MAVLink carries no mass properties or geometry: take them from the aircraft
