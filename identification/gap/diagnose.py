@@ -2,7 +2,7 @@
 how far it shrinks (``diagnose``), and its result (``GapResult``: verdict, json form, heat
 map).
 
-Each axis the records excite (``linearise.excited_axes``: elevator -> longitudinal, aileron
+Each axis the records excite (``data.axes.excited_axes``: elevator -> longitudinal, aileron
 or rudder -> lateral) is diagnosed on its own model and windows, and has its own verdict
 (``verdict``): first the model as is is tested against the null level of noise and
 turbulence; only where it fails are candidates ranked and named, in sequence until the
@@ -19,9 +19,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.files import json_safe
+from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_axes
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
 from flightid.identification.gap.candidates.identifiable import not_identifiable
@@ -29,13 +30,7 @@ from flightid.identification.gap.fit import fit
 from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
 from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
-from flightid.identification.gap.model.linearise import (
-    AXIS_INPUTS,
-    AXIS_NAMES,
-    Linearised,
-    excited_axes,
-    linearise,
-)
+from flightid.identification.gap.model.linearise import Linearised, linearise
 from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
 from flightid.identification.gap.segments import Segment, segments, split
@@ -134,7 +129,7 @@ class GapResult:
         return {c: d["total"] for c, d in self.where.by_channel().items()}
 
     def to_json(self, top: int = TOP) -> dict[str, Any]:
-        return _finite({
+        return json_safe({
             "aircraft": self.aircraft,
             "verdict": self.verdict,
             "axis": self.axis,
@@ -189,18 +184,6 @@ class GapResult:
 
     def figure(self) -> Figure:
         return heat_map(self.where, f"gap map: {self.aircraft} (the model as is)")
-
-
-def _finite(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_finite(v) for v in x]
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
 
 
 Records = FlightRecord | str | Path | Sequence[FlightRecord | str | Path]

@@ -42,9 +42,11 @@ from typing import Any
 
 import numpy as np
 
-from flightid.identification.gap.diagnose import GapResult, Records, _finite, _records, diagnose
+from flightid.files import json_safe
+from flightid.identification.data.axes import AXIS_INPUTS
+from flightid.identification.gap.diagnose import GapResult, Records, _records, diagnose
 from flightid.identification.gap.fit import fit
-from flightid.identification.gap.model.linearise import AXIS_INPUTS, record_condition
+from flightid.identification.gap.model.linearise import record_condition
 from flightid.identification.gap.rank import combine, overall
 from flightid.identification.gap.segments import segments, split
 from flightid.identification.gap.sequence import STEPS
@@ -147,7 +149,7 @@ class EnvelopeResult:
                 and not t.note]
 
     def to_json(self) -> dict[str, Any]:
-        return _finite({
+        return json_safe({
             "aircraft": self.aircraft, "verdict": self.verdict,
             "conditions": [{**c.to_json(), "verdict": r.verdict,
                             "axes": {a: {"verdict": g.verdict,

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap.diagnose import GapResult
 from flightid.identification.gap.fit import held
-from flightid.identification.gap.model.linearise import AXIS_INPUTS
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed
 from flightid.identification.gap.shrink import shrink_text

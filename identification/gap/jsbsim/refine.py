@@ -41,15 +41,12 @@ from typing import Any
 
 import numpy as np
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.effect_fit import OFFSET, fit_effect
 from flightid.identification.gap.jsbsim.refly import start_state
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.jsbsim.write import OUTPUTS, airframe_effects
-from flightid.identification.gap.model.linearise import (
-    AXIS_INPUTS,
-    record_condition,
-    start_condition,
-)
+from flightid.identification.gap.model.linearise import record_condition, start_condition
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.sim.effects.airframe import AugmentEffect

@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.gap.jsbsim.write import gap_fractions, write_aircraft
-from flightid.identification.gap.model.linearise import AXIS_INPUTS, AXIS_OUTPUTS, start_condition
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_condition
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment_cached

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification.data import windows
+from flightid.identification.data.axes import AXIS_NAMES
 from flightid.identification.gap.model.surfaces import surfaces_of
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
@@ -57,14 +57,10 @@ AXES = "body"  # the lateral model's derivative axes
 PROPULSION = True  # total derivatives: what a flight (and a flight test) sees
 NUISANCE = LATERAL_BIASES
 DERIVATIVES = LATERAL_DERIVATIVES  # the lateral model's (kept: other modules import it)
-AXIS_NAMES = ("lateral", "longitudinal")
 # per axis: the derivatives of the model, their axes, the surfaces that excite it
 AXIS_DERIVATIVES = {"lateral": LATERAL_DERIVATIVES, "longitudinal": LONGITUDINAL_DERIVATIVES}
 AXIS_FRAME = {"lateral": "body", "longitudinal": "stability"}
-AXIS_INPUTS = {"lateral": ("da", "dr"), "longitudinal": ("de",)}
 TRIM_TERMS = ("CL_0", "CD_0")  # set by the trim, not candidates of a delta
-EXCITED = 0.25  # a real record's axis is excited when a surface's spread reaches this
-# fraction of the largest surface spread of the record
 
 
 @dataclass
@@ -146,34 +142,6 @@ def start_condition(record: FlightRecord) -> tuple[float, float]:
     if "altitude_m" in cond and "speed_m_s" in cond:
         return float(cond["altitude_m"]), float(cond["speed_m_s"])
     return record_condition(record)
-
-
-def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
-    """The axes the records excite: from their maneuver lists (elevator: longitudinal;
-    aileron or rudder: lateral), else from the spread of the measured surfaces (an axis
-    whose surface spread reaches ``EXCITED`` of the largest one). Lateral first.
-
-    Parameters
-    ----------
-    records : sequence of FlightRecord
-        The records.
-
-    Returns
-    -------
-    list of str
-        "lateral" and/or "longitudinal", lateral first.
-    """
-    found: set[str] = set()
-    for r in records:
-        items = windows.maneuvers(r)
-        if items:
-            surfaces = {s for m in items for s in m["surfaces"]}
-        else:
-            spread = {s: float(np.std(r[s])) for s in ("de", "da", "dr") if s in r}
-            top = max(spread.values(), default=0.0)
-            surfaces = {s for s, v in spread.items() if top > 0 and v >= EXCITED * top}
-        found |= {a for a, ins in AXIS_INPUTS.items() if set(ins) & surfaces}
-    return [a for a in AXIS_NAMES if a in found]
 
 
 AXIS_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
