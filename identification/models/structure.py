@@ -15,11 +15,20 @@ from collections.abc import Sequence
 
 from flightid.channels import LATERAL_INPUTS
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import (
+    CONDITION_CHANNELS,
+)
 
 ALIASES = {"lat": "lateral", "lon": "longitudinal"}
 
 LATERAL_VARIABLES = ("beta", "phat", "rhat", "da", "dr")
 LONGITUDINAL_VARIABLES = ("alpha", "qhat", "de")
+# a global model's variables (Morelli 1995): every coefficient may depend on all of them,
+# e.g. the c172p's drag on |beta|, its roll moment due to yaw rate on alpha; and the
+# thrust coefficient Tc = T / (qbar S), on which the derivatives of surfaces in the
+# propeller slipstream depend (the c172p's Cm_de and Cn_dr take the slipstream's
+# dynamic pressure)
+GLOBAL_VARIABLES = ("alpha", "beta", "phat", "qhat", "rhat", "de", "da", "dr", "Tc")
 # the regression form of each preset: {coefficient: explanatory variables}
 REGRESSION: dict[str, dict[str, tuple[str, ...]]] = {
     "lateral": {"CY": LATERAL_VARIABLES, "Cl": LATERAL_VARIABLES, "Cn": LATERAL_VARIABLES},
@@ -31,11 +40,12 @@ REGRESSION: dict[str, dict[str, tuple[str, ...]]] = {
     "short_period": {"CL": LONGITUDINAL_VARIABLES, "Cm": LONGITUDINAL_VARIABLES},
 }
 REGRESSION["all"] = {**REGRESSION["longitudinal"], **REGRESSION["lateral"]}
+REGRESSION["global"] = {c: GLOBAL_VARIABLES for c in REGRESSION["all"]}
 LINEAR = tuple(lm.MODELS)
 
 # channels a regression variable is computed from
 _VARIABLE_CHANNELS = {"phat": ("p", "V"), "qhat": ("q", "V"), "rhat": ("r", "V"),
-                      "alphadot_hat": ("alpha", "V")}
+                      "alphadot_hat": ("alpha", "V"), "Tc": ("thrust", "qbar")}
 # channels each coefficient is computed from (rigid-body equations, body axes)
 _COEFFICIENT_CHANNELS = {
     "CX": ("ax",), "CY": ("ay",), "CZ": ("az",), "CL": ("ax", "az", "alpha"),
@@ -96,14 +106,14 @@ def linear(model: str) -> str:
 
 def linear_channels(model: str) -> tuple[str, ...]:
     """The record channels a linear-model preset needs: its inputs and outputs, and the
-    channels its reference condition is averaged from (``lm.condition_from_record``)."""
+    channels its reference condition is averaged from (``condition_from_record``)."""
     preset = _PRESET_SIGNALS[linear(model)]
-    return tuple(dict.fromkeys((*preset[0], *preset[1], *lm.CONDITION_CHANNELS)))
+    return tuple(dict.fromkeys((*preset[0], *preset[1], *CONDITION_CHANNELS)))
 
 
 # outputs output error fits without: attitudes a hobby recorder does not measure (the
 # states stay, integrated from the rates; the reference pitch attitude then comes from
-# the specific force, ``lm.level_pitch_attitude``)
+# the specific force, ``level_pitch_attitude``)
 OPTIONAL_OUTPUTS = ("phi", "theta")
 
 
