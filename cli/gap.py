@@ -217,7 +217,12 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     for ch, d in per.items():
         t.add_row(ch, *(f"{d[c]:.3f}" for c in cols))
     console.print(t)
-    if g.verdict == "no_gap":
+    for o in g.trim:
+        if o.named:
+            console.print(f"named at trim level: {o.text()}")
+    if g.trim_note:
+        console.print(f"trim-level check: {g.trim_note}")
+    if g.verdict == "no_gap" or not g.null_before or not g.null_before.gap:
         return
     named = {r.candidate.label: k for k, r in enumerate(g.named, start=1)}
     e = Table(title=f"effects ({g.evidence}; named first, then by delta BIC)")

@@ -36,7 +36,15 @@ from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pai
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
 from flightid.identification.gap.shrink import shrinkage
-from flightid.identification.gap.verdict import NullTest, axis_verdict, null_test, worst
+from flightid.identification.gap.trim_level import TrimOffset, trim_offsets
+from flightid.identification.gap.verdict import (
+    EXPLAINED,
+    NO_GAP,
+    NullTest,
+    axis_verdict,
+    null_test,
+    worst,
+)
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
 
@@ -79,6 +87,15 @@ class GapResult:
     # catalogue entries that are no candidate for this record: entry -> why, and what
     # would make it identifiable (``identifiable.not_identifiable``)
     not_identifiable: dict[str, str] = field(default_factory=dict)
+    # the trim-level check of this axis's channels (``trim_level``): the steady segment
+    # against the model's trim; ``trim_note`` says why it was not made ("" when it was)
+    trim: list[TrimOffset] = field(default_factory=list)
+    trim_note: str = ""
+
+    @property
+    def trim_named(self) -> list[TrimOffset]:
+        """The trim-level offsets named (significant and material), every axis's."""
+        return [o for g in self.axes().values() for o in g.trim if o.named]
 
     def unexplained_share(self) -> float | None:
         """The share of the held-out gap above the noise floor that the named effects leave,
@@ -135,6 +152,7 @@ class GapResult:
             "axis": self.axis,
             "axes": {a: g.axis_json() for a, g in (self.by_axis or {self.axis: self}).items()},
             "undiagnosed": self.undiagnosed,
+            "trim_named": [o.to_json() for o in self.trim_named],
             "model": {"axes": self.linearised.axes, "axis": self.axis,
                       "derivatives": self.linearised.derivatives,
                       "trim": {"altitude_m": self.linearised.trim.altitude_m,
@@ -163,6 +181,8 @@ class GapResult:
         """This axis's verdict, its null-level tests and what it named."""
         return {"verdict": self.verdict, "evidence": self.evidence,
                 "not_identifiable": self.not_identifiable,
+                "trim": [o.to_json() for o in self.trim], "trim_note": self.trim_note or None,
+                "trim_named": [o.text() for o in self.trim if o.named],
                 "even_terms": [{"derivative": e.derivative, "minus": e.minus, "plus": e.plus,
                                 "even": e.even, "axes": e.axes, "note": e.text()}
                                for e in even_terms(self.linearised.kinks, self.linearised.axes)],
@@ -256,6 +276,8 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     if not records:
         raise ValueError("gap: no record to diagnose")
     _one_aircraft([*records, *(validate or [])], aircraft)
+    # the trim-level check, on the surface channels as recorded (commands or positions)
+    offsets, trim_note = trim_offsets(records, aircraft)
     # records of commands: through the aircraft's own actuators (lag, rate limit) first
     records = actuated(records, aircraft, surfaces)
     validate = actuated(validate, aircraft, surfaces) if validate is not None else None
@@ -266,8 +288,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         axes = [axis]
     else:
         raise ValueError(f"gap: axis must be both, {', '.join(AXIS_NAMES)}; got {axis!r}")
-    results = {a: _diagnose_axis(a, records, aircraft, validate, names, validate_names,
-                                 try_pairs, steps, surfaces) for a in axes}
+    results = {a: _with_trim(_diagnose_axis(a, records, aircraft, validate, names,
+                                            validate_names, try_pairs, steps, surfaces),
+                             [o for o in offsets if o.axis == a], trim_note) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     result.undiagnosed = {
         a: (f"not asked for (--axis {axis})" if a in excited else
@@ -278,6 +301,15 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
             result.refined = refit(result, records)
         except NotRefined as exc:
             result.refine_note = f"not refined: {exc}"
+    return result
+
+
+def _with_trim(result: GapResult, offsets: list[TrimOffset], note: str) -> GapResult:
+    """``result`` with its axis's trim-level check: an offset named makes an axis at the
+    null level ``explained`` (the constant the window fits absorb is named at trim)."""
+    result.trim, result.trim_note = offsets, note
+    if result.verdict == NO_GAP and any(o.named for o in offsets):
+        result.verdict = EXPLAINED
     return result
 
 

@@ -14,8 +14,12 @@ the held-out seed is run).
 - an inertia about one axis and a scaling of every moment term about it: I x = M x
   scales the same way (Ixz coupling aside), so an inertia scale and a group of deltas of
   every Cl (ixx), Cm (iyy) or Cn (izz) term are the same to the data;
-- alpha bias or CL_0 mismatch: a constant alpha offset against the model's trim alpha is
-  a lift offset at the measured weight.
+- the trim-level classes (``identification.gap.trim_level.CHECKED``): a constant offset
+  of a flow angle or a surface against the model's trim at the measured airspeed,
+  altitude and weight, and the model's zero term that moves that trim value the same
+  way, are one constant to a record at one condition: alpha bias or CL_0 mismatch (a lift
+  offset at the measured weight), beta bias or CY_0 / asymmetry, and a rigging bias of
+  the elevator, aileron or rudder or a Cm_0, Cl_0 or Cn_0 mismatch.
 """
 
 from __future__ import annotations
@@ -56,7 +60,14 @@ CLASSES: dict[str, tuple[Member, ...]] = {
                       Member("group", group_prefix="Cm_")),
     "yaw inertia": (Member("inertia_scale", parameter="izz"),
                     Member("group", group_prefix="Cn_")),
-    "alpha bias or CL_0": (Member("bias", {"channel": "alpha"}), _delta("CL_0")),
+    "alpha bias or CL_0 mismatch": (Member("bias", {"channel": "alpha"}), _delta("CL_0")),
+    "beta bias or CY_0 / asymmetry": (Member("bias", {"channel": "beta"}), _delta("CY_0")),
+    "elevator bias or Cm_0 mismatch": (Member("actuator_bias", {"surface": "de"}),
+                                       _delta("Cm_0")),
+    "aileron bias or Cl_0 mismatch": (Member("actuator_bias", {"surface": "da"}),
+                                      _delta("Cl_0")),
+    "rudder bias or Cn_0 mismatch": (Member("actuator_bias", {"surface": "dr"}),
+                                     _delta("Cn_0")),
 }
 
 

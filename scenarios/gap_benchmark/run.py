@@ -35,6 +35,7 @@ from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments
+from flightid.identification.gap.trim_level import TrimOffset
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import AUGMENT_CACHE, Card, card_from_dict, fly_card, sub_seed
 from flightid.scenarios.gap_benchmark import classes
@@ -297,6 +298,8 @@ class CaseResult:
     seconds: float = math.nan  # wall time
     cpu_seconds: float = math.nan  # this process's CPU time (one core)
     error: str = ""
+    # named at trim level (``trim_level``), per axis: class -> entry(channel) value (rad)
+    trim: dict[str, dict[str, str]] = field(default_factory=dict)
 
     @property
     def excess_shrink(self) -> float:
@@ -311,7 +314,8 @@ class CaseResult:
 
     def to_json(self) -> dict[str, Any]:
         return {"case": self.case.to_json(), "label": self.case.label, "kind": self.case.kind,
-                "verdicts": self.verdicts, "named": self.named, "right": self.right,
+                "verdicts": self.verdicts, "named": self.named, "trim": self.trim,
+                "right": self.right,
                 "all_named": self.all_named, "magnitude_error": json_safe(self.magnitude_error),
                 "before": self.before, "after": self.after, "null": self.null,
                 "excess_shrink": json_safe(self.excess_shrink),
@@ -325,7 +329,8 @@ class CaseResult:
                    d["all_named"], nan if d["magnitude_error"] is None else d["magnitude_error"],
                    d["before"], d["after"], d["null"],
                    nan if d["seconds"] is None else d["seconds"],
-                   nan if d.get("cpu_seconds") is None else d["cpu_seconds"], d["error"])
+                   nan if d.get("cpu_seconds") is None else d["cpu_seconds"], d["error"],
+                   d.get("trim") or {})
 
 
 def _effect_axes(e: Effect) -> tuple[str, ...]:
@@ -337,12 +342,15 @@ def score(case: Case, result: GapResult) -> CaseResult:
     per_axis = {a: g for a in AXES if (g := axis_result(result, a)) is not None}
     out = CaseResult(case, {a: verdict(g) for a, g in per_axis.items()},
                      {a: [_label(r) for r in g.named] for a, g in per_axis.items()})
+    out.trim = {a: {o.label: f"{o.entry}({o.channel}) {o.value:+.5f} +- {o.bound:.5f}"
+                    for o in g.trim if o.named} for a, g in per_axis.items()}
     if case.category == NULL:
         return out
     if case.category == PAIR:
         out.all_named = all(
             any(classes.same(e, p) for a in _effect_axes(e) if a in per_axis
                 for r in per_axis[a].named for p in (_parts(r) if r.candidate.parts else [r]))
+            or _at_trim(e, per_axis) is not None
             for e in case.effects)
     elif case.category != OUT:
         e = case.effects[0]
@@ -352,6 +360,11 @@ def score(case: Case, result: GapResult) -> CaseResult:
         exact = [r for r in firsts if classes.exact(e, r)]
         if exact:
             out.magnitude_error = _relative_error(e, exact[0])
+        elif (offset := _at_trim(e, per_axis)) is not None:
+            out.right = True
+            if offset.entry == e.entry and e.magnitude.get(offset.parameter):
+                injected = e.magnitude[offset.parameter]
+                out.magnitude_error = abs(offset.value - injected) / abs(injected)
     for e in case.effects:
         for a in _effect_axes(e):
             g = per_axis.get(a)
@@ -360,6 +373,13 @@ def score(case: Case, result: GapResult) -> CaseResult:
                 out.before[a] = overall(g.named[0].heldout_before)
                 out.after[a] = overall(g.named[-1].heldout_after)
     return out
+
+
+def _at_trim(effect: Effect, per_axis: dict[str, GapResult]) -> TrimOffset | None:
+    """The trim-level offset named on ``effect``'s axes in its class, or None."""
+    name = classes.class_of(effect)
+    return next((o for a in _effect_axes(effect) if a in per_axis
+                 for o in per_axis[a].trim if o.named and o.label == name), None)
 
 
 def _parts(r: Ranked) -> list[Any]:

@@ -22,9 +22,10 @@ BIAS = ("a constant offset is absorbed by the model's output and state biases (t
 ALWAYS: dict[str, str] = {
     "noise": "white noise is no model error: it is the null level the gap is tested "
              "against (the output-error fit estimates its covariance)",
-    "bias": BIAS + "; against the model's trim at the measured condition and weight an "
-            "alpha bias is identifiable only as 'alpha bias or CL_0 mismatch', a beta bias "
-            "as 'beta bias or CY_0 / asymmetry' (a trim-level comparison, not a window fit)",
+    "bias": BIAS + "; the trim-level check (gap.trim_level: the steady span before the "
+            "first maneuver against the model's trim at the measured airspeed and "
+            "altitude) names an alpha bias as 'alpha bias or CL_0 mismatch', a beta bias "
+            "as 'beta bias or CY_0 / asymmetry' (the axis's 'trim' in the json)",
     "drift": "a slow ramp is taken mostly by each window's biases and initial state; a "
              "record long against 1/rate (a drift of 0.002/s over 60 s) with a ramp input "
              "would make it identifiable",
@@ -58,9 +59,13 @@ ALWAYS: dict[str, str] = {
     "backlash": "nonlinear (hysteresis): not in the linear screening; scored with the "
                 "JSBSim aircraft itself (identification.effect_fit.fit_effect) on a "
                 "record of the commands",
-    "actuator_bias": BIAS + "; against the model's trim surface deflection at the "
-                     "measured condition and weight it is identifiable only as 'surface "
-                     "bias or Cm_0 / Cl_0 / Cn_0 mismatch'",
+    "actuator_bias": BIAS + "; the trim-level check (gap.trim_level) names a surface's "
+                     "steady deflection against the model's trim one as 'elevator bias "
+                     "or Cm_0 mismatch', 'aileron bias or Cl_0 mismatch' or 'rudder bias "
+                     "or Cn_0 mismatch' (on a record of positions, a rigging offset "
+                     "between the measured and the aerodynamic deflection or the model's "
+                     "zero moment; on a record of commands, an actuator bias or that "
+                     "mismatch)",
 }
 # the condition-dependent delta: a model linearised at one condition holds one value of it
 TABLE = ("a delta that changes with airspeed or alpha: at one condition it is the "

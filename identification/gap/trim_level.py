@@ -1,0 +1,268 @@
+"""The trim-level check: the record's steady flight against the model's trim there.
+
+A constant offset (a flow-angle sensor bias, a rigging bias of a surface, or a zero-lift,
+zero-moment mismatch of the model) is invisible to the window fits, whose biases and
+initial states absorb it. Against the model trimmed at the record's measured airspeed and
+altitude (level flight, the model's weight) it shows (Morelli & Klein 2016 ch. 10, the
+bias terms of data compatibility; Jategaonkar 2015 ch. 10, trim and bias estimation).
+
+For x in alpha, beta and the surfaces de, da, dr (rad), over its axis's steady span (the
+record before its first maneuver on the axis's surfaces, ``data.axes.AXIS_INPUTS``: alpha
+and de before the first elevator maneuver, beta, da and dr before the first aileron or
+rudder maneuver; the records' maneuver list):
+
+    d(t) = x(t) - x_trim(V_bar) - (dx_trim/dV) (V(t) - V_bar),   d = mean d(t)
+
+V_bar is the mean measured airspeed over the longitudinal span (the lateral maneuvers move
+it little, and over tens of seconds the gusts average out that a 2 s segment keeps:
+on the blind check's null flights the Telemaster's trim elevator at a 2 s segment's
+airspeed was 0.6-0.9 deg off the measured one, at the longer span's 0.01-0.06 deg);
+dx_trim/dV is a finite difference of two trims. Each sample moved along the trim line,
+the slow speed excursions that alpha follows drop out of d(t), and the airspeed's noise
+and uncertainty enter its spread. sigma of d is the larger of the autocorrelation
+estimate s / sqrt(n_eff), n_eff = n / (1 + 2 sum rho_k) over the positive lags (Bayley &
+Hammersley 1946), and the batch-means one over blocks of ``GUST_S`` (the gusts'
+correlation time); a span shorter than two blocks counts one independent sample, and a
+flow angle (``FLOW_ANGLES``: it follows the gusts) is not checked on such a span (the
+Telemaster's 2 s sideslip segment put null flights at 4.2 sigma with n_eff, at 5.7 sigma
+and 3 deg with one sample).
+
+A difference is named when |d| > ``Z`` sigma (two-sided p = ``verdict.ALPHA``) and
+|d| >= ``MATERIAL``, as its equivalence class (``CHECKED``: the offset and the model's
+zero term are one constant to a record at one condition), with its value in catalogue
+units (rad: ``bias.value`` = measured minus true; ``actuator_bias.bias`` = aerodynamic
+minus measured deflection) and its bound (``Z`` sigma). The weight is the model's: the
+record's mass channel is not applied to the trim.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from flightid.identification.data import windows
+from flightid.identification.data.axes import AXIS_INPUTS
+from flightid.identification.gap.model.linearise import record_condition
+from flightid.record import FlightRecord
+from flightid.sim.jsbsim.model import load
+from flightid.sim.jsbsim.trim import Trim, TrimError, trim
+
+Z = 3.29  # two-sided p = 1e-3 (verdict.ALPHA) under a normal difference
+# rad: the largest null offset of the seed-0 development flights was 0.115 deg (a c172p
+# aileron at 3.4 sigma); the blind check draws biases of 0.25 deg and more
+MATERIAL = math.radians(0.15)
+FLOW_ANGLES = ("alpha", "beta")  # they follow the gusts; the surfaces do not (open loop)
+DV_M_S = 1.0  # the airspeed step of the trim's sensitivity
+MIN_STEADY = 25  # samples: fewer and the span's spread is no estimate of its noise
+# s of span per independent sample at most: the shortest gust correlation time L/V of the
+# blind check's flights (MIL-F-8785C, the Telemaster at 30 m and 15 m/s: about 2 s)
+GUST_S = 2.0
+# channel -> (axis, the Trim's field, the catalogue entry, its parameter, the class)
+CHECKED: dict[str, tuple[str, str, str, str, str]] = {
+    "alpha": ("longitudinal", "alpha", "bias", "value", "alpha bias or CL_0 mismatch"),
+    "de": ("longitudinal", "elevator", "actuator_bias", "bias",
+           "elevator bias or Cm_0 mismatch"),
+    "beta": ("lateral", "beta", "bias", "value", "beta bias or CY_0 / asymmetry"),
+    "da": ("lateral", "aileron", "actuator_bias", "bias", "aileron bias or Cl_0 mismatch"),
+    "dr": ("lateral", "rudder", "actuator_bias", "bias", "rudder bias or Cn_0 mismatch"),
+}
+CLASSES = tuple(v[4] for v in CHECKED.values())
+
+
+@dataclass(frozen=True)
+class TrimOffset:
+    """One channel's steady value against the model's trim (rad)."""
+
+    channel: str
+    axis: str
+    measured: float  # the steady segment's mean
+    model: float  # the model's trim at the segment's airspeed and altitude
+    sigma: float  # one standard deviation of measured - model
+    samples: int  # in the steady segment
+
+    @property
+    def difference(self) -> float:
+        """measured - model (rad)."""
+        return self.measured - self.model
+
+    @property
+    def entry(self) -> str:
+        return CHECKED[self.channel][2]
+
+    @property
+    def parameter(self) -> str:
+        return CHECKED[self.channel][3]
+
+    @property
+    def label(self) -> str:
+        """The equivalence class it is named as."""
+        return CHECKED[self.channel][4]
+
+    @property
+    def value(self) -> float:
+        """The catalogue entry's parameter (rad): a sensor bias is measured minus true, an
+        actuator bias aerodynamic minus measured."""
+        return self.difference if self.entry == "bias" else -self.difference
+
+    @property
+    def bound(self) -> float:
+        """``Z`` sigma (rad)."""
+        return Z * self.sigma
+
+    @property
+    def named(self) -> bool:
+        """Significant and material."""
+        d = abs(self.difference)
+        return d > self.bound and d >= MATERIAL
+
+    def text(self) -> str:
+        return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
+                f"{self.value:+.4f} +- {self.bound:.4f} rad ({math.degrees(self.value):+.2f} "
+                f"deg)")
+
+    def to_json(self) -> dict[str, Any]:
+        return {"channel": self.channel, "class": self.label, "entry": self.entry,
+                "parameter": self.parameter, "value": self.value, "bound": self.bound,
+                "measured": self.measured, "model": self.model, "sigma": self.sigma,
+                "samples": self.samples, "named": self.named}
+
+
+def effective_samples(x: np.ndarray) -> float:
+    """n / (1 + 2 sum rho_k): the sample count of ``x`` discounted by its autocorrelation,
+    summed over the lags up to the first non-positive one (at least 1).
+
+    Parameters
+    ----------
+    x : ndarray
+        The samples.
+
+    Returns
+    -------
+    float
+    """
+    x = np.asarray(x, float) - np.mean(x)
+    n = len(x)
+    var = float(np.dot(x, x))
+    if n < 2 or var <= 0.0:
+        return float(max(n, 1))
+    total = 0.0
+    for k in range(1, n // 2):
+        rho = float(np.dot(x[:-k], x[k:])) / var
+        if rho <= 0.0:
+            break
+        total += rho
+    return max(n / (1.0 + 2.0 * total), 1.0)
+
+
+def steady(record: FlightRecord, axis: str) -> FlightRecord | None:
+    """The record before its first maneuver on ``axis``'s surfaces (None without a
+    maneuver list, or with fewer than ``MIN_STEADY`` samples before it).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record with a maneuver list (``data.windows.maneuvers``).
+    axis : str
+        "lateral" or "longitudinal".
+
+    Returns
+    -------
+    FlightRecord or None
+    """
+    items = windows.maneuvers(record)
+    if not items:
+        return None
+    starts = [float(m["start"]) for m in items
+              if set(m.get("surfaces") or ()) & set(AXIS_INPUTS[axis])]
+    first = min(starts) if starts else float(record.time[-1]) + 1.0
+    keep = record.time < first
+    if int(keep.sum()) < MIN_STEADY:
+        return None
+    return record.slice(float(record.time[0]), float(record.time[keep][-1]))
+
+
+def _mean_sigma(x: np.ndarray, rate_hz: float) -> tuple[float, float]:
+    """The mean of ``x`` and its standard deviation (module docstring): the larger of
+    the autocorrelation estimate and the batch-means one (blocks of ``GUST_S``); a span
+    of fewer than two blocks counts one independent sample."""
+    x = np.asarray(x, float)
+    block = max(int(round(GUST_S * rate_hz)), 1)
+    k = len(x) // block
+    if k < 2:
+        return float(np.mean(x)), float(np.std(x, ddof=1))
+    means = x[:k * block].reshape(k, block).mean(axis=1)
+    batch = float(np.std(means, ddof=1) / math.sqrt(k))
+    return float(np.mean(x)), max(float(np.std(x, ddof=1)) / math.sqrt(effective_samples(x)),
+                                  batch)
+
+
+def _rate(record: FlightRecord) -> float:
+    return float((len(record.time) - 1) / (record.time[-1] - record.time[0]))
+
+
+def _pooled(parts: list[FlightRecord], channel: str, speed: float = 0.0,
+            slope: float = 0.0) -> tuple[float, float] | None:
+    """The mean and sigma of ``channel`` over ``parts``, each sample moved along the trim
+    line to ``speed`` (``slope``: d channel_trim / dV)."""
+    if not parts or not all(channel in p for p in parts):
+        return None
+    x = np.concatenate([p[channel] - slope * (p["V"] - speed) for p in parts])
+    return _mean_sigma(x, _rate(parts[0]))
+
+
+def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[TrimOffset], str]:
+    """Every checked channel's steady value against the ``aircraft``'s trim at the
+    records' steady airspeed and altitude (module docstring), and a note ("" when the
+    check was made; else why not).
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records (their surface channels as recorded: positions or commands).
+    aircraft : str
+        JSBSim aircraft: a project name, a stock JSBSim name or an XML path.
+
+    Returns
+    -------
+    (list of TrimOffset, str)
+        Per checked channel the measured and model values (rad) and sigma; the note.
+    """
+    spans = {axis: [s for r in records if (s := steady(r, axis)) is not None]
+             for axis in ("longitudinal", "lateral")}
+    condition = spans["longitudinal"] or spans["lateral"]
+    if not condition:
+        return [], ("no steady span before a maneuver (a maneuver list and at least "
+                    f"{MIN_STEADY} samples before the first maneuver are needed)")
+    speed = _pooled(condition, "V")
+    if speed is None:
+        return [], "the records carry no airspeed channel V"
+    try:
+        altitude = float(np.mean([record_condition(s)[0] for s in condition]))
+    except ValueError as exc:
+        return [], str(exc)
+    model = load(aircraft)
+    try:
+        at: Trim = trim(model, max(altitude, 0.0), speed[0])
+        above: Trim = trim(model, max(altitude, 0.0), speed[0] + DV_M_S)
+    except TrimError as exc:
+        return [], f"the model does not trim at the record's condition: {exc}"
+    out, skipped = [], []
+    for ch, (axis, field_, *_rest) in CHECKED.items():
+        if ch in FLOW_ANGLES and spans[axis] and min(
+                float(s.time[-1] - s.time[0]) for s in spans[axis]) < 2 * GUST_S:
+            skipped.append(ch)
+            continue
+        slope = (getattr(above, field_) - getattr(at, field_)) / DV_M_S
+        stats = _pooled(spans[axis], ch, speed[0], slope)
+        if stats is None:
+            continue
+        out.append(TrimOffset(ch, axis, stats[0], float(getattr(at, field_)), stats[1],
+                              sum(len(s.time) for s in spans[axis])))
+    note = (f"{', '.join(skipped)} not checked: a steady span shorter than {2 * GUST_S:g} s "
+            "(two gust correlation times) does not fix a flow angle's mean in turbulence"
+            if skipped else "")
+    return out, note

@@ -1,0 +1,87 @@
+"""The trim-level check of the gap diagnosis (identification/gap/trim_level.py): the
+record's steady span against the model's trim at the measured airspeed and altitude.
+
+JSBSim flights of the blind check's card (``scenarios.gap_benchmark.run.fly_case``: the
+lateral maneuvers from 2 s, the elevator ones from 42 s, research sensors, light
+turbulence unless said), on seeds the development of the thresholds did not use (the
+development flew seed 0's null and bias cases). The tolerance of an estimate is its own
+bound, ``Z`` sigma: sigma is the standard deviation of the steady mean against the trim
+(sensor noise, turbulence and the airspeed's uncertainty through the trim's slope)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import pytest
+
+from flightid.identification.gap import diagnose
+from flightid.identification.gap.model.surfaces import SURFACES_KEY
+from flightid.identification.gap.trim_level import CHECKED, MATERIAL, Z, trim_offsets
+from flightid.scenarios.gap_benchmark.cases import NULL, NULL_INDEX, SINGLE, Case, Effect
+from flightid.scenarios.gap_benchmark.run import fly_case, run_case, truths
+
+FAST = {"try_pairs": False, "steps": 1}
+
+
+@pytest.mark.parametrize(("aircraft", "seed", "turbulence"), [
+    ("navion", 31, "light"), ("telemaster", 32, "light"), ("c172p", 33, "calm")])
+def test_null_flight_names_nothing_at_trim(aircraft, seed, turbulence):
+    record = fly_case(Case(NULL_INDEX, seed, aircraft, NULL), turbulence)
+    offsets, note = trim_offsets([record], aircraft)
+    # the card's first lateral maneuver is at 2 s: too short a span for the sideslip
+    assert note.startswith("beta not checked")
+    assert {o.channel for o in offsets} == set(CHECKED) - {"beta"}
+    assert not [o.text() for o in offsets if o.named]
+    # in calm air only sensor noise and the lateral maneuvers' load factor move the
+    # steady means: every offset below the material level
+    if turbulence == "calm":
+        assert all(abs(o.difference) < MATERIAL for o in offsets)
+
+
+def test_alpha_bias_named_as_its_class_within_its_bound():
+    bias = Effect("bias", "longitudinal", "measured", {"channel": "alpha"}, {"value": 0.01})
+    case = Case(0, 34, "navion", SINGLE, (bias,))
+    scored = run_case(case, "light", truths(("navion",))["navion"], null=False, **FAST)
+    assert scored.right is True
+    found = scored.trim["longitudinal"]["alpha bias or CL_0 mismatch"]
+    assert found.startswith("bias(alpha)")
+    # the record, diagnosed: the longitudinal axis is no longer "no gap"
+    result = diagnose([fly_case(case, "light")], "navion", **FAST)
+    g = result.axes()["longitudinal"]
+    named = [o for o in g.trim if o.named]
+    assert [o.label for o in named] == ["alpha bias or CL_0 mismatch"]
+    o = named[0]
+    assert abs(o.value - 0.01) <= o.bound
+    assert o.bound < 0.01  # the check resolves a 0.01 rad bias in light turbulence
+    assert scored.magnitude_error <= o.bound / 0.01
+    assert g.verdict != "no_gap"
+    assert result.to_json()["axes"]["longitudinal"]["trim_named"][0].startswith(
+        "alpha bias or CL_0 mismatch")
+
+
+def test_rudder_bias_named_on_a_record_of_commands():
+    bias = -math.radians(0.5)  # aerodynamic minus commanded deflection, rad
+    case = Case(1, 35, "twinotter", SINGLE, (Effect(
+        "actuator_bias", "lateral", "card", {"surface": "dr"}, {"bias": bias}),))
+    record = fly_case(case, "light")
+    # the flight core maps commands to positions statically: the recorded rudder is the
+    # command; the record says so
+    record.meta = replace(record.meta, extra={**record.meta.extra, SURFACES_KEY: "command"})
+    result = diagnose([record], "twinotter", axis="lateral", **FAST)
+    g = result.axes()["lateral"]
+    named = {o.label: o for o in g.trim if o.named}
+    assert "rudder bias or Cn_0 mismatch" in named
+    o = named["rudder bias or Cn_0 mismatch"]
+    assert o.entry == "actuator_bias" and o.channel == "dr"
+    assert abs(o.value - bias) <= o.bound
+    assert g.verdict != "no_gap"
+
+
+def test_bound_is_z_sigma_and_value_in_catalogue_convention():
+    record = fly_case(Case(NULL_INDEX, 36, "twinotter", NULL), "calm")
+    offsets, _ = trim_offsets([record], "twinotter")
+    for o in offsets:
+        assert o.bound == pytest.approx(Z * o.sigma)
+        # a sensor bias is measured minus true, an actuator bias aerodynamic minus measured
+        assert o.value == pytest.approx(o.difference if o.entry == "bias" else -o.difference)
