@@ -18,7 +18,9 @@ import pytest
 from flightid.identification.gap import diagnose
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
 from flightid.identification.gap.trim_level import CHECKED, MATERIAL, Z, trim_offsets
+from flightid.identification.gap.trim_level import CLASSES as CHECKED_CLASSES
 from flightid.scenarios.gap_benchmark.cases import NULL, NULL_INDEX, SINGLE, Case, Effect
+from flightid.scenarios.gap_benchmark.classes import CLASSES, classes_of
 from flightid.scenarios.gap_benchmark.run import fly_case, run_case, truths
 
 FAST = {"try_pairs": False, "steps": 1}
@@ -85,3 +87,13 @@ def test_bound_is_z_sigma_and_value_in_catalogue_convention():
         assert o.bound == pytest.approx(Z * o.sigma)
         # a sensor bias is measured minus true, an actuator bias aerodynamic minus measured
         assert o.value == pytest.approx(o.difference if o.entry == "bias" else -o.difference)
+
+
+def test_trim_classes_hold_what_the_trim_cannot_tell_apart():
+    assert set(CHECKED_CLASSES) <= set(CLASSES)
+    mass = Effect("mass_scale", "longitudinal", "card", {}, {"factor": 1.1})
+    cg = Effect("cg_offset", "longitudinal", "card", {}, {"x": 0.05})
+    rudder = Effect("actuator_bias", "lateral", "card", {"surface": "dr"}, {"bias": 0.01})
+    assert classes_of(mass) == ["alpha bias or CL_0 mismatch"]
+    assert classes_of(cg) == ["pitch stiffness", "elevator bias or Cm_0 mismatch"]
+    assert classes_of(rudder) == ["rudder bias or Cn_0 mismatch"]

@@ -19,7 +19,12 @@ the held-out seed is run).
   altitude and weight, and the model's zero term that moves that trim value the same
   way, are one constant to a record at one condition: alpha bias or CL_0 mismatch (a lift
   offset at the measured weight), beta bias or CY_0 / asymmetry, and a rigging bias of
-  the elevator, aileron or rudder or a Cm_0, Cl_0 or Cn_0 mismatch.
+  the elevator, aileron or rudder or a Cm_0, Cl_0 or Cn_0 mismatch. At one condition the
+  trim fixes only the total force and moment there: a weight error (``mass_scale``) is a
+  lift offset CL_trim = W / (qbar S), so it is in the alpha class; a thrust-line offset
+  (``thrust_moment``: arm x the trim thrust) and a CG offset along x (a Cm offset
+  CL dx / cbar at trim) are pitching-moment offsets, so they are in the elevator class
+  (the CG offset is in the pitch stiffness class too).
 """
 
 from __future__ import annotations
@@ -60,10 +65,12 @@ CLASSES: dict[str, tuple[Member, ...]] = {
                       Member("group", group_prefix="Cm_")),
     "yaw inertia": (Member("inertia_scale", parameter="izz"),
                     Member("group", group_prefix="Cn_")),
-    "alpha bias or CL_0 mismatch": (Member("bias", {"channel": "alpha"}), _delta("CL_0")),
+    "alpha bias or CL_0 mismatch": (Member("bias", {"channel": "alpha"}), _delta("CL_0"),
+                                    Member("mass_scale")),
     "beta bias or CY_0 / asymmetry": (Member("bias", {"channel": "beta"}), _delta("CY_0")),
     "elevator bias or Cm_0 mismatch": (Member("actuator_bias", {"surface": "de"}),
-                                       _delta("Cm_0")),
+                                       _delta("Cm_0"), Member("thrust_moment"),
+                                       Member("cg_offset")),
     "aileron bias or Cl_0 mismatch": (Member("actuator_bias", {"surface": "da"}),
                                       _delta("Cl_0")),
     "rudder bias or Cn_0 mismatch": (Member("actuator_bias", {"surface": "dr"}),
@@ -116,6 +123,12 @@ def class_of(effect: Effect) -> str:
         if any(_effect_matches(m, effect) for m in members):
             return name
     return effect.label.split(" ")[0]
+
+
+def classes_of(effect: Effect) -> list[str]:
+    """The names of every class the injected effect is a member of."""
+    return [name for name, members in CLASSES.items()
+            if any(_effect_matches(m, effect) for m in members)]
 
 
 def same(effect: Effect, ranked: Any) -> bool:

@@ -376,10 +376,10 @@ def score(case: Case, result: GapResult) -> CaseResult:
 
 
 def _at_trim(effect: Effect, per_axis: dict[str, GapResult]) -> TrimOffset | None:
-    """The trim-level offset named on ``effect``'s axes in its class, or None."""
-    name = classes.class_of(effect)
+    """The trim-level offset named on ``effect``'s axes in one of its classes, or None."""
+    names = classes.classes_of(effect)
     return next((o for a in _effect_axes(effect) if a in per_axis
-                 for o in per_axis[a].trim if o.named and o.label == name), None)
+                 for o in per_axis[a].trim if o.named and o.label in names), None)
 
 
 def _parts(r: Ranked) -> list[Any]:
