@@ -102,7 +102,7 @@ from flightid.sim.jsbsim.model import (
     set_integrators,
 )
 from flightid.sim.jsbsim.trim import _IC_STATE as _IC_ORDER
-from flightid.sim.jsbsim.trim import Trim, apply
+from flightid.sim.jsbsim.trim import Trim, apply, steady_engines
 from flightid.units import FT
 
 SURFACE_MODES = ("commanded", "driven")
@@ -303,6 +303,7 @@ class Simulation:
             fdm.set_trim_status(False)
         fdm.get_propulsion().get_steady_state()
         fdm.run_ic()
+        steady_engines(model)
         if self.atmosphere.wind_ned_m_s[2]:
             # run_ic resets the wind to the IC's (horizontal only): add the vertical part
             # and re-evaluate every model at t = 0 without integrating
