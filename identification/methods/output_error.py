@@ -37,6 +37,7 @@ from flightid.identification.engine.bounds import (
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
+from flightid.identification.engine.structure_bias import widen_for_structure
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
 from flightid.identification.methods.protocol import (
@@ -429,22 +430,37 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
     regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
     a thrust channel), keep the model's start values.
     """
+    return {name: value for name, (value, _) in equation_error_fits(record, model).items()}
+
+
+def equation_error_fits(record: FlightRecord, model: LinearModel,
+                        consistent_smoothing: bool = False,
+                        held: Mapping[str, float] | None = None,
+                        ) -> dict[str, tuple[float, float]]:
+    """Equation error's (value, standard error corrected for colored residuals) of each of
+    ``model``'s derivatives it can estimate from ``record``: the start values
+    (``start_from_equation_error``) and, with ``consistent_smoothing`` and the ``held``
+    (a priori) values as ``--method ee`` takes them, the structure check's reference."""
+    held = dict(held or {})
     groups: dict[str, list[str]] = {}
     for name in model.parameters:
-        if is_derivative(name):
+        if is_derivative(name) and name not in held:
             coef, var = split(name)
             if var in _EE_TERMS:
                 groups.setdefault(f"C{coef}", []).append(var)
-    out: dict[str, float] = {}
+    out: dict[str, tuple[float, float]] = {}
     for coefficient, variables in groups.items():
         if (coefficient in THRUST_COEFFICIENTS and coefficient not in record
                 and "thrust" not in record):
             continue  # no thrust channel: the x force cannot be made aerodynamic
-        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables])
+        fixed = {n: v for n, v in held.items() if n.startswith(f"{coefficient}_")}
+        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables],
+                                      consistent_smoothing=consistent_smoothing,
+                                      a_priori=fixed or None)
         for var in variables:
             name = f"{coefficient}_{var}"
             if name in fit.names and name not in fit.unidentifiable:
-                out[name] = fit[name]
+                out[name] = (fit[name], fit.std_of(name))
     return out
 
 
@@ -464,6 +480,9 @@ class Options(HeldOptions, OutputErrorOptions):
     multistep_inputs: list[str] = option(
         [], "inputs flown as multisteps whose levels and edge times are estimated")
     max_iterations: int = option(50, "Gauss-Newton iteration limit")
+    structure_check: bool = option(
+        True, "widen the bounds where equation error on the same record disagrees beyond "
+              "3 combined bounds (a model structure error)")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
@@ -506,12 +525,25 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                     f"parameters withheld, at a higher cost")
             est = retry
     est.method = ID
+    if options.structure_check:
+        _check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
     est.fit["start"] = note
     if unmeasured:
         est.fit["outputs_left_out"] = {o: "not in the record (state integrated from the "
                                           "rates)" for o in unmeasured}
     return est
+
+
+def _check_structure(est: Estimate, record: FlightRecord, model: LinearModel,
+                     free: Sequence[str], held: Mapping[str, float]) -> None:
+    """Widen the bounds of the free derivatives on which equation error, as ``--method ee``
+    runs it, disagrees (``engine.structure_bias``); nothing when it cannot run."""
+    try:
+        fits = equation_error_fits(record, model, consistent_smoothing=True, held=held)
+    except (KeyError, ValueError):  # no accelerometers or coefficients: no reference
+        return
+    widen_for_structure(est, {n: f for n, f in fits.items() if n in free})
 
 
 # a fit whose outputs explain less than this share of their variance (mean R^2), or that
