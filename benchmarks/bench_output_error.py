@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 
 from flightid.identification.methods import output_error as oe  # noqa: E402
 from flightid.identification.models import linear as lm  # noqa: E402
+from flightid.identification.models.reference_condition import condition_from_record  # noqa: E402
 from flightid.record import read  # noqa: E402
 
 # the record where the tests find it (tests/conftest.py: shared/ beside the checkout, or
@@ -48,7 +49,7 @@ def _time(fn, runs: int = RUNS) -> tuple[float, list[float], object]:
 def main() -> str:
     """Run the benchmark, write the results file, return its text."""
     record = read(DATA)
-    model = lm.lateral(lm.condition_from_record(record))
+    model = lm.lateral(condition_from_record(record))
     ee_start = oe.start_from_equation_error(record, model)
     lines = [
         "output error, Twin Otter lateral (totter_f1_017), 18 parameters, "

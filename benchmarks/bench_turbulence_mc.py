@@ -45,6 +45,7 @@ from flightid.identification.methods import filter_error as fe  # noqa: E402
 from flightid.identification.methods import output_error as oe  # noqa: E402
 from flightid.identification.models import linear as lm  # noqa: E402
 from flightid.identification.models.linear import LATERAL_EXAMPLE_6_1  # noqa: E402
+from flightid.identification.models.reference_condition import condition_from_record  # noqa: E402
 from flightid.record import FlightRecord  # noqa: E402
 from flightid.sim.flight import disturbed as dist  # noqa: E402
 from flightid.sim.jsbsim import truth as truth_mod  # noqa: E402
@@ -111,7 +112,7 @@ def run_one(case: str, seed: int, trim) -> dict:
         if not calm:
             channels[name] = channels[name] + sigma * rng.standard_normal(t.size)
     record = FlightRecord(flown.time, channels, flown.meta)
-    model = lm.lateral(lm.condition_from_record(record))
+    model = lm.lateral(condition_from_record(record))
     out = {"case": case, "seed": seed, "beta_gust_deg": float(np.degrees(
         np.std(turbulence[:, 1]) / SPEED_M_S))}
     methods = (("oe", lambda: oe.estimate(record, model)),

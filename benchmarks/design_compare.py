@@ -18,7 +18,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from flightid.scenarios.montecarlo import design, design_report
+from flightid.scenarios.montecarlo.design import experiment
+from flightid.scenarios.montecarlo.design import report as design_report
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -29,14 +30,14 @@ def main() -> None:
     parser.add_argument("--card", default="navion-demo")
     parser.add_argument("--method", default="oe")
     parser.add_argument("--model", default="lon")
-    parser.add_argument("--equal", default="amplitude", choices=design.EQUAL)
+    parser.add_argument("--equal", default="amplitude", choices=experiment.EQUAL)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--study", default=None)
     args = parser.parse_args()
     study = Path(args.study or
                  Path(tempfile.gettempdir()) / f"flightid-design-compare-{args.equal}")
     t0 = time.perf_counter()
-    comparison = design.compare(args.card, args.n, args.method, args.model, study,
+    comparison = experiment.compare(args.card, args.n, args.method, args.model, study,
                                 equal=args.equal, workers=args.workers)
     wall = time.perf_counter() - t0
     stem = f"design_compare-{args.equal}"

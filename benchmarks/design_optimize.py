@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flightid.scenarios.montecarlo import design, optimize
+from flightid.scenarios.montecarlo.design import experiment, optimize
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -60,7 +60,7 @@ def main() -> None:
     if args.sweep:
         own["sweep-da-dr"] = opt.designs["sweep"]
     t1 = time.perf_counter()
-    comparison = design.compare("navion-demo", args.n, "oe", "lat", study, designs=(),
+    comparison = experiment.compare("navion-demo", args.n, "oe", "lat", study, designs=(),
                                 equal="energy", reference="3211-da-dr",
                                 workers=args.workers, own=own)
     t_mc = time.perf_counter() - t1

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from flightid.identification.methods import equation_error, frequency_output_error, output_error
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import read
 
 HERE = Path(__file__).resolve().parent
@@ -62,7 +63,7 @@ def estimates(record):
         est = equation_error.estimate(record, coef, regs, colored=coef != "Cn")
         ee.update({n: (est[n], est.std_of(n)) for n in est.names if n in PUBLISHED["ee"]})
     out["ee"] = (ee, time.perf_counter() - t)
-    model = lm.lateral(lm.condition_from_record(record))
+    model = lm.lateral(condition_from_record(record))
     t = time.perf_counter()
     est = output_error.estimate(record, model, start="equation_error")
     out["oe"] = ({n: (est[n], est.std_of(n)) for n in est.names if n in PUBLISHED["oe"]},

@@ -34,13 +34,17 @@ from flightid.cli.checks import (
 from flightid.files import write_text
 from flightid.record import FlightRecord
 from flightid.scenarios import cards
-from flightid.sim.bridge.air import (
+from flightid.sim.bridge.air.schedule import PROFILES
+from flightid.sim.bridge.air.serve import (
     BridgeConfig,
     FlightCoreAdapter,
     serve_record,
     serve_simulation,
 )
-from flightid.sim.bridge.gaps import MAX_GAP_SAMPLES
+from flightid.sim.bridge.air.signing import SenderFilter, read_key, state_path
+from flightid.sim.bridge.ground.gaps import MAX_GAP_SAMPLES
+from flightid.sim.bridge.ground.recording import record_stream
+from flightid.sim.bridge.ground.tlog import SEGMENTS, convert_tlog
 from flightid.sim.bridge.link import (
     Link,
     LinkFaults,
@@ -49,10 +53,6 @@ from flightid.sim.bridge.link import (
     open_pty_pair,
     parse_hostport,
 )
-from flightid.sim.bridge.recording import record_stream
-from flightid.sim.bridge.schedule import PROFILES
-from flightid.sim.bridge.signing import SenderFilter, read_key, state_path
-from flightid.sim.bridge.tlog import SEGMENTS, convert_tlog
 from flightid.sim.flight.simulation import Simulation
 from flightid.sim.jsbsim.trim import trim
 

@@ -33,7 +33,7 @@ from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.card_file import card_with_overrides
-from flightid.scenarios.montecarlo.design import (
+from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     EQUAL,
     Comparison,
@@ -41,7 +41,7 @@ from flightid.scenarios.montecarlo.design import (
     check_own,
     make_design,
 )
-from flightid.scenarios.montecarlo.design_report import costs_rows, ratio_rows
+from flightid.scenarios.montecarlo.design.report import costs_rows, ratio_rows
 from flightid.scenarios.montecarlo.intervals import LEVEL
 from flightid.units import DEG
 

@@ -3,7 +3,7 @@ predicted output-error bounds of a card's derivatives, at the energy and input t
 built-in design flown on each surface in turn; checked against the envelope by flying it
 in JSBSim, written as a maneuver table (``design-compare --design-file``) and, with
 ``-n``, compared with the built-ins by Monte Carlo (the work is
-``scenarios.montecarlo.optimize``)."""
+``scenarios.montecarlo.design.optimize``)."""
 
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ from flightid.cli.design_compare import SURFACES
 from flightid.cli.progress import count_progress
 from flightid.cli.tables import add_columns
 from flightid.scenarios.input_optimization import CRITERIA
-from flightid.scenarios.montecarlo.design import DESIGNS, DesignSettings
-from flightid.scenarios.montecarlo.optimize import (
+from flightid.scenarios.montecarlo.design.experiment import DESIGNS, DesignSettings
+from flightid.scenarios.montecarlo.design.optimize import (
     Envelope,
     envelope_excursions,
     envelope_violations,

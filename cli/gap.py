@@ -18,10 +18,10 @@ from flightid.cli.checks import Output, check_choice, check_paths, read_record
 from flightid.files import json_safe
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, injected
-from flightid.identification.gap.refly import refly
+from flightid.identification.gap.jsbsim.refly import refly
+from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.report import write_report
 from flightid.identification.gap.shrink import shrink_text
-from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import p_text
 
 

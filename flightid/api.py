@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # loaded on first use by __getattr__ below
     from flightid.identification.gap import diagnose as gap
     from flightid.scenarios.gap_benchmark import benchmark as gap_benchmark
     from flightid.scenarios.montecarlo import run as montecarlo
-    from flightid.scenarios.montecarlo.design_report import compare_and_report as design_compare
+    from flightid.scenarios.montecarlo.design.report import compare_and_report as design_compare
 
 __all__ = ["EXCITATION_ENV", "Estimate", "Flight", "FlightRecord", "Score", "design_compare",
            "fly", "gap", "gap_benchmark", "identify", "methods", "montecarlo", "read", "score",
@@ -53,7 +53,7 @@ _LAZY = {
     "gap": ("flightid.identification.gap", "diagnose"),
     "gap_benchmark": ("flightid.scenarios.gap_benchmark", "benchmark"),
     "montecarlo": ("flightid.scenarios.montecarlo", "run"),
-    "design_compare": ("flightid.scenarios.montecarlo.design_report", "compare_and_report"),
+    "design_compare": ("flightid.scenarios.montecarlo.design.report", "compare_and_report"),
 }
 
 

@@ -14,10 +14,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-
 from flightid.identification import nuisance
 from flightid.identification.data import time_base, windows
+from flightid.identification.data.axes import excited_axes
 from flightid.identification.data.unit_sanity import check_units
 from flightid.identification.engine import convergence
 from flightid.identification.engine import identifiability as ident
@@ -28,10 +27,6 @@ from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
 CONTROLS = ("de", "da", "dr")
-# an unlisted record is elevator-only when the elevator's standard deviation is this many
-# times the aileron's and the rudder's (a pilot's or autopilot's small corrections on the
-# other surfaces, or their sensor noise, stay below it)
-ELEVATOR_DOMINANCE = 3.0
 # the surfaces whose maneuvers a model is fitted to
 _MODEL_INPUTS = {"lateral": ("da", "dr"), "short_period": ("de",),
                  "longitudinal": ("de", "throttle")}
@@ -50,21 +45,14 @@ def model_inputs(model: str) -> tuple[str, ...]:
 
 
 def excited_model(record: FlightRecord, method: str = "oe") -> str:
-    """The model preset for the axis ``record`` excites: ``short_period`` when the elevator
-    is the only surface maneuvered (the record's listed maneuvers; else the elevator
-    excited and its standard deviation ``ELEVATOR_DOMINANCE`` times the aileron's and the
-    rudder's) and the method takes that preset; otherwise the method's default model
-    (lateral for the linear methods, 6dof for the nonlinear one)."""
+    """The model preset for the axis ``record`` excites: ``short_period`` when the record
+    excites the longitudinal axis only (``data.axes.excited_axes``; an unlisted record's
+    elevator must also pass ``identifiability.input_excitation``) and the method takes
+    that preset; otherwise the method's default model (lateral for the linear methods,
+    6dof for the nonlinear one)."""
     spec = registry.get(method)
-    listed = windows.maneuvers(record)
-    if listed:
-        flown = {s for m in listed for s in m["surfaces"]}
-        elevator_only = "de" in flown and flown <= {"de", "throttle"}
-    else:
-        spread = {c: float(np.std(record[c])) for c in CONTROLS if c in record}
-        elevator_only = ("de" in spread and not ident.input_excitation(record, ["de"])
-                         and all(spread["de"] > ELEVATOR_DOMINANCE * v
-                                 for c, v in spread.items() if c != "de"))
+    elevator_only = excited_axes([record]) == ["longitudinal"] and (
+        bool(windows.maneuvers(record)) or not ident.input_excitation(record, ["de"]))
     if elevator_only and "short_period" in spec.models:
         return "short_period"
     return spec.default_model

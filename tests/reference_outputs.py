@@ -33,6 +33,7 @@ from flightid.identification.methods import (
     registry,
 )
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import read
 from flightid.scenarios import demo
 from flightid.scenarios.cards import fly_card, load_card
@@ -73,7 +74,7 @@ def twin_otter(path: Path) -> dict[str, dict[str, list[str]]]:
     out = {f"ee_{coef}": numbers(equation_error.estimate(record, coef, list(regs),
                                                          colored=coef != "Cn"))
            for coef, regs in TWIN_OTTER_EE}
-    model = lm.lateral(lm.condition_from_record(record))
+    model = lm.lateral(condition_from_record(record))
     out["oe"] = numbers(output_error.estimate(record, model, start="equation_error"))
     out["fdoe"] = numbers(frequency_output_error.run(record, "lateral"))
     return out

@@ -16,19 +16,19 @@ import numpy as np
 import pytest
 
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.bridge.air import BridgeConfig, serve_record
-from flightid.sim.bridge.frames import read_tlog
-from flightid.sim.bridge.link import FdLink, LinkFaults, Transmitter, UdpLink, parse_hostport
-from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.messages import ServoMap, resolution
-from flightid.sim.bridge.schedule import (
+from flightid.sim.bridge.air.schedule import (
     MessageRate,
     StreamSpec,
     boomerang,
     plan_schedule,
     single_stream,
 )
-from flightid.sim.bridge.tlog import convert_tlog, decode_tlog
+from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
+from flightid.sim.bridge.frames import read_tlog
+from flightid.sim.bridge.ground.tlog import convert_tlog, decode_tlog
+from flightid.sim.bridge.link import FdLink, LinkFaults, Transmitter, UdpLink, parse_hostport
+from flightid.sim.bridge.loopback import record_bridged
+from flightid.sim.bridge.messages import ServoMap, resolution
 from flightid.units import DEG
 
 BIN = Path(sys.executable).parent

@@ -12,9 +12,9 @@ import pytest
 
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.scenarios.demo import identify_flight
-from flightid.sim.bridge.air import BridgeConfig
+from flightid.sim.bridge.air.serve import BridgeConfig
+from flightid.sim.bridge.ground.tlog import convert_tlog
 from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.tlog import convert_tlog
 
 
 @pytest.mark.parametrize("seed", [1, 4])

@@ -13,11 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.bridge.air import BridgeConfig
+from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.frames import read_tlog
-from flightid.sim.bridge.gaps import MAX_GAP_SAMPLES, nominal_interval
+from flightid.sim.bridge.ground.gaps import MAX_GAP_SAMPLES, nominal_interval
+from flightid.sim.bridge.ground.tlog import convert_tlog, decode_tlog
 from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.tlog import convert_tlog, decode_tlog
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True, database=None)
 

@@ -25,7 +25,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from flightid.record import read
-from flightid.sim.bridge.signing import (
+from flightid.sim.bridge.air.signing import (
     SenderFilter,
     read_state,
     setup_outgoing,

@@ -18,14 +18,14 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from flightid.sim.bridge.air import BridgeConfig, FlightCoreAdapter, serve_simulation
-from flightid.sim.bridge.link import open_pty_pair
-from flightid.sim.bridge.signing import (
+from flightid.sim.bridge.air.serve import BridgeConfig, FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.air.signing import (
     SenderFilter,
     read_key,
     setup_outgoing,
     signature_valid,
 )
+from flightid.sim.bridge.link import open_pty_pair
 from flightid.sim.flight.simulation import Simulation, fly
 from flightid.sim.jsbsim.trim import trim
 from flightid.units import DEG

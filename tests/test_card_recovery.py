@@ -55,6 +55,7 @@ from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.identification.methods import output_error
 from flightid.identification.models import linear as lm
 from flightid.identification.models import six_dof
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.jsbsim.model import load
@@ -144,7 +145,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     t0, t1 = windows.window(record, ("de",))
     t1 = min(t1, max(m.end for m in card.maneuvers if "de" in m.surfaces()) + settle)
     lon = record.slice(t0, t1)
-    model = lm.longitudinal(lm.condition_from_record(lon, **override), derivatives=LONGITUDINAL,
+    model = lm.longitudinal(condition_from_record(lon, **override), derivatives=LONGITUDINAL,
                             start={n: truth[n] for n in A_PRIORI},
                             thrust_input="thrust" in lon)
     if "theta" not in lon:
@@ -154,7 +155,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
                                initial_state="estimate", colored=True)
     t0, t1 = windows.window(record, ("da", "dr"))
     lat = record.slice(t0, t1)
-    model = lm.lateral(lm.condition_from_record(lat, **override),
+    model = lm.lateral(condition_from_record(lat, **override),
                        derivatives=lm.LATERAL_DERIVATIVES)
     if "phi" not in lat:
         model = lm.without_outputs(model, ("phi",))

@@ -18,7 +18,9 @@ from flightid.cli.app import app
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
 from flightid.scenarios.inputs import Maneuvers
-from flightid.scenarios.montecarlo import design, design_report, store
+from flightid.scenarios.montecarlo import store
+from flightid.scenarios.montecarlo.design import experiment
+from flightid.scenarios.montecarlo.design import report as design_report
 from flightid.scenarios.montecarlo.summary import summarize
 from flightid.units import DEG
 
@@ -26,44 +28,45 @@ RATE = 100.0
 
 
 def test_equal_amplitude_designs_share_the_peak_and_multisteps_scale_energy_by_length():
-    built = design.equalized_designs(design.DESIGNS, design.DesignSettings(), "amplitude", RATE)
-    amplitude = design.DesignSettings().amplitude
+    built = experiment.equalized_designs(experiment.DESIGNS, experiment.DesignSettings(),
+                                         "amplitude", RATE)
+    amplitude = experiment.DesignSettings().amplitude
     for kind, d in built.items():
         # the multisine's peak is set on a 64-per-cycle grid, so 100 Hz sampling can miss
         # its crest by a little; the sweep's crest likewise
-        assert design.peak(d, RATE) == pytest.approx(amplitude, rel=2e-3), kind
-    e = {k: design.input_energy(d, RATE) for k, d in built.items()}
+        assert experiment.peak(d, RATE) == pytest.approx(amplitude, rel=2e-3), kind
+    e = {k: experiment.input_energy(d, RATE) for k, d in built.items()}
     # full-amplitude pulses of 2, 4 and 7 base times (doublet, 2-1-1, 3211): energy a^2 T
-    base = design.DesignSettings().base
+    base = experiment.DesignSettings().base
     for kind, units in (("doublet", 2), ("211", 4), ("3211", 7)):
         assert e[kind] == pytest.approx(amplitude**2 * units * base, rel=0.02), kind
 
 
 def test_equal_energy_designs_have_the_reference_energy():
-    built = design.equalized_designs(design.DESIGNS, design.DesignSettings(), "energy", RATE,
-                                     reference="3211")
-    target = design.input_energy(built["3211"], RATE)
+    built = experiment.equalized_designs(experiment.DESIGNS, experiment.DesignSettings(),
+                                         "energy", RATE, reference="3211")
+    target = experiment.input_energy(built["3211"], RATE)
     for kind, d in built.items():
-        assert design.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), kind
+        assert experiment.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), kind
     # the doublet needs sqrt(7/2) times the 3211's amplitude to carry the same energy
-    ratio = design.peak(built["doublet"], RATE) / design.peak(built["3211"], RATE)
+    ratio = experiment.peak(built["doublet"], RATE) / experiment.peak(built["3211"], RATE)
     assert ratio == pytest.approx(math.sqrt(7 / 2), rel=0.02)
     with pytest.raises(ValueError, match="equal must be one of"):
-        design.equalized_designs(("3211",), design.DesignSettings(), "power", RATE)
+        experiment.equalized_designs(("3211",), experiment.DesignSettings(), "power", RATE)
 
 
 def test_design_cards_round_trip_through_toml():
     base = load_card("navion-demo")
-    for kind in design.DESIGNS:
-        d = design.make_design(kind)
-        data = design.design_card(base.to_dict(), kind, d, base.rate)
-        text = design.card_text(data)
+    for kind in experiment.DESIGNS:
+        d = experiment.make_design(kind)
+        data = experiment.design_card(base.to_dict(), kind, d, base.rate)
+        text = experiment.card_text(data)
         card = card_from_dict(tomllib.loads(text), f"{kind}.toml", text)
         assert len(card.maneuvers) == 1 and card.maneuvers[0] == d
-        assert card.duration == pytest.approx(d.end + design.SETTLE_S)
+        assert card.duration == pytest.approx(d.end + experiment.SETTLE_S)
         assert card.sensors is not None and card.disturbances and card.a_priori
     with pytest.raises(ValueError, match="unknown design 'chirp'"):
-        design.make_design("chirp")
+        experiment.make_design("chirp")
 
 
 @pytest.fixture(scope="module")
@@ -153,15 +156,15 @@ def test_command_line_refuses_bad_settings_with_exit_2(tmp_path):
 
 
 def _comparison_of(scatters: dict[str, dict[str, float | None]], n: int = 20
-                   ) -> design.Comparison:
+                   ) -> experiment.Comparison:
     """A Comparison of designs whose rows have exactly the given scatters (None: the
     derivative found unidentifiable by that design), from errors z * scatter with z
     fixed-seed normal draws standardized to sample standard deviation 1."""
     truth = {"Cm_alpha": -0.683, "CY_r": 0.0, "Cn_r": -0.125}
     z = np.random.default_rng(7).normal(size=n)
     z = (z - z.mean()) / z.std(ddof=1)
-    out = design.Comparison("navion-demo", "navion", "oe", "lat", n, "amplitude", "3211",
-                            design.DesignSettings())
+    out = experiment.Comparison("navion-demo", "navion", "oe", "lat", n, "amplitude", "3211",
+                            experiment.DesignSettings())
     for kind, by_name in scatters.items():
         rows = []
         for name, s in by_name.items():
@@ -173,7 +176,7 @@ def _comparison_of(scatters: dict[str, dict[str, float | None]], n: int = 20
                              "status": "estimated" if s else "unidentifiable",
                              "reason": ""})
         summary = summarize(store.frame(rows))
-        out.results.append(design.DesignResult(kind, 12.0, 2.8, 0.007, 3 * DEG, summary,
+        out.results.append(experiment.DesignResult(kind, 12.0, 2.8, 0.007, 3 * DEG, summary,
                                                kind))
     return out
 
@@ -232,23 +235,23 @@ def test_a_maneuver_table_is_one_design_on_several_surfaces_scaled_like_the_buil
     t = np.arange(0, 8, 1 / RATE)
     u = own.signals(t)
     assert u["da"].max() == pytest.approx(4 * DEG) and u["dr"].max() == pytest.approx(3 * DEG)
-    settings = design.DesignSettings(surface="da")
-    built = design.equalized_designs(("3211",), settings, "amplitude", RATE, own={name: own})
+    settings = experiment.DesignSettings(surface="da")
+    built = experiment.equalized_designs(("3211",), settings, "amplitude", RATE, own={name: own})
     # equal amplitude: the largest |u| of any surface is the settings' 3 deg, the rudder
     # keeping its 3/4 of the aileron
     scaled = built[name].signals(t)
-    assert design.peak(built[name], RATE) == pytest.approx(3 * DEG, rel=1e-9)
+    assert experiment.peak(built[name], RATE) == pytest.approx(3 * DEG, rel=1e-9)
     assert scaled["dr"].max() == pytest.approx(3 * DEG * 3 / 4, rel=1e-9)
     # energy summed over both surfaces: 4, 2+2 (and 7 x 0.3, 2 x 0.5) s at full amplitude
     a = 3 * DEG
-    assert design.input_energy(built[name], RATE) == pytest.approx(
+    assert experiment.input_energy(built[name], RATE) == pytest.approx(
         a**2 * 7 * 0.3 + (0.75 * a) ** 2 * 2 * 0.5, rel=0.02)
-    energy = design.equalized_designs(("3211",), settings, "energy", RATE, reference=name,
+    energy = experiment.equalized_designs(("3211",), settings, "energy", RATE, reference=name,
                                       own={name: own})
-    target = design.input_energy(built[name], RATE)
+    target = experiment.input_energy(built[name], RATE)
     for k, d in energy.items():
-        assert design.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), k
-    assert len(design.maneuver_dicts(energy[name])) == 2
+        assert experiment.input_energy(d, RATE) == pytest.approx(target, rel=1e-5), k
+    assert len(experiment.maneuver_dicts(energy[name])) == 2
 
 
 def test_a_bad_maneuver_table_is_refused_naming_file_line_and_field(tmp_path):

@@ -14,13 +14,14 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.models.linear import ReferenceCondition, lateral
+from flightid.identification.models.linear import lateral
+from flightid.identification.models.reference_condition import ReferenceCondition
 from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.inputs import Maneuvers, scale_amplitude
-from flightid.scenarios.montecarlo import design
+from flightid.scenarios.montecarlo.design import experiment
+from flightid.scenarios.montecarlo.design.optimize import sequenced
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
-from flightid.scenarios.montecarlo.optimize import sequenced
 from flightid.units import DEG
 
 RUNNER = CliRunner()
@@ -47,8 +48,8 @@ def white_problem() -> io.Problem:
 
 def test_white_residual_covariance_is_the_inverse_information_and_scales_with_energy():
     pb = white_problem()
-    d = sequenced("3211", ("da", "dr"), design.DesignSettings(amplitude=4 * DEG))
-    duration = d.end + design.SETTLE_S
+    d = sequenced("3211", ("da", "dr"), experiment.DesignSettings(amplitude=4 * DEG))
+    duration = d.end + experiment.SETTLE_S
     sens = io.sensitivities(pb, d, duration)
     r = np.array([pb.variance[o] for o in pb.model.outputs])
     info = np.einsum("tok,tol->kl", sens / r[None, :, None], sens)
@@ -101,7 +102,7 @@ def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_pat
     name, parts = load_maneuvers(out)
     assert name == "optimized"
     read = Maneuvers(parts=parts)
-    assert design.input_energy(read, 50.0) == pytest.approx(rows["optimized"]["energy"],
+    assert experiment.input_energy(read, 50.0) == pytest.approx(rows["optimized"]["energy"],
                                                             rel=1e-9)
     assert {p.kind for p in parts} == {"harmonics"}
 
@@ -120,17 +121,17 @@ def test_design_optimize_bad_options_exit_2(tmp_path, args, message):
 
 
 def test_built_ins_fly_on_each_surface_in_turn():
-    s = design.DesignSettings(surface="da", then=("dr",), amplitude=4 * DEG)
-    d = design.make_design("3211", s)
+    s = experiment.DesignSettings(surface="da", then=("dr",), amplitude=4 * DEG)
+    d = experiment.make_design("3211", s)
     assert isinstance(d, Maneuvers) and [p.surfaces() for p in d.parts] == [("da",), ("dr",)]
     # the rudder's 3211 starts GAP_S after the aileron's ends; 7 base times each
-    assert d.parts[1].start == pytest.approx(d.parts[0].end + design.GAP_S)
-    t = design.time_grid(d, 100.0)
-    e = [design.input_energy(p, 100.0) for p in d.parts]
+    assert d.parts[1].start == pytest.approx(d.parts[0].end + experiment.GAP_S)
+    t = experiment.time_grid(d, 100.0)
+    e = [experiment.input_energy(p, 100.0) for p in d.parts]
     assert e[0] == pytest.approx(e[1], rel=1e-9)
-    assert design.input_energy(d, 100.0) == pytest.approx((4 * DEG) ** 2 * 7 * 0.4 * 2,
+    assert experiment.input_energy(d, 100.0) == pytest.approx((4 * DEG) ** 2 * 7 * 0.4 * 2,
                                                           rel=0.02)
-    assert t[-1] == pytest.approx(d.end + design.SETTLE_S)
+    assert t[-1] == pytest.approx(d.end + experiment.SETTLE_S)
 
 
 def test_design_compare_refuses_a_surface_given_twice(tmp_path):

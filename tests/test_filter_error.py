@@ -25,9 +25,10 @@ from test_output_error import (
 
 from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
-from flightid.identification.methods import kalman_filter as kf
 from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.filter_error import kalman_filter as kf
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord, RecordMeta, Reference, read
 from flightid.sim.flight import disturbed as dist
 from flightid.sim.jsbsim import trim as trimming
@@ -203,7 +204,7 @@ def test_twin_otter_values_lie_between_the_published_methods(twin_otter):
     Cn_p -0.0490 (OE -0.0644, EE -0.0515), Cn_da +0.0027 (OE -0.0030, EE +0.0023); the
     other derivatives are within 10 % of the published output error.
     """
-    model = lm.lateral(lm.condition_from_record(twin_otter))
+    model = lm.lateral(condition_from_record(twin_otter))
     fem = fe.estimate(twin_otter, model)
     out = oe.estimate(twin_otter, model)
     assert fem.fit["converged"], fem.fit["reason"]
@@ -289,7 +290,7 @@ def test_jsbsim_navion_in_lateral_dryden_turbulence(navion_trim, seed):
     for name in ("beta", "p", "r", "phi", "ay"):
         channels[name] = channels[name] + NOISE[name] * noise.standard_normal(t.size)
     record = FlightRecord(flown.time, channels, flown.meta)
-    model = lm.lateral(lm.condition_from_record(record))
+    model = lm.lateral(condition_from_record(record))
     fem = fe.estimate(record, model, process_noise=["beta"])
     out = oe.estimate(record, model)
     assert fem.fit["converged"], fem.fit["reason"]

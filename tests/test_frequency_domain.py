@@ -14,7 +14,8 @@ from flightid.identification.frequency.state_space_fit import (
     output_error,
     verify_time_domain,
 )
-from flightid.identification.models.linear import ReferenceCondition, lateral, model_for_record
+from flightid.identification.models.linear import lateral, model_for_record
+from flightid.identification.models.reference_condition import ReferenceCondition
 from flightid.record import FlightRecord, read
 
 # Morelli & Klein (2016) example 7.1: frequency-domain output error, 0.1-1.5 Hz

@@ -9,8 +9,8 @@ import pytest
 from conftest import TWIN_OTTER
 
 from flightid.identification.gap import diagnose, write_aircraft
-from flightid.identification.gap.refly import refly
-from flightid.identification.gap.symmetry import even_terms
+from flightid.identification.gap.jsbsim.refly import refly
+from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.sim.jsbsim.model import load

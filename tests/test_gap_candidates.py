@@ -1,7 +1,7 @@
 """Every catalogue entry a candidate of the gap diagnosis or listed as not identifiable,
 each family named from a real JSBSim flight, physical ranges, and records with fewer
-channels (identification/gap: candidates, sensor_candidates, actuator_candidates,
-mass_candidates, identifiable, ranges).
+channels (identification/gap/candidates: build, sensor, actuator, mass, identifiable,
+ranges).
 
 Each family test flies one card with the effect injected (calm air, research sensors at
 50 Hz with their noise and 10 Hz anti-alias filters, the vanes and lever arm corrected to
@@ -16,10 +16,10 @@ import pytest
 from lateral_card import commands, maneuvers
 
 from flightid.identification.gap import diagnose
-from flightid.identification.gap.candidates import catalogue_candidates
-from flightid.identification.gap.identifiable import not_identifiable
-from flightid.identification.gap.linearise import carried_outputs, linearise
-from flightid.identification.gap.ranges import out_of_range
+from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.candidates.identifiable import not_identifiable
+from flightid.identification.gap.candidates.ranges import out_of_range
+from flightid.identification.gap.model.linearise import carried_outputs, linearise
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT

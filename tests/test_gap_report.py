@@ -1,5 +1,5 @@
 """The gap report (identification/gap/report.py: held-out time histories) and the corrected
-aircraft flown again in JSBSim (identification/gap/correct.py: ``refly``)."""
+aircraft flown again in JSBSim (identification/gap/jsbsim/refly.py)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.identification.gap import diagnose
-from flightid.identification.gap.correct import fly_record, gap_fractions
-from flightid.identification.gap.refly import refly
+from flightid.identification.gap.jsbsim.refly import refly
+from flightid.identification.gap.jsbsim.write import fly_record, gap_fractions
 from flightid.identification.gap.report import held_out_windows, html_report, time_histories
 from flightid.scenarios.cards import fly_card
 from flightid.scenarios.gap_benchmark import Case, Effect, fly_case

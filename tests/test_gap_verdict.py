@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.identification.gap import diagnose
-from flightid.identification.gap.effect_model import Candidate
+from flightid.identification.gap.model.edits import Candidate
 from flightid.identification.gap.rank import (
     MIN_EXCESS_SHRINK,
     MIN_SHRINK,

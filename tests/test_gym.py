@@ -25,13 +25,8 @@ from flightid.scenarios.gym.baselines import (
     three211,
     zero,
 )
-from flightid.scenarios.gym.env import (
-    LINEAR_RANGE,
-    OBSERVATIONS,
-    REWARDS,
-    SIGMA,
-    _Information,
-)
+from flightid.scenarios.gym.information import Information
+from flightid.scenarios.gym.options import LINEAR_RANGE, OBSERVATIONS, REWARDS, SIGMA
 
 SEEDS = (0, 1)
 
@@ -339,7 +334,7 @@ def test_information_updates_equal_the_batch_formulas():
     regularised least squares (M = I + X^T X / sigma^2) to rounding, for two coefficients
     sharing a design and one with its own (CY has another sigma)."""
     spec = [("Cl", ("beta", "p")), ("Cn", ("beta", "p")), ("CY", ("beta", "p"))]
-    info = _Information(spec)
+    info = Information(spec)
     rng = np.random.default_rng(0)
     X = np.column_stack([np.ones(300), rng.normal(0.0, 0.05, (300, 2))])
     Y = X @ rng.normal(0.0, 0.2, (3, 3)).T + rng.normal(0.0, 1e-3, (300, 3))

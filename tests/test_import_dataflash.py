@@ -15,7 +15,7 @@ from flightid.identification.data.windows import window
 from flightid.importers.dataflash import read_dataflash
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.record import read
-from flightid.sim.bridge.dataflash import BOOT_S, RATES, SysIdRun, write_dataflash
+from flightid.sim.bridge.air.dataflash import BOOT_S, RATES, SysIdRun, write_dataflash
 from flightid.units import DEG
 
 F32 = 2.0**-24  # float32 relative rounding

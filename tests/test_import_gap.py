@@ -25,7 +25,7 @@ from flightid.identification.gap import diagnose
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card
-from flightid.sim.bridge.dataflash import write_dataflash
+from flightid.sim.bridge.air.dataflash import write_dataflash
 from flightid.units import DEG
 
 LAG_S = 0.1  # the aileron servo's injected lag

@@ -14,8 +14,8 @@ from flightid.cli.app import app
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.importers.ulog import read_ulog
 from flightid.record import read
-from flightid.sim.bridge.dataflash import BOOT_S
-from flightid.sim.bridge.ulog import RATES, write_ulog
+from flightid.sim.bridge.air.dataflash import BOOT_S
+from flightid.sim.bridge.air.ulog import RATES, write_ulog
 from flightid.units import DEG
 
 F32 = 2.0**-24  # float32 relative rounding

@@ -5,13 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flightid.identification.methods.output_error import simulate
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
+from flightid.identification.models.reference_condition import (
+    ReferenceCondition,
+    condition_from_record,
+)
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 
 # Twin Otter, record totter_f1_017 (Morelli & Klein 2016, example 6.1)
-COND = lm.ReferenceCondition(
+COND = ReferenceCondition(
     V=237.02 * FT, qbar=2696.6, alpha=0.0040, theta=0.0286, mass=339.30 * SLUG,
     Ixx=20902 * SLUG_FT2, Iyy=24256 * SLUG_FT2, Izz=38463 * SLUG_FT2, Ixz=1127 * SLUG_FT2,
     area=422.48 * FT**2, span=64.99 * FT, chord=6.496 * FT,
@@ -90,7 +94,7 @@ def test_complex_step_sensitivities_equal_finite_differences_with_alphadot():
 
 
 def test_full_longitudinal_has_a_phugoid_and_a_short_period():
-    c = lm.ReferenceCondition(V=53.6, qbar=1760.0, alpha=0.0, theta=0.0, mass=1247.0,
+    c = ReferenceCondition(V=53.6, qbar=1760.0, alpha=0.0, theta=0.0, mass=1247.0,
                            Ixx=1420.0, Iyy=4067.0, Izz=4786.0, Ixz=0.0, area=17.1,
                            span=10.2, chord=1.74)
     model = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DEFAULT + ("Cm_alphadot",),
@@ -113,21 +117,21 @@ def test_bad_names_and_conditions_are_reported():
     with pytest.raises(KeyError, match="no parameter Cn_q"):
         lm.lateral(COND).values(Cn_q=1.0)
     with pytest.raises(ValueError, match="mass must be positive"):
-        lm.ReferenceCondition(**{**COND.__dict__, "mass": -1.0})
+        ReferenceCondition(**{**COND.__dict__, "mass": -1.0})
     with pytest.raises(ValueError, match="thrust must be finite"):
-        lm.ReferenceCondition(**{**COND.__dict__, "thrust": float("nan")})
+        ReferenceCondition(**{**COND.__dict__, "thrust": float("nan")})
     t = np.arange(10) * 0.02
     rec = FlightRecord(t, {"V": 50 + 0 * t}, RecordMeta(reference=Reference(10.0, 5.0, 1.0)))
     with pytest.raises(ValueError, match="no channel 'qbar'.*qbar="):
-        lm.condition_from_record(rec)
-    cond = lm.condition_from_record(rec, qbar=1500.0, alpha=0.0, theta=0.0, mass=1000.0,
+        condition_from_record(rec)
+    cond = condition_from_record(rec, qbar=1500.0, alpha=0.0, theta=0.0, mass=1000.0,
                                     Ixx=1.0, Iyy=1.0, Izz=1.0, Ixz=0.0)
     assert cond.V == 50.0 and cond.span == 5.0
 
 
 def test_longitudinal_trim_balance_and_thrust_input():
     # Telemaster-like: 15 m/s, alpha 4.8 deg, thrust 14.8 N, climbing 2 deg
-    c = lm.ReferenceCondition(V=15.0, qbar=137.5, alpha=0.084, theta=0.119, mass=11.0,
+    c = ReferenceCondition(V=15.0, qbar=137.5, alpha=0.084, theta=0.119, mass=11.0,
                            Ixx=1.0, Iyy=1.2, Izz=2.0, Ixz=0.0, area=0.83, span=2.26,
                            chord=0.35, thrust=14.8)
     weight, qs, gamma = c.mass * c.g, c.qbar * c.area, c.theta - c.alpha

@@ -9,7 +9,7 @@ import pytest
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import load_card
 from flightid.scenarios.montecarlo import store
-from flightid.scenarios.montecarlo.design import card_text
+from flightid.scenarios.montecarlo.design.experiment import card_text
 from flightid.scenarios.montecarlo.study import Study
 
 

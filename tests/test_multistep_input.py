@@ -23,6 +23,8 @@ from test_output_error import LATERAL_TRUTH, NAVION
 from flightid.identification.data import multistep_input as ms
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
+from flightid.identification.models.reference_condition import CONDITION_CHANNELS
 from flightid.record import FlightRecord, RecordMeta, Reference
 
 DEG = np.pi / 180
@@ -89,7 +91,7 @@ def _flight(seed: int) -> tuple[FlightRecord, dict[str, float]]:
     model = lm.lateral(NAVION)
     fine = np.arange(0, 8.0 + 0.5 / FINE, 1 / FINE)
     surfaces = {c: _servo(fine, cmd, SLEW) for c, cmd in DOUBLETS.items()}
-    y = oe.simulate(model, {**model.start, **truth}, fine,
+    y = simulate(model, {**model.start, **truth}, fine,
                     np.column_stack([surfaces[c] for c in model.inputs]), hold="zoh")
     step = int(FINE / DAS)
     rng = np.random.default_rng(seed)
@@ -100,7 +102,7 @@ def _flight(seed: int) -> tuple[FlightRecord, dict[str, float]]:
         channels[c] = x[::step] + rng.normal(0, SURFACE_NOISE, x[::step].size)
     # the reference condition as constant channels, for ``flightid identify``
     channels.update({n: np.full(fine[::step].size, getattr(NAVION, n))
-                     for n in lm.CONDITION_CHANNELS})
+                     for n in CONDITION_CHANNELS})
     reference = Reference(NAVION.area, NAVION.span, NAVION.chord)
     record = FlightRecord(fine[::step], channels,
                           RecordMeta(sample_rate=DAS, reference=reference))

@@ -18,7 +18,7 @@ import pytest
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import nonlinear_6dof as n6
-from flightid.identification.methods import six_dof_simulation as sim6
+from flightid.identification.methods.nonlinear_6dof import simulation as sim6
 from flightid.identification.models import rigid_body as rb
 from flightid.identification.models import six_dof
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals

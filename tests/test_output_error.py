@@ -16,17 +16,21 @@ from conftest import TWIN_OTTER as TWIN_OTTER_FILE
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
-from flightid.identification.methods.output_error import simulate
 from flightid.identification.models import linear as lm
+from flightid.identification.models.discrete import simulate
+from flightid.identification.models.reference_condition import (
+    ReferenceCondition,
+    condition_from_record,
+)
 from flightid.record import FlightRecord, RecordMeta, Reference
 from flightid.units import FT, SLUG, SLUG_FT2
 
-TWIN_OTTER = lm.ReferenceCondition(
+TWIN_OTTER = ReferenceCondition(
     V=237.02 * FT, qbar=2696.6, alpha=0.0040, theta=0.0286, mass=339.30 * SLUG,
     Ixx=20902 * SLUG_FT2, Iyy=24256 * SLUG_FT2, Izz=38463 * SLUG_FT2, Ixz=1127 * SLUG_FT2,
     area=422.48 * FT**2, span=64.99 * FT, chord=6.496 * FT,
 )
-NAVION = lm.ReferenceCondition(
+NAVION = ReferenceCondition(
     V=176.0 * FT, qbar=0.5 * 1.225 * (176.0 * FT) ** 2, alpha=0.0, theta=0.0,
     mass=2750.0 / 32.174 * SLUG, Ixx=1048 * SLUG_FT2, Iyy=3000 * SLUG_FT2,
     Izz=3530 * SLUG_FT2, Ixz=0.0, area=184.0 * FT**2, span=33.4 * FT, chord=5.7 * FT,
@@ -142,7 +146,7 @@ PUBLISHED_OE = {
 
 
 def test_twin_otter_reproduces_published_output_error(twin_otter):
-    model = lm.lateral(lm.condition_from_record(twin_otter))
+    model = lm.lateral(condition_from_record(twin_otter))
     est = oe.estimate(twin_otter, model)
     assert est.fit["converged"], est.fit["reason"]
     assert est.unidentifiable == {}
@@ -168,14 +172,14 @@ def test_twin_otter_through_the_method_registry(twin_otter):
 def test_twin_otter_zero_order_hold_is_what_breaks_the_match(twin_otter):
     # the published values need inputs interpolated between samples; holding them for a
     # sample delays them by half a sample, which moves Cl_p by many standard errors
-    model = lm.lateral(lm.condition_from_record(twin_otter))
+    model = lm.lateral(condition_from_record(twin_otter))
     est = oe.estimate(twin_otter, model, hold="zoh")
     value, std = PUBLISHED_OE["Cl_p"]
     assert abs(est["Cl_p"] - value) > 5 * std
 
 
 def test_twin_otter_colored_residual_bounds_are_larger(twin_otter):
-    model = lm.lateral(lm.condition_from_record(twin_otter))
+    model = lm.lateral(condition_from_record(twin_otter))
     plain = oe.estimate(twin_otter, model)
     colored = oe.estimate(twin_otter, model, colored=True)
     ratio = colored.std / plain.std

@@ -8,6 +8,7 @@ import pytest
 
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim.flight import simulation as flight
 from flightid.sim.jsbsim import trim as trimming
@@ -33,7 +34,7 @@ def navion_flight():
 
 def test_lateral_derivatives_of_a_jsbsim_flight(navion_flight):
     record, true = navion_flight
-    est = oe.estimate(record, lm.lateral(lm.condition_from_record(record)))
+    est = oe.estimate(record, lm.lateral(condition_from_record(record)))
     assert est.fit["converged"], est.fit["reason"]
     assert est.unidentifiable == {}
     # Noise-free flight: what is left is model error. The linear model holds V, alpha and
@@ -57,7 +58,7 @@ def test_rudder_terms_unidentifiable_on_an_aileron_only_jsbsim_flight():
     record = flight.fly("navion", trim,
                         total_signals([AILERON], t),
                         duration_s=10.0, rate_hz=50.0)
-    est = oe.estimate(record, lm.lateral(lm.condition_from_record(record)))
+    est = oe.estimate(record, lm.lateral(condition_from_record(record)))
     assert set(est.unidentifiable) == {"CY_dr", "Cl_dr", "Cn_dr"}
     assert all("input dr is not excited" in why for why in est.unidentifiable.values())
     true = truth.derivatives("navion", trim, axes="body")
@@ -81,7 +82,7 @@ def test_longitudinal_model_with_thrust_and_body_az(aircraft):
     record = flight.fly(aircraft, trim, total_signals([doublet], t), duration_s=duration,
                         rate_hz=rate)
     true = truth.derivatives(aircraft, trim, axes="stability")
-    condition = lm.condition_from_record(record)
+    condition = condition_from_record(record)
     assert condition.thrust == pytest.approx(np.mean(record["thrust"]))
     # CL_q, Cm_alphadot a priori (as in the demo); CL_0 at the weight balance (with the
     # biases it is not separable); CD_de not excited apart from the other drag terms

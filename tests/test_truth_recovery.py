@@ -52,7 +52,7 @@ import numpy as np
 import pytest
 
 from flightid.identification.methods import nonlinear_6dof as n6
-from flightid.identification.methods import six_dof_simulation as sim6
+from flightid.identification.methods.nonlinear_6dof import simulation as sim6
 from flightid.identification.models import six_dof
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
 from flightid.sim.flight import simulation as flight

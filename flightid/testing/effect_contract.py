@@ -30,11 +30,11 @@ import numpy as np
 from flightid.channels import CHANNELS
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment
-from flightid.sim.bridge.air import BridgeConfig, serve_record
+from flightid.sim.bridge.air.schedule import single_stream
+from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link
 from flightid.sim.bridge.messages import message_time
-from flightid.sim.bridge.schedule import single_stream
 from flightid.sim.effects.base import Reference
 from flightid.sim.effects.catalogue import (
     ARRIVAL_TIMES,

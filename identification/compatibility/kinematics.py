@@ -47,17 +47,16 @@ from flightid.identification.compatibility.parameters import (
     WGS84_E2,
     WIND,
 )
+from flightid.identification.engine import problem as problem_skeleton
 
 
-@dataclass
-class Problem:
-    """A record arranged for the reconstruction: measured inputs and outputs, gravity."""
+@dataclass(kw_only=True)
+class Problem(problem_skeleton.Problem):
+    """A record arranged for the reconstruction (the skeleton's time, measured outputs with
+    psi unwrapped, and noise floor, and:) measured inputs, output names, gravity."""
 
-    time: np.ndarray
-    dt: float
     inputs: np.ndarray  # (N, 6) measured ax ay az p q r
     outputs: tuple[str, ...]
-    z: np.ndarray  # (N, ny) measured outputs (psi unwrapped)
     gravity: float
     latitude: float | None  # rad; None: flat, non-rotating Earth
     gyros: str  # 'inertial' (they sense Earth rate) or 'earth' (rates relative to the Earth)

@@ -57,8 +57,9 @@ from flightid.identification.compatibility.parameters import (
 )
 from flightid.identification.engine import convergence
 from flightid.identification.engine import identifiability as ident
+from flightid.identification.engine import problem as problem_skeleton
 from flightid.identification.engine.bounds import colored_residual_covariance
-from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.estimate import Estimate
 from flightid.identification.models.rigid_body import local_gravity
@@ -132,7 +133,9 @@ def problem_from_record(record: FlightRecord, outputs: Sequence[str] | None = No
     if gyros not in ("inertial", "earth"):
         raise ValueError(f"gyros must be 'inertial' or 'earth', got {gyros!r}")
     inputs = np.column_stack([record[c] for c in INPUTS])
-    return Problem(time.copy(), dt, inputs, outputs, z, float(gravity), known, gyros), notes
+    return Problem(time=time.copy(), dt=dt, inputs=inputs, outputs=outputs, z=z,
+                   noise_floor=problem_skeleton.noise_floor(z), gravity=float(gravity),
+                   latitude=known, gyros=gyros), notes
 
 
 def _line_start(t: np.ndarray, x: np.ndarray) -> float:
@@ -167,16 +170,14 @@ def initial_states(record: FlightRecord, values: Mapping[str, float]) -> dict[st
 def _iterate(problem: Problem, names: list[str], values: dict[str, float],
              max_iterations: int, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
     """Maximum likelihood with a diagonal R: the output-error optimiser
-    (``output_error.maximum_likelihood``: Newton-Raphson on N/2 ln det R with R concentrated
+    (``engine.problem.fit``: Newton-Raphson on N/2 ln det R with R concentrated
     out, Levenberg-Marquardt safeguard; M&K eqs. 6.22-6.33) on the kinematic model.
 
     Returns its fit with ``noise`` as the vector of output noise variances.
     """
-    z = problem.z
-    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
     fixed = {k: v for k, v in values.items() if k not in names}
-    fit = maximum_likelihood(
-        z, floor,
+    fit = problem_skeleton.fit(
+        problem,
         lambda vals: outputs_and_sensitivities(problem, {**fixed, **vals}, names),
         lambda vals: simulate(problem, {**fixed, **vals})[0],
         list(names), values, max_iterations, False, step_tol, cost_tol)

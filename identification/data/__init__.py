@@ -1,3 +1,3 @@
-"""Data preparation before identification: windows, coefficients, unit checks, time bases, input
-denoising, multistep inputs, data reduction.
+"""Data preparation before identification: the axes a record excites, windows,
+coefficients, unit checks, time bases, input denoising, multistep inputs, data reduction.
 """

@@ -7,6 +7,8 @@ Newton steps, bound their estimates by the Cramer-Rao inequality and refit witho
 parameters the flight cannot determine (Morelli & Klein 2016, ch. 6; Jategaonkar 2015,
 ch. 4-5). One module per job:
 
+- ``problem``: the skeleton every output-error problem extends (measured outputs, fixed
+  parameters, initial states, noise floor), its fit and its unidentifiable parameters;
 - ``likelihood``: measurement-noise covariance R, the cost with R concentrated out, the
   Fisher information matrix and the Hessian of the concentrated cost;
 - ``gauss_newton``: the damped (Levenberg-Marquardt) Newton step and the output-error

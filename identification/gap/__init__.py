@@ -1,16 +1,16 @@
 """Sim-to-real gap diagnosis: where a JSBSim model departs from flight data, which effect
 of the catalogue causes it, and how far the gap shrinks on held-out data.
 
-``linearise`` (the model at the record's condition), ``segments`` (maneuver windows),
-``fit`` (output error on one window), ``where`` (gap map), ``candidates`` and ``rank``
-(which effect; the families in ``sensor_candidates``, ``actuator_candidates`` and
-``mass_candidates`` on ``effect_model``; ``identifiable`` the entries that are not
-candidates, ``ranges`` the physical ranges, ``classes`` the equivalence classes),
-``shrink`` (how far), ``correct`` (the corrected aircraft), ``diagnose`` (all of it),
+``model`` (the model under test: the aircraft linearised at the record's condition, with
+its actuators on a record of commands), ``segments`` (maneuver windows), ``fit`` (output
+error on one window), ``verdict`` (is there a gap), ``where`` (gap map), ``candidates``
+(the catalogue's entries as candidates, their physical ranges and equivalence classes),
+``rank`` (which effect), ``sequence`` (several effects), ``shrink`` (how far), ``jsbsim``
+(the corrected aircraft written, refined and flown again), ``diagnose`` (all of it),
 ``report`` (HTML).
 """
 
-from flightid.identification.gap.correct import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, diagnose
+from flightid.identification.gap.jsbsim.write import write_aircraft
 
 __all__ = ["GapResult", "diagnose", "write_aircraft"]

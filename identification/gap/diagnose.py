@@ -23,10 +23,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.engine.threads import one_blas_thread
-from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.candidates.identifiable import not_identifiable
 from flightid.identification.gap.fit import fit
-from flightid.identification.gap.identifiable import not_identifiable
-from flightid.identification.gap.linearise import (
+from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
+from flightid.identification.gap.jsbsim.refine import refine as refit
+from flightid.identification.gap.jsbsim.symmetry import even_terms
+from flightid.identification.gap.model.linearise import (
     AXIS_INPUTS,
     AXIS_NAMES,
     Linearised,
@@ -34,12 +37,9 @@ from flightid.identification.gap.linearise import (
     linearise,
 )
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
-from flightid.identification.gap.refine import NotRefined, Refined
-from flightid.identification.gap.refine import refine as refit
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
 from flightid.identification.gap.shrink import shrinkage
-from flightid.identification.gap.symmetry import even_terms
 from flightid.identification.gap.verdict import NullTest, axis_verdict, null_test, worst
 from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification.gap.linearise import nuisance
+from flightid.identification.gap.model.linearise import nuisance
 from flightid.identification.methods import output_error
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord

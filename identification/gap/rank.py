@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification.gap.candidates import Candidate, pair
-from flightid.identification.gap.classes import prefer_model_terms
+from flightid.identification.gap.candidates.build import Candidate, pair
+from flightid.identification.gap.candidates.classes import prefer_model_terms
+from flightid.identification.gap.candidates.ranges import out_of_range
 from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
-from flightid.identification.gap.linearise import Linearised
-from flightid.identification.gap.ranges import out_of_range
+from flightid.identification.gap.model.linearise import Linearised
 from flightid.identification.gap.segments import Segment
 
 MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect

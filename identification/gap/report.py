@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from flightid.identification.gap.diagnose import GapResult
 from flightid.identification.gap.fit import held
-from flightid.identification.gap.linearise import AXIS_INPUTS
+from flightid.identification.gap.model.linearise import AXIS_INPUTS
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed
 from flightid.identification.gap.shrink import shrink_text
@@ -103,7 +103,7 @@ def _f(x: float | None, fmt: str = ".4g") -> str:
 def html_report(result: GapResult, records: Records | None = None,
                 validate: Records | None = None, refly: dict | None = None) -> str:
     """The report as one self-contained HTML page; with ``records`` (those diagnosed), the
-    time histories of the held-out windows; with ``refly`` (``correct.refly``), the gap of
+    time histories of the held-out windows; with ``refly`` (``jsbsim.refly``), the gap of
     the corrected aircraft flown again in JSBSim."""
     d = result.to_json()
     named_labels = {r.candidate.label: k for k, r in enumerate(result.named_all(), start=1)}

@@ -14,8 +14,8 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 
-from flightid.identification.gap.candidates import Candidate, catalogue_candidates
-from flightid.identification.gap.linearise import Linearised
+from flightid.identification.gap.candidates.build import Candidate, catalogue_candidates
+from flightid.identification.gap.model.linearise import Linearised
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, rank
 
 STEPS = 3  # effects named at most

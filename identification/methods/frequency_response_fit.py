@@ -20,7 +20,7 @@ from flightid.identification.frequency.transfer_function import COHERENCE_MIN
 from flightid.identification.methods.protocol import LinearModelOptions, Method, option
 from flightid.identification.models import linear as lm
 from flightid.identification.models import structure as model_structure
-from flightid.identification.models.linear import condition_from_record
+from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord
 
 ID = "fr"

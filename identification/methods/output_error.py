@@ -7,7 +7,7 @@ measurement-noise covariance R re-estimated from the residuals at every iteratio
 (relaxation algorithm, M&K eq. 6.27). Output sensitivities come from the exact derivative
 of the zero-order-hold discretisation: for each parameter the augmented system
 [[A, 0], [A_k, A]], [[B], [B_k]] is discretised with one matrix exponential (batched),
-and the state and all sensitivities are propagated together.
+and the state and all sensitivities are propagated together (``models.discrete``).
 
 The optimiser, the bounds and the refit loop are those of the shared engine
 (``identification.engine``): ``gauss_newton.maximum_likelihood`` on the outputs and
@@ -25,21 +25,21 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
-from flightid.derivatives import is_derivative, split
-from flightid.identification.data.coefficients import THRUST_COEFFICIENTS
 from flightid.identification.data.multistep_input import MultistepParameters, from_measurement
 from flightid.identification.engine import identifiability as ident
+from flightid.identification.engine import problem as problem_skeleton
 from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
 )
-from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit, maximum_likelihood
+from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
-from flightid.identification.engine.structure_bias import widen_for_structure
 from flightid.identification.estimate import Estimate
-from flightid.identification.methods import equation_error
+from flightid.identification.methods.equation_error_reference import (
+    check_structure,
+    start_from_equation_error,
+)
 from flightid.identification.methods.protocol import (
     HeldOptions,
     Method,
@@ -49,28 +49,30 @@ from flightid.identification.methods.protocol import (
 from flightid.identification.models import a_priori
 from flightid.identification.models import linear as lm
 from flightid.identification.models import structure as model_structure
+from flightid.identification.models.discrete import (
+    HOLDS,
+    discretize,
+    hold_inputs,
+    propagate,
+    simulate_matrices,
+    stacked_product,
+)
 from flightid.identification.models.linear import LinearModel, matrix_sensitivities
 from flightid.record import FlightRecord
 
 ID = "oe"
-HOLDS = ("foh", "zoh")
 
 
-@dataclass
-class Problem:
-    """The data and model of one output-error fit, arranged for fast evaluation."""
+@dataclass(kw_only=True)
+class Problem(problem_skeleton.Problem):
+    """The data and model of one output-error fit, arranged for fast evaluation (the
+    skeleton's time, outputs, fixed parameters, initial states and noise floor, and:)."""
 
     model: LinearModel
-    time: np.ndarray
-    dt: float
     u: np.ndarray  # (N, m + 1): inputs and the constant 1
     w: np.ndarray  # per-step input of the discrete model (see hold_inputs)
     hold: str  # 'foh' or 'zoh'
-    z: np.ndarray  # (N, ny): measured outputs
     x0: np.ndarray  # (n,) initial state when it is not estimated
-    fixed: dict[str, float]  # every model parameter not estimated, at its value
-    x0_names: tuple[str, ...]  # names of estimated initial states, "x0_<state>"
-    noise_floor: np.ndarray  # smallest admitted noise variance per output
     # multistep inputs estimated as levels and edges (multistep_input): channel -> start
     multistep: dict[str, MultistepParameters] = field(default_factory=dict)
 
@@ -128,124 +130,16 @@ def problem_from_record(
     for c, ms in multistep.items():
         u[:, model.inputs.index(c)] = ms.samples(time, hold)
     z = np.column_stack([z, *(record[c] for c in multistep)])
-    # variance floor: rounding level of each output (1e-10 of its range, squared)
-    floor = (1e-10 * np.maximum(np.ptp(z, axis=0), np.abs(z).max(axis=0)) + 1e-300) ** 2
-    return Problem(model, time, dt, u, hold_inputs(u, hold), hold, z, x0, {}, x0_names, floor,
-                   multistep)
-
-
-# ------------------------------------------------------------------ simulation
-
-
-def discretize(
-    A: np.ndarray, B: np.ndarray, dt: float, dA: np.ndarray, dB: np.ndarray,
-    hold: str = "foh",
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Phi, Gamma and their parameter derivatives dPhi, dGamma (stacked on axis 0).
-
-    x_{i+1} = Phi x_i + Gamma w_i with w_i = u_i ('zoh', input held over the sample) or
-    w_i = [u_i; u_{i+1}] ('foh', input interpolated linearly between samples). One batched
-    matrix exponential per parameter k of the block matrix (Van Loan 1978)
-        [[A, 0, B, 0], [A_k, A, B_k, 0], [0, 0, 0, I/dt], [0, 0, 0, 0]] dt
-    (without the last block row and column for 'zoh'); its blocks are Phi, dPhi/dk and
-    the input matrices with their derivatives. The sensitivities are thus the exact
-    derivatives of the discrete model that is simulated.
-    """
-    if hold not in HOLDS:
-        raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
-    n, m = B.shape
-    npar = dA.shape[0]
-    foh = hold == "foh"
-    batch = max(npar, 1)
-    size = 2 * n + (2 * m if foh else m)
-    big = np.zeros((batch, size, size))
-    big[:, :n, :n] = A * dt
-    big[:, n:2 * n, n:2 * n] = A * dt
-    big[:, :n, 2 * n:2 * n + m] = B * dt
-    if npar:
-        big[:, n:2 * n, :n] = dA * dt
-        big[:, n:2 * n, 2 * n:2 * n + m] = dB * dt
-    if foh:
-        big[:, 2 * n:2 * n + m, 2 * n + m:] = np.eye(m)
-    e = scipy.linalg.expm(big)
-    phi = e[0, :n, :n]
-    dphi = e[:npar, n:2 * n, :n]
-    if not foh:
-        return phi, e[0, :n, 2 * n:], dphi, e[:npar, n:2 * n, 2 * n:]
-    # x_{i+1} = Phi x_i + G0 u_i + G1 (u_{i+1} - u_i)
-    g0, g1 = e[:, :, 2 * n:2 * n + m], e[:, :, 2 * n + m:]
-    gam = np.concatenate([g0 - g1, g1], axis=2)
-    return phi, gam[0, :n], dphi, gam[:npar, n:2 * n]
-
-
-def hold_inputs(u: np.ndarray, hold: str) -> np.ndarray:
-    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh')."""
-    if hold == "zoh":
-        return u
-    return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
-
-
-def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """x_{i+1} = phi x_i + forcing_i from x0; forcing (N, n[, k]) -> states of the same shape.
-
-    Blocked recursion so that Python loops run about 2 sqrt(N) times instead of N: within
-    blocks of L samples the zero-state responses of all blocks are advanced together, the
-    block-start states are chained with phi^L, and phi^j x_block is added back.
-    """
-    squeeze = forcing.ndim == 2
-    f = forcing[:, :, None] if squeeze else forcing
-    x0 = np.asarray(x0, dtype=float).reshape(f.shape[1], f.shape[2])
-    n_samples, n, k = f.shape
-    size = max(1, int(np.ceil(np.sqrt(n_samples))))
-    blocks = -(-n_samples // size)
-    padded = np.zeros((blocks * size, n, k))
-    padded[:n_samples] = f
-    fb = padded.reshape(blocks, size, n, k)
-    local = np.empty((blocks, size, n, k))
-    state = np.zeros((blocks, n, k))
-    for j in range(size):
-        local[:, j] = state
-        state = phi @ state + fb[:, j]
-    powers = np.empty((size + 1, n, n))
-    powers[0] = np.eye(n)
-    for j in range(size):
-        powers[j + 1] = phi @ powers[j]
-    starts = np.empty((blocks, n, k))
-    starts[0] = x0
-    for b in range(blocks - 1):
-        starts[b + 1] = powers[size] @ starts[b] + state[b]
-    out = (np.matmul(powers[None, :size], starts[:, None]) + local).reshape(-1, n, k)
-    out = out[:n_samples]
-    return out[:, :, 0] if squeeze else out
-
-
-def simulate(model: LinearModel, values: Mapping[str, float], time: np.ndarray,
-             inputs: np.ndarray, x0: np.ndarray | None = None, hold: str = "foh") -> np.ndarray:
-    """Outputs (N, ny) of ``model`` at ``values`` for inputs (N, m) sampled at ``time`` (s).
-
-    Inputs in the model's order and SI units; x0 the initial state (default zero).
-    """
-    time = np.asarray(time, dtype=float)
-    u = np.column_stack([np.asarray(inputs, dtype=float).reshape(len(time), -1),
-                         np.ones(len(time))])
-    A, B, C, D = model.matrices(values)
-    x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, dtype=float)
-    return _simulate(A, B, C, D, float(np.mean(np.diff(time))), u, hold_inputs(u, hold), x0,
-                     hold)
-
-
-def _simulate(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
-    phi, gam, _, _ = discretize(A, B, dt, np.zeros((0, *A.shape)), np.zeros((0, *B.shape)),
-                                hold)
-    x = propagate(phi, w @ gam.T, x0)
-    return x @ C.T + u @ D.T
+    return Problem(model=model, time=time, dt=dt, u=u, w=hold_inputs(u, hold), hold=hold, z=z,
+                   x0=x0, fixed={}, x0_names=x0_names,
+                   noise_floor=problem_skeleton.noise_floor(z), multistep=multistep)
 
 
 def _outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
     A, B, C, D = problem.model.build({**problem.model.start, **problem.fixed,
                                       **_model_values(problem, values)})
     u, w = _inputs(problem, values)
-    y = _simulate(A, B, C, D, problem.dt, u, w, _x0_of(problem, values), problem.hold)
+    y = simulate_matrices(A, B, C, D, problem.dt, u, w, _x0_of(problem, values), problem.hold)
     return np.column_stack([y, u[:, _multistep_columns(problem)]])
 
 
@@ -278,14 +172,6 @@ def _input_sensitivities(problem: Problem, values: Mapping[str, float],
             k, j = (list(x) for x in zip(*cols, strict=True))
             du[:, problem.model.inputs.index(c), k] = d[:, j]
     return du
-
-
-def stacked_product(mats: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """out[i, a, k] = sum_b mats[k, a, b] x[i, b], as one matrix product."""
-    k, a, b = mats.shape
-    if k == 0:
-        return np.zeros((x.shape[0], a, 0))
-    return (x @ mats.reshape(k * a, b).T).reshape(x.shape[0], k, a).transpose(0, 2, 1)
 
 
 def _outputs_and_sensitivities(
@@ -418,52 +304,6 @@ def estimate(
         full_noise_covariance=full_noise_covariance)
 
 
-_EE_TERMS = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
-             "de": "de", "da": "da", "dr": "dr"}
-
-
-def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[str, float]:
-    """Start values for ``model``'s derivatives from equation error on the same record.
-
-    As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
-    (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
-    regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
-    a thrust channel), keep the model's start values.
-    """
-    return {name: value for name, (value, _) in equation_error_fits(record, model).items()}
-
-
-def equation_error_fits(record: FlightRecord, model: LinearModel,
-                        consistent_smoothing: bool = False,
-                        held: Mapping[str, float] | None = None,
-                        ) -> dict[str, tuple[float, float]]:
-    """Equation error's (value, standard error corrected for colored residuals) of each of
-    ``model``'s derivatives it can estimate from ``record``: the start values
-    (``start_from_equation_error``) and, with ``consistent_smoothing`` and the ``held``
-    (a priori) values as ``--method ee`` takes them, the structure check's reference."""
-    held = dict(held or {})
-    groups: dict[str, list[str]] = {}
-    for name in model.parameters:
-        if is_derivative(name) and name not in held:
-            coef, var = split(name)
-            if var in _EE_TERMS:
-                groups.setdefault(f"C{coef}", []).append(var)
-    out: dict[str, tuple[float, float]] = {}
-    for coefficient, variables in groups.items():
-        if (coefficient in THRUST_COEFFICIENTS and coefficient not in record
-                and "thrust" not in record):
-            continue  # no thrust channel: the x force cannot be made aerodynamic
-        fixed = {n: v for n, v in held.items() if n.startswith(f"{coefficient}_")}
-        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables],
-                                      consistent_smoothing=consistent_smoothing,
-                                      a_priori=fixed or None)
-        for var in variables:
-            name = f"{coefficient}_{var}"
-            if name in fit.names and name not in fit.unidentifiable:
-                out[name] = (fit[name], fit.std_of(name))
-    return out
-
-
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
 class Options(HeldOptions, OutputErrorOptions):
@@ -526,24 +366,13 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
             est = retry
     est.method = ID
     if options.structure_check:
-        _check_structure(est, record, linear, free, held)
+        check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
     est.fit["start"] = note
     if unmeasured:
         est.fit["outputs_left_out"] = {o: "not in the record (state integrated from the "
                                           "rates)" for o in unmeasured}
     return est
-
-
-def _check_structure(est: Estimate, record: FlightRecord, model: LinearModel,
-                     free: Sequence[str], held: Mapping[str, float]) -> None:
-    """Widen the bounds of the free derivatives on which equation error, as ``--method ee``
-    runs it, disagrees (``engine.structure_bias``); nothing when it cannot run."""
-    try:
-        fits = equation_error_fits(record, model, consistent_smoothing=True, held=held)
-    except (KeyError, ValueError):  # no accelerometers or coefficients: no reference
-        return
-    widen_for_structure(est, {n: f for n, f in fits.items() if n in free})
 
 
 # a fit whose outputs explain less than this share of their variance (mean R^2), or that
@@ -614,9 +443,9 @@ def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, floa
 
 def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_iterations: int,
              full: bool, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
-    """``maximum_likelihood`` on a linear-model problem (outputs from ``_outputs``)."""
-    return maximum_likelihood(
-        problem.z, problem.noise_floor,
+    """``engine.problem.fit`` on a linear-model problem (outputs from ``_outputs``)."""
+    return problem_skeleton.fit(
+        problem,
         lambda current: _outputs_and_sensitivities(problem, current, names),
         lambda trial: _outputs(problem, trial),
         names, values, max_iterations, full, step_tol, cost_tol,
@@ -625,8 +454,6 @@ def _iterate(problem: Problem, names: list[str], values: dict[str, float], max_i
 
 def _singular(names: list[str], fit: MaximumLikelihoodFit, tol: float) -> dict[str, str]:
     """Unidentifiable parameters of a fit; biases and initial states kept in preference."""
-    values = np.array([fit.values[n] for n in names])
     keep = [n for n in names if n.startswith("bias_") or n.startswith("x0_")]
-    return ident.unidentifiable(names, fit.information, values, prefer_keep=keep,
-                                tolerance=tol)
+    return problem_skeleton.singular(names, fit, tol, keep)
 

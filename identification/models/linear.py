@@ -5,17 +5,14 @@ model files): continuous-time state space
 
     xdot = A(theta) x + B(theta) [u; 1],    y = C(theta) x + D(theta) [u; 1]
 
-whose entries are built from nondimensional stability and control derivatives (names of
-``flightid.derivatives``), the mass, inertia, reference geometry and the reference
-(trim) flight condition. The last input column is the constant 1: the bias parameters
-``bias_<x>dot`` (state equations, SI units of the state rate) and ``bias_<y>`` (outputs, SI
-units of the output) multiply it. States, inputs and outputs are the *measured* channels
-(absolute values, SI units): the biases absorb the trim terms (CY_0, g cos(theta0) theta0,
-trim control deflections ...), so no trim value has to be subtracted first, as in SIDPAC.
-
-A model is a plain description (names, start values, one ``build`` function). ``build``
-takes a mapping from parameter name to value and uses only arithmetic, so complex-step
-differentiation of the matrices (``matrix_sensitivities``) is exact to rounding.
+whose entries are built from nondimensional derivatives (``flightid.derivatives``), the
+mass properties, geometry and reference condition (``models.reference_condition``). The
+last input column is the constant 1, multiplied by the biases ``bias_<x>dot`` (state
+equations) and ``bias_<y>`` (outputs), in SI units. States, inputs and outputs are the
+*measured* channels (absolute, SI): the biases absorb the trim terms, so no trim value is
+subtracted first, as in SIDPAC. A model is a plain description (names, start values, one
+``build`` function of the parameter values using only arithmetic, so complex-step
+differentiation of the matrices, ``matrix_sensitivities``, is exact to rounding).
 """
 
 from __future__ import annotations
@@ -26,103 +23,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flightid.channels import LATERAL_INPUTS
+from flightid.identification.models.reference_condition import (
+    ReferenceCondition,
+    condition_from_record,
+    level_pitch_attitude,
+)
 from flightid.record import FlightRecord
-from flightid.units import G0
 
 Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-
-
-@dataclass(frozen=True)
-class ReferenceCondition:
-    """Reference condition and mass properties of a perturbation model (SI units, rad).
-
-    V true airspeed (m/s), qbar dynamic pressure (Pa), alpha and theta trim angle of attack
-    and pitch angle (rad), mass (kg), inertias (kg m^2, Ixz positive as in Etkin), area
-    (m^2), span and chord (m), g (m/s^2), thrust (N, along body x; 0 when unknown).
-    """
-
-    V: float
-    qbar: float
-    alpha: float
-    theta: float
-    mass: float
-    Ixx: float
-    Iyy: float
-    Izz: float
-    Ixz: float
-    area: float
-    span: float
-    chord: float
-    g: float = G0
-    thrust: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("V", "qbar", "mass", "Ixx", "Iyy", "Izz", "area", "span", "chord", "g"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0:
-                raise ValueError(
-                    f"flight condition {name} must be positive and finite, got {value}"
-                )
-        if not np.isfinite(self.thrust):
-            raise ValueError(f"flight condition thrust must be finite (N), got {self.thrust}")
-
-
-CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
-
-
-# the flight condition a perturbation model is linearised about: the trim before the
-# maneuver, when the record says where its maneuvers start
-TRIM_CHANNELS = ("V", "qbar", "alpha", "theta")
-MIN_TRIM_S = 0.5  # s of trim before the first maneuver needed to take the condition from it
-
-
-def trim_lead(record: FlightRecord) -> np.ndarray | None:
-    """Boolean mask of the samples before the record's first listed maneuver
-    (``meta.extra['maneuvers']``), or None when it lists none or they span less than
-    ``MIN_TRIM_S``."""
-    listed = record.meta.extra.get("maneuvers") or []
-    if not listed:
-        return None
-    first = min(float(m["start"]) for m in listed)
-    t = np.asarray(record.time, dtype=float)
-    mask = t < first
-    if not mask.any() or first - t[0] < MIN_TRIM_S:
-        return None
-    return mask
-
-
-def condition_from_record(record: FlightRecord, **override: float) -> ReferenceCondition:
-    """Reference condition of a record: channel means (SI) and meta.reference geometry.
-
-    Any field of ReferenceCondition can be given as a keyword to override the record (needed
-    when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
-    """
-    values: dict[str, float] = {}
-    for name in CONDITION_CHANNELS:
-        if name in override:
-            continue
-        if name not in record:
-            raise ValueError(
-                f"record has no channel {name!r} for the reference condition; pass "
-                f"{name}=<value in SI units> to condition_from_record"
-            )
-        values[name] = float(np.mean(record[name]))
-    lead = trim_lead(record)
-    if lead is not None:
-        for name in TRIM_CHANNELS:
-            if name in values and name in record:
-                values[name] = float(np.mean(np.asarray(record[name])[lead]))
-    ref = record.meta.reference
-    if ref is None and not {"area", "span", "chord"} <= set(override):
-        raise ValueError(
-            "record has no meta.reference (area, span, chord); set it or pass area=, span=, chord="
-        )
-    if ref is not None:
-        values.update(area=ref.area, span=ref.span, chord=ref.chord)
-    if "thrust" in record:
-        values["thrust"] = float(np.mean(record["thrust"]))
-    values.update(override)
-    return ReferenceCondition(**values)
 
 
 @dataclass
@@ -550,17 +458,6 @@ def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
     if "theta" not in record:
         override["theta"] = level_pitch_attitude(record)
     return MODELS[kind](condition_from_record(record, **override), **kwargs)
-
-
-def level_pitch_attitude(record: FlightRecord) -> float:
-    """The pitch attitude (rad) of unaccelerated flight from the record's mean specific
-    forces: theta0 = atan2(ax, -az) (the accelerometers read -g sin(theta), g cos(theta)
-    in steady wings-level flight, Morelli & Klein 2016 eq. 10.13)."""
-    missing = [c for c in ("ax", "az") if c not in record]
-    if missing:
-        raise ValueError(f"record has no channel theta for the reference condition, nor "
-                         f"{', '.join(missing)} to take the pitch attitude from")
-    return float(np.arctan2(np.mean(record["ax"]), -np.mean(record["az"])))
 
 
 def without_outputs(model: LinearModel, drop: Sequence[str]) -> LinearModel:

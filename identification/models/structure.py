@@ -15,6 +15,9 @@ from collections.abc import Sequence
 
 from flightid.channels import LATERAL_INPUTS
 from flightid.identification.models import linear as lm
+from flightid.identification.models.reference_condition import (
+    CONDITION_CHANNELS,
+)
 
 ALIASES = {"lat": "lateral", "lon": "longitudinal"}
 
@@ -96,14 +99,14 @@ def linear(model: str) -> str:
 
 def linear_channels(model: str) -> tuple[str, ...]:
     """The record channels a linear-model preset needs: its inputs and outputs, and the
-    channels its reference condition is averaged from (``lm.condition_from_record``)."""
+    channels its reference condition is averaged from (``condition_from_record``)."""
     preset = _PRESET_SIGNALS[linear(model)]
-    return tuple(dict.fromkeys((*preset[0], *preset[1], *lm.CONDITION_CHANNELS)))
+    return tuple(dict.fromkeys((*preset[0], *preset[1], *CONDITION_CHANNELS)))
 
 
 # outputs output error fits without: attitudes a hobby recorder does not measure (the
 # states stay, integrated from the rates; the reference pitch attitude then comes from
-# the specific force, ``lm.level_pitch_attitude``)
+# the specific force, ``level_pitch_attitude``)
 OPTIONAL_OUTPUTS = ("phi", "theta")
 
 

@@ -11,7 +11,7 @@ cannot carry a table. ``sim.augment.augment`` writes them into OUT/aircraft/<nam
 The held-out points (``[[held_out]]``) are flown with the flown aircraft (the campaign's
 effects included) and its sensors; the measured record, reduced as at the test points, is
 flown again open loop with its measured surfaces by the model and by the updated aircraft
-(``identification.gap.correct.fly_record``), and the gap is the gap diagnosis's: per
+(``identification.gap.jsbsim.write.fly_record``), and the gap is the gap diagnosis's: per
 channel, residual over measured energy, means removed (``gap_fractions``), averaged over
 each axis's channels. The flown aircraft re-flown the same way gives the floor: the gap a
 perfect model would leave (open loop from trim, the slow modes drift; sensor noise).
@@ -32,8 +32,8 @@ import pandas as pd
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.envelope_fit import Correction, fit_correction
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
-from flightid.identification.gap.correct import fly_record, gap_fractions
-from flightid.identification.gap.linearise import AXIS_OUTPUTS
+from flightid.identification.gap.jsbsim.write import fly_record, gap_fractions
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS
 from flightid.scenarios.campaign.card import Campaign, point_card
 from flightid.scenarios.campaign.point import model_values
 from flightid.scenarios.cards import augmented, card_from_dict, fly_card, sub_seed

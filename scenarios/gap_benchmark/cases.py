@@ -70,7 +70,7 @@ AIRCRAFT: dict[str, Flight] = {
 STOCK = ("c172p",)  # aircraft shipped with JSBSim (the others are the project's)
 
 # derivative deltas: the derivatives drawn per axis, in the axes the diagnosis's models
-# use (``identification.gap.linearise.AXIS_FRAME``: lateral body, longitudinal stability)
+# use (``identification.gap.model.linearise.AXIS_FRAME``: lateral body, longitudinal stability)
 DERIVATIVES = {
     LATERAL: ("Cn_beta", "Cl_beta", "Cn_r", "Cl_p", "Cl_r", "CY_beta", "Cl_da", "Cn_dr"),
     LONGITUDINAL: ("Cm_alpha", "Cm_q", "Cm_de", "CL_alpha", "CD_alpha", "Cm_alphadot"),

@@ -28,9 +28,10 @@ from typing import Any
 
 import numpy as np
 
+from flightid.files import json_safe
 from flightid.identification.gap import GapResult, diagnose
-from flightid.identification.gap.actuator_candidates import SURFACES_KEY
-from flightid.identification.gap.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
+from flightid.identification.gap.model.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
+from flightid.identification.gap.model.surfaces import SURFACES_KEY
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
@@ -310,10 +311,10 @@ class CaseResult:
     def to_json(self) -> dict[str, Any]:
         return {"case": self.case.to_json(), "label": self.case.label, "kind": self.case.kind,
                 "verdicts": self.verdicts, "named": self.named, "right": self.right,
-                "all_named": self.all_named, "magnitude_error": _finite(self.magnitude_error),
+                "all_named": self.all_named, "magnitude_error": json_safe(self.magnitude_error),
                 "before": self.before, "after": self.after, "null": self.null,
-                "excess_shrink": _finite(self.excess_shrink),
-                "seconds": _finite(self.seconds), "cpu_seconds": _finite(self.cpu_seconds),
+                "excess_shrink": json_safe(self.excess_shrink),
+                "seconds": json_safe(self.seconds), "cpu_seconds": json_safe(self.cpu_seconds),
                 "error": self.error}
 
     @classmethod
@@ -324,10 +325,6 @@ class CaseResult:
                    d["before"], d["after"], d["null"],
                    nan if d["seconds"] is None else d["seconds"],
                    nan if d.get("cpu_seconds") is None else d["cpu_seconds"], d["error"])
-
-
-def _finite(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def _effect_axes(e: Effect) -> tuple[str, ...]:

@@ -2,9 +2,9 @@
 
 Importing this package (or ``flightid``) registers the environment by its entry-point
 string; the environment module itself (``env``: JSBSim, the flight core) is loaded on
-first use of ``ExcitationEnv``, ``OBS_CHANNELS`` or ``PRESETS`` (PEP 562) or by
-``gymnasium.make``. gymnasium 1.x has no plugin entry points, so without an import use
-its module form::
+first use of ``ExcitationEnv`` (PEP 562) or by ``gymnasium.make``, its options
+(``options``: ``OBS_CHANNELS``, ``PRESETS``) on first use of theirs. gymnasium 1.x has no
+plugin entry points, so without an import use its module form::
 
     gymnasium.make("flightid.scenarios.gym:flightid/Excitation-v0")
 """
@@ -19,7 +19,7 @@ register_envs()
 __all__ = ["ENV_ID", "OBS_CHANNELS", "PRESETS", "DecisionChunks", "ExcitationEnv",
            "register_envs"]
 # public name -> its module, imported on first use
-_LAZY = {"OBS_CHANNELS": "env", "PRESETS": "env", "ExcitationEnv": "env",
+_LAZY = {"OBS_CHANNELS": "options", "PRESETS": "options", "ExcitationEnv": "env",
          "DecisionChunks": "chunks"}
 
 

@@ -79,12 +79,33 @@ from typing import Any
 import gymnasium
 import numpy as np
 from gymnasium import spaces
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import Card, augmented_aircraft, load_card, sub_seed
-from flightid.scenarios.gym.kernels import decide, pack, rank_one
+from flightid.scenarios.gym.information import Information, regression_designs
+from flightid.scenarios.gym.kernels import decide, pack
+from flightid.scenarios.gym.options import (
+    ACCURACY_SCALE,
+    CONTROLS,
+    LIGHT,
+    LIMITS,
+    LINEAR_RANGE,
+    MAX_DECISIONS,
+    MAX_RATE_HZ,
+    OBS_BOUNDS,
+    OBS_CHANNELS,
+    OBS_SCALES,
+    OBSERVATIONS,
+    PENALTY,
+    REWARDS,
+    SIGMA,
+    TURBULENCE,
+    check_condition,
+    check_one_of,
+    check_positive,
+    check_targets,
+)
+from flightid.scenarios.gym.render import render_episode
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.sensor import WhiteNoise
 from flightid.sim.flight.simulation import Atmosphere, DepartureError, Simulation
@@ -95,55 +116,6 @@ from flightid.sim.jsbsim.truth import derivatives
 from flightid.sim.sensors.builtin import SUITES, builtin_suite
 from flightid.sim.sensors.suites import SensorSuite, measure
 from flightid.units import G0
-
-OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",
-                "de", "da", "dr", "h")
-CONTROLS = ("de", "da", "dr")
-# |value| bounds of the observation space (far outside the envelope, which ends episodes)
-OBS_BOUNDS = {"V": 400.0, "alpha": math.pi, "beta": math.pi, "p": 20.0, "q": 20.0, "r": 20.0,
-              "phi": math.pi, "theta": math.pi, "ax": 200.0, "ay": 200.0, "az": 200.0,
-              "de": 1.6, "da": 1.6, "dr": 1.6, "h": 30000.0}
-PRESETS = {
-    "lateral": ("Cl_beta", "Cl_p", "Cl_r", "Cl_da", "Cl_dr",
-                "Cn_beta", "Cn_p", "Cn_r", "Cn_da", "Cn_dr"),
-    "longitudinal": ("CZ_alpha", "CZ_q", "CZ_de", "Cm_alpha", "Cm_q", "Cm_de"),
-}
-# std of the equation-error residual of each coefficient (nominal, stated): moments 1e-3,
-# forces 1e-2 (the order of the Navion's residuals with the research suite)
-SIGMA = {"Cl": 1e-3, "Cm": 1e-3, "Cn": 1e-3, "CX": 1e-2, "CY": 1e-2, "CZ": 1e-2}
-# regressor variables: observed channels (p, q, r enter as phat, qhat, rhat)
-VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr")
-# the safe envelope: alpha (deg), |bank| (deg), load factor n = -az / g, airspeed as a
-# fraction of the trim airspeed, altitude loss below the trim altitude (m)
-LIMITS = {"alpha_deg": (-6.0, 14.0), "bank_deg": 60.0, "load_factor": (-1.0, 3.5),
-          "speed_ratio": (0.7, 1.4), "altitude_loss_m": 150.0}
-PENALTY = 20.0
-# the linear range of the regression: the largest perturbation from trim of each variable
-# (deg, deg/s; airspeed as a fraction of the trim airspeed) at which a sample's information
-# counts in full under the "valid-information" reward; it counts less beyond, nothing at
-# twice it. The 3211 and multisine baselines (0.2 of travel) stay inside on the Navion.
-LINEAR_RANGE = {"alpha_deg": 5.0, "beta_deg": 10.0, "p_deg_s": 30.0, "q_deg_s": 15.0,
-                "r_deg_s": 30.0, "speed_ratio": 0.1}
-REWARDS = ("valid-information", "information", "accuracy")
-ACCURACY_SCALE = 100.0  # "accuracy": return of an exact estimate
-OBSERVATIONS = ("si", "scaled")
-# "scaled" observations: (value - trim value) / scale, so that 1 is the edge of the linear
-# range (alpha, beta, rates, airspeed), of the envelope (bank, altitude loss), of the surface
-# travel (de, da, dr: the larger of its two sides) or of the episode (t: value / episode_s);
-# scales in SI, None where they come from the environment
-OBS_SCALES = {"t": None, "V": None,
-              **{c: math.radians(LINEAR_RANGE[k]) for c, k in (
-                  ("alpha", "alpha_deg"), ("beta", "beta_deg"), ("p", "p_deg_s"),
-                  ("q", "q_deg_s"), ("r", "r_deg_s"))},
-              "phi": math.radians(LIMITS["bank_deg"]), "theta": math.radians(15.0), "ax": 0.5 * G0,
-              "ay": 0.5 * G0, "az": G0, "de": None, "da": None, "dr": None,
-              "h": LIMITS["altitude_loss_m"]}
-DEFAULT_CONDITION = (1524.0, 46.3)  # trim altitude (m), true airspeed (m/s)
-MAX_RATE_HZ = 1000.0  # decision and record rates (Hz)
-MAX_DECISIONS = 1_000_000  # decisions per episode (its noise is drawn at reset)
-TURBULENCE = ("none", "light")
-# light turbulence: MIL-F-8785C Dryden, 15 kt at 20 ft, POE 1e-2 (JSBSim severity 3)
-LIGHT = {"turbulence": "milspec", "windspeed_20ft_m_s": 15 * 0.514444, "severity": 3}
 
 _CACHE: dict[tuple, tuple[Model, Trim, dict[str, float]]] = {}
 
@@ -164,116 +136,6 @@ def _noise_sigma(suite: SensorSuite | None, channel: str) -> float:
     return float(sum(e.sigma for e in suite.channels[channel] if isinstance(e, WhiteNoise)))
 
 
-def _designs(spec: Sequence[tuple[str, tuple[str, ...]]]
-             ) -> tuple[list[int], list[tuple[tuple[str, ...], float]]]:
-    """(each coefficient's design, the designs): a design is (variables, residual std);
-    coefficients with the same one share an information matrix."""
-    keys = [(v, SIGMA[c]) for c, v in spec]
-    unique = list(dict.fromkeys(keys))
-    return [unique.index(k) for k in keys], unique
-
-
-class _Information:
-    """Information, inverse and estimate of every coefficient's regression.
-
-    Coefficients with the same regressors and residual std (Cl and Cn of the lateral
-    preset) share one information matrix: ``design[g]`` is coefficient g's, and a shared
-    matrix counts once per coefficient in log det. Designs with fewer variables are padded
-    with regressors that stay zero: with the prior I their entries stay decoupled
-    (information 1, no contribution to log det). Each sample is a rank-one update of
-    P = M^-1 (Sherman-Morrison) and of the estimate (recursive least squares, Ljung &
-    Soderstrom 1983, which with P_0 = I and theta_0 = 0 is exactly M^-1 X^T W y), compiled
-    (``kernels.rank_one``).
-    """
-
-    def __init__(self, spec: Sequence[tuple[str, tuple[str, ...]]]) -> None:
-        design, unique = _designs(spec)
-        k = 1 + max(len(v) for _, v in spec)
-        nd, ng = len(unique), len(spec)
-        self.design = np.array(design, dtype=np.int64)
-        self.w = np.array([1.0 / s**2 for _, s in unique])  # per design
-        self.count = np.array([design.count(d) for d in range(nd)], dtype=float)
-        self.w_coef = np.array([1.0 / SIGMA[c] ** 2 for c, _ in spec])
-        # one flat array (the compiled step's ``state``) and its views: inv (D, k, k),
-        # theta (G, k), acc = [sum over coefficients of log det M (prior I), the samples'
-        # summed weights]
-        self.state = np.zeros(nd * k * k + ng * k + 2)
-        self.inv = self.state[:nd * k * k].reshape(nd, k, k)
-        self.inv[:] = np.eye(k)
-        self.theta = self.state[nd * k * k:nd * k * k + ng * k].reshape(ng, k)
-        self.acc = self.state[nd * k * k + ng * k:]
-
-    @property
-    def logdet_m(self) -> float:
-        """Sum over the coefficients of log det M."""
-        return float(self.acc[0])
-
-    @property
-    def logdet(self) -> float:
-        """Sum of log det of the targets' information (Schur complements of the biases)."""
-        return float(self.acc[0] - np.sum(np.log1p(self.acc[1] * self.w_coef)))
-
-    def add(self, x: Sequence[Sequence[float]], y: Sequence[float], weight: float = 1.0
-            ) -> None:
-        """One sample: regressors x (per design, bias first), dependent variables y (per
-        coefficient), with ``weight`` in [0, 1] on its information (weighted least squares:
-        the residual's variance sigma^2 / weight)."""
-        rank_one(self.inv, self.theta, self.design, self.w, self.count,
-                 np.asarray(x, dtype=float), np.asarray(y, dtype=float), float(weight), self.acc)
-
-
-def _one_of(option: str, value: Any, choices: Sequence[str]) -> None:
-    if not isinstance(value, str) or value not in choices:
-        raise ValueError(f"{option} must be one of {', '.join(map(repr, choices))}; "
-                         f"got {value!r}")
-
-
-def _positive(option: str, value: Any, most: float = math.inf, zero: bool = False) -> float:
-    """``value`` as a finite float in (0, most] ([0, most] with ``zero``), or a ValueError
-    naming ``option``."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if (isinstance(value, bool) or not math.isfinite(v) or not (0.0 <= v if zero else 0.0 < v)
-            or not v <= most):
-        bound = f"{'>= 0' if zero else '> 0'}" + (f" and <= {most:g}" if most < math.inf else "")
-        raise ValueError(f"{option} must be a finite number {bound}; got {value!r}")
-    return v
-
-
-def _condition(condition: Sequence[float] | None) -> FlightCondition:
-    if condition is None:
-        return FlightCondition(*DEFAULT_CONDITION)
-    try:
-        alt, speed = (float(v) for v in condition)
-    except (TypeError, ValueError):
-        alt = speed = math.nan
-    if not (math.isfinite(alt) and alt >= 0.0 and math.isfinite(speed) and speed > 0.0):
-        raise ValueError("condition must be (altitude m >= 0, true airspeed m/s > 0), finite; "
-                         f"got {condition!r}")
-    return FlightCondition(alt, speed)
-
-
-def _targets(targets: str | Sequence[str]) -> tuple[str, ...]:
-    """The target derivatives: a preset's or the given names, checked."""
-    if isinstance(targets, str):
-        _one_of("targets", targets, tuple(PRESETS))
-        return PRESETS[targets]
-    names = tuple(targets) if isinstance(targets, Sequence) else ()
-    usage = (f"targets must be {' or '.join(map(repr, PRESETS))} or a non-empty list of "
-             f"distinct C{{l,m,n,X,Y,Z}}_{{{','.join(VARIABLES)}}}")
-    if not names or not all(isinstance(n, str) for n in names):
-        raise ValueError(f"{usage}; got {targets!r}")
-    for name in names:
-        coef, _, var = name.partition("_")
-        if coef not in SIGMA or var not in VARIABLES:
-            raise ValueError(f"{usage}; got unsupported target {name!r}")
-    if len(set(names)) < len(names):
-        raise ValueError(f"{usage}; got a repeated target in {targets!r}")
-    return names
-
-
 class ExcitationEnv(gymnasium.Env):
     """Excite an aircraft for identification; see the module docstring for the spaces,
     reward and termination."""
@@ -289,19 +151,20 @@ class ExcitationEnv(gymnasium.Env):
                  observation: str = "si", render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        _one_of("turbulence", turbulence, TURBULENCE)
-        _one_of("reward", reward, REWARDS)
+        check_one_of("turbulence", turbulence, TURBULENCE)
+        check_one_of("reward", reward, REWARDS)
         self.reward = reward
-        _one_of("observation", observation, OBSERVATIONS)
+        check_one_of("observation", observation, OBSERVATIONS)
         self.observation = observation
         if isinstance(effects, (str, Mapping)) or not isinstance(effects, Sequence) or not all(
                 isinstance(d, Mapping) for d in effects):
             raise ValueError("effects must be a list of effect tables (dicts), e.g. "
                              "[{'name': 'rate_limit', 'surface': 'de', 'rate_deg': 20}]; "
                              f"got {effects!r}")
-        self.episode_s = _positive("episode_s", episode_s)
-        self.decision_hz = _positive("decision_hz", decision_hz, MAX_RATE_HZ)
-        sim_hz = self.decision_hz if sim_hz is None else _positive("sim_hz", sim_hz, MAX_RATE_HZ)
+        self.episode_s = check_positive("episode_s", episode_s)
+        self.decision_hz = check_positive("decision_hz", decision_hz, MAX_RATE_HZ)
+        sim_hz = (self.decision_hz if sim_hz is None
+                  else check_positive("sim_hz", sim_hz, MAX_RATE_HZ))
         self.sim_per_decision = int(round(sim_hz / self.decision_hz))
         if self.sim_per_decision < 1 or abs(self.sim_per_decision * self.decision_hz
                                             - sim_hz) > 1e-9:
@@ -312,7 +175,7 @@ class ExcitationEnv(gymnasium.Env):
             raise ValueError(f"episode_s * decision_hz = {self.episode_s:g} s x "
                              f"{self.decision_hz:g} Hz = {self.n_decisions} decisions; it must "
                              f"be 1 to {MAX_DECISIONS:,} (an episode's noise is drawn at reset)")
-        self.penalty = _positive("penalty", penalty, zero=True)
+        self.penalty = check_positive("penalty", penalty, zero=True)
         suite: SensorSuite | None
         augmentation = tuple(CATALOGUE.from_dict(d, "effect", f"effects[{i}]")
                              for i, d in enumerate(effects))
@@ -325,13 +188,13 @@ class ExcitationEnv(gymnasium.Env):
         else:
             if not isinstance(aircraft, str) or not aircraft:
                 raise ValueError(f"aircraft must be an aircraft name, got {aircraft!r}")
-            cond = _condition(condition)
-            _one_of("sensors", sensors, ("none", *SUITES))
+            cond = check_condition(condition)
+            check_one_of("sensors", sensors, ("none", *SUITES))
             suite = None if sensors in ("none", "ideal") else builtin_suite(sensors)
         self.render_mode = render_mode
         self.aircraft, self.condition, self.suite = aircraft, cond, suite
         self.effects = augmentation  # airframe and actuator effects flown (and in the truth)
-        self.targets = _targets(targets)
+        self.targets = check_targets(targets)
         flown = augmented_aircraft(aircraft, augmentation) if augmentation else aircraft
         model, self.trim, self.truth = _setup(flown, cond)
         self._atmosphere = Atmosphere(**LIGHT) if turbulence == "light" else Atmosphere()
@@ -350,7 +213,7 @@ class ExcitationEnv(gymnasium.Env):
             groups.setdefault(coef, []).append(var)
         self._group_spec = [(c, tuple(v)) for c, v in groups.items()]
         width = max(len(v) for v in groups.values())
-        design, designs = _designs(self._group_spec)  # coefficient -> its design
+        design, designs = regression_designs(self._group_spec)  # coefficient -> its design
         coefs = [c for c, _ in self._group_spec]
         self._coefs = coefs
         # what a step reads from the flight core: the observed channels, then the
@@ -429,7 +292,7 @@ class ExcitationEnv(gymnasium.Env):
             self.sim.atmosphere = replace(self._atmosphere, seed=sub_seed(self._seed, "jsbsim"))
         sample = self.sim.reset(self.trim)
         self._advance = self.sim.stepper(self._read)
-        self._info_state = _Information(self._group_spec)
+        self._info_state = Information(self._group_spec)
         n = self.n_decisions + 1
         obs_noise = self._sigma_obs * self.np_random.standard_normal((n, self._n_obs))
         y_noise = self._sigma_y * self.np_random.standard_normal((n, len(self._coefs)))
@@ -517,29 +380,8 @@ class ExcitationEnv(gymnasium.Env):
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":
             return None
-        obs = np.array(self._obs_hist)
-        act = np.array(self._actions)
-        fig = Figure(figsize=(6.4, 4.8), dpi=80)
-        canvas = FigureCanvasAgg(fig)
-        ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
-        t = obs[:, 0]
-        for i, c in enumerate(CONTROLS):
-            ax1.plot(t, act[:, i], label=c)
-        ax1.set_ylabel("action")
-        ax1.set_ylim(-1.05, 1.05)
-        ax1.legend(loc="upper right", fontsize=7)
-        for c in ("p", "q", "r"):
-            ax2.plot(t, np.degrees(obs[:, OBS_CHANNELS.index(c)]), label=c)
-        ax2.set_ylabel("rate (deg/s)")
-        ax2.legend(loc="upper right", fontsize=7)
-        for c in ("alpha", "beta", "phi"):
-            ax3.plot(t, np.degrees(obs[:, OBS_CHANNELS.index(c)]), label=c)
-        ax3.set_ylabel("angle (deg)")
-        ax3.set_xlabel("t (s)")
-        ax3.legend(loc="upper right", fontsize=7)
-        fig.suptitle(f"{self.aircraft}: log det information {self._logdet:.1f}", fontsize=9)
-        canvas.draw()
-        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+        return render_episode(np.array(self._obs_hist), np.array(self._actions), self.aircraft,
+                              self._logdet)
 
     # -- the episode as a record ------------------------------------------------------
     def record(self, measured: bool = True) -> FlightRecord:
@@ -633,3 +475,4 @@ class ExcitationEnv(gymnasium.Env):
         if departure is not None:
             info["departure"] = departure
         return info
+

@@ -7,7 +7,8 @@ bias, scatter and the coverage of the reported bounds; locally or on a Dask clus
 
 Modules: ``study`` (the description, one realization), ``store`` (STUDY/study.json and
 one Parquet file per realization; continuing), ``executors`` (local processes, Dask),
-``summary`` (per-derivative statistics), ``report`` (STUDY/report.html). docs/montecarlo.md.
+``summary`` (per-derivative statistics), ``report`` (STUDY/report.html); input-design
+comparisons in ``design/``. docs/montecarlo.md.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from flightid.scenarios.cards import load_card, overridden_card
-from flightid.scenarios.montecarlo.design import card_text
+from flightid.scenarios.montecarlo.design.experiment import card_text
 
 CARD_FILE = "card.toml"
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from flightid.scenarios.montecarlo import load
-from flightid.scenarios.montecarlo.design import Comparison, DesignResult, DesignSettings
+from flightid.scenarios.montecarlo.design.experiment import Comparison, DesignResult, DesignSettings
 from flightid.scenarios.montecarlo.store import SUMMARY_COLUMNS, read_description
 from flightid.scenarios.montecarlo.summary import summarize
 

@@ -8,9 +8,9 @@ import threading
 from pathlib import Path
 
 from flightid.record import FlightRecord
-from flightid.sim.bridge.air import BridgeConfig, serve_record
+from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
+from flightid.sim.bridge.ground.recording import record_stream
 from flightid.sim.bridge.link import Link, SerialLink, UdpLink, open_pty_pair
-from flightid.sim.bridge.recording import record_stream
 
 
 def record_bridged(

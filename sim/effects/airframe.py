@@ -59,7 +59,7 @@ class AugmentEffect(NamedEffect):
             raise ValueError(f"{self.name}: field {field!r} must be one of "
                              f"{', '.join(choices)}, got {getattr(self, field)!r}")
 
-    def _finite(self, *fields: str) -> None:
+    def _require_finite(self, *fields: str) -> None:
         for f in fields:
             v = getattr(self, f)
             if not isinstance(v, int | float) or not math.isfinite(v):
@@ -82,7 +82,7 @@ class DerivativeDelta(AugmentEffect):
     def __post_init__(self) -> None:
         self._choice("axes", AXES_CHOICES)
         self._choice("form", FORM_CHOICES)
-        self._finite("delta")
+        self._require_finite("delta")
         ok = tuple(f"C{c}_{v}" for c in COEFS[self.axes] for v in VARIABLES)
         if self.derivative not in ok:
             raise ValueError(f"{self.name}: field 'derivative': {self.derivative!r} is not a "
@@ -113,7 +113,7 @@ class DerivativeTable(AugmentEffect):
     def __post_init__(self) -> None:
         self._choice("axes", AXES_CHOICES)
         self._choice("schedule", SCHEDULE_CHOICES)
-        self._finite("delta_low", "delta_high", "low", "high")
+        self._require_finite("delta_low", "delta_high", "low", "high")
         ok = tuple(f"C{c}_{v}" for c in COEFS[self.axes] for v in VARIABLES)
         if self.derivative not in ok:
             raise ValueError(f"{self.name}: field 'derivative': {self.derivative!r} is not a "
@@ -145,7 +145,7 @@ class ControlEffectiveness(AugmentEffect):
 
     def __post_init__(self) -> None:
         self._choice("surface", SURFACE_CHOICES)
-        self._finite("factor")
+        self._require_finite("factor")
 
     def neutral(self) -> bool:
         return self.factor == 1.0
@@ -160,7 +160,7 @@ class CgOffset(AugmentEffect):
     z: float = 0.0
 
     def __post_init__(self) -> None:
-        self._finite("x", "z")
+        self._require_finite("x", "z")
 
     def neutral(self) -> bool:
         return self.x == 0.0 and self.z == 0.0
@@ -174,7 +174,7 @@ class MassScale(AugmentEffect):
     factor: float = 1.1
 
     def __post_init__(self) -> None:
-        self._finite("factor")
+        self._require_finite("factor")
         if not self.factor > 0:
             raise ValueError(f"{self.name}: field 'factor' must be > 0, got {self.factor}")
 
@@ -192,7 +192,7 @@ class InertiaScale(AugmentEffect):
     izz: float = 1.1
 
     def __post_init__(self) -> None:
-        self._finite("ixx", "iyy", "izz")
+        self._require_finite("ixx", "iyy", "izz")
         for f in ("ixx", "iyy", "izz"):
             if not getattr(self, f) > 0:
                 raise ValueError(f"{self.name}: field {f!r} must be > 0, got {getattr(self, f)}")
@@ -209,7 +209,7 @@ class ThrustMoment(AugmentEffect):
     arm: float = 0.1
 
     def __post_init__(self) -> None:
-        self._finite("arm")
+        self._require_finite("arm")
 
     def neutral(self) -> bool:
         return self.arm == 0.0
@@ -232,7 +232,7 @@ class TailIce(AugmentEffect):
     damping: float = 0.9
 
     def __post_init__(self) -> None:
-        self._finite("elevator", "stability", "damping")
+        self._require_finite("elevator", "stability", "damping")
 
     def neutral(self) -> bool:
         return self.elevator == self.stability == self.damping == 1.0

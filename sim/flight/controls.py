@@ -149,3 +149,32 @@ def sampled_controls(controls: Mapping[str, Control], n: int, rate_hz: float
             raise ValueError(f"control {name!r} has non-finite values")
         out[name] = arr
     return out
+
+
+def command_schedule(setters: Mapping[str, Callable[[float], None]],
+                     maps: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+                     trim_cmd: Mapping[str, float], trim_pos: Mapping[str, float],
+                     trim_throttle: float, throttle_setters: Sequence[Callable[[float], None]],
+                     inputs: Mapping[str, np.ndarray], n: int
+                     ) -> list[tuple[Callable[[float], None], np.ndarray]]:
+    """(setter, command per sample) of every pilot command node for a whole flight.
+
+    ``setters``: control -> the setter of its pilot command node; ``maps``: control ->
+    (surface positions in rad, pilot commands), the FCS map of ``command_maps``;
+    ``trim_cmd`` and ``trim_pos``: the trim's command and surface position (rad) per
+    control; ``inputs``: control -> increment per sample (rad; throttle as a fraction).
+    The same mapping as a single step's (a zero increment keeps the trim command exactly),
+    one vectorised call per control; the throttle is clipped to 0..1.
+    """
+    out = []
+    for c, set_cmd in setters.items():
+        inc = inputs.get(c)
+        if inc is None or c not in maps:
+            cmd = np.full(n, trim_cmd[c])
+        else:
+            pos, cmds = maps[c]
+            cmd = np.where(inc != 0.0, np.interp(trim_pos[c] + inc, pos, cmds), trim_cmd[c])
+        out.append((set_cmd, cmd))
+    thr = np.clip(trim_throttle + inputs.get("throttle", np.zeros(n)), 0.0, 1.0)
+    out.extend((set_thr, thr) for set_thr in throttle_setters)
+    return out

@@ -31,25 +31,13 @@ from a record's measured surfaces needs (those have passed the real actuator alr
 value interpolated at ``hold_center`` (a held value otherwise lags the surface by
 (substeps - 1) / 2 internal steps: 2 % of the Twin Otter's pitch-rate peak in a 3211).
 
-Speed. Per sample the loop steps JSBSim, writes the pilot commands and gusts that changed
-(the commands of the whole flight are mapped before it, one vectorised ``np.interp`` per
-control; JSBSim's models read these inputs and do not write them, so a value written
-once holds), reads the raw properties through cached property nodes and packs them into
-one buffer of doubles; the conversion to SI channels runs once, vectorised, after the
-flight. With JSBSim's own turbulence off (``Atmosphere.turbulence == "none"``) JSBSim's
-turbulence velocities and rates are zero, so the aero-relative rates equal the body
-rates and the total wind is the steady wind plus the gusts written by the loop: those
-nine properties are filled in after the flight instead of read (and checked against
-JSBSim at the last sample). ``step`` converts its one sample with plain float
-arithmetic, by the same formulas (``channels_from_raw``, table-driven: ``scaled_channels``).
-``stepper(channels)`` is ``step`` for a loop that needs a few channels (a gym environment):
-it reads only their properties and keeps nothing (0.9 of bare JSBSim stepping, against
-0.6 for ``step``; benchmarks/gym_throughput.py). benchmarks/bench_runner.py measures
-``fly``.
-
-Property nodes belong to one FGFDMExec, and ``reset`` after the first gives the model a
-fresh one (bit-identical restarts): nodes taken from ``sim.jsbsim.model`` before a reset are
-stale afterwards. ``Simulation.get`` / ``Simulation.set`` resolve on the current one.
+Speed. Per sample the loop steps JSBSim, writes only the pilot commands and gusts that
+changed (``controls.command_schedule`` maps a whole flight's commands before it), reads
+the raw properties through cached property nodes into one buffer of doubles and converts
+them to SI channels once, vectorised, after the flight (with JSBSim's turbulence off, the
+winds are filled in: ``atmosphere.fill_calm``). ``step`` converts its one sample by the same
+formulas in floats; ``stepper(channels)`` reads only the channels a gym environment needs
+(0.9 of bare JSBSim stepping, against 0.6 for ``step``; benchmarks/gym_throughput.py).
 """
 
 from __future__ import annotations
@@ -57,39 +45,36 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta
+from flightid.sim.flight.atmosphere import Atmosphere, fill_calm
 from flightid.sim.flight.controls import (
     Control,
     command_maps,
+    command_schedule,
     hold_center,
     interp_point,
     sampled_controls,
     schedule_writes,
     substeps,
 )
+from flightid.sim.flight.departure import DepartureError, Limits, departure_reason, envelope
+from flightid.sim.flight.initial import evaluate, restart
 from flightid.sim.flight.properties import (
-    AERO_RATES,
     AGL,
     CALM_FILLED,
     FLAP,
     GUST,
     NEAR_GROUND_FT,
-    RATES,
     RAW,
     RPM,
-    STEADY_WIND,
-    TOTAL_WIND,
-    TURB,
     WOW,
     book_turbulence,
     channels_from_raw,
     divide,
-    ned_to_body,
     scaled_channels,
 )
 from flightid.sim.jsbsim.model import (
@@ -98,70 +83,12 @@ from flightid.sim.jsbsim.model import (
     DRIVE_ON,
     Model,
     as_model,
-    quiet,
-    set_integrators,
 )
-from flightid.sim.jsbsim.trim import _IC_STATE as _IC_ORDER
 from flightid.sim.jsbsim.trim import Trim, apply, steady_engines
 from flightid.units import FT
 
 SURFACE_MODES = ("commanded", "driven")
 _DRIVE_SPAN = 10.0  # rad: the driven surfaces' identity map spans any position
-TURBULENCE_TYPES = {"none": 0, "standard": 1, "culp": 2, "milspec": 3, "tustin": 4}
-
-
-
-class DepartureError(RuntimeError):
-    """The flight left the valid envelope; ``reason``, ``time`` (s) and ``record`` say how."""
-
-    def __init__(self, reason: str, time: float, record: FlightRecord | None = None) -> None:
-        super().__init__(f"departure at t = {time:.3f} s: {reason}")
-        self.reason = reason
-        self.time = time
-        self.record = record
-
-
-@dataclass(frozen=True)
-class Atmosphere:
-    """Disturbances: steady wind (NED, m/s) and JSBSim turbulence with a random seed.
-
-    turbulence: "none", "milspec" or "tustin" (Dryden spectra, MIL-F-8785C; JSBSim
-    ``atmosphere/turb-type`` 3 and 4), "standard" or "culp" (JSBSim's older models).
-    For milspec/tustin, ``windspeed_20ft_m_s`` sets the low-altitude intensity and
-    ``severity`` the probability-of-exceedance curve of MIL-F-8785C Fig. 7 used above
-    2000 ft: 0 off, 1 POE 2e-1, 2 1e-1, 3 1e-2 (light), 4 1e-3 (moderate), 5 1e-4,
-    6 1e-5 (severe), 7 1e-6 (JSBSim FGWinds: "3=light, 4=moderate, 6=severe"; the
-    matching windspeeds at 20 ft are 15, 30 and 45 kt).
-    For standard/culp, ``turb_gain`` and ``turb_rate`` are JSBSim's turb-gain/turb-rate.
-    """
-
-    wind_ned_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    turbulence: str = "none"
-    windspeed_20ft_m_s: float = 0.0
-    severity: int = 0
-    turb_gain: float = 0.0
-    turb_rate: float = 0.0
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        if self.turbulence not in TURBULENCE_TYPES:
-            raise ValueError(
-                f"unknown turbulence {self.turbulence!r}; use one of {', '.join(TURBULENCE_TYPES)}"
-            )
-        if not 0 <= self.severity <= 7:
-            raise ValueError(f"turbulence severity must be 0..7, got {self.severity}")
-        if self.windspeed_20ft_m_s < 0:
-            raise ValueError(f"windspeed_20ft_m_s must be >= 0, got {self.windspeed_20ft_m_s}")
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Departure limits; None picks the default from the model and trim."""
-
-    alpha_rad: tuple[float, float] | None = None  # default: <alphalimits> +-5 deg, else -20..30
-    max_speed_m_s: float | None = None  # default: 2 x trim speed
-    min_speed_m_s: float | None = None  # default: 0.3 x trim speed
-
 
 class Simulation:
     """Stepping core: ``reset(trim)``, then ``step(controls)`` per interval, or ``fly``."""
@@ -241,17 +168,6 @@ class Simulation:
         """Set a JSBSim property of the current FGFDMExec (JSBSim units); see ``get``."""
         self.model.node(prop).set_double_value(float(value))
 
-    def _set_atmosphere(self) -> None:
-        fdm, a = self.model.fdm, self.atmosphere
-        fdm["simulation/randomseed"] = a.seed
-        if self.model.has("atmosphere/randomseed"):
-            fdm["atmosphere/randomseed"] = a.seed
-        fdm["atmosphere/turb-type"] = TURBULENCE_TYPES[a.turbulence]
-        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = a.windspeed_20ft_m_s / FT
-        fdm["atmosphere/turbulence/milspec/severity"] = a.severity
-        fdm["atmosphere/turb-gain"] = a.turb_gain
-        fdm["atmosphere/turb-rate"] = a.turb_rate
-
     def reset(self, trim: Trim, controls: Mapping[str, float] | None = None) -> dict[str, float]:
         """Restore the trimmed state (t = 0) with optional control increments; returns the sample.
 
@@ -288,11 +204,11 @@ class Simulation:
                                   for c in self._cmd_setters}
             self._trim_throttle = trim.throttle
             self.trim = trim
-        self._restart(trim)
+        restart(self.model, trim, self.atmosphere)
         if self.driven:
             fdm[DRIVE_ON] = 1.0
         self._k = 0
-        self._envelope = self._bounds()
+        self._envelope = envelope(self.limits, self.model, trim)
         self._lat0 = fdm["position/lat-geod-rad"]
         self._lon0 = fdm["position/long-gc-rad"]
         self._apply_controls(controls)
@@ -308,42 +224,7 @@ class Simulation:
             # run_ic resets the wind to the IC's (horizontal only): add the vertical part
             # and re-evaluate every model at t = 0 without integrating
             fdm["atmosphere/wind-down-fps"] = self.atmosphere.wind_ned_m_s[2] / FT
-            self._evaluate()
-
-    def _evaluate(self) -> None:
-        """Re-run every JSBSim model at the current time without integrating."""
-        fdm = self.model.fdm
-        fdm.suspend_integration()
-        fdm.run()
-        fdm.resume_integration()
-
-    def _restart(self, trim: Trim) -> None:
-        """Re-initialise every JSBSim model (turbulence filters, actuators) at the trim state."""
-        fdm = self.model.fdm
-        for prop, value in trim.jsbsim.items():
-            if not prop.startswith("ic/"):
-                fdm[prop] = value
-        for prop in _IC_ORDER:
-            fdm[prop] = trim.jsbsim[prop]
-        # IC body velocities are ground-relative: add the wind so the airspeed stays trimmed
-        n, e, d = self.atmosphere.wind_ned_m_s
-        wind = np.array([n, e, d], dtype=float) / FT
-        w_body = ned_to_body(wind[:, None], *(np.array([trim.jsbsim[f"ic/{a}"]])
-                              for a in ("phi-rad", "theta-rad", "psi-true-rad")))[:, 0]
-        for i, axis in enumerate("uvw"):
-            fdm[f"ic/{axis}-fps"] = trim.jsbsim[f"ic/{axis}-fps"] + w_body[i]
-        # JSBSim's IC takes the horizontal wind as magnitude and direction (ic/vw-north-fps
-        # does not stick in 1.3.3); the vertical wind is set after run_ic (see reset)
-        fdm["ic/vw-mag-fps"] = math.hypot(n, e) / FT
-        fdm["ic/vw-dir-deg"] = math.degrees(math.atan2(e, n))
-        with quiet():
-            fdm.reset_to_initial_conditions(0)  # InitModel() of every model, then run_ic
-        for prop, value in trim.jsbsim.items():  # the FCS re-initialisation cleared them
-            if not prop.startswith("ic/"):
-                fdm[prop] = value
-        fdm["propulsion/set-running"] = -1
-        set_integrators(fdm)  # InitModel restored JSBSim's defaults
-        self._set_atmosphere()
+            evaluate(self.model)
 
     # -- controls ------------------------------------------------------------------
     def travel(self, control: str) -> tuple[float, float] | None:
@@ -370,28 +251,6 @@ class Simulation:
         thr = min(1.0, max(0.0, self._trim_throttle + controls.get("throttle", 0.0)))
         for set_thr in self._throttle_setters:
             set_thr(thr)
-
-    def _command_schedule(self, inputs: Mapping[str, np.ndarray], n: int
-                          ) -> list[tuple[Callable[[float], None], np.ndarray]]:
-        """(setter, command per sample) of every pilot command node for a whole flight.
-
-        The same mapping as ``_apply_controls`` (a zero increment keeps the trim command
-        exactly), one vectorised call per control.
-        """
-        out = []
-        for c, set_cmd in self._cmd_setters.items():
-            inc = inputs.get(c)
-            trim_cmd = self._trim_cmd[c]
-            if inc is None or c not in self._maps:
-                cmd = np.full(n, trim_cmd)
-            else:
-                pos, cmds = self._maps[c]
-                cmd = np.where(inc != 0.0, np.interp(self._trim_pos[c] + inc, pos, cmds),
-                               trim_cmd)
-            out.append((set_cmd, cmd))
-        thr = np.clip(self._trim_throttle + inputs.get("throttle", np.zeros(n)), 0.0, 1.0)
-        out.extend((set_thr, thr) for set_thr in self._throttle_setters)
-        return out
 
     # -- stepping ------------------------------------------------------------------
     def _read(self) -> list[float]:
@@ -509,7 +368,9 @@ class Simulation:
         # JSBSim's pilot commands and gust velocities are inputs that no JSBSim model writes:
         # set at reset, they need writing again only when they change; turbulence changes
         # every sample and is written every sample
-        commands = schedule_writes(self._command_schedule(inputs, n), n)
+        commands = schedule_writes(command_schedule(
+            self._cmd_setters, self._maps, self._trim_cmd, self._trim_pos, self._trim_throttle,
+            self._throttle_setters, inputs, n), n)
         every_sample = np.count_nonzero(np.any(np.diff(extra, axis=0), axis=1)) > n // 4
         gusts = schedule_writes(
             [] if every_sample else zip(self._gust_setters, gust_fps.T, strict=True), n)
@@ -518,7 +379,7 @@ class Simulation:
         if np.any(extra[0]):  # (reset left the gusts at zero)
             for set_gust, value in zip(self._gust_setters, gust_fps[0].tolist(), strict=True):
                 set_gust(value)
-            self._evaluate()  # t = 0 with the gust, without integrating
+            evaluate(self.model)  # t = 0 with the gust, without integrating
         columns, col = self._loop_columns, {c: i for i, c in enumerate(self._loop_columns)}
         get, nodes = self._get, self._loop_nodes
         row = list(map(get, nodes))
@@ -561,7 +422,7 @@ class Simulation:
         values = np.frombuffer(buffer, dtype=float).reshape(k, len(columns))
         raw = {c: values[:, i] for i, c in enumerate(columns)}
         if self._calm:
-            self._fill_calm(raw, gust_fps[:k])
+            fill_calm(raw, gust_fps[:k], self.get)
         channels = self.convert(raw)
         if turbulence is not None and np.any(turbulence):
             book_turbulence(channels, np.asarray(turbulence, dtype=float)[:k])
@@ -570,58 +431,10 @@ class Simulation:
             raise DepartureError(departure, (k - 1) / rate_hz, record)
         return record
 
-    def _fill_calm(self, raw: dict[str, np.ndarray], gust_fps: np.ndarray) -> None:
-        """Columns not read with JSBSim's turbulence off, from what JSBSim computes them of.
-
-        Checked against JSBSim's own values at the last sample, so that a JSBSim whose
-        winds work otherwise fails loudly instead of recording wrong winds.
-        """
-        steady = [self.get(p) for p in STEADY_WIND]
-        n = len(gust_fps)
-        for p, aero in zip(RATES, AERO_RATES, strict=True):
-            raw[aero] = raw[p]
-        for i in range(3):
-            raw[TURB[i]] = np.zeros(n)
-            raw[TOTAL_WIND[i]] = steady[i] + gust_fps[:, i]
-        for p in CALM_FILLED:
-            actual, filled = self.get(p), float(raw[p][-1])
-            if not (actual == filled or (math.isnan(actual) and math.isnan(filled))):
-                raise RuntimeError(f"{p} is {actual!r} in JSBSim but {filled!r} as filled in "
-                                   "with its turbulence off: JSBSim's wind model changed")
-
     # -- departure -------------------------------------------------------------------
-    def _bounds(self) -> tuple[float, float, float, float]:
-        lim, trim = self.limits, self.trim
-        if lim.alpha_rad is not None:
-            a_lo, a_hi = lim.alpha_rad
-        elif self.model.alpha_limits is not None:
-            a_lo = self.model.alpha_limits[0] - math.radians(5)
-            a_hi = self.model.alpha_limits[1] + math.radians(5)
-        else:
-            a_lo, a_hi = math.radians(-20), math.radians(30)
-        v_hi = lim.max_speed_m_s if lim.max_speed_m_s is not None else 2.0 * trim.speed_m_s
-        v_lo = lim.min_speed_m_s if lim.min_speed_m_s is not None else 0.3 * trim.speed_m_s
-        return a_lo, a_hi, v_lo / FT, v_hi / FT
-
     def _departure(self, row: Sequence[float], col: Mapping[str, int]) -> str | None:
         """Why the sample ``row`` (raw values, column index ``col``) left the envelope, or None."""
-        if not all(map(math.isfinite, row)):
-            bad = [p for p, i in col.items() if not math.isfinite(row[i])]
-            return f"state is not finite ({', '.join(bad[:4])})"
-        alpha, vt = row[col["aero/alpha-rad"]], row[col["velocities/vt-fps"]]
-        a_lo, a_hi, v_lo, v_hi = self._envelope
-        agl = row[col[AGL]] if AGL in col else self._agl_node.get_double_value()
-        wow = row[col[WOW]] if WOW in col else self._wow_node.get_double_value()
-        if agl <= 0 or wow > 0:
-            return f"ground contact (altitude AGL {agl * FT:.1f} m)"
-        if not a_lo <= alpha <= a_hi:
-            return (f"alpha {math.degrees(alpha):.1f} deg left the range "
-                    f"{math.degrees(a_lo):.1f}..{math.degrees(a_hi):.1f} deg")
-        if vt > v_hi:
-            return f"over-speed: {vt * FT:.1f} m/s > {v_hi * FT:.1f} m/s"
-        if vt < v_lo:
-            return f"airspeed {vt * FT:.1f} m/s fell below {v_lo * FT:.1f} m/s"
-        return None
+        return departure_reason(row, col, self._envelope, self._agl_node, self._wow_node)
 
     # -- conversion --------------------------------------------------------------------
     def _sample(self, row: Sequence[float]) -> dict[str, float]:

@@ -21,7 +21,7 @@ from flightid.identification.engine.convergence import NotConvergedWarning
 from flightid.identification.methods import registry
 from flightid.record import FlightRecord, read
 from flightid.scenarios.cards import fly_card, library_cards, load_card
-from flightid.sim.bridge.air import BridgeConfig
+from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.loopback import record_bridged
 from flightid.sim.flight.disturbed import disturbance_from_dict
 from flightid.units import DEG, FT, G0, KT, PSF, SLUG

@@ -39,9 +39,9 @@ import pytest
 
 from flightid.identification.compatibility import reconstruction as compat
 from flightid.identification.effect_fit import fit_effect, parameter_scale
-from flightid.identification.gap.candidates import catalogue_candidates
+from flightid.identification.gap.candidates.build import catalogue_candidates
 from flightid.identification.gap.fit import fit
-from flightid.identification.gap.linearise import linearise
+from flightid.identification.gap.model.linearise import linearise
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.scenarios.inputs import input_from_dict, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE

@@ -1,0 +1,56 @@
+"""Equivalence classes: candidates the data of one axis cannot tell apart.
+
+A CG moved forward by x changes every pitching-moment derivative by its lift derivative
+times x/cbar (``mass.cg_offset``); on the Navion, Cm_alpha moves by 4.4 x/cbar
+while Cm_de and Cm_q move by under 1 % of their own values, so a ``cg_offset`` and a
+``derivative_delta(Cm_alpha)`` are one class (and on the lateral axis a ``cg_offset`` and a
+``derivative_delta(Cn_beta)``, through CY_beta x/b). On the Navion's elevator card a CG
+shift of 0.1 m was fitted as x 0.1036 m or as a Cm_alpha delta of -0.249 (delta BIC 2 %
+apart, held-out shrink 0.979 and 0.973), and a Cm_alpha delta of +0.1 was named a CG
+shift until this rule. Within a class the
+diagnosis names the model's own term, the derivative delta, unless the other member is
+better on held-out data by the confirmation margin (``prefer_model_terms``); the other
+classes are listed in docs/gap.md ("Equivalence classes").
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from flightid.identification.gap.model.edits import Candidate
+
+# entry -> the derivatives whose delta is its class's member named first
+CLASS_OF: dict[str, tuple[str, ...]] = {"cg_offset": ("Cm_alpha", "Cn_beta")}
+
+
+def same_class(a: Candidate, b: Candidate) -> bool:
+    """Whether ``a`` and ``b`` are one of the classes of ``CLASS_OF`` (either order)."""
+    for x, y in ((a, b), (b, a)):
+        if (x.entry in CLASS_OF and y.entry == "derivative_delta"
+                and y.options.get("derivative") in CLASS_OF[x.entry]):
+            return True
+    return False
+
+
+def prefer_model_terms(ranked: list[Any], margin: float) -> None:
+    """Unconfirm a confirmed member of a class (``CLASS_OF``) when a confirmed derivative
+    delta of its class leaves a held-out gap within ``margin`` (relative) of its own: the
+    data cannot tell them apart, and the delta is the model's own term. ``ranked``: the
+    ``rank.Ranked`` of one ranking."""
+    confirmed = [r for r in ranked if r.confirmed and r.heldout_after]
+    for r in confirmed:
+        if r.candidate.entry not in CLASS_OF:
+            continue
+        for d in confirmed:
+            if d.candidate.entry == "derivative_delta" and same_class(r.candidate, d.candidate):
+                mine, theirs = _gap(r), _gap(d)
+                if mine > (1 - margin) * theirs:
+                    r.confirmed = False
+                    r.note = (f"one class with {d.candidate.label} (not better on held-out "
+                              "data): the model's own term is named")
+                    break
+
+
+def _gap(r: Any) -> float:
+    known = [v for v in r.heldout_after.values() if v == v]
+    return sum(known) / len(known) if known else float("nan")

@@ -1,0 +1,375 @@
+"""Filter-error method: maximum likelihood with a steady-state Kalman filter inside.
+
+For flights in turbulence (Jategaonkar 2015, ch. 5; Maine & Iliff 1985; Morelli & Klein
+2016, ch. 6) the linear model of ``linear_models`` is given process noise:
+
+    x_{k+1} = Phi x_k + Gamma w_k + e_k,   e_k ~ N(0, Q_d),   z_k = C x_k + D u_k + v_k,
+
+with Phi, Gamma the exact discretisation of (A, B) used by output error (first-order hold
+on the inputs), Q_d = int_0^dt e^{A s} F F^T e^{A^T s} ds the discretisation of the
+continuous white process noise F n(t) (unit intensity, F diagonal; Van Loan 1978) and
+v_k ~ N(0, R) the measurement noise. The steady-state predicted-state covariance P solves
+the discrete algebraic Riccati equation (``scipy.linalg.solve_discrete_are``); the Kalman
+gain is K = P C^T S^-1 with the innovation covariance S = C P C^T + R. The one-step
+predictor
+
+    nu_k = z_k - C x~_k - D u_k,   x~_{k+1} = Phi (x~_k + K nu_k) + Gamma w_k
+
+gives the innovations nu, and the negative log-likelihood (Jategaonkar ch. 5)
+
+    J(theta) = 1/2 sum_k nu_k^T S^-1 nu_k + N/2 ln det S.
+
+Estimation is Jategaonkar's two-step relaxation:
+1. with R fixed, Gauss-Newton on the derivatives, biases and the diagonal of F, with the
+   Fisher information M_jl = sum_k dnu_j^T S^-1 dnu_l + N/2 tr(S^-1 dS_j S^-1 dS_l)
+   (its observed form while the residuals do not yet match S) and Levenberg-Marquardt
+   damping; the innovation sensitivities come from central differences of
+   (Phi, Gamma, C, D, K, S), propagated through the predictor exactly;
+2. R from the innovations, R = diag(1/N sum nu nu^T - C P C^T) (the measurement part of
+   the innovation covariance, Maine & Iliff's mixed formulation), kept above 1 % (in
+   standard deviation) of the output-error residual, then the F-compensation heuristic
+   (Jategaonkar eq. 5.41), which scales each F_i with the weighted change
+   sqrt(R_new / R_old) of the outputs that see state i, so that the Kalman gain of the
+   next pass starts where the last one ended. The R step is damped until it lowers J, so
+   both steps descend the same likelihood. While R still moves by more than 10 % the
+   Gauss-Newton passes are cut to a few steps.
+Both steps use the shared engine (``identification.engine``): the damped Newton step of
+``gauss_newton`` on the filter's likelihood, Cramer-Rao bounds sqrt(diag M^-1) at the
+converged point (R taken as known; ``bounds``, M&K eq. 6.50). Output error supplies the
+start values and decides which parameters the flight cannot determine; the same checks of
+``identifiability`` are repeated on the filter's information matrix, and a relaxation is
+refitted without the parameters they find (``refit.refit_without_unidentifiable``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from flightid.identification.engine import identifiability as ident
+from flightid.identification.engine.bounds import cramer_rao_covariance, standard_errors
+from flightid.identification.engine.metrics import r_squared_by_output
+from flightid.identification.engine.refit import refit_without_unidentifiable
+from flightid.identification.engine.threads import one_blas_thread
+from flightid.identification.estimate import Estimate
+from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.filter_error.kalman_filter import (
+    PROCESS_NOISE_PREFIX,
+    FilterEvaluation,
+    FilterProblem,
+    evaluate,
+    gauss_newton_pass,
+    measurement_noise,
+    noise_step,
+    process_noise_name,
+)
+from flightid.identification.methods.protocol import HeldOptions, Method, option
+from flightid.identification.models import a_priori
+from flightid.identification.models import structure as model_structure
+from flightid.identification.models.linear import LinearModel
+from flightid.record import FlightRecord
+
+ID = "fem"
+KINEMATIC_STATES = ("phi", "theta", "psi")
+# relaxation: Gauss-Newton passes of EARLY_ITERATIONS steps while R still changes by more
+# than ROUGH_NOISE_CHANGE (relative) per update, full passes after that
+EARLY_ITERATIONS = 3
+# smallest measurement-noise standard deviation, as a fraction of the output-error residual
+# standard deviation of the same output: on real data the process noise can explain all
+# of an output's innovation, which drives R to zero (K C -> I, the filter then follows the
+# measured states and the method degenerates towards equation error)
+MIN_NOISE_FRACTION = 0.01
+ROUGH_NOISE_CHANGE = 0.1
+
+
+# ------------------------------------------------------------------ estimation
+
+
+@one_blas_thread
+def estimate(
+    record: FlightRecord,
+    model: LinearModel,
+    *,
+    free: Sequence[str] | None = None,
+    start: Mapping[str, float] | None = None,
+    process_noise: Sequence[str] | None = None,
+    process_noise_start: Mapping[str, float] | None = None,
+    initial_state: str = "measured",
+    hold: str = "foh",
+    max_iterations: int = 30,
+    max_relaxations: int = 20,
+    step_tolerance: float = 1e-3,
+    cost_tolerance: float = 1e-6,
+    noise_tolerance: float = 1e-3,
+    check_identifiability: bool = True,
+) -> Estimate:
+    """Filter-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
+
+    free: model parameters to estimate (default all). start: a priori values overriding the
+    model's (the iteration starts from an output-error fit from there). process_noise: the
+    states whose equations carry process noise, each with a free F_<state> (state units per
+    sqrt(s)); default every state except the Euler angles. process_noise_start: start
+    values of F_<state> (default: half the output-error residual standard deviation of the
+    state's channel per sqrt(s)). initial_state: 'measured' or 'zero' (the filter forgets
+    it within a few samples). Values are nondimensional derivatives, SI-unit biases and
+    F_<state>; standard errors are Cramer-Rao bounds of the filter's likelihood.
+    Converged when a Gauss-Newton pass moved no parameter by more than ``step_tolerance``
+    of its standard error and the R update changed no variance by more than
+    ``noise_tolerance`` (relative).
+    """
+    if initial_state not in ("measured", "zero"):
+        raise ValueError(
+            f"filter error takes initial_state 'measured' or 'zero', got {initial_state!r} "
+            "(the Kalman filter forgets the initial state, so it is not estimated)"
+        )
+    if start:
+        model = model.with_start(**start)
+    if isinstance(process_noise, str):  # 'beta' or 'beta,p,r' from the command line
+        process_noise = [s.strip() for s in process_noise.split(",") if s.strip()]
+    noise_states = tuple(s for s in model.states if s not in KINEMATIC_STATES) \
+        if process_noise is None else tuple(process_noise)
+    bad = [s for s in noise_states if s not in model.states]
+    if bad:
+        raise ValueError(f"process noise on unknown state(s) {', '.join(bad)}; the "
+                         f"{model.name} model has states {', '.join(model.states)}")
+    if not noise_states:
+        raise ValueError("filter error needs process noise on at least one state; without "
+                         "it the method is output error (use output_error.estimate)")
+    names = list(model.parameters if free is None else free)
+
+    # output error first: start values, measurement noise and identifiability
+    oe_fit = oe.estimate(record, model, free=names, initial_state=initial_state, hold=hold,
+                         check_identifiability=check_identifiability)
+    data = oe.problem_from_record(record, model, initial_state, hold)
+    unidentifiable = dict(oe_fit.unidentifiable)
+    R = np.diag([oe_fit.fit["noise_std"][o] ** 2 for o in model.outputs])
+    f_start = {}
+    for s in noise_states:
+        channel = model.state_channels.get(s, s)
+        sigma = oe_fit.fit["noise_std"].get(channel, np.sqrt(np.mean(np.diag(R))))
+        f_start[process_noise_name(s)] = 0.5 * sigma
+    for k, v in (process_noise_start or {}).items():
+        if k not in f_start:
+            raise ValueError(f"process_noise_start has {k!r}; process-noise parameters are "
+                             f"{', '.join(f_start)}")
+        f_start[k] = float(v)
+    values = {n: (oe_fit[n] if n in oe_fit.names else model.start[n]) for n in names}
+    values.update(f_start)
+    all_names = [n for n in names if n not in unidentifiable] + list(f_start)
+
+    # lower bound of R: a fixed fraction of the output-error residual variance
+    floor = np.maximum(data.noise_floor, MIN_NOISE_FRACTION**2 * np.diag(R))
+
+    def fit(active: list[str], current: dict[str, float]) -> _Relaxed:
+        # parameters found unidentifiable stay at the values of the fit that found them,
+        # and the next relaxation starts from its R
+        nonlocal R
+        prob = FilterProblem(data, active,
+                        {n: v for n, v in {**model.start, **current}.items()
+                         if n in model.parameters and n not in active},
+                        noise_states,
+                        {n: 0.0 for n in f_start if n not in active})
+        theta = np.array([current[n] for n in active])
+        relaxed = _relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
+                         step_tolerance, cost_tolerance, noise_tolerance, floor)
+        R = relaxed.R
+        return relaxed
+
+    def singular(active: list[str], relaxed: _Relaxed) -> dict[str, str]:
+        if not (check_identifiability and active):
+            return {}
+        keep = [n for n in active if n.startswith(("bias_", PROCESS_NOISE_PREFIX))]
+        return ident.unidentifiable(active, relaxed.information, relaxed.theta,
+                                    prefer_keep=keep)
+
+    final, unidentifiable = refit_without_unidentifiable(all_names, values, fit, singular,
+                                                         known=unidentifiable)
+    return _result(final.problem, final, unidentifiable, oe_fit)
+
+
+@dataclass
+class _Relaxed:
+    problem: FilterProblem
+    theta: np.ndarray
+    R: np.ndarray
+    evaluation: FilterEvaluation
+    information: np.ndarray
+    converged: bool
+    reason: str
+    passes: int
+    iterations: int
+    cost_history: list[float]
+    noise_history: list[np.ndarray]
+    lower: np.ndarray
+
+    @property
+    def values(self) -> dict[str, float]:
+        """{name: value} of the estimated parameters."""
+        return dict(zip(self.problem.names, self.theta, strict=True))
+
+
+def _relax(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
+           max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
+           noise_tol: float, floor: np.ndarray) -> _Relaxed:
+    """Alternate Gauss-Newton passes (R fixed) and R updates with F compensation."""
+    history: list[float] = []
+    noise_history = [np.diag(R).copy()]
+    iterations = 0
+    converged, reason = False, f"R still changing after {max_relaxations} relaxation steps"
+    change = np.inf
+    passes = 0
+    while passes < max_relaxations:
+        passes += 1
+        # while R is far from its final value the likelihood surface in theta is skewed
+        # and Gauss-Newton creeps: a few steps, then a new R (Jategaonkar sec. 5.5)
+        early = change > ROUGH_NOISE_CHANGE
+        gn = gauss_newton_pass(prob, theta, R, x0, EARLY_ITERATIONS if early else max_iterations,
+                           step_tol, cost_tol)
+        iterations += gn.iterations
+        history.extend(gn.cost_history)
+        theta = gn.theta
+        if not gn.converged and not (early and np.isfinite(gn.evaluation.cost)):
+            converged, reason = False, gn.reason
+            break
+        R_new = measurement_noise(gn.evaluation, floor)
+        change = float(np.max(np.abs(np.diag(R_new) / np.diag(R) - 1.0)))
+        if change < noise_tol and gn.converged:
+            converged = True
+            reason = (f"{gn.reason}; measurement noise changed by less than {noise_tol:g} "
+                      "(relative)")
+            break
+        step = noise_step(prob, theta, R, R_new, gn.evaluation, x0)
+        if step is None:
+            if not gn.converged:
+                change = 0.0  # finish the Gauss-Newton pass before trying R again
+                continue
+            # no R between the old and the new one lowers the likelihood: R is at its
+            # optimum for these parameters, as far as this update can tell
+            converged = True
+            reason = f"{gn.reason}; no update of the measurement noise lowers the cost"
+            break
+        theta, R_next = step
+        change = float(np.max(np.abs(np.diag(R_next) / np.diag(R) - 1.0)))
+        R = R_next
+        noise_history.append(np.diag(R).copy())
+    # F enters only through F F^T: report the non-negative root
+    for j, name in enumerate(prob.names):
+        if name.startswith(PROCESS_NOISE_PREFIX):
+            theta[j] = abs(theta[j])
+    final = evaluate(prob, theta, R, x0, sensitivities=True)
+    info = final.information if final.information is not None else np.zeros((0, 0))
+    return _Relaxed(prob, theta, R, final, info, converged, reason, passes, iterations, history,
+                    noise_history, floor)
+
+
+def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
+            oe_fit: Estimate) -> Estimate:
+    names = prob.names
+    d = prob.data
+    ev = fit.evaluation
+    if names:
+        cov = cramer_rao_covariance(fit.information)
+        cov = 0.5 * (cov + cov.T)
+    else:
+        cov = np.zeros((0, 0))
+    std = standard_errors(cov)
+    predicted = d.z - ev.nu
+    outputs = {
+        name: {"measured": d.z[:, j], "model": predicted[:, j], "residual": ev.nu[:, j]}
+        for j, name in enumerate(d.model.outputs)
+    }
+    r2 = r_squared_by_output(d.z, ev.nu, d.model.outputs)
+    outs = d.model.outputs
+    fit_stats = {
+        "model": d.model.name,
+        "converged": fit.converged,
+        "reason": fit.reason,
+        "iterations": fit.iterations,
+        "relaxation_steps": fit.passes,
+        "cost_history": list(fit.cost_history),
+        "cost": ev.cost,
+        "noise_std": {o: float(np.sqrt(fit.R[j, j])) for j, o in enumerate(outs)},
+        "noise_at_lower_bound": [o for j, o in enumerate(outs)
+                                 if fit.R[j, j] <= fit.lower[j] * (1 + 1e-9)],
+        "noise_covariance": fit.R,
+        "noise_history": [dict(zip(outs, np.sqrt(r).tolist(), strict=True))
+                          for r in fit.noise_history],
+        "innovation_std": {o: float(np.sqrt(ev.flt.S[j, j])) for j, o in enumerate(outs)},
+        "innovation_covariance": ev.flt.S,
+        "kalman_gain": ev.flt.K,
+        "kalman_gain_times_C": np.diag(ev.flt.K @ ev.flt.C),
+        "process_noise_states": list(prob.noise_states),
+        "R2_per_output": r2,
+        "R2": float(np.nanmean(list(r2.values()))),
+        "fixed": {n: float(v) for n, v in {**prob.fixed, **prob.fixed_noise}.items()},
+        "std_kind": "cramer-rao (filter-error likelihood, R fixed)",
+        "samples": int(d.z.shape[0]),
+        "high_correlations": ident.high_correlations(names, cov, 0.9) if names else [],
+        "output_error": {"cost": oe_fit.fit["cost"], "converged": oe_fit.fit["converged"]},
+    }
+    return Estimate(
+        method=ID,
+        names=list(names),
+        values=fit.theta.copy(),
+        std=std,
+        covariance=cov,
+        fit=fit_stats,
+        unidentifiable=dict(unidentifiable),
+        outputs=outputs,
+        time=d.time.copy(),
+    )
+
+
+# ----------------------------------------------------------------------------- protocol
+@dataclass(frozen=True)
+class Options(HeldOptions):
+    """Options of ``--method fem``."""
+
+    free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
+    start: dict[str, float] | None = option(None, "start (a priori) values")
+    process_noise: list[str] | None = option(
+        None, "states with process noise (default: all but the Euler angles)")
+    process_noise_start: dict[str, float] | None = option(
+        None, "start values of F_<state> (state units per sqrt(s))")
+    initial_state: str = option("measured", "'measured' or 'zero' (the filter forgets it)")
+    hold: str = option("foh", "inputs between samples: 'foh' (linear) or 'zoh' (held)")
+    max_iterations: int = option(30, "Gauss-Newton iterations per relaxation")
+    max_relaxations: int = option(20, "limit of alternating parameter / R updates")
+    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
+    cost_tolerance: float = option(1e-6, "or when the cost changes less than this (relative)")
+    noise_tolerance: float = option(1e-3, "and R changes less than this (relative)")
+    check_identifiability: bool = option(True, "report parameters the data cannot determine")
+
+
+def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
+        ) -> Estimate:
+    """Filter error with a linear-model preset ('lateral', 'longitudinal', 'short_period')
+    at the record's reference condition, a priori parameters held."""
+    options = options or Options()
+    linear, free, held = a_priori.linear_model(
+        model_structure.linear(model), record, options.derivatives, options.a_priori,
+        "filter error")
+    est = estimate(
+        record, linear, free=free if options.free is None else list(options.free),
+        start=options.start, process_noise=options.process_noise,
+        process_noise_start=options.process_noise_start,
+        initial_state=options.initial_state, hold=options.hold,
+        max_iterations=options.max_iterations, max_relaxations=options.max_relaxations,
+        step_tolerance=options.step_tolerance, cost_tolerance=options.cost_tolerance,
+        noise_tolerance=options.noise_tolerance,
+        check_identifiability=options.check_identifiability)
+    est.fit["a_priori"] = a_priori.describe(record, held)
+    return est
+
+
+METHOD = Method(
+    id=ID, name="filter error",
+    summary="maximum likelihood with a steady-state Kalman filter in the loop: process "
+            "noise (turbulence) and measurement noise together",
+    reference="Jategaonkar, Flight Vehicle System Identification: A Time-Domain "
+              "Methodology, 2nd ed., 2015, ch. 5; Morelli & Klein 2016 ch. 6",
+    options=Options, models=model_structure.LINEAR, default_model="lateral",
+    channels=model_structure.linear_channels, run=run, contract_model="lateral",
+)

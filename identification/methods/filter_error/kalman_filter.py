@@ -1,0 +1,360 @@
+"""The filter-error method's model and likelihood: the steady-state Kalman filter of a
+linear model with process noise (Jategaonkar 2015 ch. 5; Van Loan 1978 for the
+discretised process noise), the innovations and their negative log-likelihood, and one
+Gauss-Newton pass with R fixed followed by the measurement-noise step with the
+F-compensation (Jategaonkar eq. 5.41). ``filter_error`` holds the relaxation around them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from flightid.identification.engine.gauss_newton import damped_newton_step
+from flightid.identification.methods import output_error as oe
+from flightid.identification.models.discrete import (
+    discretize,
+    hold_inputs,
+    propagate,
+    stacked_product,
+)
+from flightid.identification.models.linear import LinearModel
+
+# Euler angles follow from the rates by kinematics: turbulence does not enter them
+PROCESS_NOISE_PREFIX = "F_"
+# relative step of the central differences of the filter matrices: truncation error
+# ~1e-10, rounding of the Riccati solution (~1e-13 relative) amplified to ~1e-8
+RELATIVE_STEP = 1e-5
+
+
+def process_noise_name(state: str) -> str:
+    """Parameter name of the process-noise standard deviation of a state equation."""
+    return f"{PROCESS_NOISE_PREFIX}{state}"
+
+
+@dataclass
+class SteadyStateFilter:
+    """Discrete model and steady-state Kalman filter of one parameter set (SI units).
+
+    phi, gamma: discrete state and input matrices (input w_i of ``models.discrete.hold_inputs``);
+    C, D: output matrices; Qd: process-noise covariance per sample; P: predicted-state
+    covariance; S: innovation covariance; K: Kalman gain.
+    """
+
+    phi: np.ndarray
+    gamma: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    Qd: np.ndarray
+    P: np.ndarray
+    S: np.ndarray
+    K: np.ndarray
+
+
+def process_noise_covariance(A: np.ndarray, F: np.ndarray, dt: float) -> np.ndarray:
+    """Q_d = int_0^dt e^{A s} F F^T e^{A^T s} ds for xdot = A x + F n, n unit white noise.
+
+    Van Loan (1978): the blocks of expm([[-A, F F^T], [0, A^T]] dt). F in state units per
+    sqrt(s) (state rate per sqrt(Hz)); Q_d in state units squared.
+    """
+    n = A.shape[0]
+    big = np.zeros((2 * n, 2 * n))
+    big[:n, :n] = -A * dt
+    big[:n, n:] = F @ F.T * dt
+    big[n:, n:] = A.T * dt
+    e = scipy.linalg.expm(big)
+    phi = e[n:, n:].T
+    q = phi @ e[:n, n:]
+    return 0.5 * (q + q.T)
+
+
+def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                        F: np.ndarray, R: np.ndarray, dt: float,
+                        hold: str = "foh") -> SteadyStateFilter:
+    """Discretise (A, B) and F, solve the discrete Riccati equation, return the filter.
+
+    Raises numpy.linalg.LinAlgError when the Riccati equation has no stabilising solution.
+    """
+    n = A.shape[0]
+    phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n, n)),
+                                     np.zeros((0, *B.shape)), hold)
+    qd = process_noise_covariance(A, F, dt)
+    if np.any(qd):
+        # solve_discrete_are(a, b, q, r) is the control form; the filter's predicted
+        # covariance is its dual with a = Phi^T, b = C^T
+        P = scipy.linalg.solve_discrete_are(phi.T, C.T, qd, R)
+        P = 0.5 * (P + P.T)
+    else:
+        P = np.zeros((n, n))
+    S = C @ P @ C.T + R
+    K = np.linalg.solve(S, C @ P).T  # P C^T S^-1 (S symmetric)
+    return SteadyStateFilter(phi, gamma, C, D, qd, P, 0.5 * (S + S.T), K)
+
+
+def innovations(flt: SteadyStateFilter, u: np.ndarray, w: np.ndarray, z: np.ndarray,
+                x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted states x~ (N, n) and innovations nu (N, ny) of the steady-state filter.
+
+    u (N, m+1) inputs with the constant 1, w their per-step form (``hold_inputs``), z (N, ny)
+    measured outputs, x0 the predicted state at the first sample.
+    The predictor is LTI: x~_{k+1} = Phi (I - K C) x~_k + Phi K (z_k - D u_k) + Gamma w_k.
+    """
+    gain = flt.phi @ flt.K
+    closed = flt.phi - gain @ flt.C
+    forcing = (z - u @ flt.D.T) @ gain.T + w @ flt.gamma.T
+    x = propagate(closed, forcing, x0)
+    return x, z - x @ flt.C.T - u @ flt.D.T
+
+
+def simulate_process_noise(model: LinearModel, values: Mapping[str, float],
+                           process_noise: Mapping[str, float], time: np.ndarray,
+                           inputs: np.ndarray, x0: np.ndarray | None = None,
+                           seed: int = 0, hold: str = "foh") -> np.ndarray:
+    """Outputs (N, ny) of ``model`` driven by inputs (N, m) and by white process noise.
+
+    process_noise: {state: F_i} standard deviations of the continuous white noise entering
+    each state equation (state units per sqrt(s)); the exact discrete equivalent Q_d is
+    sampled with a fixed ``seed``. No measurement noise is added. This is the model the
+    filter-error method assumes (turbulence as white noise, e.g. a sideslip gust in the
+    beta equation).
+    """
+    time = np.asarray(time, dtype=float)
+    n_states = len(model.states)
+    unknown = [s for s in process_noise if s not in model.states]
+    if unknown:
+        raise ValueError(f"process noise on unknown state(s) {', '.join(unknown)}; "
+                         f"the {model.name} model has {', '.join(model.states)}")
+    u = np.column_stack([np.asarray(inputs, dtype=float).reshape(len(time), -1),
+                         np.ones(len(time))])
+    A, B, C, D = model.matrices(values)
+    dt = float(np.mean(np.diff(time)))
+    F = np.diag([process_noise.get(s, 0.0) for s in model.states])
+    phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n_states, n_states)),
+                                     np.zeros((0, *B.shape)), hold)
+    qd = process_noise_covariance(A, F, dt)
+    vals, vecs = np.linalg.eigh(qd)
+    root = vecs * np.sqrt(np.clip(vals, 0.0, None))
+    noise = np.random.default_rng(seed).standard_normal((len(time), n_states)) @ root.T
+    w = hold_inputs(u, hold)
+    start = np.zeros(n_states) if x0 is None else np.asarray(x0, dtype=float)
+    x = propagate(phi, w @ gamma.T + noise, start)
+    return x @ C.T + u @ D.T
+
+
+# ------------------------------------------------------------------ problem
+
+
+@dataclass
+class FilterProblem:
+    data: oe.Problem
+    names: list[str]  # estimated: model parameters then F_<state>
+    fixed: dict[str, float]  # model parameters not estimated
+    noise_states: tuple[str, ...]  # states with an F parameter (free or fixed)
+    fixed_noise: dict[str, float]  # F_<state> not estimated, at their values
+
+    def split(self, theta: np.ndarray) -> tuple[dict[str, float], np.ndarray]:
+        """Model parameter values and the diagonal F matrix of a parameter vector."""
+        values = {**self.data.model.start, **self.fixed}
+        f_values = dict(self.fixed_noise)
+        for name, value in zip(self.names, theta, strict=True):
+            if name.startswith(PROCESS_NOISE_PREFIX):
+                f_values[name] = value
+            else:
+                values[name] = value
+        states = self.data.model.states
+        diag = [f_values.get(process_noise_name(s), 0.0) for s in states]
+        return values, np.diag(np.asarray(diag, dtype=float))
+
+    def filter(self, theta: np.ndarray, R: np.ndarray) -> SteadyStateFilter:
+        values, F = self.split(theta)
+        A, B, C, D = self.data.model.build(values)
+        return steady_state_filter(np.real(A), np.real(B), np.real(C), np.real(D), F, R,
+                                   self.data.dt, self.data.hold)
+
+
+@dataclass
+class FilterEvaluation:
+    cost: float
+    x: np.ndarray
+    nu: np.ndarray
+    flt: SteadyStateFilter
+    gradient: np.ndarray | None = None
+    information: np.ndarray | None = None
+    hessian: np.ndarray | None = None
+
+
+def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
+    """1/2 sum nu^T S^-1 nu + N/2 ln det S (Jategaonkar eq. 5.9, constant dropped)."""
+    sign, logdet = np.linalg.slogdet(S)
+    if sign <= 0:
+        return float("inf")
+    quad = np.sum(nu * np.linalg.solve(S, nu.T).T)
+    return float(0.5 * quad + 0.5 * nu.shape[0] * logdet)
+
+
+def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
+              sensitivities: bool) -> FilterEvaluation:
+    d = prob.data
+    try:
+        flt = prob.filter(theta, R)
+    except (np.linalg.LinAlgError, ValueError):
+        return FilterEvaluation(float("inf"), np.empty(0), np.empty(0), None)  # type: ignore[arg-type]
+    x, nu = innovations(flt, d.u, d.w, d.z, x0)
+    cost = negative_log_likelihood(nu, flt.S) if np.all(np.isfinite(nu)) else float("inf")
+    ev = FilterEvaluation(cost, x, nu, flt)
+    if not sensitivities or not np.isfinite(cost):
+        return ev
+    npar = len(theta)
+    mats = ("phi", "gamma", "C", "D", "K", "S")
+    grads = {m: np.empty((npar, *getattr(flt, m).shape)) for m in mats}
+    for j in range(npar):
+        h = RELATIVE_STEP * max(abs(theta[j]), 1e-3)
+        up, down = theta.copy(), theta.copy()
+        up[j] += h
+        down[j] -= h
+        f_up, f_down = prob.filter(up, R), prob.filter(down, R)
+        for m in mats:
+            grads[m][j] = (getattr(f_up, m) - getattr(f_down, m)) / (2 * h)
+    phi, K, C, D = flt.phi, flt.K, flt.C, flt.D
+    gain = phi @ K
+    closed = phi - gain @ C
+    d_gain = grads["phi"] @ K + phi @ grads["K"]
+    d_closed = grads["phi"] - d_gain @ C - gain @ grads["C"]
+    # sensitivity recursion of the predictor: s_{k+1} = closed s_k + forcing_k
+    residual_input = d.z - d.u @ D.T
+    forcing = (stacked_product(d_closed, x) + stacked_product(d_gain, residual_input)
+               - np.einsum("ab,jbc,ic->iaj", gain, grads["D"], d.u)
+               + stacked_product(grads["gamma"], d.w))
+    s = propagate(closed, forcing, np.zeros((x.shape[1], npar)))
+    dnu = -(np.matmul(C, s) + stacked_product(grads["C"], x)
+            + stacked_product(grads["D"], d.u))
+    S_inv = np.linalg.inv(flt.S)
+    n = nu.shape[0]
+    weighted = np.einsum("ab,ibj->iaj", S_inv, dnu)
+    info = np.einsum("iak,ial->kl", dnu, weighted)
+    dS = grads["S"]
+    sd = np.einsum("ab,jbc->jac", S_inv, dS)  # S^-1 dS_j
+    info += 0.5 * n * np.einsum("jab,lba->jl", sd, sd)
+    V = nu.T @ nu
+    grad = np.einsum("ia,iaj->j", nu, weighted)
+    grad += 0.5 * n * np.einsum("jaa->j", sd) - 0.5 * np.einsum("jab,bc,ca->j", sd, S_inv, V)
+    ev.gradient = grad
+    ev.information = 0.5 * (info + info.T)
+    # Hessian without the expectation E[nu nu^T] = S (second derivatives of nu and S
+    # dropped): differs from M when the residuals do not match S, i.e. while R is wrong
+    #   H = sum dnu^T W dnu - (B + B^T) + tr(W dS_j W dS_l W V) - N/2 tr(W dS_j W dS_l),
+    #   B_jl = tr(W dS_l W sum_k dnu_kj nu_k^T),  W = S^-1
+    cross = np.einsum("iaj,ib->jab", dnu, nu)  # sum_k dnu_kj nu_k^T
+    b = np.einsum("lab,jbc,ca->jl", sd, cross, S_inv)
+    wv = S_inv @ V
+    hess = (info - 0.5 * n * np.einsum("jab,lba->jl", sd, sd) - b - b.T
+            + np.einsum("jab,lbc,ca->jl", sd, sd, wv) - 0.5 * n * np.einsum("jab,lba->jl", sd, sd))
+    ev.hessian = 0.5 * (hess + hess.T)
+    return ev
+
+
+# ------------------------------------------------------------------ iteration
+
+
+@dataclass
+class FilterPass:
+    theta: np.ndarray
+    evaluation: FilterEvaluation
+    converged: bool
+    reason: str
+    iterations: int
+    cost_history: list[float]
+
+
+def gauss_newton_pass(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
+                  max_iterations: int, step_tol: float, cost_tol: float) -> FilterPass:
+    """Minimise J(theta) with R fixed: Gauss-Newton with Levenberg-Marquardt damping
+    (``engine.gauss_newton.damped_newton_step`` on the filter's H, M and gradient)."""
+    lam = 0.0
+    history: list[float] = []
+
+    def cost(trial: np.ndarray) -> float:
+        return evaluate(prob, trial, R, x0, sensitivities=False).cost
+
+    for iteration in range(max_iterations + 1):
+        ev = evaluate(prob, theta, R, x0, sensitivities=True)
+        history.append(ev.cost)
+        if not np.isfinite(ev.cost):
+            return FilterPass(theta, ev, False, "the filter has no stabilising Riccati solution "
+                         "at these parameters", iteration, history)
+        if len(theta) == 0:
+            return FilterPass(theta, ev, True, "no free parameters", iteration, history)
+        if iteration == max_iterations:
+            return FilterPass(theta, ev, False, f"no convergence in {max_iterations} iterations",
+                         iteration, history)
+        step = damped_newton_step(theta, ev.information, ev.hessian, -ev.gradient, ev.cost,
+                                  cost, lam, step_tol)
+        lam = step.lam
+        if not step.accepted:
+            return FilterPass(theta, ev, step.at_minimum, step.reason, iteration, history)
+        change = float(np.max(np.abs(step.step) / step.std))
+        theta = step.theta
+        if change < step_tol or ev.cost - step.cost < cost_tol:
+            final = evaluate(prob, theta, R, x0, sensitivities=True)
+            history.append(final.cost)
+            why = (f"parameter change below {step_tol:g} standard errors" if change < step_tol
+                   else f"cost change below {cost_tol:g}")
+            return FilterPass(theta, final, True, why, iteration + 1, history)
+    raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
+
+
+def measurement_noise(ev: FilterEvaluation, lower: np.ndarray) -> np.ndarray:
+    """R = diag(1/N sum nu nu^T - C P C^T), the measurement part of the innovations.
+
+    Kept above ``lower`` (variances) so that R stays positive definite when the process
+    noise explains all of an output's innovation (Jategaonkar's constraint K C <= 1).
+    """
+    innovation = np.mean(ev.nu**2, axis=0)
+    predicted = np.diag(ev.flt.C @ ev.flt.P @ ev.flt.C.T)
+    return np.diag(np.maximum(innovation - predicted, lower))
+
+
+def noise_step(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, R_new: np.ndarray,
+                ev: FilterEvaluation, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(theta, R) after the R update, damped until it lowers the likelihood, or None.
+
+    The closed-form R is not the exact minimiser of J over R (Maine & Iliff's mixed
+    formulation neglects the dependence of P on R), and far from convergence it can
+    overshoot (an R at its lower bound with a large F); so the update is taken
+    geometrically, R^(1-a) R_new^a with a = 1, 1/2, ..., 1/32, with and without the F
+    compensation, and the first candidate that lowers J is kept. Both steps of the
+    relaxation then lower the same likelihood, which makes the iteration monotone.
+    """
+    for a in (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125):
+        R_try = np.diag(np.diag(R) ** (1 - a) * np.diag(R_new) ** a)
+        for candidate in (compensate_process_noise(prob, theta, R, R_try, ev.flt.C), theta):
+            cost = evaluate(prob, candidate, R_try, x0, sensitivities=False).cost
+            if np.isfinite(cost) and cost < ev.cost:
+                return candidate, R_try
+    return None
+
+
+def compensate_process_noise(prob: FilterProblem, theta: np.ndarray, R_old: np.ndarray,
+                             R_new: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Jategaonkar eq. 5.41: F_i *= sum_k C_ki^2/R_k sqrt(R_new_k/R_k) / sum_k C_ki^2/R_k.
+
+    If R and F F^T scale together the Riccati solution scales with them and the Kalman
+    gain is unchanged; this keeps the gain roughly constant across the R update.
+    """
+    theta = theta.copy()
+    r_old, r_new = np.diag(R_old), np.diag(R_new)
+    weight = (C**2).T / r_old  # (n, ny)
+    num = weight @ np.sqrt(r_new / r_old)
+    den = weight.sum(axis=1)
+    states = prob.data.model.states
+    for j, name in enumerate(prob.names):
+        if name.startswith(PROCESS_NOISE_PREFIX):
+            i = states.index(name[len(PROCESS_NOISE_PREFIX):])
+            if den[i] > 0:
+                theta[j] *= num[i] / den[i]
+    return theta
+
+

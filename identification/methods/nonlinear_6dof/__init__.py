@@ -1,0 +1,24 @@
+"""``--method oe6dof``: output error on the nonlinear 6-DOF rigid-body equations.
+
+``estimation`` (the estimate, the method's options and protocol entry), ``simulation``
+(a record as a 6-DOF problem, its RK4 integration, outputs and sensitivities). The
+package exports the method's API; the model structure is ``models.six_dof``.
+"""
+
+from flightid.identification.methods.nonlinear_6dof.estimation import (
+    ID,
+    METHOD,
+    Options,
+    estimate,
+    run,
+    start_from_equation_error,
+)
+from flightid.identification.methods.nonlinear_6dof.simulation import (
+    model_from_record,
+    problem_from_record,
+    simulate,
+)
+from flightid.identification.models.six_dof import default_structure
+
+__all__ = ["ID", "METHOD", "Options", "default_structure", "estimate", "model_from_record",
+           "problem_from_record", "run", "simulate", "start_from_equation_error"]

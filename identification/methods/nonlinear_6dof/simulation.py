@@ -1,0 +1,417 @@
+"""A record as a six-degree-of-freedom output-error problem, and its simulation: the
+rigid-body equations (``models.rigid_body``) driven by the measured controls (linear,
+cubic or held between samples) and the propulsive terms, integrated by RK4 for many
+parameter sets at once; the outputs and their central-difference sensitivities.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from flightid.identification.data.coefficients import channel_values, mass_properties
+from flightid.identification.engine import problem as problem_skeleton
+from flightid.identification.models import rigid_body as rb
+from flightid.identification.models.six_dof import (
+    COLUMNS,
+    CONTROL_HOLDS,
+    CONTROLS,
+    INITIAL_STATES,
+    OUTPUTS,
+    PROPULSIVE_MOMENTS,
+    ROTOR,
+    TORQUE,
+    VARIABLE_CHANNEL,
+    VARIABLES,
+    SixDofModel,
+    check_structure,
+    default_structure,
+)
+from flightid.record import FlightRecord
+from flightid.units import G0
+
+
+@dataclass(kw_only=True)
+class Problem(problem_skeleton.Problem):
+    """Data and model of one fit, arranged for fast integration (the skeleton's time,
+    outputs, fixed parameters, initial states and noise floor, and:)."""
+
+    model: SixDofModel
+    # inputs (de - de_ref, da - da_ref, dr - dr_ref, thrust N, rho kg/m^3, mass kg,
+    # L_prop, M_prop, N_prop N m (0 unless the model takes them)), (N, 9)
+    inputs: np.ndarray
+    # the same at the RK4 stage instants t_i, t_i + dt/2, t_i+1: (3, N - 1, 9)
+    stage_inputs: np.ndarray
+    x0: np.ndarray  # (9,) measured initial state
+    controls: str
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The measured outputs, in the columns of ``z``."""
+        return tuple(self.model.outputs)
+
+
+def model_from_record(
+    record: FlightRecord,
+    structure: Mapping[str, Sequence[str]] | None = None,
+    *,
+    force_axes: str | None = None,
+    alphadot: bool = False,
+    outputs: Sequence[str] | None = None,
+    rotor_momentum: bool = False,
+    engine_torque: bool = False,
+    start: Mapping[str, float] | None = None,
+    gravity: float | None = None,
+    moment_axes: str = "body",
+    propulsive_moments: bool = False,
+) -> SixDofModel:
+    """The 6-DOF model at a record's mass properties, geometry and mean references.
+
+    ``structure`` {coefficient: variables} defaults to ``default_structure(force_axes,
+    alphadot)``; ``force_axes`` is inferred from the structure when not given. Outputs
+    default to those of OUTPUTS the record has. ``rotor_momentum`` adds h_engine (N m s),
+    ``engine_torque`` L_engine (N m, constant rolling moment of the engine). Gravity
+    (m/s^2) defaults to the local effective gravity at the record's mean latitude and
+    altitude (``rigid_body.local_gravity``), else G0. ``moment_axes`` "stability" makes Cl
+    and Cn stability-axis coefficients on stability-axis rates (see the module docstring).
+    ``propulsive_moments`` drives the model with the record's L_prop, M_prop, N_prop (N m).
+    """
+    if structure is None:
+        structure = default_structure(force_axes or "body", alphadot)
+    structure = {c: tuple(t) for c, t in structure.items()}
+    if force_axes is None:
+        force_axes = "stability" if {"CL", "CD"} & set(structure) else "body"
+    check_structure(structure, force_axes)
+    if record.meta.reference is None:
+        raise ValueError("record has no meta.reference (area, span, chord): the 6-DOF model "
+                         "needs the reference geometry")
+    mp = {k: float(np.mean(v)) for k, v in mass_properties(record).items()}
+    if gravity is None:
+        gravity = (rb.local_gravity(float(np.mean(record["latitude"])),
+                                    float(np.mean(record["h"])) if "h" in record else 0.0)
+                   if "latitude" in record else G0)
+    mass = rb.MassProperties(mp["mass"], mp["Ixx"], mp["Iyy"], mp["Izz"], mp["Ixz"], gravity)
+    used = {v for t in structure.values() for v in t}
+    references = {v: float(np.mean(channel_values(record, VARIABLE_CHANNEL[v])))
+                  for v in VARIABLES if v in used}
+    if outputs is None:
+        outputs = tuple(o for o in OUTPUTS if o in record)
+    return SixDofModel(structure, force_axes, mass, record.meta.reference, references,
+                       tuple(outputs), rotor_momentum, engine_torque, dict(start or {}),
+                       moment_axes=moment_axes, propulsive_moments=propulsive_moments)
+
+
+def density(record: FlightRecord) -> np.ndarray:
+    if "rho" in record:
+        return record["rho"]
+    if "qbar" in record and "V" in record:
+        return 2.0 * record["qbar"] / record["V"] ** 2
+    raise ValueError("record has neither 'rho' nor 'qbar' and 'V': the 6-DOF model needs the "
+                     "air density (kg/m^3)")
+
+
+def measured_state(record: FlightRecord, index: int = 0) -> np.ndarray:
+    """The state (u, v, w, p, q, r, phi, theta, psi) of sample ``index`` in SI units.
+
+    u, v, w from their channels, else from V, alpha and beta; psi 0 when absent.
+    """
+    if all(c in record for c in ("u", "v", "w")):
+        uvw = [record[c][index] for c in ("u", "v", "w")]
+    else:
+        missing = [c for c in ("V", "alpha", "beta") if c not in record]
+        if missing:
+            raise ValueError(f"record lacks {', '.join(missing)} (and u, v, w) for the initial "
+                             "state of the 6-DOF model")
+        uvw = rb.state_from_air_data(record["V"][index], record["alpha"][index],
+                                     record["beta"][index])
+    rest = []
+    for c in ("p", "q", "r", "phi", "theta", "psi"):
+        if c in record:
+            rest.append(record[c][index])
+        elif c == "psi":
+            rest.append(0.0)
+        else:
+            raise ValueError(f"record lacks channel {c!r} for the initial state of the 6-DOF model")
+    return np.array([*uvw, *rest], dtype=float)
+
+
+def problem_from_record(record: FlightRecord, model: SixDofModel,
+                        initial_state: str = "measured", controls: str = "cubic") -> Problem:
+    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling)."""
+    if initial_state not in INITIAL_STATES:
+        raise ValueError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got "
+                         f"{initial_state!r}")
+    if controls not in CONTROL_HOLDS:
+        raise ValueError(f"controls must be one of {', '.join(CONTROL_HOLDS)}, got {controls!r}")
+    time = record.time
+    if time.size < 10:
+        raise ValueError(f"record has {time.size} samples; output error needs at least 10")
+    steps = np.diff(time)
+    dt = float(np.mean(steps))
+    if np.max(np.abs(steps - dt)) > 1e-6 * dt + 1e-9:
+        i = int(np.argmax(np.abs(steps - dt)))
+        raise ValueError(f"record is not uniformly sampled (step {steps[i]:.6g} s at sample {i}, "
+                         f"mean {dt:.6g} s); resample it before output error")
+    missing = [o for o in model.outputs if o not in record]
+    if "thrust" not in record:
+        missing.append("thrust")
+    if model.propulsive_moments:
+        missing += [c for c in PROPULSIVE_MOMENTS if c not in record]
+    missing += [c for c in CONTROLS if c in model.variables and c not in record]
+    if missing:
+        raise ValueError(f"record lacks channel(s) {', '.join(missing)} needed by the 6-DOF model")
+    n = time.size
+    ctrl = [record[c] - model.references[c] if c in model.variables else np.zeros(n)
+            for c in CONTROLS]
+    moments = [record[c] if model.propulsive_moments else np.zeros(n)
+               for c in PROPULSIVE_MOMENTS]
+    inputs = np.column_stack([*ctrl, record["thrust"], density(record),
+                              mass_properties(record)["mass"], *moments])
+    z = np.column_stack([np.unwrap(record[o]) if o == "psi" else record[o]
+                         for o in model.outputs])
+    bad = [c for c, col in zip((*CONTROLS, "thrust", "rho", "mass", *PROPULSIVE_MOMENTS,
+                                *model.outputs),
+                               np.hstack([inputs, z]).T, strict=True)
+           if not np.all(np.isfinite(col))]
+    if bad:
+        raise ValueError(f"channel(s) {', '.join(bad)} contain NaN or inf values")
+    if np.any(inputs[:, 4] <= 0):
+        i = int(np.argmax(inputs[:, 4] <= 0))
+        raise ValueError(f"air density is not positive at sample {i} (t = {time[i]} s)")
+    mid = cubic_midpoints(inputs) if controls == "cubic" else 0.5 * (inputs[:-1] + inputs[1:])
+    start, end = inputs[:-1], inputs[1:].copy()
+    if controls == "zoh":
+        mid[:, :3] = start[:, :3]
+        end[:, :3] = start[:, :3]
+    x0 = measured_state(record)
+    names = [s for s in rb.STATES if s != "psi" or "psi" in model.outputs]
+    x0_names = tuple(f"x0_{s}" for s in names) if initial_state == "estimate" else ()
+    return Problem(model=model, time=time, dt=dt, inputs=inputs,
+                   stage_inputs=np.stack([start, mid, end]), z=z, x0=x0, x0_names=x0_names,
+                   fixed={}, noise_floor=problem_skeleton.noise_floor(z), controls=controls)
+
+
+def cubic_midpoints(x: np.ndarray) -> np.ndarray:
+    """Values halfway between samples (rows) by the 4-point cubic (Lagrange) interpolant.
+
+    (-x[i-1] + 9 x[i] + 9 x[i+1] - x[i+2]) / 16; the end intervals use the linear mean.
+    """
+    mid = 0.5 * (x[:-1] + x[1:])
+    if x.shape[0] >= 4:
+        mid[1:-1] = (9.0 * (x[1:-2] + x[2:-1]) - x[:-3] - x[3:]) / 16.0
+    return mid
+
+
+# ------------------------------------------------------------------ simulation
+
+
+def aero(model: SixDofModel, x, controls: tuple, thrust, rho, combine, xp=np) -> tuple:
+    """Aerodynamic state of states x[9, ...] (an array, or Python floats with xp=SCALAR).
+
+    ``controls`` are (de, da, dr) minus their references (rad), thrust (N) and rho
+    (kg/m^3), broadcast against x[0]; ``combine(rows)`` maps the regressor rows (alpha,
+    beta, phat, qhat, rhat, de, da, dr as perturbations) to the six coefficients, without
+    the alphadot terms. Returns body forces fx, fy, fz (N, thrust included), the
+    coefficients, qbar S (N), V (m/s), alpha and beta (rad), and 1/(2V) (s/m).
+    """
+    ref, refs = model.reference, model.references
+    u, v, w = x[0], x[1], x[2]
+    uw2 = u * u + w * w
+    speed2 = uw2 + v * v
+    speed = xp.sqrt(speed2)
+    alpha = xp.arctan(w / u)
+    beta = xp.arcsin(v / speed)
+    inv2v = 0.5 / speed
+    uw = xp.sqrt(uw2)
+    ca, sa = u / uw, w / uw  # cos(alpha), sin(alpha)
+    p, r = x[3], x[5]
+    stability_moments = model.moment_axes == "stability"
+    if stability_moments:
+        p, r = p * ca + r * sa, r * ca - p * sa
+    coef = combine((alpha - refs.get("alpha", 0.0), beta - refs.get("beta", 0.0),
+                    p * (ref.span * inv2v) - refs.get("p", 0.0),
+                    x[4] * (ref.chord * inv2v) - refs.get("q", 0.0),
+                    r * (ref.span * inv2v) - refs.get("r", 0.0), *controls))
+    if stability_moments:
+        cl, cn = coef[3], coef[5]
+        coef = (coef[0], coef[1], coef[2], cl * ca - cn * sa, coef[4], cl * sa + cn * ca)
+    qs = (0.5 * ref.area) * rho * speed2
+    if model.force_axes == "body":
+        cx, cz = coef[0], coef[2]
+    else:
+        # lift and drag in the local stability axes (rotation by alpha)
+        cx = coef[2] * sa - coef[0] * ca
+        cz = -coef[2] * ca - coef[0] * sa
+    return qs * cx + thrust, qs * coef[1], qs * cz, coef, qs, speed, alpha, beta, inv2v
+
+
+def batch_combination(model: SixDofModel, theta: np.ndarray, shape: tuple[int, ...]):
+    """combine(rows) for arrays: one einsum of theta (6, 10, K) with the regressors."""
+    reg = np.empty((1 + len(VARIABLES), *shape), dtype=theta.dtype)
+    reg[0] = 1.0
+    reg[9] = -model.references.get("alphadot", 0.0)
+
+    def combine(rows: tuple) -> np.ndarray:
+        for j, row in enumerate(rows, start=1):
+            reg[j] = row
+        return np.einsum("jrk,r...k->j...k", theta, reg)
+
+    return combine
+
+
+def scalar_combination(model: SixDofModel, theta: np.ndarray):
+    """combine(rows) for Python floats: sums over the nonzero terms of theta (6, 10, 1)."""
+    t = theta[..., 0].tolist()
+    adot_ref = model.references.get("alphadot", 0.0)
+    const = [t[j][0] - t[j][9] * adot_ref for j in range(6)]
+    terms = [[(c - 1, t[j][c]) for c in range(1, 9) if t[j][c] != 0.0] for j in range(6)]
+
+    def combine(rows: tuple) -> list[float]:
+        out = []
+        for j in range(6):
+            value = const[j]
+            for c, k in terms[j]:
+                value += k * rows[c]
+            out.append(value)
+        return out
+
+    return combine
+
+
+def integrate(problem: Problem, theta: np.ndarray, engine: np.ndarray, x0: np.ndarray
+               ) -> np.ndarray:
+    """States (N, 9, K) for a batch of K coefficient tensors theta (6, 10, K).
+
+    engine (2, K): rotor angular momentum (N m s) and engine rolling moment (N m); x0 (9, K).
+    One real trajectory (K = 1) runs on Python floats, a batch on numpy arrays.
+    """
+    model = problem.model
+    ref, mp = model.reference, model.mass
+    stages = problem.stage_inputs.tolist()
+    has_adot = "alphadot" in model.variables
+    scalar = x0.shape[1] == 1 and not np.iscomplexobj(theta)
+    if scalar:
+        xp, combine = rb.SCALAR, scalar_combination(model, theta)
+        adot = theta[3:, COLUMNS["alphadot"], 0].tolist()
+        rotor, torque = engine[:, 0].tolist()
+        x0 = x0[:, 0]
+    else:
+        xp, combine = np, batch_combination(model, theta, x0.shape[1:])
+        adot = theta[3:, COLUMNS["alphadot"]]  # (3, K): Cl, Cm, Cn per alphadot_hat
+        rotor, torque = engine
+    span, chord = ref.span, ref.chord
+
+    def rhs(state: np.ndarray, i: int, stage: int) -> np.ndarray:
+        x = state.tolist() if scalar else state
+        de, da, dr, thrust, rho, mass, l_prop, m_prop, n_prop = stages[stage][i]
+        fx, fy, fz, coef, qs, _, _, _, inv2v = aero(model, x, (de, da, dr), thrust, rho,
+                                                    combine, xp)
+        trig = rb.euler_trig(x, xp)
+        udot, vdot, wdot = rb.translational(x, fx / mass, fy / mass, fz / mass, mp.g, trig)
+        cl, cm, cn = coef[3], coef[4], coef[5]
+        if has_adot:
+            u, w = x[0], x[2]
+            adot_hat = (u * wdot - w * udot) / (u * u + w * w) * (chord * inv2v)
+            cl, cm, cn = cl + adot[0] * adot_hat, cm + adot[1] * adot_hat, cn + adot[2] * adot_hat
+        pdot, qdot, rdot = rb.rotational(x, qs * span * cl + torque + l_prop,
+                                         qs * chord * cm + m_prop, qs * span * cn + n_prop,
+                                         mp, rotor)
+        out = (udot, vdot, wdot, pdot, qdot, rdot, *rb.kinematic(x, trig))
+        return np.array(out) if scalar else np.stack(out)
+
+    states = rb.rk4(rhs, x0, problem.time.size - 1, problem.dt)
+    return states[:, :, None] if scalar else states
+
+
+def outputs_of_states(problem: Problem, states: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Outputs (N, K, ny) of states (N, 9, K)."""
+    model = problem.model
+    x = states.transpose(1, 0, 2)
+    inp = problem.inputs.T[:, :, None]  # (9, N, 1)
+    combine = batch_combination(model, theta, x.shape[1:])
+    fx, fy, fz, _, _, speed, alpha, beta, _ = aero(model, x, tuple(inp[:3]), inp[3], inp[4],
+                                                   combine)
+    m = inp[5]
+    columns = {"V": speed, "alpha": alpha, "beta": beta, "ax": fx / m, "ay": fy / m,
+               "az": fz / m}
+    for j, s in enumerate(rb.STATES[3:], start=3):
+        columns[s] = x[j]
+    return np.stack([columns[o] for o in model.outputs], axis=-1)
+
+
+def batch_outputs(problem: Problem, values: Mapping[str, float],
+           columns: Mapping[str, np.ndarray], k: int, dtype: type
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Coefficient tensors (6, 10, k), engine terms (2, k) and initial states (9, k).
+
+    ``values`` are scalars common to the batch, ``columns`` arrays (k,) that override them.
+    """
+    model = problem.model
+    index = model.index()
+    theta = np.zeros((6, 1 + len(VARIABLES), k), dtype=dtype)
+    engine = np.zeros((2, k), dtype=dtype)
+    x0 = np.repeat(problem.x0.astype(dtype)[:, None], k, axis=1)
+    for name, value in {**model.start, **values, **columns}.items():
+        if name in index:
+            theta[index[name][0], index[name][1]] = value
+        elif name == ROTOR:
+            engine[0] = value
+        elif name == TORQUE:
+            engine[1] = value
+        elif name in problem.x0_names:
+            x0[rb.STATES.index(name[3:])] = value
+    return theta, engine, x0
+
+
+def outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
+    """Model outputs (N, ny) at parameter values (the others at their fixed/start values).
+
+    A trajectory that leaves the domain of the equations (a trial step of the optimiser
+    that makes the model diverge) gives NaN outputs, which the optimiser rejects.
+    """
+    theta, engine, x0 = batch_outputs(problem, {**problem.fixed, **values}, {}, 1, float)
+    try:
+        with np.errstate(all="ignore"):
+            states = integrate(problem, theta, engine, x0)
+            return outputs_of_states(problem, states, theta)[:, 0]
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return np.full(problem.z.shape, np.nan)
+
+
+def outputs_and_sensitivities(problem: Problem, values: Mapping[str, float],
+                               names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs (N, ny) and complex-step sensitivities (N, ny, len(names)), one batched run."""
+    if not names:
+        return outputs(problem, values), np.zeros((problem.z.shape[0], problem.z.shape[1], 0))
+    base = {**problem.fixed, **values}
+    k = len(names)
+    steps = np.array([1e-20 * max(1.0, abs(base[n])) for n in names])
+    columns = {}
+    for j, name in enumerate(names):
+        col = np.full(k, base[name], dtype=complex)
+        col[j] += 1j * steps[j]
+        columns[name] = col
+    theta, engine, x0 = batch_outputs(problem, base, columns, k, complex)
+    states = integrate(problem, theta, engine, x0)
+    y = outputs_of_states(problem, states, theta)  # (N, k, ny)
+    sens = np.ascontiguousarray((y.imag / steps[None, :, None]).transpose(0, 2, 1))
+    return y[:, 0].real.copy(), sens
+
+
+def simulate(record: FlightRecord, model: SixDofModel, values: Mapping[str, float] | None = None,
+             controls: str = "cubic", x0: Mapping[str, float] | None = None
+             ) -> dict[str, np.ndarray]:
+    """Model outputs {output: time history (SI)} for a record's inputs at parameter ``values``.
+
+    Parameters not in ``values`` take the model's start values; the initial state is the
+    record's first sample, with any ``x0`` {"x0_<state>": value} applied. Use it to predict
+    a maneuver not used in the fit.
+    """
+    problem = problem_from_record(record, model, "estimate" if x0 else "measured", controls)
+    problem.fixed = dict(x0 or {})
+    y = outputs(problem, dict(values or {}))
+    return {o: y[:, j] for j, o in enumerate(model.outputs)}
+
+

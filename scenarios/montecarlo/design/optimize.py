@@ -1,0 +1,169 @@
+"""``design-optimize``: a multisine optimised for the predicted bounds of a card's
+derivatives, against the built-in designs flown one surface after another as the cards
+do (``input_optimization`` for the prediction and the optimiser).
+
+The problem is measured on the card itself: a flight without inputs (the card's
+condition, sensors and turbulence, seed of the card) gives the trim condition, the JSBSim
+truth and the residual spectrum. Every built-in design is applied to each surface in
+turn (the next ``design.GAP_S`` s after the previous input ends), all scaled to the energy of
+the ``reference`` built-in; the multisine gets that energy and the reference's input
+time, so it flies as long as the reference does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from flightid.channels import LATERAL_INPUTS
+from flightid.scenarios.cards import card_from_dict, fly_card, load_card
+from flightid.scenarios.input_design import InputDesign
+from flightid.scenarios.input_optimization import (
+    OptimizedMultisine,
+    Problem,
+    mean_relative_bound,
+    optimize_multisine,
+    predicted_bounds,
+    problem_from_flight,
+)
+from flightid.scenarios.inputs import scale_to_energy
+from flightid.scenarios.montecarlo.design.experiment import (
+    DESIGNS,
+    SETTLE_S,
+    START_S,
+    DesignSettings,
+    card_text,
+    design_card,
+    input_energy,
+    make_design,
+    maneuver_dicts,
+    peak,
+    time_grid,
+)
+
+QUIET_S = 60.0  # s of the flight without inputs that measures the residual spectrum
+
+
+def sequenced(kind: str, surfaces: Sequence[str], settings: DesignSettings) -> InputDesign:
+    """Built-in design ``kind`` on each of ``surfaces`` in turn from START_S (``make_design``
+    with ``then``)."""
+    return make_design(kind, dataclasses.replace(settings, surface=surfaces[0],
+                                                 then=tuple(surfaces[1:])))
+
+
+def card_problem(card: str, model: str = "lat", derivatives: Sequence[str] | None = None
+                 ) -> Problem:
+    """The design problem of ``card``: a QUIET_S s flight of it without inputs."""
+    base = load_card(card)
+    data = {k: v for k, v in base.data.items() if k != "maneuver"}
+    data["duration"] = QUIET_S
+    measured, truth = fly_card(card_from_dict(data, base.path), base.seed)
+    return problem_from_flight(measured, truth, model, derivatives)
+
+
+@dataclass
+class Optimized:
+    """The optimised multisine and every design's predicted bounds (the derivatives'
+    units), mean bound / |truth|, energy (rad^2 s), input and flight time (s), peak (rad)."""
+
+    problem: Problem
+    multisine: OptimizedMultisine
+    designs: dict[str, InputDesign]
+    predicted: dict[str, dict[str, float]] = field(default_factory=dict)
+    rows: list[dict[str, Any]] = field(default_factory=list)
+
+    def best_builtin(self) -> str:
+        """The built-in design with the smallest predicted mean bound / |truth|."""
+        return min((r for r in self.rows if r["design"] != "optimized"),
+                   key=lambda r: r["mean_relative_bound"])["design"]
+
+    def gain(self) -> float:
+        """1 - optimised / best built-in mean bound / |truth| (a fraction)."""
+        by = {r["design"]: r["mean_relative_bound"] for r in self.rows}
+        return 1.0 - by["optimized"] / by[self.best_builtin()]
+
+    def maneuver_table(self, name: str = "optimized") -> str:
+        """The optimised design as a maneuver table (TOML, read by ``--design-file``)."""
+        return card_text({"name": name, "description":
+                          f"design-optimize: {self.multisine.criterion}-optimal multisine "
+                          f"on {', '.join(self.multisine.components)}",
+                          "maneuver": maneuver_dicts(self.designs["optimized"])})
+
+
+def optimize(card: str = "navion-demo", model: str = "lat",
+             surfaces: Sequence[str] = LATERAL_INPUTS, criterion: str = "A",
+             band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
+             settings: DesignSettings | None = None,
+             derivatives: Sequence[str] | None = None,
+             problem: Problem | None = None) -> Optimized:
+    """Optimise a multisine on ``surfaces`` for ``criterion`` at the energy and input time
+    of the built-in ``reference`` flown on each surface in turn at the settings'
+    amplitude (default 4 deg, as the library cards' lateral inputs); predict every
+    built-in's bounds at that energy too."""
+    settings = settings or DesignSettings(amplitude=np.deg2rad(4.0))
+    if reference not in DESIGNS:
+        raise ValueError(f"unknown reference design {reference!r}; designs: "
+                         f"{', '.join(DESIGNS)}")
+    pb = problem or card_problem(card, model, derivatives)
+    rate = pb.rate
+    ref = sequenced(reference, surfaces, settings)
+    energy = input_energy(ref, rate)
+    designs: dict[str, InputDesign] = {}
+    for kind in DESIGNS:
+        d = sequenced(kind, surfaces, settings)
+        designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
+    span = ref.end - ref.start
+    ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
+                            start=START_S, settle=SETTLE_S)
+    designs["optimized"] = ms.design()
+    out = Optimized(pb, ms, designs)
+    for name, d in designs.items():
+        b = predicted_bounds(pb, d, d.end + SETTLE_S)
+        out.predicted[name] = b
+        out.rows.append({"design": name, "mean_relative_bound": mean_relative_bound(pb, b),
+                         "energy": input_energy(d, rate), "input_time": d.end - d.start,
+                         "flight_time": float(time_grid(d, rate)[-1]),
+                         "peak": peak(d, rate)})
+    return out
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """Limits of a flight: largest |bank| (rad), largest alpha (rad), largest relative
+    airspeed change |V - V0| / V0 (fraction)."""
+
+    bank: float = np.deg2rad(30.0)
+    alpha: float = np.deg2rad(15.0)
+    speed: float = 0.10
+
+
+def envelope_excursions(card: str, design: InputDesign) -> dict[str, float]:
+    """Fly ``design`` on ``card`` (its condition, turbulence and seed) in JSBSim for the
+    input and SETTLE_S s after: the largest |bank| and alpha (rad) and relative airspeed
+    change (fraction) of the true flight. Raises DepartureError if it departs."""
+    base = load_card(card)
+    data = design_card(base.to_dict(), "optimized", design, base.rate)
+    _, truth = fly_card(card_from_dict(data, base.path), base.seed)
+    v0 = float(truth["V"][0])
+    return {"bank": float(np.max(np.abs(truth["phi"]))),
+            "alpha": float(np.max(truth["alpha"])),
+            "speed": float(np.max(np.abs(truth["V"] - v0)) / v0)}
+
+
+def envelope_violations(excursions: dict[str, float], limits: Envelope) -> list[str]:
+    """The limits an excursion exceeds, each as a sentence naming it."""
+    out = []
+    if excursions["bank"] > limits.bank:
+        out.append(f"bank {np.rad2deg(excursions['bank']):.1f} deg exceeds "
+                   f"{np.rad2deg(limits.bank):.1f} deg")
+    if excursions["alpha"] > limits.alpha:
+        out.append(f"alpha {np.rad2deg(excursions['alpha']):.1f} deg exceeds "
+                   f"{np.rad2deg(limits.alpha):.1f} deg")
+    if excursions["speed"] > limits.speed:
+        out.append(f"airspeed change {100 * excursions['speed']:.1f} % exceeds "
+                   f"{100 * limits.speed:.1f} %")
+    return out

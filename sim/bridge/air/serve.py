@@ -1,0 +1,432 @@
+"""The air side of the recorder bridge: a flight as MAVLink 2 bytes on a real link.
+
+The bridge makes a simulated aircraft look like the instrumented Boomerang 60 of the
+Monash paper (c. 2008) to the ground: one or more recorders (``schedule.StreamSpec``),
+each with its own system/component id, sequence numbers and clock, send HEARTBEAT,
+SYSTEM_TIME, HIGHRES_IMU, ATTITUDE, AOA_SSA, VFR_HUD, SERVO_OUTPUT_RAW, GPS_RAW_INT,
+HIL_SENSOR and HIL_STATE_QUATERNION (``messages``) at rates that fit the link budget, through
+injectable faults (``link``). Time stamps come from the simulation clock mapped
+through each recorder's clock (offset, drift); SYSTEM_TIME pairs the recorder clock
+with the common (GPS) time.
+
+Sources: a FlightRecord replayed sample by sample (:func:`serve_record`), or a stepping
+simulation flown by controls received over the same link (:func:`serve_simulation`),
+in lock-step (one step per control message) or in real time (latest control held).
+
+Controls accepted (canonical signs, ``ServoMap`` limits):
+- HIL_ACTUATOR_CONTROLS / SET_ACTUATOR_CONTROL_TARGET: controls[0..3] = roll, pitch,
+  yaw (-1..1, positive = right roll, nose up, nose right moment) and throttle (0..1):
+  da = -roll * da_max, de = -pitch * de_max, dr = -yaw * dr_max;
+- MANUAL_CONTROL: x = pitch stick (+1000 forward: nose down, de = x/1000 * de_max),
+  y = roll stick (+ right: da = -y/1000 * da_max), z = throttle (0..1000),
+  r = yaw (+ right pedal: dr = -r/1000 * dr_max);
+- RC_CHANNELS_OVERRIDE: surface PWM on the SERVO_OUTPUT_RAW channels (same mapping;
+  0 and UINT16_MAX leave a channel unchanged).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from flightid.record import FlightRecord
+from flightid.sim.bridge.air.schedule import Schedule, StreamSpec, plan_schedule, single_stream
+from flightid.sim.bridge.air.signing import SenderFilter, setup_outgoing
+from flightid.sim.bridge.frames import FrameScanner
+from flightid.sim.bridge.link import Link, LinkFaults, Transmitter
+from flightid.sim.bridge.messages import (
+    EncodeContext,
+    GeoOrigin,
+    ServoMap,
+    TelemetryState,
+    encode,
+)
+
+#: unix time of sim time 0 unless told otherwise (June 2008, the Boomerang 60's flight tests)
+DEFAULT_EPOCH = 1_213_488_000.0
+
+
+@dataclass
+class BridgeConfig:
+    """Everything the air side needs besides the source and the link."""
+
+    streams: tuple[StreamSpec, ...] = field(default_factory=single_stream)
+    baud: int | None = 57600  # bits/s of the link being emulated; None = unlimited
+    faults: LinkFaults = field(default_factory=LinkFaults)
+    seed: int = 0
+    realtime: bool = False
+    servo_map: ServoMap = field(default_factory=ServoMap)
+    origin: GeoOrigin = field(default_factory=GeoOrigin)
+    epoch_unix: float = DEFAULT_EPOCH
+    utilization: float = 0.85
+    buffer_bytes: int = 4096
+    ground_system: int = 255  # who may send controls (the ground station's system id)
+    ground_component: int | None = None  # its component id; None = any component
+    signing_key: bytes | None = None  # 32 bytes: sign telemetry, accept signed controls only
+    # file keeping the last signing timestamp of each stream across runs (signing.state_path)
+    signing_state: str | Path | None = None
+
+    def sender_filter(self) -> SenderFilter:
+        """The check every received packet passes before it may move a surface."""
+        return SenderFilter(self.ground_system, self.ground_component, self.signing_key,
+                            state=self.signing_state)
+
+
+@dataclass
+class BridgeReport:
+    """What the air side sent: schedule, per-source packet counts, faults applied."""
+
+    schedule: Schedule
+    transmit: Any  # link.TransmitReport
+    samples: int = 0
+    duration: float = 0.0
+    servo_saturated: int = 0
+    controls_received: int = 0
+    faults: LinkFaults = field(default_factory=LinkFaults)
+    refused: dict[str, int] = field(default_factory=dict)  # packets refused, by reason
+    ended: str = ""  # why a flight in the loop ended before its last step ("" = it did not)
+
+    def per_source(self) -> dict[tuple[int, int], dict[str, int]]:
+        """Per (sysid, compid): packets produced and their fates."""
+        out: dict[tuple[int, int], dict[str, int]] = {}
+        for f in self.transmit.fates:
+            d = out.setdefault(f.source, {"packets": 0, "sent": 0, "corrupted": 0,
+                                          "dropped": 0, "overflow": 0})
+            d["packets"] += 1
+            d[f.fate] += 1
+        return out
+
+    def as_dict(self) -> dict:
+        """Plain-data summary."""
+        return {
+            "samples": self.samples,
+            "duration_s": self.duration,
+            "servo_saturated": self.servo_saturated,
+            "controls_received": self.controls_received,
+            "packets_refused": dict(self.refused),
+            "ended_early": self.ended,
+            "faults": vars(self.faults),
+            "transmit": self.transmit.as_dict(),
+            "schedule": self.schedule.as_dict(),
+        }
+
+    def summary(self) -> str:
+        """Readable summary: the schedule table and the packet fates."""
+        tx = self.transmit
+        return (
+            f"{self.schedule.table()}\n"
+            f"sent {self.samples} samples ({self.duration:.2f} s): {tx.packets} packets, "
+            f"{tx.sent_intact} intact, {tx.corrupted} corrupted, {tx.dropped} dropped, "
+            f"{tx.overflow} lost to UART overflow; {self.servo_saturated} servo values clipped"
+        )
+
+
+class AirSide:
+    """Turns samples into scheduled MAVLink packets and hands them to a transmitter."""
+
+    def __init__(self, config: BridgeConfig, source_rate: float, link: Link,
+                 keep_fates: bool = True) -> None:
+        self.config = config
+        self.schedule = plan_schedule(config.streams, source_rate, config.baud,
+                                      config.utilization, signed=config.signing_key is not None)
+        self.tx = Transmitter(link, config.faults, config.baud, config.seed,
+                              config.realtime, config.buffer_bytes, keep_fates)
+        self.link = link
+        self.mavs = {s.name: mavlink2.MAVLink(None, s.sysid, s.compid) for s in config.streams}
+        if config.signing_key is not None:
+            for mav in self.mavs.values():
+                setup_outgoing(mav, config.signing_key)
+        epoch = int(round(config.epoch_unix * 1e6))
+        self.ctx = {s.name: EncodeContext(config.servo_map, epoch, s.mav_type)
+                    for s in config.streams}
+        self.streams = {s.name: s for s in config.streams}
+        self.state = TelemetryState(config.origin)
+        self.samples = 0
+        self.last_t = 0.0
+        self.first_t: float | None = None
+
+    def emit(self, tick: int, t: float, channels: dict[str, float]) -> int:
+        """Send the messages due at source sample ``tick`` (sim time t, s); returns count."""
+        if self.first_t is None:
+            self.first_t = t
+            self.tx.start(t)
+        sample = self.state.sample(t, channels)
+        n = 0
+        for g in self.schedule.due(tick):
+            stream = self.streams[g.stream]
+            mav = self.mavs[g.stream]
+            msg = encode(g.name, sample, t, stream.local_time(t), self.ctx[g.stream])
+            packet = msg.pack(mav)
+            self.tx.send(packet, t, (stream.sysid, stream.compid), mav.seq, msg.get_msgId())
+            mav.seq = (mav.seq + 1) % 256
+            n += 1
+        self.samples += 1
+        self.last_t = t
+        return n
+
+    def heartbeat(self, t: float) -> None:
+        """A HEARTBEAT from every stream at sim time t (s), outside the schedule."""
+        if self.first_t is None:
+            self.tx.start(t)
+        for stream in self.streams.values():
+            mav = self.mavs[stream.name]
+            msg = encode("HEARTBEAT", {}, t, stream.local_time(t), self.ctx[stream.name])
+            self.tx.send(msg.pack(mav), t, (stream.sysid, stream.compid), mav.seq, 0)
+            mav.seq = (mav.seq + 1) % 256
+
+    def finish(self) -> BridgeReport:
+        """Flush the link and return the report."""
+        self.tx.close()
+        return BridgeReport(
+            self.schedule, self.tx.report, self.samples,
+            self.last_t - (self.first_t or 0.0),
+            sum(c.saturated for c in self.ctx.values()), faults=self.config.faults,
+        )
+
+
+def source_rate_of(record: FlightRecord) -> float:
+    """Sample rate (Hz) of a uniformly sampled record; raises if it is not uniform."""
+    if len(record) < 2:
+        raise ValueError("a record needs at least two samples to be streamed")
+    dt = np.diff(record.time)
+    if np.ptp(dt) > 1e-6 * np.mean(dt) + 1e-9:
+        raise ValueError(
+            f"record is not uniformly sampled (dt from {dt.min():.6g} to {dt.max():.6g} s); "
+            "resample it before streaming"
+        )
+    return 1.0 / float(np.mean(dt))
+
+
+def serve_record(record: FlightRecord, link: Link, config: BridgeConfig | None = None,
+                 keep_fates: bool = True) -> BridgeReport:
+    """Stream a uniformly sampled record over ``link``; real time if ``config.realtime``."""
+    config = config or BridgeConfig()
+    air = AirSide(config, source_rate_of(record), link, keep_fates)
+    names = list(record.channels)
+    data = np.column_stack([record[n] for n in names]) if names else np.zeros((len(record), 0))
+    t0 = float(record.time[0])
+    for k, t in enumerate(record.time):
+        if config.realtime and air.first_t is not None:
+            # keep the producer near real time so that the queue stays short
+            lead = air.tx.wall_time(float(t)) - time.monotonic()
+            if lead > 0.05:
+                time.sleep(lead - 0.05)
+        air.emit(k, float(t) - t0, dict(zip(names, data[k], strict=True)))
+    return air.finish()
+
+
+# -- in the loop -------------------------------------------------------------------------
+
+#: messages that carry controls to the bridge
+CONTROL_MESSAGES = (
+    "HIL_ACTUATOR_CONTROLS",
+    "SET_ACTUATOR_CONTROL_TARGET",
+    "MANUAL_CONTROL",
+    "RC_CHANNELS_OVERRIDE",
+)
+
+
+def controls_from_message(msg, servo_map: ServoMap) -> dict[str, float] | None:
+    """Canonical controls (rad, throttle 0..1) from a control message, None if not one."""
+    kind = msg.get_type()
+    m = servo_map
+    if kind in ("HIL_ACTUATOR_CONTROLS", "SET_ACTUATOR_CONTROL_TARGET"):
+        if kind == "SET_ACTUATOR_CONTROL_TARGET" and msg.group_mlx != 0:
+            return None
+        roll, pitch, yaw, thr = (float(c) for c in msg.controls[:4])
+        return {"da": -roll * m.da_max, "de": -pitch * m.de_max, "dr": -yaw * m.dr_max,
+                "throttle": min(max(thr, 0.0), 1.0)}
+    if kind == "MANUAL_CONTROL":
+        return {"de": msg.x / 1000.0 * m.de_max, "da": -msg.y / 1000.0 * m.da_max,
+                "dr": -msg.r / 1000.0 * m.dr_max, "throttle": min(max(msg.z / 1000.0, 0.0), 1.0)}
+    if kind == "RC_CHANNELS_OVERRIDE":
+        out = {}
+        for ch, num in m.channels().items():
+            pwm = getattr(msg, f"chan{num}_raw")
+            if pwm not in (0, 65535):
+                out[ch] = m.from_pwm(ch, pwm)
+        return out
+    return None
+
+
+class SteppingSimulation(Protocol):
+    """What the bridge needs from a simulation: a fixed step and one step per call."""
+
+    dt: float
+
+    def step(self, controls: dict[str, float]) -> dict[str, float]:
+        """Advance one step with the given controls; return canonical channels."""
+        ...
+
+
+class _ControlReader:
+    """Parses control messages arriving on the link (uplink: no faults injected); only
+    packets that pass ``senders`` (the ground station's ids, its signature) count."""
+
+    def __init__(self, link: Link, servo_map: ServoMap, senders: SenderFilter) -> None:
+        self.link, self.servo_map, self.senders = link, servo_map, senders
+        self.scanner = FrameScanner()
+        self.received = 0
+        self.heard = False  # any intact message from the ground yet
+        self.closed = False
+        self._pending: list[dict[str, float]] = []
+
+    def poll(self, timeout: float) -> list[dict[str, float]]:
+        """Controls received within ``timeout`` s (may be empty)."""
+        if self._pending:
+            out, self._pending = self._pending, []
+            return out
+        data = self.link.read(timeout)
+        if data is None:
+            self.closed = True
+            return []
+        frames = self.scanner.feed(data)
+        if self.link.datagrams:
+            frames += self.scanner.flush()
+        out = []
+        frames = [fr for fr in frames if self.senders.accept(fr.raw, fr.source)]
+        self.heard = self.heard or bool(frames)
+        for fr in frames:
+            c = controls_from_message(fr.msg, self.servo_map)
+            if c is not None and not all(math.isfinite(v) for v in c.values()):
+                self.senders.refuse("not finite")  # NaN is not "hold the trim"
+            elif c is not None:
+                out.append(c)
+        self.received += len(out)
+        return out
+
+    def next(self, timeout: float) -> dict[str, float] | None:
+        """The next control message, waiting at most ``timeout`` s in total."""
+        end = time.monotonic() + timeout
+        while not self.closed:
+            got = self.poll(max(0.0, min(0.05, end - time.monotonic())))
+            if got:
+                self._pending = got[1:]
+                return got[0]
+            if time.monotonic() >= end:
+                return None
+        return None
+
+
+class FlightCoreAdapter:
+    """The flight core (``flightid.sim.flight.simulation.Simulation``) flown by absolute controls.
+
+    The link carries absolute surface positions (rad) and throttle (0..1), as an onboard
+    computer commands them; the flight core takes increments on its trim. Increments
+    below 1e-6 (rad, or throttle fraction; some 30 float32 steps of a normalised command)
+    are taken as zero, so the trim commands are kept exactly when the ground sends the
+    trim values back through float32 fields.
+    """
+
+    def __init__(self, sim, trim) -> None:
+        self.sim, self.trim = sim, trim
+        self.dt = 1.0 / sim.rate_hz
+        self._trim = {"de": trim.elevator, "da": trim.aileron, "dr": trim.rudder,
+                      "throttle": trim.throttle}
+
+    def increments(self, controls: dict[str, float]) -> dict[str, float]:
+        """Absolute controls -> increments on trim (only the controls given)."""
+        out = {}
+        for c, v in controls.items():
+            inc = v - self._trim[c]
+            out[c] = inc if abs(inc) > 1e-6 * max(1.0, abs(self._trim[c])) else 0.0
+        return out
+
+    def reset(self, controls: dict[str, float] | None = None) -> dict[str, float]:
+        """Back to trim (t = 0) with absolute controls; the first sample."""
+        return self.sim.reset(self.trim, self.increments(controls or {}))
+
+    def step(self, controls: dict[str, float]) -> dict[str, float]:
+        """One step with absolute controls."""
+        return self.sim.step(self.increments(controls))
+
+
+def serve_simulation(
+    sim: SteppingSimulation, initial: dict[str, float], link: Link,
+    config: BridgeConfig | None = None, *, steps: int, lockstep: bool = True,
+    timeout: float = 5.0, controls: dict[str, float] | None = None,
+) -> tuple[BridgeReport, list[dict[str, float]]]:
+    """Fly ``sim`` with controls received over ``link``, telemetry going back the same way.
+
+    ``initial`` holds the channels at the start (time 0); ``controls`` the control values
+    held until the first control message. The flight starts when the ground station first
+    speaks (a HEARTBEAT, as MAVLink ground stations send at 1 Hz); until then the bridge
+    sends heartbeats. Lock-step: after each telemetry sample the
+    bridge waits (at most ``timeout`` s) for one control message, applies it for exactly
+    one step and sends the next sample: the control answering the sample at t_k is the
+    surface position at t_(k+1) (the flight core's ``step`` semantics), so a ground station
+    sends u(t_k + dt). Real time: the simulation steps on the wall clock
+    and uses the latest control received. Lock-step needs a loss-free downlink, so link
+    faults that lose packets are refused. Returns the report and the channel history.
+    """
+    config = config or BridgeConfig()
+    if lockstep and config.faults.damaging:
+        raise ValueError(
+            "lock-step needs every step's telemetry to arrive; drop/corrupt faults would "
+            "stall the client (use real time for a lossy link)"
+        )
+    if not math.isfinite(sim.dt) or sim.dt <= 0:
+        raise ValueError(f"simulation step must be > 0 s, got {sim.dt}")
+    air = AirSide(config, 1.0 / sim.dt, link)
+    reader = _ControlReader(link, config.servo_map, config.sender_filter())
+    try:
+        return _fly(sim, initial, link, config, air, reader, steps=steps, lockstep=lockstep,
+                    timeout=timeout, controls=controls)
+    finally:
+        reader.senders.save()  # the signing timestamps seen, for the next run
+
+
+def _fly(sim: SteppingSimulation, initial: dict[str, float], link: Link,
+         config: BridgeConfig, air: AirSide, reader: _ControlReader, *, steps: int,
+         lockstep: bool, timeout: float, controls: dict[str, float] | None,
+         ) -> tuple[BridgeReport, list[dict[str, float]]]:
+    """The flight of :func:`serve_simulation`, after its checks."""
+    held = dict(controls or {})
+    history = [dict(initial)]
+    t = 0.0
+    # handshake: heartbeats (2 Hz) until the ground station speaks (its HEARTBEAT, or a
+    # control); only then does the flight start, so nothing is sent into an unopened port
+    end = time.monotonic() + timeout
+    while not reader.heard:
+        air.heartbeat(0.0)
+        for got in reader.poll(0.5):
+            held.update(got)
+        if reader.closed or time.monotonic() > end:
+            air.finish()
+            refused = reader.senders.rejected
+            why = (f" (refused {sum(refused.values())} packet(s): "
+                   f"{', '.join(f'{n} {k}' for k, n in refused.items())})" if refused else "")
+            raise TimeoutError(f"no ground station answered on {getattr(link, 'name', link)} "
+                               f"within {timeout} s{why}")
+    air.emit(0, t, initial)
+    start = time.monotonic()
+    ended = ""
+    for k in range(1, steps + 1):
+        if lockstep:
+            got = reader.next(timeout)
+            if got is None:
+                ended = (f"the link closed after step {k - 1} of {steps}" if reader.closed
+                         else f"no control within {timeout:g} s after step {k - 1} of {steps}")
+                break
+            held.update(got)
+        else:
+            for got in reader.poll(0.0):
+                held.update(got)
+            lead = start + k * sim.dt - time.monotonic()
+            if lead > 0:
+                time.sleep(lead)
+        channels = sim.step(dict(held))
+        t = k * sim.dt
+        history.append(dict(channels))
+        air.emit(k, t, channels)
+    report = air.finish()
+    report.controls_received = reader.received
+    report.refused = dict(reader.senders.rejected)
+    report.ended = ended
+    return report, history
