@@ -18,6 +18,11 @@ from flightid.cli.checks import Output, check_choice, check_paths, read_record
 from flightid.files import json_safe
 from flightid.identification.gap import write_aircraft
 from flightid.identification.gap.diagnose import GapResult, injected
+from flightid.identification.gap.envelope import (
+    conditions,
+    envelope,
+    write_envelope_aircraft,
+)
 from flightid.identification.gap.jsbsim.refly import refly
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.report import write_report
@@ -62,8 +67,17 @@ def gap_command(
     # each record read once: resource guard, unit check, jitter re-gridded
     recs = [read_record(path, "gap", force=force) for path in records]
     vals = [read_record(path, "gap", force=force) for path in validate or []]
+    stems = [Path(p).stem for p in records]
+    if len(conditions(recs, stems)) > 1:  # several conditions: each its own linearisation
+        if vals or refine or report:
+            raise ValueError("--validate, --refine and --report take records of one "
+                             "condition; these records were flown at several (airspeed, "
+                             "altitude or flaps): each condition is held out on its own "
+                             "maneuvers")
+        _envelope(recs, stems, model, axis, surfaces, write, format)
+        return
     result = gap(recs, model, validate=vals or None, refine=refine, axis=axis, surfaces=surfaces,
-                 names=[Path(p).stem for p in records],
+                 names=stems,
                  validate_names=[f"validate {Path(p).stem}" for p in validate or []])
     written = write_aircraft(result, write) if write else None
     # the corrected aircraft and the one as is, flown in JSBSim with each record's inputs
@@ -99,6 +113,48 @@ def gap_command(
         console.print(f"corrected aircraft: {written}")
         if again:
             _print_refly(console, again)
+
+
+def _envelope(recs: list, stems: list[str], model: str, axis: str, surfaces: str | None,
+              write: str | None, format: str) -> None:
+    """Records from several conditions: each diagnosed at its own condition, the regime
+    bins and the derivative trends (``identification.gap.envelope``)."""
+    result = envelope(recs, model, names=stems, axis=axis, surfaces=surfaces)
+    written = write_envelope_aircraft(result, write) if write else None
+    if format == "json":
+        d = result.to_json()
+        d["injected"] = injected(recs)
+        d["aircraft_written"] = str(written) if written else None
+        print(json.dumps(d, indent=2))
+        return
+    console = Console()
+    console.print(f"verdict (the most severe of {len(result.conditions)} conditions): "
+                  f"{VERDICT_TEXT.get(result.verdict, result.verdict)}")
+    t = Table(title="per condition (gap above the null level of the model as is)")
+    for col in ("condition", "axis", "verdict", "above null", "named"):
+        t.add_column(col, overflow="fold")
+    for row in result.to_json()["conditions"]:
+        for a, g in row["axes"].items():
+            above = g["above_null"]
+            t.add_row(row["label"], a[:3], g["verdict"],
+                      "-" if above is None else f"{above:.4f}", "; ".join(g["named"]) or "-")
+    console.print(t)
+    b = Table(title="where in the envelope (bins of conditions)")
+    for col in ("regime", "bin", "axis", "verdicts", "above null"):
+        b.add_column(col, overflow="fold")
+    for r in result.bins:
+        span = (f"{r['low']:.3g}" if r["low"] == r["high"]
+                else f"{r['low']:.3g} to {r['high']:.3g}")
+        b.add_row(r["variable"], f"{span} {r['unit']}", r["axis"][:3],
+                  ", ".join(r["verdicts"]), f"{r['above_null']:.4f}")
+    console.print(b)
+    for tr in result.trends:
+        where = "; ".join(f"{p.delta:+.4f} ± {p.std:.1g} at {p.condition}" for p in tr.points)
+        console.print(f"{tr.axis} {tr.derivative} ({tr.axes} axes) delta: {where}")
+        console.print(f"  trend: {tr.slope_text()} -> named {tr.label()}"
+                      + (f" ({tr.note})" if tr.note else ""))
+    if written:
+        console.print(f"corrected aircraft: {written}")
 
 
 def _print_refly(console: Console, again: dict) -> None:

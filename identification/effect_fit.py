@@ -34,7 +34,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -124,8 +124,11 @@ class _Flights:
                  names: Sequence[str], outputs: Sequence[str],
                  controls: Mapping[str, np.ndarray], cache: Path, surfaces: str,
                  flight_rate_hz: float, offsets: Sequence[str],
-                 condition: tuple[float, float] | None) -> None:
+                 condition: tuple[float, float] | None,
+                 initial: Callable[[Trim], Trim] | None = None,
+                 base: tuple[AugmentEffect, ...] = ()) -> None:
         self.aircraft, self.effect = aircraft, effect
+        self.initial, self.base = initial, base
         self.names = list(names) + [OFFSET + c for c in offsets]
         self.outputs, self.cache, self.surfaces = list(outputs), cache, surfaces
         self.n = record.time.size
@@ -176,9 +179,10 @@ class _Flights:
         key = tuple(own.values())
         if key not in self.trimmed:
             e = dataclasses.replace(self.effect, **own)
-            model = load(str(augment_cached(self.aircraft, [e], self.cache,
+            model = load(str(augment_cached(self.aircraft, [*self.base, e], self.cache,
                                             surface_drive=self.surfaces == "driven")))
-            self.trimmed[key] = model, trim(model, *self.condition)
+            trimmed = trim(model, *self.condition)
+            self.trimmed[key] = model, (self.initial(trimmed) if self.initial else trimmed)
         return self.trimmed[key]
 
     def step(self, name: str) -> float:
@@ -222,7 +226,9 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
                max_iterations: int = 12, colored: bool = False,
                cache: str | Path | None = None, surfaces: str = "commanded",
                flight_rate_hz: float = 0.0, offsets: Sequence[str] = (),
-               condition: tuple[float, float] | None = None) -> EffectFit:
+               condition: tuple[float, float] | None = None,
+               initial: Callable[[Trim], Trim] | None = None,
+               base: Sequence[AugmentEffect] = ()) -> EffectFit:
     """Fit ``effect``'s ``free`` parameters (default: all that size it) to ``record``.
 
     ``aircraft``: the model the effect is added to (a name or an XML path); ``effect``: the
@@ -241,6 +247,10 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
     record's trim surface is known only to its noise and quantization, and a constant
     surface error of 0.005 deg drifts the speed of a 30 s record enough to bias the fit.
     ``condition``: (altitude m, airspeed m/s) to trim at, instead of the record metadata's.
+    ``initial``: the flight's start state from the trim (e.g. a window's measured sideslip,
+    bank and rates, ``gap.jsbsim.refly.start_state``; default: the trim itself). ``base``: effects
+    written into the aircraft with ``effect`` and held as they are (other named
+    corrections, an even term removed).
     """
     if not isinstance(effect, AugmentEffect):
         raise ValueError(f"{METHOD}: {type(effect).__name__} is not an airframe or actuator "
@@ -267,7 +277,7 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
                          f"controls are {', '.join(controls) or 'none'}")
     flights = _Flights(record, aircraft, effect, names, outputs, controls,
                        Path(cache) if cache else CACHE, surfaces, flight_rate_hz, offsets,
-                       condition)
+                       condition, initial, tuple(base))
     all_names = flights.names  # the effect's parameters, then the offsets
     z = np.column_stack([record[c] for c in outputs])
     floor = np.maximum(1e-12 * np.var(z, axis=0), 1e-16)

@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from conftest import TWIN_OTTER
 
+from flightid.identification.data.axes import excited_axes
 from flightid.identification.gap import diagnose, write_aircraft
 from flightid.identification.gap.jsbsim.refly import refly
-from flightid.identification.gap.model.linearise import excited_axes
 from flightid.identification.gap.report import html_report
 from flightid.record import read
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card

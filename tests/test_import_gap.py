@@ -80,13 +80,12 @@ def test_the_imported_log_holds_commands_without_maneuver_windows(imported):
 
 
 def test_the_gap_diagnosis_names_the_servo_lag_and_the_mapping_error(imported):
-    """Measured (docs/import.md): actuator_lag(da) 0.1085 s first, then the rudder as a
-    Cn_dr delta of +0.00899 (-0.2006 of the model's -0.0448: a factor 0.799), held-out
-    gap 0.110 -> 0.032 -> 0.0042. The lag within 15 %: with the rudder mapped right the
-    diagnosis puts 0.1084 s on the record before logging and 0.1086 s on the log (the
-    Telemaster's rate limit and the input's sampling are not in the linear model; a null
-    record of commands shows a 0.009 s lag).
-    The rudder's factor within 0.05 of 0.8: its bound is 0.012."""
+    """Measured (docs/import.md): actuator_lag(da) 0.0991 +- 0.0011 s first, then the
+    rudder as control_effectiveness(dr) 0.804, held-out gap 0.096 -> 0.032 -> 0.0037 (the
+    commands run through the Telemaster's own actuators first). The lag within 15 %: two
+    lags in series stand for one in the fit, and the log's servo values are rounded to
+    whole microseconds.
+    The rudder's factor within 0.05 of 0.8: its bound is 0.001."""
     result = diagnose([imported], "telemaster", axis="lateral", try_pairs=False, steps=2)
     assert result.linearised.surfaces == "command"
     top = result.named[0]

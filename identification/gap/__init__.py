@@ -7,10 +7,13 @@ error on one window), ``verdict`` (is there a gap), ``where`` (gap map), ``candi
 (the catalogue's entries as candidates, their physical ranges and equivalence classes),
 ``rank`` (which effect), ``sequence`` (several effects), ``shrink`` (how far), ``jsbsim``
 (the corrected aircraft written, refined and flown again), ``diagnose`` (all of it),
-``report`` (HTML).
+``report`` (HTML); ``envelope`` (records from several conditions: each diagnosed at
+its own, where in the envelope the model departs) and ``trend`` (a derivative error's
+trend over the conditions).
 """
 
 from flightid.identification.gap.diagnose import GapResult, diagnose
+from flightid.identification.gap.envelope import EnvelopeResult, envelope
 from flightid.identification.gap.jsbsim.write import write_aircraft
 
-__all__ = ["GapResult", "diagnose", "write_aircraft"]
+__all__ = ["EnvelopeResult", "GapResult", "diagnose", "envelope", "write_aircraft"]

@@ -2,7 +2,7 @@
 how far it shrinks (``diagnose``), and its result (``GapResult``: verdict, json form, heat
 map).
 
-Each axis the records excite (``linearise.excited_axes``: elevator -> longitudinal, aileron
+Each axis the records excite (``data.axes.excited_axes``: elevator -> longitudinal, aileron
 or rudder -> lateral) is diagnosed on its own model and windows, and has its own verdict
 (``verdict``): first the model as is is tested against the null level of noise and
 turbulence; only where it fails are candidates ranked and named, in sequence until the
@@ -19,9 +19,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.files import json_safe
+from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_axes
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
 from flightid.identification.gap.candidates.identifiable import not_identifiable
@@ -29,13 +30,8 @@ from flightid.identification.gap.fit import fit
 from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
 from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
-from flightid.identification.gap.model.linearise import (
-    AXIS_INPUTS,
-    AXIS_NAMES,
-    Linearised,
-    excited_axes,
-    linearise,
-)
+from flightid.identification.gap.model.linearise import Linearised, linearise
+from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
@@ -133,7 +129,7 @@ class GapResult:
         return {c: d["total"] for c, d in self.where.by_channel().items()}
 
     def to_json(self, top: int = TOP) -> dict[str, Any]:
-        return _finite({
+        return json_safe({
             "aircraft": self.aircraft,
             "verdict": self.verdict,
             "axis": self.axis,
@@ -190,18 +186,6 @@ class GapResult:
         return heat_map(self.where, f"gap map: {self.aircraft} (the model as is)")
 
 
-def _finite(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_finite(v) for v in x]
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
-
-
 Records = FlightRecord | str | Path | Sequence[FlightRecord | str | Path]
 
 
@@ -219,32 +203,50 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
              validate_names: Sequence[str] | None = None, try_pairs: bool = True,
              steps: int = STEPS, axis: str = "both", refine: bool = False,
              surfaces: str | None = None) -> GapResult:
-    """Diagnose ``records`` against the JSBSim ``aircraft``.
-
-    Parameters
-    ----------
-    records, validate : flight records (or paths) of one aircraft; ``validate`` are held
-        out of every fit when given.
-    aircraft : JSBSim aircraft (project name, stock name or XML path).
-    axis : "lateral", "longitudinal", or "both" (default; "auto" is the same): each axis
-        the records excite, each with its own verdict (module docstring); an axis they do
-        not excite is listed in ``undiagnosed`` with the reason.
-    steps : effects named at most per axis (``sequence.following``), fewer when the model
-        with the named ones reaches the null level.
-    refine : refit the top named airframe effect with the JSBSim aircraft flown from the
-        longest record (``gap.refine``; 5-20 s more): its values are then the ones
-        ``write_aircraft`` writes.
-    surfaces : what the records' surface channels hold, "position" or "command" (None:
-        their ``meta.extra["surfaces"]``, default "position"); on commands the actuator
-        lags are candidates too.
+    """Diagnose ``records`` against the JSBSim ``aircraft``: per excited axis, is there a
+    gap above the null level of noise and turbulence, where it lies, which catalogue
+    effects explain it and how far the held-out gap shrinks (module docstring).
 
     Held out: each maneuver window in turn (windows of the records' maneuver lists, or the
     halves of a record without one); an axis with a single window is cut in two halves in
     time (``evidence`` says so: the weaker evidence of one maneuver).
 
+    Parameters
+    ----------
+    records : FlightRecord, path, or a sequence of them
+        Flight records of one aircraft at one condition (``envelope`` takes several).
+    aircraft : str
+        JSBSim aircraft: a project name, a stock JSBSim name or an XML path.
+    validate : FlightRecord, path, a sequence of them, or None
+        Records held out of every fit; None: each window held out in turn.
+    names, validate_names : sequence of str, or None
+        Labels of the records and of the validation records in the windows' names
+        (default: the file stems, or "record k").
+    try_pairs : bool
+        Try pairs of the top effect with the next ones when it alone leaves a gap.
+    steps : int
+        Effects named at most per axis (``sequence.following``), fewer when the model
+        with the named ones reaches the null level.
+    axis : str
+        "lateral", "longitudinal", or "both" (default; "auto" is the same): each axis the
+        records excite, each with its own verdict; an axis they do not excite is listed in
+        ``undiagnosed`` with the reason.
+    refine : bool
+        Refit the top named airframe effect with the JSBSim aircraft flown on the
+        longest record (``gap.jsbsim.refine``; 10-30 s more): its values are then the ones
+        ``write_aircraft`` writes.
+    surfaces : str or None
+        What the records' surface channels hold, "position" or "command" (None: their
+        ``meta.extra["surfaces"]``, default "position"); commands are passed through the
+        aircraft's own actuators first (``model.surfaces.actuated``), and the
+        actuator lags are candidates too.
+
     Returns
     -------
     GapResult
+        The verdict (``no_gap``, ``explained``, ``partly_unexplained``, ``unexplained``;
+        the worst axis), the gap map, the ranked effects with their parameters in
+        catalogue units, the named ones and the held-out shrink; ``axes()`` per axis.
     """
     records, found = _records(records)
     names = names or found
@@ -254,6 +256,9 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
     if not records:
         raise ValueError("gap: no record to diagnose")
     _one_aircraft([*records, *(validate or [])], aircraft)
+    # records of commands: through the aircraft's own actuators (lag, rate limit) first
+    records = actuated(records, aircraft, surfaces)
+    validate = actuated(validate, aircraft, surfaces) if validate is not None else None
     excited = excited_axes(records)
     if axis in ("both", "auto"):
         axes = excited or ["lateral"]
@@ -376,7 +381,17 @@ def injected(records: Sequence[FlightRecord]) -> list[str]:
     """The airframe and actuator effects a simulated record's card injected (its
     metadata's ``[[effect]]``), as "name(option=value, ...)" with a derivative delta's
     axes always said (the catalogue's default is stability axes; the lateral diagnosis
-    fits body axes); [] for a real record."""
+    fits body axes); [] for a real record.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+
+    Returns
+    -------
+    list of str
+    """
     out: list[str] = []
     for r in records:
         card = (r.meta.scenario or {}).get("card") or {}

@@ -48,14 +48,35 @@ def noise_energy(residual: np.ndarray) -> float:
     Differencing removes what varies slowly (a model's misfit of the rigid-body response)
     and keeps white measurement noise, whose differences have twice its variance (the
     difference-based noise estimate of the residual; Morelli & Klein 2016 ch. 11 estimate
-    noise from the high-frequency part of a residual the same way)."""
+    noise from the high-frequency part of a residual the same way).
+
+    Parameters
+    ----------
+    residual : ndarray
+        One output's residual on one window.
+
+    Returns
+    -------
+    float
+        In the residual's units squared (nan under two samples).
+    """
     if residual.size < 2:
         return float("nan")
     return residual.size * float(np.mean(np.diff(residual) ** 2)) / 2.0
 
 
 def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
-    """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal."""
+    """sum(residual^2) / sum((measured - mean)^2); nan for a constant signal.
+
+    Parameters
+    ----------
+    residual, measured : ndarray
+        One output's residual and measured signal.
+
+    Returns
+    -------
+    float
+    """
     spread = float(np.sum((measured - np.mean(measured)) ** 2))
     return float(np.sum(residual**2) / spread) if spread > 0 else float("nan")
 
@@ -63,7 +84,25 @@ def energy_fraction(residual: np.ndarray, measured: np.ndarray) -> float:
 def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
         max_iterations: int = MAX_ITERATIONS) -> WindowFit:
     """Fit ``free`` (and the nuisance parameters) of ``model`` on ``record``, in at most
-    ``max_iterations`` Gauss-Newton steps."""
+    ``max_iterations`` Gauss-Newton steps.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft (with a candidate's edits).
+    record : FlightRecord
+        One window.
+    free : sequence of str
+        The model's parameters fitted besides the nuisance ones (none: the model as is).
+    max_iterations : int
+        Gauss-Newton steps at most.
+
+    Returns
+    -------
+    WindowFit
+        The freed parameters with their bounds (colored-residual corrected), the cost
+        N/2 ln det R, and each output's measured, model and residual time history.
+    """
     est = output_error.estimate(
         record, model, free=[*free, *nuisance(model)], initial_state="estimate", hold="foh",
         colored=True, check_identifiability=True, max_iterations=max_iterations)
@@ -81,5 +120,20 @@ def fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
 
 
 def held(model: LinearModel, values: dict[str, float], record: FlightRecord) -> WindowFit:
-    """``model`` with ``values`` held, on ``record`` (only the nuisance fitted)."""
+    """``model`` with ``values`` held, on ``record`` (only the nuisance fitted).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft (with a candidate's edits).
+    values : dict of str to float
+        Parameters held at these values (fitted on other windows).
+    record : FlightRecord
+        The held-out window.
+
+    Returns
+    -------
+    WindowFit
+        As ``fit`` with no parameter freed.
+    """
     return fit(model.with_start(**values) if values else model, record, ())

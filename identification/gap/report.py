@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap.diagnose import GapResult
 from flightid.identification.gap.fit import held
-from flightid.identification.gap.model.linearise import AXIS_INPUTS
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed
 from flightid.identification.gap.shrink import shrink_text
@@ -47,7 +47,19 @@ def _loaded(items: Records, prefix: str = "") -> tuple[list[FlightRecord], list[
 def held_out_windows(result: GapResult, records: Records, validate: Records | None = None
                      ) -> list[Segment]:
     """The windows ``result`` held out, cut again from ``records`` (or ``validate``) as the
-    diagnosis cut them; every window when the labels do not match."""
+    diagnosis cut them; every window when the labels do not match.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    records, validate : records or paths
+        Those diagnosed, and the validation records.
+
+    Returns
+    -------
+    list of Segment
+    """
     recs, names = _loaded(validate, "validate ") if validate else _loaded(records)
     windows = segments(recs, names, AXIS_INPUTS[result.axis])
     chosen = [w for w in windows if w.label in set(result.windows.get("held_out", []))]
@@ -58,7 +70,19 @@ def time_histories(result: GapResult, records: Records, validate: Records | None
                    ) -> Figure:
     """Per held-out window (at most ``MAX_WINDOWS``) and output: measured, the model as is
     and the model with every named effect (at the values fitted on all windows; the
-    nuisance biases and initial state refitted on the window, as in the held-out check)."""
+    nuisance biases and initial state refitted on the window, as in the held-out check).
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    records, validate : records or paths
+        Those diagnosed, and the validation records.
+
+    Returns
+    -------
+    Figure
+    """
     windows = held_out_windows(result, records, validate)[:MAX_WINDOWS]
     lin = result.linearised
     corrected = lin
@@ -104,7 +128,22 @@ def html_report(result: GapResult, records: Records | None = None,
                 validate: Records | None = None, refly: dict | None = None) -> str:
     """The report as one self-contained HTML page; with ``records`` (those diagnosed), the
     time histories of the held-out windows; with ``refly`` (``jsbsim.refly``), the gap of
-    the corrected aircraft flown again in JSBSim."""
+    the corrected aircraft flown again in JSBSim.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    records, validate : records, paths or None
+        Those diagnosed, and the validation records.
+    refly : dict or None
+        ``jsbsim.refly``'s result.
+
+    Returns
+    -------
+    str
+        The HTML page.
+    """
     d = result.to_json()
     named_labels = {r.candidate.label: k for k, r in enumerate(result.named_all(), start=1)}
     rows = []
@@ -209,7 +248,24 @@ def _refly(refly: dict | None) -> str:
 
 def write_report(result: GapResult, path: str | Path, records: Records | None = None,
                  validate: Records | None = None, refly: dict | None = None) -> Path:
-    """Write ``html_report`` to ``path``."""
+    """Write ``html_report`` to ``path``.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    path : str or Path
+        The HTML file written.
+    records, validate : records, paths or None
+        Those diagnosed, and the validation records.
+    refly : dict or None
+        ``jsbsim.refly``'s result.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     path.write_text(html_report(result, records, validate, refly))
     return path

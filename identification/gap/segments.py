@@ -30,7 +30,23 @@ class Segment:
 
 def segments(records: list[FlightRecord], names: list[str] | None = None,
              inputs: tuple[str, ...] = INPUTS) -> list[Segment]:
-    """The maneuver windows of ``records`` (labelled by ``names`` or the record index)."""
+    """The maneuver windows of ``records`` (labelled by ``names`` or the record index).
+
+    Parameters
+    ----------
+    records : list of FlightRecord
+        The records.
+    names : list of str or None
+        Their labels (default: "record k").
+    inputs : tuple of str
+        The axis's surfaces ("da", "dr" lateral; "de" longitudinal).
+
+    Returns
+    -------
+    list of Segment
+        One per maneuver on ``inputs`` (1 s before it to 8 s after it, or the next
+        maneuver), or the two halves of a record without a maneuver list.
+    """
     out: list[Segment] = []
     for k, record in enumerate(records):
         name = names[k] if names else f"record {k + 1}"
@@ -70,7 +86,18 @@ def _halves(record: FlightRecord) -> list[tuple[float, float]]:
 def split(segment: Segment) -> list[Segment]:
     """One window cut in two halves in time (labelled "first half" and "second half"),
     so that one can be held out of the other's fit when an axis flies a single maneuver;
-    the window itself when a half would be shorter than ``MIN_WINDOW_S``."""
+    the window itself when a half would be shorter than ``MIN_WINDOW_S``.
+
+    Parameters
+    ----------
+    segment : Segment
+        One window.
+
+    Returns
+    -------
+    list of Segment
+        Its two halves, or the window itself.
+    """
     mid = 0.5 * (segment.start + segment.end)
     if mid - segment.start < MIN_WINDOW_S:
         return [segment]

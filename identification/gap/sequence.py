@@ -22,7 +22,19 @@ STEPS = 3  # effects named at most
 
 
 def fixed(lin: Linearised, effect: Ranked) -> Linearised:
-    """``lin`` with ``effect`` added at its fitted values (no longer free)."""
+    """``lin`` with ``effect`` added at its fitted values (no longer free).
+
+    Parameters
+    ----------
+    lin : Linearised
+        The model.
+    effect : Ranked
+        A named effect.
+
+    Returns
+    -------
+    Linearised
+    """
     model = effect.candidate.wrap(lin.model).with_start(**effect.values)
     return dataclasses.replace(lin, model=model)
 
@@ -55,7 +67,28 @@ def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
     fixed in the model; stops at the first step that confirms nothing, or as soon as the
     model with the effects named so far passes ``at_null`` (its residual is at the null
     level of noise and turbulence: ``verdict.null_test``). ``above``: the gap above the
-    null level of the model with the effects so far (``Ranker.above``)."""
+    null level of the model with the effects so far (``Ranker.above``).
+
+    Parameters
+    ----------
+    lin : Linearised
+        The model.
+    folds : Folds
+        The fitted and held-out windows.
+    first : Ranked
+        The first named effect (or pair).
+    steps : int
+        More effects at most.
+    at_null : callable or None
+        Whether a model is at the null level (stops the sequence).
+    above : callable or None
+        A model's gap above the null level per channel (what a next effect is judged against).
+
+    Returns
+    -------
+    list of Ranked
+        The effects named after ``first``, in order.
+    """
     named = [first]
     current = fixed(lin, first)
     out: list[Ranked] = []

@@ -12,7 +12,21 @@ def shrinkage(sequence: Sequence[Ranked]) -> dict:
     """{"effect", "steps", "channels": {ch: {"before", "after", "shrink"}}, "overall"}:
     the held-out gap (fraction of the measured energy) of the model as is (before the
     first effect) and with every effect of ``sequence`` (after the last), and the overall
-    gap after each step; empty without an effect or held-out windows."""
+    gap after each step; empty without an effect or held-out windows.
+
+    Parameters
+    ----------
+    sequence : sequence of Ranked
+        The named effects in order (each fitted with the ones before it fixed).
+
+    Returns
+    -------
+    dict
+        "effect" (the labels joined by "then"), "windows" (held out), "channels"
+        {channel: before, after, shrink}, "steps" (each effect's held-out gap after it)
+        and "overall" (mean over channels), as fractions of the measured energy; {}
+        without an effect or held-out windows.
+    """
     if not sequence or not sequence[0].heldout_before or not sequence[-1].heldout_after:
         return {}
     first, last = sequence[0], sequence[-1]
@@ -29,7 +43,17 @@ def shrinkage(sequence: Sequence[Ranked]) -> dict:
 
 
 def shrink_text(x: float | None) -> str:
-    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown."""
+    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown.
+
+    Parameters
+    ----------
+    x : float or None
+        A relative shrink (1: the gap closed).
+
+    Returns
+    -------
+    str
+    """
     if x is None or not math.isfinite(x):
         return "-"
     return "worse" if x < 0 else f"{x:.0%}"

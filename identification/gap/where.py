@@ -28,13 +28,39 @@ REGIMES = {"alpha": ("deg", 180.0 / math.pi), "V": ("m/s", 1.0)}  # variable: un
 
 
 def band_label(band: tuple[float, float]) -> str:
+    """A band's label for tables ("<0.3 Hz", "1-3 Hz", ">3 Hz").
+
+    Parameters
+    ----------
+    band : tuple of float
+        (low, high), Hz; low 0 or high inf for the open ends.
+
+    Returns
+    -------
+    str
+    """
     lo, hi = band
     return f"<{hi:g} Hz" if lo == 0 else (f">{lo:g} Hz" if math.isinf(hi) else f"{lo:g}-{hi:g} Hz")
 
 
 def band_fractions(residual: np.ndarray, measured: np.ndarray, dt: float,
                    bands: tuple[tuple[float, float], ...] = BANDS) -> list[float]:
-    """Residual energy in each band / measured energy (mean removed), by Parseval."""
+    """Residual energy in each band / measured energy (mean removed), by Parseval.
+
+    Parameters
+    ----------
+    residual, measured : ndarray
+        One output's residual and measured signal on one window.
+    dt : float
+        Sample interval, s.
+    bands : tuple of (float, float)
+        Frequency bands, Hz.
+
+    Returns
+    -------
+    list of float
+        Per band, the residual energy over the measured energy (nan for a constant signal).
+    """
     n = residual.size
     f = np.fft.rfftfreq(n, dt)
     weight = np.full(f.size, 2.0)
@@ -82,7 +108,23 @@ def regime_rows(fits: dict[str, WindowFit], records: dict[str, FlightRecord],
                 bins: int = REGIME_BINS) -> list[dict]:
     """Per regime variable (alpha, V: measured, from each window's record) and bin, each
     output's residual energy / measured energy (window means removed) over the samples in
-    the bin; a variable the records lack is left out."""
+    the bin; a variable the records lack is left out.
+
+    Parameters
+    ----------
+    fits : dict of str to WindowFit
+        The model-as-is fits by window label.
+    records : dict of str to FlightRecord
+        The windows' records, same labels.
+    bins : int
+        Equal-count bins per regime variable.
+
+    Returns
+    -------
+    list of dict
+        Per variable (alpha deg, V m/s), bin and channel: "variable", "unit", "low",
+        "high", "channel", "fraction" and "samples".
+    """
     out: list[dict] = []
     labels = [k for k in fits if k in records]
     for var, (unit, scale) in REGIMES.items():
@@ -109,7 +151,23 @@ def regime_rows(fits: dict[str, WindowFit], records: dict[str, FlightRecord],
 def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] = BANDS,
             records: dict[str, FlightRecord] | None = None) -> GapMap:
     """The gap map of the model-as-is fits of each window (``{window label: fit}``); by
-    regime too when the windows' ``records`` are given."""
+    regime too when the windows' ``records`` are given.
+
+    Parameters
+    ----------
+    fits : dict of str to WindowFit
+        The model-as-is fits by window label.
+    bands : tuple of (float, float)
+        Frequency bands, Hz.
+    records : dict of str to FlightRecord or None
+        The windows' records (for the regime rows).
+
+    Returns
+    -------
+    GapMap
+        Per window and channel the residual fraction and its split by band; by regime when
+        ``records`` are given.
+    """
     out = GapMap(bands, regimes=regime_rows(fits, records) if records else [])
     labels = [band_label(b) for b in bands]
     for window, wf in fits.items():
@@ -123,7 +181,19 @@ def gap_map(fits: dict[str, WindowFit], bands: tuple[tuple[float, float], ...] =
 
 
 def heat_map(gm: GapMap, title: str = "") -> Figure:
-    """Channels x bands (averaged over windows) and channels x windows (total)."""
+    """Channels x bands (averaged over windows) and channels x windows (total).
+
+    Parameters
+    ----------
+    gm : GapMap
+        The gap map.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    Figure
+    """
     chans = gm.channels()
     labels = [band_label(b) for b in gm.bands]
     per = gm.by_channel()

@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 from flightid.files import json_safe
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import GapResult, diagnose
-from flightid.identification.gap.model.linearise import AXIS_FRAME, AXIS_INPUTS, linearise
+from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
 from flightid.identification.gap.segments import segments

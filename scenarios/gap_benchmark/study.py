@@ -158,13 +158,37 @@ def benchmark(n: int, seed: int, nulls: int = 100, turbulence: str = "light",
               aircraft: tuple[str, ...] = tuple(AIRCRAFT),
               options: dict[str, Any] | None = None) -> Benchmark:
     """``n`` blind cases and ``nulls`` null cases drawn from ``seed``, each flown in
-    ``turbulence`` (calm, light, moderate), diagnosed and scored.
+    ``turbulence``, diagnosed without being told what was injected, and scored.
 
-    ``workers`` local processes (1: in this process), or the Dask scheduler at
-    ``dask_address``. With ``output``, each case is appended to ``output/cases.jsonl`` as
-    it finishes, cases stored there already are not run again, and the summary goes to
-    ``output/summary.json``. ``options``: passed to ``diagnose`` (tests: fewer steps).
-    ``progress(done, total)`` after each case.
+    Parameters
+    ----------
+    n : int
+        Blind cases (single effects, pairs and effects outside the catalogue).
+    seed : int
+        The draw's seed.
+    nulls : int
+        Null cases (nothing injected), drawn on their own stream.
+    turbulence : str
+        "calm", "light" or "moderate" (MIL-F-8785C Dryden).
+    output : str, Path or None
+        A folder: each case is appended to ``output/cases.jsonl`` as it finishes, cases
+        stored there already are not run again, and the summary goes to
+        ``output/summary.json``; None: nothing written.
+    progress : callable or None
+        ``progress(done, total)`` after each case.
+    workers : int or None
+        Local processes (1: in this process; None: one per core).
+    dask_address : str or None
+        A Dask scheduler's address to run the cases on instead.
+    aircraft : tuple of str
+        The aircraft drawn from (project names and stock JSBSim ones).
+    options : dict or None
+        Passed to ``diagnose`` (tests: fewer steps).
+
+    Returns
+    -------
+    Benchmark
+        The cases' results and their summary per kind of effect.
     """
     options = dict(options or {})
     aircraft = tuple(aircraft)

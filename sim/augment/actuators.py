@@ -7,12 +7,15 @@ surface position (``fcs/elevator-pos-rad``, ``fcs/left-aileron-pos-rad``,
 ``fcs/rudder-pos-rad``): JSBSim's ``<lag>`` is the break frequency C1 of C1/(s + C1) (JSBSim
 reference manual, FGActuator), so the time constant is 1/C1. Actuators in series (an
 augmented aircraft's added lag after the original) add their time constants (the
-low-frequency sum of two first-order lags). Rate limits are nonlinear and not read here.
+low-frequency sum of two first-order lags). ``actuator_chains`` reads each actuator's lag
+and ``<rate_limit>`` (rad/s) in series, for a model that runs them as JSBSim does.
 """
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 
 from flightid.sim.augment.document import POSITIONS
 from flightid.sim.jsbsim.model import locate
@@ -20,10 +23,29 @@ from flightid.sim.jsbsim.model import locate
 MAX_CHAIN = 8  # actuators followed in series
 
 
-def actuator_lags(aircraft: str) -> dict[str, float]:
-    """Per surface (``de``, ``da``, ``dr``): the time constant (s) of the actuator lags
-    writing its position in ``aircraft``'s XML (a project name, stock JSBSim name or XML
-    path); 0 for a surface without one (or an FCS kept in a separate systems file)."""
+@dataclass(frozen=True)
+class Actuator:
+    """One JSBSim ``<actuator>``: its first-order lag's time constant (s; 0 without a
+    ``<lag>``) and its rate limit (rad/s; inf without a ``<rate_limit>``)."""
+
+    tau: float = 0.0
+    rate_limit: float = math.inf
+
+
+def _number(text: str | None, default: float) -> float:
+    """A plain number of the XML, else ``default`` (a property-valued rate limit is not
+    read here)."""
+    try:
+        return float(text) if text is not None else default
+    except ValueError:
+        return default
+
+
+def actuator_chains(aircraft: str) -> dict[str, list[Actuator]]:
+    """Per surface (``de``, ``da``, ``dr``): the ``<actuator>`` elements writing its position
+    in ``aircraft``'s XML (a project name, stock JSBSim name or XML path), in series from
+    the command to the position; [] for a surface without one (or an FCS kept in a
+    separate systems file)."""
     _, xml, _ = locate(aircraft)
     root = ET.parse(xml).getroot()
     writers = {}
@@ -31,16 +53,24 @@ def actuator_lags(aircraft: str) -> dict[str, float]:
         out = act.findtext("output")
         if out:
             writers[out.strip()] = act
-    lags = {}
+    chains = {}
     for surface, props in POSITIONS.items():
-        prop, tau = props[0][0], 0.0
+        prop, chain = props[0][0], []
         for _ in range(MAX_CHAIN):
             act = writers.get(prop)
             if act is None:
                 break
-            lag = act.findtext("lag")
-            if lag is not None and float(lag) > 0:
-                tau += 1.0 / float(lag)
+            lag = _number(act.findtext("lag"), 0.0)
+            limit = _number(act.findtext("rate_limit"), math.inf)
+            chain.append(Actuator(1.0 / lag if lag > 0 else 0.0,
+                                  limit if limit > 0 else math.inf))
             prop = (act.findtext("input") or "").strip().lstrip("-")
-        lags[surface] = tau
-    return lags
+        chains[surface] = chain[::-1]
+    return chains
+
+
+def actuator_lags(aircraft: str) -> dict[str, float]:
+    """Per surface (``de``, ``da``, ``dr``): the time constant (s) of the actuator lags
+    writing its position in ``aircraft``'s XML (``actuator_chains``; lags in series add);
+    0 for a surface without one."""
+    return {s: sum((a.tau for a in chain), 0.0) for s, chain in actuator_chains(aircraft).items()}

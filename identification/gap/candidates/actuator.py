@@ -14,12 +14,11 @@ surface channels hold the commands (``model.surfaces.surfaces_of``: the record's
   absorb (``identifiable``).
 
 On a record of surface positions the actuator has already acted on what was recorded:
-no actuator entry is a candidate there. On a record of commands the model includes the
-aircraft's own actuator lags (``model.surfaces.with_actuators``, read from its XML by
-``sim.actuators.actuator_lags``), so an ``actuator_lag`` candidate is the lag the model
-lacks; the aircraft's own rate limits are not in the linear model (a 4 deg step through
-the Navion's 60 deg/s limit looks like 0.07 s more lag), so a command record of large,
-fast steps on an aircraft with slow actuators names a lag that is the rate limit.
+no actuator entry is a candidate there. On a record of commands the diagnosis first
+passes the commands through the aircraft's own actuators, read from its XML
+(``model.surfaces.actuated``: each ``<actuator>``'s lag and rate limit, run as JSBSim runs
+them, the commands held between updates), so the plain aircraft flown on its own commands
+is at the null level and an ``actuator_lag`` candidate is the lag the model lacks.
 """
 
 from __future__ import annotations
@@ -34,7 +33,18 @@ TAU_START = 0.02  # s: start of the lag fit
 
 def actuator_lag(surface: str) -> Candidate:
     """The catalogue's ``actuator_lag`` (tau, s) between the recorded command of
-    ``surface`` and the surface."""
+    ``surface`` and the surface.
+
+    Parameters
+    ----------
+    surface : str
+        "da", "dr" or "de", an input of the model.
+
+    Returns
+    -------
+    Candidate
+        Its catalogue entry, options and the linear-model parameters it frees (tau, s).
+    """
     name = f"actuator_lag_{surface}"
 
     def wrap(model: LinearModel) -> LinearModel:
@@ -50,7 +60,20 @@ def actuator_lag(surface: str) -> Candidate:
 
 def actuator_candidates(model: LinearModel, surfaces: str) -> list[Candidate]:
     """The actuator candidates for ``model``: a lag per surface input when ``surfaces``
-    is "command", none for "position"."""
+    is "command", none for "position".
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    surfaces : str
+        "position" or "command".
+
+    Returns
+    -------
+    list of Candidate
+        One ``actuator_lag`` per surface input on commands; [] on positions.
+    """
     if surfaces != "command":
         return []
     return [actuator_lag(s) for s in model.inputs if s in ("da", "dr", "de")]

@@ -80,7 +80,24 @@ def catalogue_candidates(model: LinearModel, axes: str = "body", *,
     derivatives in ``axes``): derivative deltas and control effectiveness, tail ice (a
     longitudinal model), the sensor and mounting candidates of its outputs, the mass
     properties, and the actuator lags when ``surfaces`` (None: from the ``records``'
-    metadata, ``model.surfaces.surfaces_of``) is "command"."""
+    metadata, ``model.surfaces.surfaces_of``) is "command".
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    axes : str
+        Axes of its derivatives ("body" lateral, "stability" longitudinal).
+    surfaces : str or None
+        "position" or "command" (None: from ``records``).
+    records : sequence of FlightRecord
+        The records (their metadata says what the surfaces hold).
+
+    Returns
+    -------
+    list of Candidate
+        Every single-effect candidate for the model.
+    """
     known = {d for names in AXIS_DERIVATIVES.values() for d in names} - set(TRIM_TERMS)
     out = [_derivative(d, axes) for d in model.parameters if d in known]
     out += [_surface(s) for s in SURFACES if s in model.inputs]
@@ -111,7 +128,18 @@ def _tail_ice(model: LinearModel) -> LinearModel:
 
 def tail_candidate(model: LinearModel) -> Candidate | None:
     """The catalogue's ``tail_ice`` (three factors); None when the model has no elevator
-    or no pitching-moment derivatives."""
+    or no pitching-moment derivatives.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        Its three factors (elevator, stability, damping; 1: the model).
+    """
     if "de" not in model.inputs or not {"Cm_de", "Cm_alpha", "Cm_q"} <= set(model.parameters):
         return None
     return Candidate("tail_ice", {}, tuple(f"tail_{k}" for k in TAIL_ICE), _tail_ice,
@@ -120,7 +148,20 @@ def tail_candidate(model: LinearModel) -> Candidate | None:
 
 def group(entry: str, parts: list[Candidate]) -> Candidate | None:
     """Several effects at once, named ``entry`` (a group among them flattened into its
-    parts); None when two free the same parameter."""
+    parts); None when two free the same parameter.
+
+    Parameters
+    ----------
+    entry : str
+        The group's name ("pair": a pair of effects).
+    parts : list of Candidate
+        The effects.
+
+    Returns
+    -------
+    Candidate or None
+        The group, freeing every part's parameters.
+    """
     parts = [q for p in parts for q in (p.parts or (p,))]
     free = [f for p in parts for f in p.free]
     if len(set(free)) < len(free):
@@ -135,5 +176,16 @@ def group(entry: str, parts: list[Candidate]) -> Candidate | None:
 
 
 def pair(a: Candidate, b: Candidate) -> Candidate | None:
-    """Both effects at once; None when they free the same parameter."""
+    """Both effects at once; None when they free the same parameter.
+
+    Parameters
+    ----------
+    a, b : Candidate
+        The two effects.
+
+    Returns
+    -------
+    Candidate or None
+        The pair.
+    """
     return group("pair", [a, b])

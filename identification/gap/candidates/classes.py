@@ -24,7 +24,17 @@ CLASS_OF: dict[str, tuple[str, ...]] = {"cg_offset": ("Cm_alpha", "Cn_beta")}
 
 
 def same_class(a: Candidate, b: Candidate) -> bool:
-    """Whether ``a`` and ``b`` are one of the classes of ``CLASS_OF`` (either order)."""
+    """Whether ``a`` and ``b`` are one of the classes of ``CLASS_OF`` (either order).
+
+    Parameters
+    ----------
+    a, b : Candidate
+        Two candidates.
+
+    Returns
+    -------
+    bool
+    """
     for x, y in ((a, b), (b, a)):
         if (x.entry in CLASS_OF and y.entry == "derivative_delta"
                 and y.options.get("derivative") in CLASS_OF[x.entry]):
@@ -36,7 +46,15 @@ def prefer_model_terms(ranked: list[Any], margin: float) -> None:
     """Unconfirm a confirmed member of a class (``CLASS_OF``) when a confirmed derivative
     delta of its class leaves a held-out gap within ``margin`` (relative) of its own: the
     data cannot tell them apart, and the delta is the model's own term. ``ranked``: the
-    ``rank.Ranked`` of one ranking."""
+    ``rank.Ranked`` of one ranking.
+
+    Parameters
+    ----------
+    ranked : list of Ranked
+        The ranked effects, changed in place.
+    margin : float
+        Relative held-out margin by which a class member must beat the delta.
+    """
     confirmed = [r for r in ranked if r.confirmed and r.heldout_after]
     for r in confirmed:
         if r.candidate.entry not in CLASS_OF:

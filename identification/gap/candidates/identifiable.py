@@ -62,6 +62,11 @@ ALWAYS: dict[str, str] = {
                      "measured condition and weight it is identifiable only as 'surface "
                      "bias or Cm_0 / Cl_0 / Cn_0 mismatch'",
 }
+# the condition-dependent delta: a model linearised at one condition holds one value of it
+TABLE = ("a delta that changes with airspeed or alpha: at one condition it is the "
+         "derivative_delta of the derivative there (named as such); records at several "
+         "conditions (flightid gap over them: identification.gap.envelope) fit its table "
+         "and name it with its trend")
 # the link and clock entries act on the bytes and time stamps of a telemetry link
 LINK = ("acts on the telemetry link's packets or time stamps, not on the values of a "
         "decoded record; the bridge's own statistics (packets lost, CRC failures, arrival "
@@ -86,6 +91,8 @@ def _reason(name: str, model: LinearModel, surfaces: str) -> str:
             return ("the record's surfaces are positions: the actuator has already acted "
                     "on what was recorded; " + COMMANDS)
         return "the model has no surface input"
+    if name == "derivative_table":
+        return TABLE
     if name == "tail_ice":
         return ("tail ice acts on the pitching moment: the lateral axis does not carry it; "
                 "a record with elevator maneuvers (the longitudinal axis) makes it "
@@ -108,7 +115,22 @@ def not_identifiable(model: LinearModel, records: Sequence[FlightRecord] = (), *
     a candidate for ``model`` (the linearised aircraft of one axis, with the outputs the
     ``records`` carry), with the reason and what would make it identifiable.
     ``surfaces``: what the records' surface channels hold ("position" or "command"; None:
-    their metadata)."""
+    their metadata).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+    records : sequence of FlightRecord
+        The records.
+    surfaces : str or None
+        "position" or "command" (None: the records' metadata).
+
+    Returns
+    -------
+    dict of str to str
+        Entry (or entry with options) -> the reason, and what would make it identifiable.
+    """
     kind = surfaces_of(records, surfaces)
     found = {c.entry for c in catalogue_candidates(model, surfaces=kind)}
     out = {name: _reason(name, model, kind) for name in CATALOGUE if name not in found}

@@ -43,7 +43,18 @@ def _moved(model: LinearModel) -> list[tuple[str, str, float]]:
 
 
 def cg_offset(model: LinearModel) -> Candidate | None:
-    """The CG moved forward by x (m)."""
+    """The CG moved forward by x (m).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None without a reference condition or any moment derivative a CG shift moves.
+    """
     if model.condition is None:
         return None
     pairs = [(m, f, length) for m, f, length in _moved(model) if f in model.parameters]
@@ -68,7 +79,18 @@ TRIM = ("CL_0", "CD_0")
 
 
 def mass_scale(model: LinearModel) -> Candidate | None:
-    """The mass scaled by ``factor``."""
+    """The mass scaled by ``factor``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None when the model has no force derivative (trim terms aside).
+    """
     scaled = [d for d in model.parameters
               if d.partition("_")[0] in FORCES and d not in TRIM]
     if not scaled:
@@ -94,7 +116,18 @@ def mass_scale(model: LinearModel) -> Candidate | None:
 
 
 def inertia_scale(model: LinearModel) -> Candidate | None:
-    """The inertias of the model's axis scaled (ixx, izz lateral; iyy longitudinal)."""
+    """The inertias of the model's axis scaled (ixx, izz lateral; iyy longitudinal).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None without a reference condition or a p, r or q state.
+    """
     c = model.condition
     if c is None:
         return None
@@ -128,7 +161,18 @@ def inertia_scale(model: LinearModel) -> Candidate | None:
 
 
 def thrust_moment(model: LinearModel) -> Candidate | None:
-    """A pitching moment arm x thrust (m), when thrust is an input of the model."""
+    """A pitching moment arm x thrust (m), when thrust is an input of the model.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None without a reference condition, a thrust input or a q state.
+    """
     c = model.condition
     if c is None or "thrust" not in model.inputs or "q" not in model.states:
         return None
@@ -149,6 +193,17 @@ def thrust_moment(model: LinearModel) -> Candidate | None:
 
 
 def mass_candidates(model: LinearModel) -> list[Candidate]:
-    """Every mass-property candidate for ``model``."""
+    """Every mass-property candidate for ``model``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    list of Candidate
+        Those that apply to the model.
+    """
     return [c for f in (cg_offset, mass_scale, inertia_scale, thrust_moment)
             if (c := f(model)) is not None]

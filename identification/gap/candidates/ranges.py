@@ -37,18 +37,38 @@ def _percent(factor: float) -> str:
     return f"{(factor - 1.0) * 100:+.0f} %"
 
 
-def _derivative(cand: Candidate, delta: float, model: LinearModel | None) -> str | None:
-    name = cand.options["derivative"]
-    if name not in DERIVATIVE_RANGES or model is None or name not in model.start:
+def derivative_outside(name: str, value: float) -> str | None:
+    """None when the derivative ``name`` at ``value`` (per rad, or per unit nondimensional
+    rate) is inside ``DERIVATIVE_RANGES`` (or has no range there); else why not.
+
+    Parameters
+    ----------
+    name : str
+        The derivative, e.g. "Cn_beta".
+    value : float
+        Its value, per rad (or per unit nondimensional rate).
+
+    Returns
+    -------
+    str or None
+        None inside the range; else the value, the range and what fits instead.
+    """
+    if name not in DERIVATIVE_RANGES:
         return None
     lo, hi = DERIVATIVE_RANGES[name]
-    value = model.start[name] + delta
     if lo <= value <= hi:
         return None
     what = ("dynamics the model lacks (a lag or delay of a sensor or actuator) fitted as a "
             "damping term" if name.endswith(RATE_TERMS) else
             "a change no airframe has: a sensor scale or the wrong aircraft data")
     return f"{name} {value:+.3g} is outside [{lo:g}, {hi:g}]: {what}"
+
+
+def _derivative(cand: Candidate, delta: float, model: LinearModel | None) -> str | None:
+    name = cand.options["derivative"]
+    if model is None or name not in model.start:
+        return None
+    return derivative_outside(name, model.start[name] + delta)
 
 
 def _family(cand: Candidate, name: str, value: float) -> str:
@@ -87,7 +107,22 @@ def out_of_range(candidate: Candidate, parameters: Mapping[str, Mapping[str, flo
     {name: {"value", ...}}, as ``Candidate.parameters`` gives them) is in the catalogue's
     physical range; else the family that fits, e.g. "horizontal-tail effectiveness +38 %"
     for a ``tail_ice`` elevator factor of 1.38. ``model``: the linear model the deltas are
-    relative to (a ``derivative_delta`` is checked as the derivative it makes)."""
+    relative to (a ``derivative_delta`` is checked as the derivative it makes).
+
+    Parameters
+    ----------
+    candidate : Candidate
+        The candidate (a pair's parts each checked).
+    parameters : mapping
+        Its fitted parameters in catalogue units, {name: {"value", ...}}.
+    model : LinearModel or None
+        The model a derivative delta is relative to.
+
+    Returns
+    -------
+    str or None
+        None inside the range; else the family that fits.
+    """
     if candidate.parts:
         found = []
         for p in candidate.parts:

@@ -58,7 +58,19 @@ def _output_scale(channel: str) -> Callable[[LinearModel], LinearModel]:
 
 
 def scale(channel: str) -> Candidate:
-    """The catalogue's sensor ``scale`` on output ``channel``."""
+    """The catalogue's sensor ``scale`` on output ``channel``.
+
+    Parameters
+    ----------
+    channel : str
+        An output of the model.
+
+    Returns
+    -------
+    Candidate
+        Its catalogue entry, options and the linear-model parameters it frees (the
+        factor, 1: the model).
+    """
     return Candidate("scale", {"channel": channel}, (f"scale_{channel}",),
                      _output_scale(channel))
 
@@ -79,12 +91,34 @@ def _time_constant(entry: str, channel: str) -> Candidate:
 
 
 def delay(channel: str) -> Candidate:
-    """The catalogue's sensor ``delay`` (tau, s) on output ``channel``."""
+    """The catalogue's sensor ``delay`` (tau, s) on output ``channel``.
+
+    Parameters
+    ----------
+    channel : str
+        An output of the model.
+
+    Returns
+    -------
+    Candidate
+        Its catalogue entry, options and the linear-model parameters it frees (tau, s).
+    """
     return _time_constant("delay", channel)
 
 
 def lag(channel: str) -> Candidate:
-    """The catalogue's sensor ``lag`` (tau, s) on output ``channel``."""
+    """The catalogue's sensor ``lag`` (tau, s) on output ``channel``.
+
+    Parameters
+    ----------
+    channel : str
+        An output of the model.
+
+    Returns
+    -------
+    Candidate
+        Its catalogue entry, options and the linear-model parameters it frees (tau, s).
+    """
     return _time_constant("lag", channel)
 
 
@@ -93,7 +127,18 @@ def _rows(C: np.ndarray, D: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
 
 
 def misalignment(model: LinearModel) -> Candidate | None:
-    """The IMU triad rotated about body y (rad), when the model outputs p and r."""
+    """The IMU triad rotated about body y (rad), when the model outputs p and r.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None when the model lacks p or r.
+    """
     if not {"p", "r"} <= set(model.outputs):
         return None
     name = "misalignment_y"
@@ -121,7 +166,18 @@ _LEVER = {"ay": (("x", "r", 1.0), ("z", "p", -1.0)), "az": (("x", "q", -1.0),)}
 
 
 def lever_arm(model: LinearModel) -> Candidate | None:
-    """Accelerometers off the CG (m, body axes): ay or az with the tangential terms."""
+    """Accelerometers off the CG (m, body axes): ay or az with the tangential terms.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None when the model outputs neither ay nor az (with the states they read).
+    """
     channel = next((c for c in _LEVER if c in model.outputs), None)
     terms = tuple(t for t in _LEVER[channel] if t[1] in model.states) if channel else ()
     if not terms:
@@ -154,7 +210,19 @@ _VANE = {"beta": (("beta_x", "r", 1.0),), "alpha": (("alpha_x", "q", -1.0),)}
 
 
 def vanes(model: LinearModel) -> Candidate | None:
-    """Flow vanes off the CG (m): beta or alpha with the rotation's flow."""
+    """Flow vanes off the CG (m): beta or alpha with the rotation's flow.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    Candidate or None
+        None without a reference condition, or when the model outputs neither beta nor
+        alpha.
+    """
     if model.condition is None:
         return None
     channel = next((c for c in _VANE if c in model.outputs), None)
@@ -183,7 +251,18 @@ def vanes(model: LinearModel) -> Candidate | None:
 
 def sensor_candidates(model: LinearModel) -> list[Candidate]:
     """Every sensor and mounting candidate for ``model``: scale, delay and lag of each
-    output, then misalignment, lever arm and vanes where the outputs carry them."""
+    output, then misalignment, lever arm and vanes where the outputs carry them.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft of one axis.
+
+    Returns
+    -------
+    list of Candidate
+        In that order.
+    """
     out = [scale(c) for c in model.outputs]
     out += [f(c) for f in (delay, lag) for c in model.outputs]
     out += [c for f in (misalignment, lever_arm, vanes) if (c := f(model)) is not None]

@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.gap.jsbsim.write import gap_fractions, write_aircraft
-from flightid.identification.gap.model.linearise import AXIS_INPUTS, AXIS_OUTPUTS, start_condition
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_condition
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment_cached
@@ -55,7 +56,23 @@ def start_state(tr: Trim, record: FlightRecord, window: FlightRecord) -> Trim:
     since ``record``'s first sample (taken as the trim: a vane's bias cancels), bank angle
     and roll and yaw rate as measured. Airspeed, alpha and attitude stay at the trim: a
     JSBSim engine started at another airspeed goes through a transient of its own (a
-    propeller 5 % slow for 2 s) that the aircraft in flight did not have."""
+    propeller 5 % slow for 2 s) that the aircraft in flight did not have.
+
+    Parameters
+    ----------
+    tr : Trim
+        The aircraft's trim where the record starts.
+    record : FlightRecord
+        The record.
+    window : FlightRecord
+        One of its windows.
+
+    Returns
+    -------
+    Trim
+        ``tr`` with its JSBSim initial conditions moved (sideslip, bank, roll and yaw
+        rate).
+    """
     js = dict(tr.jsbsim)
     V, a = tr.speed_m_s, tr.alpha
     b = tr.beta + (float(window["beta"][0]) - float(record["beta"][0])
@@ -107,7 +124,27 @@ def fly_window(model: Model, tr: Trim, record: FlightRecord, window: FlightRecor
     offsets of the axis's surfaces refitted on it (``MAX_FLIGHTS`` flights). A lateral
     window is flown from its own start state (``start_state``); a longitudinal one from the
     record's start (its trim), through what comes before the window: the phugoid's state
-    at the window's start (airspeed, height, the engine's) is the flight's history."""
+    at the window's start (airspeed, height, the engine's) is the flight's history.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim aircraft (surfaces driven).
+    tr : Trim
+        Its trim where the record starts.
+    record : FlightRecord
+        The record.
+    window : FlightRecord
+        One of its windows.
+    axis : str
+        "lateral" or "longitudinal".
+
+    Returns
+    -------
+    WindowFlight
+        The gap per channel (residual over measured energy), the offsets (rad), the
+        largest bank error (deg) and the departure, if any.
+    """
     outputs = tuple(c for c in AXIS_OUTPUTS[axis] if c in window)
     surfaces = tuple(s for s in AXIS_INPUTS[axis] if s in window)
     if axis == "lateral":
@@ -151,7 +188,25 @@ def refly(result: Any, records: FlightRecord | list[FlightRecord], folder: str |
     written now under ``folder``) flown on each maneuver window of every diagnosed axis
     (``fly_window``). Per window: the gap per channel before and after, the shrink, the
     surface offsets and the largest bank error; per axis and overall, the means over
-    windows. A window where a model departs has no overall figure; it says so."""
+    windows. A window where a model departs has no overall figure; it says so.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    records : FlightRecord or list of FlightRecord
+        Its records.
+    folder : str or Path
+        Where the corrected aircraft is written when ``written`` is None.
+    written : str, Path or None
+        The corrected aircraft's XML, when written already.
+
+    Returns
+    -------
+    dict
+        "aircraft", "windows" (per window: the gaps before and after per channel, offsets
+        deg, bank errors deg, departures) and "overall" (before, after, shrink).
+    """
     records = [records] if isinstance(records, FlightRecord) else list(records)
     path = Path(written) if written is not None else write_aircraft(result, folder)
     models = {"before": result.aircraft, "after": path}

@@ -58,7 +58,19 @@ class EvenTerm:
 
 def even_terms(kinks: dict[str, Kink], axes: str) -> list[EvenTerm]:
     """The kinks of ``kinks`` (derivative -> ``Kink``) that break the airframe's symmetry:
-    CY, Cl or Cn in beta, p or r."""
+    CY, Cl or Cn in beta, p or r.
+
+    Parameters
+    ----------
+    kinks : dict of str to Kink
+        The model's kinks at trim (``Linearised.kinks``).
+    axes : str
+        Their axes.
+
+    Returns
+    -------
+    list of EvenTerm
+    """
     out = []
     for name, k in sorted(kinks.items()):
         coef, _, var = name.partition("_")

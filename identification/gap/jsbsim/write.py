@@ -39,7 +39,19 @@ MASS_PROPERTIES = {"cg_offset": (CgOffset, {"x": 0.0, "z": 0.0}),
 
 
 def airframe_effects(effects: list[Any]) -> list[AugmentEffect]:
-    """The airframe effects among ranked effects (a ``Ranked`` or a pair of them)."""
+    """The airframe effects among ranked effects (a ``Ranked`` or a pair of them).
+
+    Parameters
+    ----------
+    effects : list of Ranked
+        Ranked effects (a pair's parts included).
+
+    Returns
+    -------
+    list of AugmentEffect
+        The airframe ones as catalogue effects (catalogue units); sensor, mounting and
+        actuator ones are left out.
+    """
     out: list[AugmentEffect] = []
     for r in effects:
         cands = r.candidate.parts or (r.candidate,)
@@ -67,7 +79,22 @@ def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> 
     (the top one at its refined values when the diagnosis refined it) and with the model's
     even terms in sideslip, roll or yaw rate removed (``symmetry``: the aircraft flown
     again is then the model the diagnosis tested), under ``folder``; the new XML's path.
-    Sensor effects are not written (they belong to the measurement, not the aircraft)."""
+    Sensor effects are not written (they belong to the measurement, not the aircraft).
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    folder : str or Path
+        Where the aircraft folder is written.
+    name : str or None
+        The new aircraft's name (default: "<aircraft>-corrected").
+
+    Returns
+    -------
+    Path
+        The new XML. Raises ValueError when there is nothing to write.
+    """
     named = result.named_all()
     effects = airframe_effects(named)
     refined = getattr(result, "refined", None)
@@ -88,7 +115,21 @@ def write_aircraft(result: Any, folder: str | Path, name: str | None = None) -> 
 def gap_fractions(record: FlightRecord, flown: FlightRecord,
                   outputs: tuple[str, ...] = OUTPUTS["lateral"]) -> dict[str, float]:
     """Per channel: residual energy / measured energy, means removed from both (the trim
-    offsets and sensor biases a re-flight from trim cannot know)."""
+    offsets and sensor biases a re-flight from trim cannot know).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The record.
+    flown : FlightRecord
+        The model flown with its inputs.
+    outputs : tuple of str
+        The channels compared.
+
+    Returns
+    -------
+    dict of str to float
+    """
     out = {}
     n = min(len(record.time), len(flown.time))
     for ch in outputs:
@@ -105,7 +146,20 @@ def fly_record(aircraft: str | Path, record: FlightRecord) -> FlightRecord:
     """``aircraft`` trimmed where ``record`` starts (``linearise.start_condition``, level)
     and flown open loop with the record's measured surfaces (rad, increments on their
     first sample) at the record's rate, driven past its actuators (the measured positions
-    have passed the real ones). Raises DepartureError when it departs."""
+    have passed the real ones). Raises DepartureError when it departs.
+
+    Parameters
+    ----------
+    aircraft : str or Path
+        JSBSim aircraft (name or XML path).
+    record : FlightRecord
+        The record whose surfaces (rad) are flown.
+
+    Returns
+    -------
+    FlightRecord
+        The flight, at the record's rate.
+    """
     altitude, speed = start_condition(record)
     model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
     trimmed = trim(model, max(altitude, 0.0), speed)

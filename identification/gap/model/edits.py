@@ -59,7 +59,17 @@ class Candidate:
 
 
 def identity(model: LinearModel) -> LinearModel:
-    """The model unchanged (a candidate that only frees a parameter of it)."""
+    """The model unchanged (a candidate that only frees a parameter of it).
+
+    Parameters
+    ----------
+    model : LinearModel
+
+    Returns
+    -------
+    LinearModel
+        ``model`` itself.
+    """
     return model
 
 
@@ -67,7 +77,23 @@ def extended(model: LinearModel, start: Mapping[str, float],
              build: Callable[[Mapping[str, complex]], Matrices],
              states: tuple[str, ...] = ()) -> LinearModel:
     """``model`` with the parameters ``start`` (name -> start value) added, the new
-    ``build`` and the new ``states`` appended to its states."""
+    ``build`` and the new ``states`` appended to its states.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The model edited.
+    start : mapping of str to float
+        The new parameters and their start values.
+    build : callable
+        The new (A, B, C, D) from the parameter values.
+    states : tuple of str
+        The new states' names.
+
+    Returns
+    -------
+    LinearModel
+    """
     return LinearModel(model.name, (*model.states, *states), model.inputs, model.outputs,
                        (*model.parameters, *start), {**model.start, **start}, build,
                        model.condition, model.description, dict(model.state_channels))
@@ -79,7 +105,20 @@ def _dtype(*arrays: np.ndarray, extra: complex | float = 0.0) -> np.dtype:
 
 def grown(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
           extra: complex | float) -> Matrices:
-    """(A, B, C, D) with one zero state appended (dtype wide enough for ``extra``)."""
+    """(A, B, C, D) with one zero state appended (dtype wide enough for ``extra``).
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray
+        The state-space matrices.
+    extra : complex or float
+        A value the new state's entries will hold (sets the dtype).
+
+    Returns
+    -------
+    tuple of ndarray
+        (A, B, C, D) with one more state.
+    """
     dtype = _dtype(A, B, C, D, extra=extra)
     n = A.shape[0]
     A2 = np.zeros((n + 1, n + 1), dtype=dtype)
@@ -99,7 +138,24 @@ def lagged_output(mats: Matrices, row: int, tau: complex | float, pade: bool) ->
         lag:   w' = (y - w)/tau,        y_measured = w
         delay: w' = (y - w)/(tau/2),    y_measured = 2 w - y
 
-    with y = C_row x + D_row u the output before (its direct input terms included)."""
+    with y = C_row x + D_row u the output before (its direct input terms included).
+
+    Parameters
+    ----------
+    mats : tuple of ndarray
+        (A, B, C, D).
+    row : int
+        The output's row.
+    tau : complex or float
+        Time constant, s.
+    pade : bool
+        A Pade delay (True) or a lag.
+
+    Returns
+    -------
+    tuple of ndarray
+        (A, B, C, D) with the state w appended.
+    """
     A, B, C, D = mats
     A2, B2, C2, D2 = grown(A, B, C, D, tau)
     n = A.shape[0]
@@ -120,7 +176,22 @@ def lagged_output(mats: Matrices, row: int, tau: complex | float, pade: bool) ->
 
 def lagged_input(mats: Matrices, column: int, tau: complex | float) -> Matrices:
     """Input ``column`` passed through a first-order lag 1/(tau s + 1) before the model
-    (an actuator: x_s' = (u - x_s)/tau, the model reading x_s where it read u)."""
+    (an actuator: x_s' = (u - x_s)/tau, the model reading x_s where it read u).
+
+    Parameters
+    ----------
+    mats : tuple of ndarray
+        (A, B, C, D).
+    column : int
+        The input's column.
+    tau : complex or float
+        Time constant, s.
+
+    Returns
+    -------
+    tuple of ndarray
+        (A, B, C, D) with the state x_s appended.
+    """
     A, B, C, D = mats
     A2, B2, C2, D2 = grown(A, B, C, D, tau)
     n = A.shape[0]

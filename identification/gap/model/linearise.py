@@ -24,9 +24,9 @@ fitted on every window; the derivatives are the model.
 Records with fewer channels (a hobby suite without attitudes, a record without vanes) are
 diagnosed on the outputs they carry (``carried_outputs``): the model keeps every state
 (phi still drives beta through gravity) and drops the output rows, and the output bias of
-a dropped accelerometer. At least two outputs are needed. On records of surface commands
-(``meta.extra["surfaces"] = "command"``, docs/record.md) the model's inputs pass through the
-aircraft's own actuator lags (``sim.actuators.actuator_lags``), as in the JSBSim aircraft.
+a dropped accelerometer. At least two outputs are needed. Records of surface commands
+(``meta.extra["surfaces"] = "command"``, docs/record.md) reach the model through the
+aircraft's own actuators (``model.surfaces.actuated``, in ``diagnose``).
 """
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.identification.data import windows
-from flightid.identification.gap.model.surfaces import surfaces_of, with_actuators
+from flightid.identification.data.axes import AXIS_NAMES
+from flightid.identification.gap.model.surfaces import surfaces_of
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
@@ -49,7 +49,6 @@ from flightid.identification.models.linear import (
     longitudinal,
 )
 from flightid.record import FlightRecord
-from flightid.sim.augment.actuators import actuator_lags
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import Trim, trim
 from flightid.sim.jsbsim.truth import Kink, derivatives
@@ -58,14 +57,10 @@ AXES = "body"  # the lateral model's derivative axes
 PROPULSION = True  # total derivatives: what a flight (and a flight test) sees
 NUISANCE = LATERAL_BIASES
 DERIVATIVES = LATERAL_DERIVATIVES  # the lateral model's (kept: other modules import it)
-AXIS_NAMES = ("lateral", "longitudinal")
 # per axis: the derivatives of the model, their axes, the surfaces that excite it
 AXIS_DERIVATIVES = {"lateral": LATERAL_DERIVATIVES, "longitudinal": LONGITUDINAL_DERIVATIVES}
 AXIS_FRAME = {"lateral": "body", "longitudinal": "stability"}
-AXIS_INPUTS = {"lateral": ("da", "dr"), "longitudinal": ("de",)}
 TRIM_TERMS = ("CL_0", "CD_0")  # set by the trim, not candidates of a delta
-EXCITED = 0.25  # a real record's axis is excited when a surface's spread reaches this
-# fraction of the largest surface spread of the record
 
 
 @dataclass
@@ -85,12 +80,33 @@ class Linearised:
 
 
 def nuisance(model: LinearModel) -> tuple[str, ...]:
-    """The bias parameters of ``model`` (trim offsets, fitted on every window)."""
+    """The bias parameters of ``model`` (trim offsets, fitted on every window).
+
+    Parameters
+    ----------
+    model : LinearModel
+
+    Returns
+    -------
+    tuple of str
+        The parameters named ``bias_*``.
+    """
     return tuple(p for p in model.parameters if p.startswith("bias_"))
 
 
 def record_condition(record: FlightRecord) -> tuple[float, float]:
-    """(altitude m, true airspeed m/s): the record's means."""
+    """(altitude m, true airspeed m/s): the record's means.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record with V and h as channels or in ``meta.condition``.
+
+    Returns
+    -------
+    tuple of float
+        (altitude m, true airspeed m/s). Raises ValueError naming what is missing.
+    """
     cond = record.meta.condition or {}
     if "V" in record:
         speed = float(np.mean(record["V"]))
@@ -110,28 +126,22 @@ def record_condition(record: FlightRecord) -> tuple[float, float]:
 def start_condition(record: FlightRecord) -> tuple[float, float]:
     """(altitude m, true airspeed m/s) to trim a JSBSim model at before flying it with the
     record's inputs: the metadata's condition where the record has one (a card's trim: an
-    elevator 3211 drifts the mean airspeed away from it), else ``record_condition``."""
+    elevator 3211 drifts the mean airspeed away from it), else ``record_condition``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record.
+
+    Returns
+    -------
+    tuple of float
+        (altitude m, true airspeed m/s).
+    """
     cond = record.meta.condition or {}
     if "altitude_m" in cond and "speed_m_s" in cond:
         return float(cond["altitude_m"]), float(cond["speed_m_s"])
     return record_condition(record)
-
-
-def excited_axes(records: Sequence[FlightRecord]) -> list[str]:
-    """The axes the records excite: from their maneuver lists (elevator: longitudinal;
-    aileron or rudder: lateral), else from the spread of the measured surfaces (an axis
-    whose surface spread reaches ``EXCITED`` of the largest one). Lateral first."""
-    found: set[str] = set()
-    for r in records:
-        items = windows.maneuvers(r)
-        if items:
-            surfaces = {s for m in items for s in m["surfaces"]}
-        else:
-            spread = {s: float(np.std(r[s])) for s in ("de", "da", "dr") if s in r}
-            top = max(spread.values(), default=0.0)
-            surfaces = {s for s, v in spread.items() if top > 0 and v >= EXCITED * top}
-        found |= {a for a, ins in AXIS_INPUTS.items() if set(ins) & surfaces}
-    return [a for a in AXIS_NAMES if a in found]
 
 
 AXIS_OUTPUTS = {"lateral": ("beta", "p", "r", "phi", "ay"),
@@ -142,7 +152,20 @@ MIN_OUTPUTS = 2
 
 def carried_outputs(records: Sequence[FlightRecord], axis: str) -> tuple[str, ...]:
     """The outputs of ``axis``'s model that every record carries (in the model's order);
-    raises naming the missing ones when fewer than ``MIN_OUTPUTS`` are left."""
+    raises naming the missing ones when fewer than ``MIN_OUTPUTS`` are left.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records.
+    axis : str
+        "lateral" or "longitudinal".
+
+    Returns
+    -------
+    tuple of str
+        The outputs every record carries, in the model's order.
+    """
     outs = tuple(c for c in AXIS_OUTPUTS[axis] if all(c in r for r in records))
     if len(outs) < MIN_OUTPUTS:
         missing = [c for c in AXIS_OUTPUTS[axis] if c not in outs]
@@ -153,7 +176,19 @@ def carried_outputs(records: Sequence[FlightRecord], axis: str) -> tuple[str, ..
 
 
 def restricted(model: LinearModel, outputs: Sequence[str]) -> LinearModel:
-    """``model`` with only the output rows ``outputs`` (every state kept)."""
+    """``model`` with only the output rows ``outputs`` (every state kept).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The model.
+    outputs : sequence of str
+        The outputs kept, in order.
+
+    Returns
+    -------
+    LinearModel
+    """
     if tuple(outputs) == model.outputs:
         return model
     rows = [model.outputs.index(c) for c in outputs]
@@ -172,7 +207,25 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
     """The ``aircraft`` trimmed at the records' mean airspeed and altitude, linearised on
     ``axis`` ("lateral" or "longitudinal"), with the outputs the records carry
     (``carried_outputs``). ``surfaces``: what the records' surface channels hold
-    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``)."""
+    ("position" or "command"; None: their metadata, ``surfaces.surfaces_of``).
+
+    Parameters
+    ----------
+    aircraft : str
+        JSBSim aircraft: a project name, a stock JSBSim name or an XML path.
+    records : list of FlightRecord
+        The records of one condition.
+    axis : str
+        "lateral" or "longitudinal".
+    surfaces : str or None
+        "position" or "command" (None: the records' metadata).
+
+    Returns
+    -------
+    Linearised
+        The perturbation model of the axis (its derivatives per rad or per unit
+        nondimensional rate, in the axis's axes), the trim, and the kinks at trim.
+    """
     if axis not in AXIS_NAMES:
         raise ValueError(f"gap: axis must be one of {', '.join(AXIS_NAMES)}, got {axis!r}")
     conds = np.array([record_condition(r) for r in records])
@@ -208,7 +261,5 @@ def linearise(aircraft: str, records: list[FlightRecord], axis: str = "lateral",
         values = {d: float(linear.start[d]) for d in names}
     kind = surfaces_of(records, surfaces)
     linear = restricted(linear, outputs)
-    if kind == "command":  # the commands pass through the aircraft's own actuators
-        linear = with_actuators(linear, actuator_lags(aircraft))
     kinks = {d: k for d, k in truth.flags.items() if d in names}
     return Linearised(aircraft, linear, values, trimmed, frame, axis, kind, kinks)
