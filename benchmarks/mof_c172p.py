@@ -1,10 +1,17 @@
-"""Held-out prediction of ``--method mof`` on the stock c172p, pre-stall (issue 35 item 4).
+"""Held-out prediction of ``--method mof`` on the stock c172p, pre-stall (issue 35).
 
-Trains on one flight (1000 m, 33 m/s: elevator 3211 -7 deg, aileron and rudder doublets
-8 deg; alpha up to about 12 deg, below the stall hysteresis near 16 deg), predicts the
-coefficients of a held-out flight (elevator doublet, aileron and rudder 2-1-1, another
-seed), both with research sensors and the standard data reduction, and compares with
-linear equation error. Writes benchmarks/results/mof_c172p.txt.
+Trains the global model (every coefficient over alpha, beta, the three rates, the three
+surfaces and the thrust coefficient) on three flights at 1000 m, pooled: 33 m/s
+(elevator 3211 -7 deg, aileron and rudder doublets 8 deg), 29 m/s and 38 m/s (other
+3211 and 2-1-1 inputs); alpha -1.5 to 14.2 deg, below the stall hysteresis near 16 deg.
+Predicts the coefficients of two held-out flights (research sensors, the standard data
+reduction) and compares with the same model of order 1 (linear terms only):
+
+- ``held-out``: 33 m/s, elevator doublet, aileron and rudder 2-1-1, seed 2; it was
+  scored while the method was changed;
+- ``confirmation``: 30 m/s, elevator 2-1-1, aileron 3211, rudder doublet, seed 3.
+
+Neither is used by the fit. Writes benchmarks/results/mof_c172p-<sensors>.txt.
 
     .venv/bin/python benchmarks/mof_c172p.py [--sensors research|ideal]
 """
@@ -19,23 +26,39 @@ import numpy as np
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.estimate import Estimate
 from flightid.identification.evaluation.validation import r_squared, theil_inequality
-from flightid.identification.identify import identify
 from flightid.identification.methods import equation_error as ee
+from flightid.identification.methods import mof
 from flightid.scenarios.cards import card_from_dict, fly_card
 
 RESULTS = Path(__file__).resolve().parent / "results"
 TRAIN = [{"kind": "3211", "surface": "de", "start": 2.0, "base": 0.6, "amplitude_deg": -7.0},
          {"kind": "doublet", "surface": "da", "start": 14.0, "base": 1.0, "amplitude_deg": 8.0},
          {"kind": "doublet", "surface": "dr", "start": 20.0, "base": 1.0, "amplitude_deg": 8.0}]
+# more training flights at the envelope's other speeds (maneuvers and conditions pooled)
+TRAIN_SLOW = [
+    {"kind": "3211", "surface": "de", "start": 2.0, "base": 0.6, "amplitude_deg": -5.0},
+    {"kind": "211", "surface": "da", "start": 13.0, "base": 0.8, "amplitude_deg": 7.0},
+    {"kind": "3211", "surface": "dr", "start": 20.0, "base": 0.5, "amplitude_deg": 6.0}]
+TRAIN_FAST = [
+    {"kind": "3211", "surface": "de", "start": 2.0, "base": 0.5, "amplitude_deg": -8.0},
+    {"kind": "3211", "surface": "da", "start": 12.0, "base": 0.5, "amplitude_deg": 8.0},
+    {"kind": "211", "surface": "dr", "start": 20.0, "base": 0.8, "amplitude_deg": 8.0}]
+TRAINING = {"33 m/s": (TRAIN, 1, 33.0), "29 m/s": (TRAIN_SLOW, 4, 29.0),
+            "38 m/s": (TRAIN_FAST, 5, 38.0)}
 TEST = [{"kind": "doublet", "surface": "de", "start": 2.0, "base": 1.2, "amplitude_deg": -6.0},
         {"kind": "211", "surface": "da", "start": 12.0, "base": 0.8, "amplitude_deg": 7.0},
         {"kind": "211", "surface": "dr", "start": 20.0, "base": 0.8, "amplitude_deg": 6.0}]
+CONFIRM = [{"kind": "211", "surface": "de", "start": 2.0, "base": 0.8, "amplitude_deg": -5.0},
+           {"kind": "3211", "surface": "da", "start": 11.0, "base": 0.6, "amplitude_deg": 6.0},
+           {"kind": "doublet", "surface": "dr", "start": 21.0, "base": 1.2,
+            "amplitude_deg": 7.0}]
+FLIGHTS = {"held-out": (TEST, 2, 33.0), "confirmation": (CONFIRM, 3, 30.0)}
 
 
-def record(maneuvers: list, seed: int, sensors: str):
+def record(maneuvers: list, seed: int, sensors: str, speed: float = 33.0):
     card = card_from_dict({"name": "c172p-mof", "aircraft": "c172p", "duration": 30.0,
                            "rate": 100.0, "seed": seed,
-                           "condition": {"altitude": 1000.0, "speed": 33.0},
+                           "condition": {"altitude": 1000.0, "speed": speed},
                            "maneuver": maneuvers, "sensors": {"suite": sensors}})
     measured, truth = fly_card(card)
     return reduce_record(measured).record, truth
@@ -51,21 +74,28 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sensors", default="research")
     args = ap.parse_args()
-    train, truth = record(TRAIN, 1, args.sensors)
-    test, _ = record(TEST, 2, args.sensors)
-    lines = [f"mof on c172p, {args.sensors} sensors; training alpha "
-             f"{np.degrees(truth['alpha'].min()):.1f} to {np.degrees(truth['alpha'].max()):.1f}"
-             " deg (pre-stall)",
-             "coefficient  mof R2  mof Theil  ee R2  ee Theil  terms"]
-    for model in ("longitudinal", "lateral"):
-        est = identify(train, "mof", model, window="none")
-        lin = identify(train, "ee", model, window="none")
+    flown = {name: record(m, seed, args.sensors, speed)
+             for name, (m, seed, speed) in TRAINING.items()}
+    training = [rec for rec, _ in flown.values()]
+    est = mof.fit_records(training, "global")
+    lin = mof.fit_records(training, "global", mof.Options(order=1))
+    alpha = np.degrees(np.concatenate([t["alpha"] for _, t in flown.values()]))
+    lines = [f"mof on c172p, {args.sensors} sensors, global model, trained on "
+             f"{len(training)} flights ({', '.join(TRAINING)}); training alpha "
+             f"{alpha.min():.1f} to {alpha.max():.1f} deg (pre-stall); 'linear': the same "
+             "with order 1"]
+    for flight, (maneuvers, seed, speed) in FLIGHTS.items():
+        test, tt = record(maneuvers, seed, args.sensors, speed)
+        lines += [f"{flight} flight (seed {seed}, {speed:g} m/s; alpha "
+                  f"{np.degrees(tt['alpha'].min()):.1f} to {np.degrees(tt['alpha'].max()):.1f}"
+                  " deg)",
+                  "coefficient  mof R2  mof Theil  linear R2  linear Theil  terms"]
         for c in est.fit["coefficients"]:
             y = ee.channel_values(test, c)
             m, lpart = ee.predict(part(est, c), test), ee.predict(part(lin, c), test)
             terms = [n for n in est.names if n.startswith(c + "_")]
             lines.append(f"{c:<12} {r_squared(y, m):6.3f} {theil_inequality(y, m):9.3f} "
-                         f"{r_squared(y, lpart):6.3f} {theil_inequality(y, lpart):8.3f}  "
+                         f"{r_squared(y, lpart):9.3f} {theil_inequality(y, lpart):12.3f}  "
                          f"{', '.join(terms)}")
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"mof_c172p-{args.sensors}.txt").write_text("\n".join(lines) + "\n")

@@ -39,8 +39,19 @@ def test_only_cn_beta_is_corrected_with_its_trend(updated):
 
 def test_the_update_shrinks_the_held_out_gap_by_70_percent(updated):
     u = updated.update
-    # the model's part of the gap (above the flown aircraft's own floor): measured 100 %
+    # the held-out records flown window by window as the gap diagnosis re-flies them
+    # (start state, surface offsets refitted). The model's part of the gap, above the
+    # flown aircraft's own floor: measured 104 %
     assert u["shrink_above_floor"]["lateral"] >= 0.70
+    # the raw gap cannot shrink below the floor: measured 63 % of the 61 % that the flown
+    # aircraft itself reaches (floor 0.0035 of 0.0089), within its 10 %
+    m = u["mean"]
+    reachable = 1.0 - m["floor"]["lateral"] / m["before"]["lateral"]
+    assert u["shrink"]["lateral"] >= 0.9 * reachable
+    # the whole record flown open loop from the trim: the same, with a larger floor
+    o = u["open_loop"]
+    assert (o["before"]["lateral"] - o["after"]["lateral"]) >= 0.7 * (
+        o["before"]["lateral"] - o["floor"]["lateral"])
     # the derivative itself at the held-out points: RMS error 0.0095 -> 0.00086
     g = u["derivative_gap"]["Cn_beta"]
     assert g["updated"] <= 0.3 * g["model"]

@@ -168,17 +168,28 @@ def initial_states(record: FlightRecord, values: Mapping[str, float]) -> dict[st
 
 
 def _iterate(problem: Problem, names: list[str], values: dict[str, float],
-             max_iterations: int, step_tol: float, cost_tol: float) -> MaximumLikelihoodFit:
+             max_iterations: int, step_tol: float, cost_tol: float,
+             last: dict | None = None) -> MaximumLikelihoodFit:
     """Maximum likelihood with a diagonal R: the output-error optimiser
     (``engine.problem.fit``: Newton-Raphson on N/2 ln det R with R concentrated
     out, Levenberg-Marquardt safeguard; M&K eqs. 6.22-6.33) on the kinematic model.
+    ``last``: the latest outputs and sensitivities, shared between the identifiability
+    probe of a pass and the fit that starts where it did (one integration fewer).
 
     Returns its fit with ``noise`` as the vector of output noise variances.
     """
     fixed = {k: v for k, v in values.items() if k not in names}
+    last = {} if last is None else last
+
+    def sensitivities(vals: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        key = (tuple(names), tuple(sorted({**fixed, **vals}.items())))
+        if key not in last:
+            last.clear()
+            last[key] = outputs_and_sensitivities(problem, {**fixed, **vals}, names)
+        return last[key]
+
     fit = problem_skeleton.fit(
-        problem,
-        lambda vals: outputs_and_sensitivities(problem, {**fixed, **vals}, names),
+        problem, sensitivities,
         lambda vals: simulate(problem, {**fixed, **vals})[0],
         list(names), values, max_iterations, False, step_tol, cost_tol)
     fit.noise = np.diag(fit.noise).copy()
@@ -301,16 +312,18 @@ def reconstruct(
     names += [f"x0_{s}" for s in used_states if f"x0_{s}" not in fixed and f"x0_{s}" not in names]
 
     unidentifiable: dict[str, str] = _unexcited(record, names)
+    last: dict = {}
     for _ in range(len(names) + 1):
         active = [n for n in names if n not in unidentifiable]
         values = {**start, **{n: start[n] for n in active}}
         # at the start values first, so that the iteration never meets a singular M
-        probe = _iterate(problem, active, values, 0, step_tolerance, cost_tolerance)
+        probe = _iterate(problem, active, values, 0, step_tolerance, cost_tolerance, last)
         found = _unidentifiable(active, probe, singular_eigenvalue)
         if found:
             unidentifiable.update(found)
             continue
-        fit = _iterate(problem, active, values, max_iterations, step_tolerance, cost_tolerance)
+        fit = _iterate(problem, active, values, max_iterations, step_tolerance, cost_tolerance,
+                       last)
         found = _unidentifiable(active, fit, singular_eigenvalue)
         if not found:
             break

@@ -207,14 +207,28 @@ def _reference(record: FlightRecord):
 
 
 THRUST_COEFFICIENTS = ("CX", "CL", "CD")
+# the thrust coefficient: the propeller slipstream's dynamic pressure over the free
+# stream's grows with it (momentum theory: qbar_slipstream / qbar = 1 + Tc S / A_disk),
+# so surfaces in the slipstream have derivatives that change with Tc
+THRUST_COEFFICIENT = "Tc"
+
+
+def thrust_coefficient(record: FlightRecord) -> np.ndarray:
+    """Tc = T / (qbar S), dimensionless, from the record's thrust (N, body x)."""
+    if "thrust" not in record:
+        raise ValueError("the thrust coefficient Tc needs the record's 'thrust' channel (N)")
+    return record["thrust"] / (record["qbar"] * _reference(record).area)
 
 
 def channel_values(record: FlightRecord, channel: str) -> np.ndarray:
-    """A channel of the record, or one derived from it (phat qhat rhat, alphadot_hat)."""
+    """A channel of the record, or one derived from it (phat qhat rhat, alphadot_hat, the
+    thrust coefficient Tc)."""
     if channel in record:
         return record[channel]
     if channel in ("phat", "qhat", "rhat"):
         return nondimensional_rates(record)[channel]
+    if channel == THRUST_COEFFICIENT:
+        return thrust_coefficient(record)
     if channel == "alphadot_hat":
         if record.meta.reference is None:
             raise ValueError("alphadot needs the reference chord (meta.reference)")

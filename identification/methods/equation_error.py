@@ -284,8 +284,8 @@ def estimate(
     x_held = regressor_matrix(record, [t for t, _ in held.values()], refs)
     smoothed_x = consistent_smoothing and differentiated(record, coefficient)
     if smoothed_x:
-        x_all = _smooth_columns(x_all, terms, record.dt)
-        x_held = _smooth_columns(x_held, [t for t, _ in held.values()], record.dt)
+        x_all = smooth_columns(x_all, terms, record.dt)
+        x_held = smooth_columns(x_held, [t for t, _ in held.values()], record.dt)
     if held:
         y = y - x_held @ np.array([value for _, value in held.values()])
     names_all = [derivative_name(coefficient, t) for t in terms]
@@ -335,7 +335,7 @@ class LeastSquares:
     statistics: dict
 
 
-def _smooth_columns(x: np.ndarray, terms: Sequence[Term], dt: float) -> np.ndarray:
+def smooth_columns(x: np.ndarray, terms: Sequence[Term], dt: float) -> np.ndarray:
     """Regressor columns through ``coefficients.smoothed``; a column that is itself a
     smoothed derivative (alphadot_hat) already carries the filter and is left as is."""
     cols = [col if any(c in DERIVED_BY_DIFFERENTIATION for c, _ in term.factors)
@@ -417,11 +417,15 @@ def predict(est: Estimate, record: FlightRecord) -> np.ndarray:
     """The coefficient time history an equation-error estimate predicts for another record.
 
     The regressors are formed from ``record`` with the reference values of the fit, so
-    the prediction is the fitted absolute model, not refitted to the new record's mean.
+    the prediction is the fitted absolute model, not refitted to the new record's mean;
+    a fit with consistent smoothing passes them through the same filter as the
+    coefficient it is compared with.
     """
     coefficient = est.fit["coefficient"]
     terms = [parse_term(t) for t in est.fit["regressors"]]
     x = regressor_matrix(record, terms, est.fit["reference_values"])
+    if est.fit.get("consistent_smoothing") and differentiated(record, coefficient):
+        x = smooth_columns(x, terms, record.dt)
     values = [est[derivative_name(coefficient, t)] for t in terms]
     y = x @ np.asarray(values, dtype=float) if terms else np.zeros(len(record))
     if est.fit.get("bias", True):

@@ -6,11 +6,13 @@ aerodynamics", and Morelli & Klein (2016) section 5.5 (SIDPAC's ``mof``):
 * candidates: every monomial of the explanatory variables (alpha, beta, the
   nondimensional rates, the surfaces) up to ``order`` (default 3: linear terms, squares,
   products, cubes and their cross products), each a perturbation from the reference;
-* orthogonal functions: the candidates are made mutually orthogonal over the data by
-  Gram-Schmidt, and at each step the candidate whose orthogonalised function p_j lowers
-  the squared error most, (p_j' z)^2 / (p_j' p_j), enters (orthogonal least squares,
-  Chen, Billings & Luo 1989): with orthogonal functions each entry's contribution is
-  independent of the others, so ranking is exact and cheap;
+* orthogonal functions: the candidates, simplest first, are made mutually orthogonal
+  over the data by Gram-Schmidt in that order, so each function p_j holds only what the
+  simpler ones do not; the functions are ranked by the squared error they remove,
+  (p_j' z)^2 / (p_j' p_j), which with orthogonal functions is independent of the others;
+* consistent smoothing: a moment coefficient computed from smoothed derivatives of the
+  rates has its regressors passed through the same filter, in the search, the fit and
+  the prediction (Morelli & Klein 2016 sec. 11.2);
 * stop: the predicted square error (Morelli 1995 eq. 24; M&K eq. 5.96)
 
       PSE = (1/N) (z - y)'(z - y) + sigma_max^2 p / N,   sigma_max^2 = (1/N) sum (z - mean z)^2
@@ -31,6 +33,7 @@ from itertools import combinations_with_replacement
 
 import numpy as np
 
+from flightid.identification.data.coefficients import differentiated
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
@@ -59,45 +62,55 @@ def candidate_terms(variables: Sequence[str], order: int = 3) -> list[str]:
 
 def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | None = None
            ) -> tuple[list[int], list[dict]]:
-    """Orthogonal forward selection of columns of x for y (a bias always in), stopped at
-    the least PSE along the path. Returns the chosen columns and the steps (term, R^2 in
-    percent, PSE, why)."""
+    """Multivariate orthogonal functions of the columns of x for y (a bias always in):
+    the chosen columns and the steps (term, R^2 in percent, PSE, why).
+
+    Morelli (1995) sec. 3; Morelli & Klein (2016) sec. 5.5: the candidates, ordered
+    from simple to complex (``candidate_terms`` gives every linear term before any
+    square, every square before any cube), are made orthogonal once by Gram-Schmidt in
+    that order, so each function holds only what the simpler candidates before it do not.
+    A cube of a doublet input, whose levels are only +-A and 0, is then left with almost
+    none of its norm after its linear term and never enters: the data cannot tell it from
+    the linear term, and the simpler one is kept. The functions are ranked by their error
+    reduction (p_j' z)^2 / (p_j' p_j), entered in that order (a candidate the estimate
+    could not separate from those in is skipped), and the model of least PSE is kept."""
     n, m = x.shape
     z = y - y.mean()
     sst = float(z @ z)
     sigma2 = sst / n
     q = x - x.mean(axis=0)  # orthogonal to the bias
-    norms0 = np.einsum("ij,ij->j", q, q)
-    basis: list[np.ndarray] = []
+    functions: list[np.ndarray] = []
+    columns: list[int] = []
+    for j in range(m):
+        p = q[:, j].copy()
+        norm0 = float(p @ p)
+        for f in functions:
+            p -= f * ((f @ p) / (f @ f))
+        if float(p @ p) > DEPENDENT * max(norm0, 1e-300):
+            functions.append(p)
+            columns.append(j)
+    gains = np.array([(f @ z) ** 2 / (f @ f) for f in functions])
     chosen: list[int] = []
     steps: list[dict] = []
     sse = sst
-    path = [(sse / n, [])]
+    path = [(sse / n, 0)]
     limit = min(m, max_terms or m, n - 2)
-    while len(chosen) < limit:
-        norms = np.einsum("ij,ij->j", q, q)
-        ok = (norms > DEPENDENT * np.maximum(norms0, 1e-300))
-        ok[chosen] = False
-        if not ok.any():
+    for k in np.argsort(-gains):
+        if len(chosen) >= limit:
             break
-        gain = np.where(ok, (q.T @ z) ** 2 / np.where(ok, norms, 1.0), -np.inf)
-        j = next((int(k) for k in np.argsort(-gain) if np.isfinite(gain[k])
-                  and _separable(x, [*chosen, int(k)])), None)
-        if j is None:
-            break
-        p = q[:, j].copy()
+        j = columns[int(k)]
+        if not _separable(x, [*chosen, j]):
+            continue
         chosen.append(j)
-        basis.append(p)
-        sse -= float(gain[j])
+        sse -= float(gains[k])
         pse = sse / n + sigma2 * len(chosen) / n
-        path.append((pse, list(chosen)))
+        path.append((pse, len(chosen)))
         steps.append({"action": "enter", "term": names[j], "R2": 100.0 * (1 - sse / sst),
-                      "PSE": pse, "why": f"largest error reduction of the orthogonalised "
-                                         f"candidates; R^2 {100 * (1 - sse / sst):.3f} %, "
+                      "PSE": pse, "why": f"largest error reduction of the orthogonal "
+                                         f"functions left; R^2 {100 * (1 - sse / sst):.3f} %, "
                                          f"PSE {pse:.4g}"})
-        # orthogonalise the remaining candidates against the new function (Gram-Schmidt)
-        q = q - np.outer(p, (p @ q) / (p @ p))
-    best_pse, best = min(path, key=lambda item: item[0])
+    best_pse, size = min(path, key=lambda item: item[0])
+    best = chosen[:size]
     steps.append({"action": "select", "term": ", ".join(names[i] for i in best), "R2": float(
         "nan"), "PSE": best_pse, "why": f"the model of least PSE ({best_pse:.4g}): "
                                          f"{len(best)} of {len(chosen)} functions entered"})
@@ -117,27 +130,86 @@ def _separable(x: np.ndarray, columns: list[int]) -> bool:
     return bool(np.all(np.isfinite(vif)) and np.max(vif) <= ee.VIF_LIMIT)
 
 
-def estimate(record: FlightRecord, coefficient: str, candidates: Iterable[str], *,
-             reference: str = "mean", colored: bool = True, max_terms: int | None = None
-             ) -> Estimate:
-    """Multivariate orthogonal functions for ``coefficient`` over candidate terms: the
-    Estimate of the chosen terms (equation error), ``fit['steps']`` the selection path,
-    ``fit['candidates']`` the terms searched (a candidate left with less than
-    ``DEPENDENT`` of its squared norm after orthogonalisation never enters)."""
+def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
+             candidates: Iterable[str], *, reference: str = "mean", colored: bool = True,
+             max_terms: int | None = None, consistent_smoothing: bool = True) -> Estimate:
+    """Multivariate orthogonal functions for ``coefficient`` over candidate terms, from one
+    record or from several (maneuvers and conditions pooled, as a global model is
+    identified: Morelli 1995): the Estimate of the chosen terms (least squares),
+    ``fit['steps']`` the selection path, ``fit['candidates']`` the terms searched (a
+    candidate left with less than ``DEPENDENT`` of its squared norm after the simpler
+    ones never enters). ``reference``: regressors as perturbations from the pooled
+    'mean', the first record's 'initial' value, or 'none'. ``consistent_smoothing``:
+    regressors of a coefficient from smoothed rate derivatives go through the same filter
+    (``equation_error.estimate``), each record on its own."""
+    recs = [records] if isinstance(records, FlightRecord) else list(records)
+    if not recs:
+        raise ValueError("mof needs at least one record")
     terms = [ee.parse_term(t) for t in candidates]
-    y = ee.channel_values(record, coefficient)
-    refs = ee.reference_values(record, terms, reference)
-    x = ee.regressor_matrix(record, terms, refs)
-    # no collinearity screen before the search: a doublet's surface and its cube are
-    # collinear (r = 0.99), and the orthogonalisation keeps the one that explains more
-    # (the other is then left with less than DEPENDENT of its norm and never enters)
+    y, x, refs = _stacked(recs, coefficient, terms, reference, consistent_smoothing)
     chosen, steps = select(y, x, [t.text for t in terms], max_terms)
     selected = [terms[i].text for i in sorted(chosen)]
-    est = ee.estimate(record, coefficient, selected, reference=reference, colored=colored)
-    est.method = ID
+    if len(recs) == 1:
+        est = ee.estimate(recs[0], coefficient, selected, reference=reference,
+                          colored=colored, consistent_smoothing=consistent_smoothing)
+        est.method = ID
+    else:
+        est = _pooled_fit(coefficient, [terms[i] for i in sorted(chosen)],
+                          y, x[:, sorted(chosen)], refs, colored,
+                          consistent_smoothing and differentiated(recs[0], coefficient))
     est.fit["steps"] = steps
     est.fit["candidates"] = [t.text for t in terms]
+    est.fit["records"] = len(recs)
     return est
+
+
+def _stacked(records: Sequence[FlightRecord], coefficient: str, terms: Sequence[ee.Term],
+             reference: str, consistent_smoothing: bool
+             ) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """The coefficient (N) and the candidates' regressors (N x terms) of the records one
+    after another, as perturbations from the pooled reference values."""
+    if reference == "mean":
+        pooled = {ch: float(np.mean(np.concatenate([ee.channel_values(r, ch) for r in records])))
+                  for ch in dict.fromkeys(c for t in terms for c, _ in t.factors)}
+        refs = pooled
+    else:
+        refs = ee.reference_values(records[0], terms, reference)
+    ys, xs = [], []
+    for record in records:
+        x = ee.regressor_matrix(record, terms, refs)
+        if consistent_smoothing and differentiated(record, coefficient):
+            x = ee.smooth_columns(x, terms, record.dt)
+        ys.append(ee.channel_values(record, coefficient))
+        xs.append(x)
+    return np.concatenate(ys), np.vstack(xs), refs
+
+
+def _pooled_fit(coefficient: str, terms: Sequence[ee.Term], y: np.ndarray, x: np.ndarray,
+                refs: dict[str, float], colored: bool, smoothed_x: bool) -> Estimate:
+    """Least squares of the chosen terms and a bias over pooled records (the fit
+    ``equation_error.predict`` reads)."""
+    result = ee.least_squares(np.column_stack([x, np.ones(len(y))]), y, colored=colored)
+    names = [*(ee.derivative_name(coefficient, t) for t in terms), ee.bias_name(coefficient)]
+    fit = {"coefficient": coefficient, "regressors": [t.text for t in terms],
+           "reference": "pooled", "reference_values": refs, "bias": True,
+           "consistent_smoothing": smoothed_x, "fixed": {}, **result.statistics}
+    return Estimate(method=ID, names=names, values=result.theta, std=result.std,
+                    covariance=result.covariance, fit=fit,
+                    outputs={coefficient: {"measured": y, "model": result.model,
+                                           "residual": y - result.model}})
+
+
+def fit_records(records: Sequence[FlightRecord], model: str = "global",
+                options: Options | None = None) -> Estimate:
+    """A global model of every coefficient of ``model`` from several records (maneuvers
+    and conditions pooled): one Estimate, as ``run`` gives for one record."""
+    options = options or Options()
+    structure = model_structure.regression(model, options.coefficients)
+    return merge(ID, [
+        estimate(records, c, candidate_terms(t, options.order), reference=options.reference,
+                 colored=options.colored, max_terms=options.max_terms,
+                 consistent_smoothing=options.consistent_smoothing)
+        for c, t in structure.items()])
 
 
 # ----------------------------------------------------------------------------- protocol
@@ -150,22 +222,20 @@ class Options(RegressionOptions):
     reference: str = option("mean", "regressors as perturbations from the record's 'mean', "
                                     "its 'initial' value, or 'none'")
     colored: bool = option(True, "standard errors corrected for colored residuals")
+    consistent_smoothing: bool = option(
+        True, "pass the regressors of a moment coefficient computed from smoothed rate "
+              "derivatives through the same filter (search, fit and prediction)")
 
     def __post_init__(self) -> None:
         if not 1 <= self.order <= 4:
             raise ValueError(f"option order of method mof must be 1 to 4, got {self.order}")
 
 
-def run(record: FlightRecord, model: str = "longitudinal", options: Options | None = None
+def run(record: FlightRecord, model: str = "global", options: Options | None = None
         ) -> Estimate:
     """Multivariate orthogonal functions for every coefficient of ``model`` over its
     variables' monomials up to ``options.order``; one Estimate."""
-    options = options or Options()
-    structure = model_structure.regression(model, options.coefficients)
-    return merge(ID, [
-        estimate(record, c, candidate_terms(t, options.order), reference=options.reference,
-                 colored=options.colored, max_terms=options.max_terms)
-        for c, t in structure.items()])
+    return fit_records([record], model, options)
 
 
 METHOD = Method(
@@ -175,6 +245,6 @@ METHOD = Method(
     reference="Morelli, Global Nonlinear Parametric Modeling with Application to F-16 "
               "Aerodynamics, ACC 1995; Morelli & Klein 2016 sec. 5.5",
     options=Options, models=(*model_structure.REGRESSION, "structure"),
-    default_model="longitudinal", channels=model_structure.regression_channels, run=run,
+    default_model="global", channels=model_structure.regression_channels, run=run,
     contract_model="lateral",
 )

@@ -23,6 +23,12 @@ ALIASES = {"lat": "lateral", "lon": "longitudinal"}
 
 LATERAL_VARIABLES = ("beta", "phat", "rhat", "da", "dr")
 LONGITUDINAL_VARIABLES = ("alpha", "qhat", "de")
+# a global model's variables (Morelli 1995): every coefficient may depend on all of them,
+# e.g. the c172p's drag on |beta|, its roll moment due to yaw rate on alpha; and the
+# thrust coefficient Tc = T / (qbar S), on which the derivatives of surfaces in the
+# propeller slipstream depend (the c172p's Cm_de and Cn_dr take the slipstream's
+# dynamic pressure)
+GLOBAL_VARIABLES = ("alpha", "beta", "phat", "qhat", "rhat", "de", "da", "dr", "Tc")
 # the regression form of each preset: {coefficient: explanatory variables}
 REGRESSION: dict[str, dict[str, tuple[str, ...]]] = {
     "lateral": {"CY": LATERAL_VARIABLES, "Cl": LATERAL_VARIABLES, "Cn": LATERAL_VARIABLES},
@@ -34,11 +40,12 @@ REGRESSION: dict[str, dict[str, tuple[str, ...]]] = {
     "short_period": {"CL": LONGITUDINAL_VARIABLES, "Cm": LONGITUDINAL_VARIABLES},
 }
 REGRESSION["all"] = {**REGRESSION["longitudinal"], **REGRESSION["lateral"]}
+REGRESSION["global"] = {c: GLOBAL_VARIABLES for c in REGRESSION["all"]}
 LINEAR = tuple(lm.MODELS)
 
 # channels a regression variable is computed from
 _VARIABLE_CHANNELS = {"phat": ("p", "V"), "qhat": ("q", "V"), "rhat": ("r", "V"),
-                      "alphadot_hat": ("alpha", "V")}
+                      "alphadot_hat": ("alpha", "V"), "Tc": ("thrust", "qbar")}
 # channels each coefficient is computed from (rigid-body equations, body axes)
 _COEFFICIENT_CHANNELS = {
     "CX": ("ax",), "CY": ("ay",), "CZ": ("az",), "CL": ("ax", "az", "alpha"),

@@ -125,7 +125,13 @@ def _notes(result: dict) -> list[str]:
             lines.append(f"held-out gap, {axis}: {m['before'][axis]:.4f} before, "
                          f"{m['after'][axis]:.4f} after ({100 * shrink:.0f} % smaller); the "
                          f"flown aircraft itself {m['floor'][axis]:.4f}: the model's part "
-                         f"{100 * result['shrink_above_floor'][axis]:.0f} % smaller")
+                         f"{100 * result['shrink_above_floor'][axis]:.0f} % smaller (each "
+                         "maneuver window re-flown as the gap diagnosis does)")
+        if result.get("open_loop"):
+            o = result["open_loop"]
+            lines.append(f"held-out gap, {axis}, whole record open loop: "
+                         f"{o['before'][axis]:.4f} before, {o['after'][axis]:.4f} after, "
+                         f"the flown aircraft itself {o['floor'][axis]:.4f}")
     for name, g in result["derivative_gap"].items():
         lines.append(f"held-out {name}: RMS error {g['model']:.4g} before, {g['updated']:.4g} "
                      "after")

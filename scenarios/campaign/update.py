@@ -10,11 +10,16 @@ cannot carry a table. ``sim.augment.augment`` writes them into OUT/aircraft/<nam
 
 The held-out points (``[[held_out]]``) are flown with the flown aircraft (the campaign's
 effects included) and its sensors; the measured record, reduced as at the test points, is
-flown again open loop with its measured surfaces by the model and by the updated aircraft
-(``identification.gap.jsbsim.write.fly_record``), and the gap is the gap diagnosis's: per
-channel, residual over measured energy, means removed (``gap_fractions``), averaged over
-each axis's channels. The flown aircraft re-flown the same way gives the floor: the gap a
-perfect model would leave (open loop from trim, the slow modes drift; sensor noise).
+flown again by the model, by the updated aircraft and by the flown aircraft itself (the
+floor: what a perfect model leaves, sensor noise). Each is flown as the gap diagnosis's
+re-fly flies a record (``identification.gap.jsbsim.refly.fly_window``): per maneuver window of
+the axis, a lateral window from its own start state, a longitudinal one from the trim
+through what precedes it, with the measured surfaces plus constant offsets refitted on the
+window (the bias and initial conditions of a prediction case, Morelli & Klein 2016). The
+gap is the diagnosis's: per channel, residual over measured energy, means removed
+(``gap_fractions``), averaged over the axis's channels and windows. The whole record
+flown open loop from the trim without offsets (``identification.gap.jsbsim.write.fly_record``)
+is kept as ``open_loop`` (the slow modes drift over 28 s).
 """
 
 from __future__ import annotations
@@ -29,22 +34,28 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.data.reduction import reduce_record
+from flightid.identification.effect_fit import CACHE
 from flightid.identification.envelope_fit import Correction, fit_correction
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
+from flightid.identification.gap.jsbsim.refly import fly_window
 from flightid.identification.gap.jsbsim.write import fly_record, gap_fractions
-from flightid.identification.gap.model.linearise import AXIS_OUTPUTS
+from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_condition
+from flightid.identification.gap.segments import segments
+from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign, point_card
 from flightid.scenarios.campaign.point import model_values
 from flightid.scenarios.cards import augmented, card_from_dict, fly_card, sub_seed
-from flightid.sim.augment import augment
+from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
     DERIVATIVES,
     AugmentEffect,
     DerivativeDelta,
     DerivativeTable,
 )
-from flightid.sim.jsbsim.model import quiet
+from flightid.sim.jsbsim.model import load, quiet
+from flightid.sim.jsbsim.trim import trim
 
 SCHEDULES = {"speed": "airspeed", "alpha": "alpha"}
 # the condition each estimate stands for (point.flown_condition), by the campaign's x
@@ -109,9 +120,12 @@ class HeldOutGap:
     speed: float
     before: dict[str, float] = field(default_factory=dict)
     after: dict[str, float] = field(default_factory=dict)
-    # the flown aircraft itself re-flown: the gap a perfect model leaves (open loop from
-    # trim, measured surfaces and channels; known only in simulation)
+    # the flown aircraft itself re-flown: the gap a perfect model leaves (measured
+    # surfaces and channels; known only in simulation)
     floor: dict[str, float] = field(default_factory=dict)
+    # the whole record flown open loop from the trim, no offsets: {before|after|floor: {axis:
+    # gap}}
+    open_loop: dict[str, dict[str, float]] = field(default_factory=dict)
     # per corrected derivative: the exact values of the flown, model and updated aircraft
     derivatives: dict[str, dict[str, float]] = field(default_factory=dict)
 
@@ -122,8 +136,10 @@ class HeldOutGap:
 
 
 def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[HeldOutGap]:
-    """Fly every held-out point and its gap with the model and with the model plus the
-    correction ``effects`` (the updated aircraft, with the point's mass and CG)."""
+    """Fly every held-out point and its gap with the model, with the model plus the
+    correction ``effects`` (the updated aircraft, with the point's mass and CG) and with
+    the flown aircraft (the floor), window by window as the gap diagnosis re-flies
+    (``window_gaps``), and over the whole record open loop (``open_loop``)."""
     out = []
     for i, p in enumerate(campaign.held_out):
         gap = HeldOutGap(i, p.altitude, p.speed)
@@ -137,11 +153,12 @@ def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[Held
             updated = card_from_dict(data, f"{campaign.path} (held-out point {i}, updated)")
             real = point_card(campaign, p)
             for key, card in (("before", model), ("after", updated), ("floor", real)):
-                flown = fly_record(augmented(card) if card.augmentation else card.aircraft,
-                                   record)
-                for axis, outputs in AXIS_OUTPUTS.items():
-                    fractions = gap_fractions(record, flown, outputs)
-                    getattr(gap, key)[axis] = float(np.nanmean(list(fractions.values())))
+                aircraft = augmented(card) if card.augmentation else card.aircraft
+                getattr(gap, key).update(window_gaps(aircraft, record))
+                flown = fly_record(aircraft, record)
+                gap.open_loop[key] = {
+                    axis: float(np.nanmean(list(gap_fractions(record, flown, outputs).values())))
+                    for axis, outputs in AXIS_OUTPUTS.items()}
             values = {k: model_values(c)[1] for k, c in
                       (("flown", real), ("model", model), ("updated", updated))}
         gap.derivatives = {e.derivative: {k: float(v[e.derivative]) for k, v in values.items()}
@@ -150,12 +167,33 @@ def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[Held
     return out
 
 
+def window_gaps(aircraft: str | Path, record: FlightRecord) -> dict[str, float]:
+    """Per axis, the gap of ``aircraft`` on ``record``: the mean over the axis's maneuver
+    windows (``identification.gap.segments``) of the mean over its channels, each window
+    flown as the gap diagnosis's re-fly (``identification.gap.jsbsim.refly.fly_window``: start
+    state, offsets refitted); NaN for an axis without a window or where every window
+    departs."""
+    model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
+    altitude, speed = start_condition(record)
+    trimmed = trim(model, max(altitude, 0.0), speed)
+    out = {}
+    for axis in AXIS_OUTPUTS:
+        values = []
+        for seg in segments([record], inputs=AXIS_INPUTS[axis]):
+            flown = fly_window(model, trimmed, record, seg.record, axis)
+            if flown.gap and not flown.departed:
+                values.append(float(np.nanmean(list(flown.gap.values()))))
+        out[axis] = float(np.mean(values)) if values else math.nan
+    return out
+
+
 def summary(fitted: list[Correction], gaps: list[HeldOutGap]) -> dict[str, Any]:
     """The corrections and the held-out gaps as plain data (update.json): per axis the
     mean gap before, after and of the flown aircraft itself (floor), the shrink
     (before - after) / before and the shrink of the model's part of the gap,
-    (before - after) / (before - floor); per corrected derivative the RMS over the
-    held-out points of model minus flown and updated minus flown."""
+    (before - after) / (before - floor); the same means of the whole record flown open
+    loop (``open_loop``); per corrected derivative the RMS over the held-out points of
+    model minus flown and updated minus flown."""
     axes = list(AXIS_OUTPUTS)
     mean = {key: {a: float(np.nanmean([getattr(g, key).get(a, math.nan) for g in gaps]))
                   for a in axes} for key in ("before", "after", "floor")} if gaps else {}
@@ -166,6 +204,8 @@ def summary(fitted: list[Correction], gaps: list[HeldOutGap]) -> dict[str, Any]:
         b, f = mean["before"][a], mean["floor"][a] if floor else 0.0
         return (b - mean["after"][a]) / (b - f) if b - f > 0 else math.nan
 
+    open_loop = {key: {a: float(np.nanmean([g.open_loop[key].get(a, math.nan) for g in gaps]))
+                       for a in axes} for key in ("before", "after", "floor")} if gaps else {}
     names = sorted({n for g in gaps for n in g.derivatives})
     derivative_gap = {n: {k: float(np.sqrt(np.mean([(g.derivatives[n][k]
                                                       - g.derivatives[n]["flown"]) ** 2
@@ -176,4 +216,5 @@ def summary(fitted: list[Correction], gaps: list[HeldOutGap]) -> dict[str, Any]:
             "mean": mean,
             "shrink": {a: ratio(a, False) for a in axes},
             "shrink_above_floor": {a: ratio(a, True) for a in axes},
+            "open_loop": open_loop,
             "derivative_gap": derivative_gap}

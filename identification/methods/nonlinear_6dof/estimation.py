@@ -157,13 +157,26 @@ def estimate(
 
     unexcited = _unexcited(problem, names, min_input_range) if check_identifiability else {}
 
+    # the identifiability probe of a pass (zero iterations) and the fit that follows it
+    # start at the same values with the same free parameters: the fit reuses the probe's
+    # outputs and sensitivities, one batched integration of the record fewer per pass
+    last: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+    def sensitivities(active: list[str], v: dict[str, float]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        key = (tuple(active), tuple(sorted(problem.fixed.items())), tuple(sorted(v.items())))
+        if key not in last:
+            last.clear()
+            last[key] = outputs_and_sensitivities(problem, v, active)
+        return last[key]
+
     def fit(active: list[str], current: dict[str, float],
             iterations: int = max_iterations) -> MaximumLikelihoodFit:
         problem.fixed = {n: v for n, v in {**model.start, **x0_start}.items() if n not in active}
         with np.errstate(over="ignore", invalid="ignore"):  # rejected diverging trial steps
             return problem_skeleton.fit(
                 problem,
-                lambda v: outputs_and_sensitivities(problem, v, active),
+                lambda v: sensitivities(active, v),
                 lambda v: outputs(problem, v),
                 active, current, iterations, full_noise_covariance, step_tolerance,
                 cost_tolerance)
