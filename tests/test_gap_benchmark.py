@@ -42,6 +42,7 @@ from flightid.scenarios.gap_benchmark.cases import (
     OUTSIDE,
     PAIR,
     SINGLE,
+    SIZED_BASE,
     STABLE_SIGN,
     THRUST_ARM_M,
 )
@@ -116,6 +117,8 @@ def test_magnitudes_in_their_ranges(t, big):
                     k = abs(value) / THRUST_ARM_M
                 elif e.entry == "scale":
                     k = (value - 1.0) / 0.2
+                elif e.entry in SIZED_BASE:  # sized: a multiple of the row's base
+                    k = abs(value - p.zero) / abs(SIZED_BASE[e.entry] - p.zero)
                 elif math.isfinite(p.zero):
                     k = abs(value - p.zero) / abs(p.default - p.zero)
                 else:  # a rate limit: neutral at infinity, drawn as a multiple of the default

@@ -206,3 +206,29 @@ def test_effect_in_turbulence_confirmed_against_the_gap_above_the_null_level():
     assert top.shrink < MIN_SHRINK  # the whole-gap rule would not have confirmed it
     value = top.parameters["factor"]
     assert abs(value["value"] - factor) < 2 * value["std"]
+
+
+def test_band_limited_test_clears_a_slow_turbulence_false_alarm():
+    """A null Twin Otter of the blind check (seed 0's null case 8, light turbulence): its
+    slow phugoid-band turbulence response correlated by chance with the slow regressors,
+    a longitudinal false alarm of the unfiltered test (q, p 5.6e-5, share 0.038). With
+    residual and regressors high-passed at ``HIGHPASS_RAD_S`` both axes are `no_gap`."""
+    result = diagnose([_blind_card("twinotter", 1498554800)], "twinotter", try_pairs=False,
+                      steps=1)
+    for axis, g in result.axes().items():
+        assert g.verdict == NO_GAP, (axis, g.null_before.to_json())
+
+
+def test_band_limited_test_sees_a_pitch_break_the_unfiltered_one_did_not():
+    """A Telemaster pitch break (outside the catalogue; seed 0's case 25, light
+    turbulence: 0.49 deg above trim, 82 % of its Cm_alpha lost) that the unfiltered test
+    left `no_gap` (q, p 1.2e-3): high-passed, the pitch rate's residual is input-correlated
+    (measured p 2.4e-4, share 0.054), and the axis is not `no_gap`."""
+    effect = Effect("cm_alpha_break", "longitudinal", "card", {},
+                    {"above": 0.00856296474957567, "delta": 0.82086821744019},
+                    in_catalogue=False)
+    result = diagnose([fly_case(Case(25, 328766611, "telemaster", "outside", (effect,)),
+                                "light")], "telemaster", axis="longitudinal",
+                      try_pairs=False, steps=1)
+    assert result.null_before.gap, result.null_before.to_json()
+    assert result.verdict != NO_GAP

@@ -81,6 +81,22 @@ HIGH_ALPHA = 1e-6  # stricter: a turbulent record's high band is where gusts and
 HIGH_MATERIAL = 0.05  # input-explained share of the measured energy above HIGH_HZ
 LAGUERRE = 4  # Laguerre filters per input
 LAGUERRE_TAU_S = 0.7  # their time constant (s): the band of the short period and Dutch roll
+# the main test's band: residual and regressors through the same 2nd-order Butterworth
+# high-pass at this corner (rad/s) before the Wald test, per window. A linear filter applied
+# to both keeps the null's uncorrelatedness (inputs against turbulence and noise) and takes
+# off the few-cycle phugoid and slow turbulence response (V, theta over a 10 s window) that
+# correlates by chance with the slow regressors; the maneuvers' 0.6-3 rad/s are kept
+# (docs/gap_benchmark.md, the rules for the seed-3 run)
+HIGHPASS_RAD_S = 0.6
+# longitudinal outputs left out of the main test (the high band still tests them): the
+# pitch attitude integrates q (its residual is the integral of q's, dominated by the slow
+# turbulence response) and the airspeed is the phugoid's; a longitudinal model error shows
+# in q, alpha and az, which are tested. Measured on seed 0 of the blind check (100 null and
+# 36 single cases, light turbulence, high-passed): 8 null cases of 100 were false alarms
+# with them, 3 without; the singles seen went from 9 to 7, the two lost biases, which the
+# test cannot see (means removed): chance (docs/gap_benchmark.md). The bank angle stays:
+# a Navion Cn_beta delta of 30 % in light turbulence is seen on phi only (p 1.6e-8)
+SLOW_CHANNELS = ("V", "theta")
 
 
 @dataclass
@@ -94,6 +110,7 @@ class ChannelTest:
     share: float  # input-explained energy less chance, / measured energy
     explained: float = 0.0  # input-explained energy / measured energy (chance included)
     high: ChannelTest | None = None  # the high band's test (``fast_regressors``)
+    slow: bool = False  # in ``SLOW_CHANNELS``: only the high band tested
 
     @property
     def gap(self) -> bool:
@@ -105,6 +122,8 @@ class ChannelTest:
     def to_json(self) -> dict:
         out = {"statistic": self.statistic, "dof": self.dof, "p_value": self.p_value,
                "share": self.share, "gap": self.gap}
+        if self.slow:
+            out["main_test"] = "not run: a slow channel (high band only)"
         if self.high is not None:
             out["high_band"] = {"p_value": self.high.p_value,
                                 "share_above_hz": self.high.explained, "hz": HIGH_HZ}
@@ -123,9 +142,9 @@ class NullTest:
         return any(c.gap for c in self.channels.values())
 
     def above(self) -> dict[str, float]:
-        """Per channel: the input-explained share less chance (>= 0): the gap above the
-        null level of noise and turbulence."""
-        return {c: max(t.share, 0.0) for c, t in self.channels.items()}
+        """Per channel of the main test: the input-explained share less chance (>= 0): the
+        gap above the null level of noise and turbulence (slow channels left out)."""
+        return {c: max(t.share, 0.0) for c, t in self.channels.items() if not t.slow}
 
     def gap_channels(self) -> list[str]:
         return [c for c, t in self.channels.items() if t.gap]
@@ -198,6 +217,13 @@ def _independent(x: np.ndarray) -> np.ndarray:
     return x[:, np.sort(piv[:rank])]
 
 
+def highpass(x: np.ndarray, dt: float, corner: float = HIGHPASS_RAD_S) -> np.ndarray:
+    """``x`` ((N,) or (N, k), means removed) through a causal 2nd-order Butterworth
+    high-pass with corner ``corner`` rad/s, sample time ``dt`` s (along the first axis)."""
+    b, a = signal.butter(2, corner * dt / math.pi, "high")
+    return signal.lfilter(b, a, x - np.mean(x, axis=0), axis=0)
+
+
 def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
     """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval."""
     f = np.fft.rfftfreq(x.size, dt)
@@ -231,19 +257,21 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
     out = NullTest()
     if not labels:
         return out
-    xs = [regressors(fits[k], records[k], inputs) for k in labels]
+    dts = {k: float(np.median(np.diff(fits[k].time))) for k in labels}
+    xs = [highpass(regressors(fits[k], records[k], inputs), dts[k]) for k in labels]
     xh = np.vstack([fast_regressors(fits[k], records[k], inputs) for k in labels])
     for ch in fits[labels[0]].residual:
-        vs = [fits[k].residual[ch] - np.mean(fits[k].residual[ch]) for k in labels]
+        raw = [fits[k].residual[ch] - np.mean(fits[k].residual[ch]) for k in labels]
+        vs = [highpass(v, dts[k]) for k, v in zip(labels, raw, strict=True)]
         spread = sum(float(np.sum((fits[k].measured[ch] - np.mean(fits[k].measured[ch])) ** 2))
                      for k in labels)
         v = np.concatenate(vs)
         if not np.all(np.isfinite(v)):
             continue
-        test = channel_test(v, np.vstack(xs), spread, ch)
-        high = sum(band_energy(fits[k].measured[ch], float(np.median(np.diff(fits[k].time))),
-                               HIGH_HZ) for k in labels)
-        test.high = channel_test(v, xh, high, ch)
+        test = (ChannelTest(ch, 0.0, 0, 1.0, 0.0, slow=True) if ch in SLOW_CHANNELS
+                else channel_test(v, np.vstack(xs), spread, ch))
+        high = sum(band_energy(fits[k].measured[ch], dts[k], HIGH_HZ) for k in labels)
+        test.high = channel_test(np.concatenate(raw), xh, high, ch)
         out.channels[ch] = test
     return out
 

@@ -109,9 +109,25 @@ SIZED = {
                      "longitudinal outputs by 0.0018 of their energy (0.06 m, navion), "
                      "below the diagnosis's least gain (0.002); thrust lines 0.2-0.5 m off "
                      "the CG are common on high-wing and twin aircraft",
+    "delay": "tau 0.5-1.5 times 0.1 s: the default 0.05 s moved the calm flights' outputs "
+             "by 0.004-0.03 of their energy (navion and telemaster, p and q), under what "
+             "the test sees in light turbulence (an input-explained share of about 0.03); "
+             "0.1 s moved them by 0.016-0.11. Air-data and IMU pipelines of autopilot and "
+             "RC logs carry 0.05-0.15 s",
+    "lag": "as delay (the same class: 1/(tau s + 1) and exp(-tau s) agree to first order)",
+    "actuator_lag": "tau 0.5-1.5 times 0.1 s: the default 0.05 s moved the outputs by "
+                    "0.004-0.06 (navion and telemaster, aileron and elevator), 0.1 s by "
+                    "0.012-0.17; hobby and light-aircraft servos have time constants of "
+                    "0.05-0.15 s (0.1-0.2 s per 60 deg of travel)",
+    "inertia_scale": "factor 1 + 0.5-1.5 times 0.2: the default 1.1 moved the outputs by "
+                     "0.002-0.027 (navion and telemaster, Izz and Iyy), 1.2 by 0.008-0.094; "
+                     "inertias computed from a component breakdown are often 10-30 % off "
+                     "(a swing test gets them to about 5 %)",
 }
 THRUST_ARM_M = 0.25
 CG_CHORDS = 0.05
+# the sized rows' base magnitudes (drawn 0.5-1.5 times, measured from neutral)
+SIZED_BASE = {"delay": 0.1, "lag": 0.1, "actuator_lag": 0.1, "inertia_scale": 1.2}
 
 
 @dataclass(frozen=True)
@@ -247,7 +263,7 @@ def fingerprint() -> str:
     the aircraft's flights): a stored study continues only under the same draw."""
     text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
                        DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
-                       THRUST_ARM_M, {a: asdict(f) for a, f in AIRCRAFT.items()}],
+                       THRUST_ARM_M, SIZED_BASE, {a: asdict(f) for a, f in AIRCRAFT.items()}],
                       sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -298,12 +314,14 @@ def _null(k: int, seed: int, aircraft: tuple[str, ...]) -> Case:
     return Case(NULL_INDEX + k, int(rng.integers(2**31)), name, NULL)
 
 
-def _scaled(entry: str, name: str, k: float) -> float:
-    """``k`` times the catalogue default, measured from the neutral value."""
+def _scaled(entry: str, name: str, k: float, base: float | None = None) -> float:
+    """``k`` times the catalogue default (or the sized row's ``base``), measured from the
+    neutral value."""
     p = CATALOGUE[entry].parameter(name)
+    base = p.default if base is None else base
     if p.neutral is None or not math.isfinite(p.neutral):
-        return k * p.default
-    return p.neutral + k * (p.default - p.neutral)
+        return k * base
+    return p.neutral + k * (base - p.neutral)
 
 
 def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
@@ -327,7 +345,9 @@ def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
         mag = {"factor": 1.0 + k * 0.2}
     elif kind.one_of:
         which = str(rng.choice(kind.sized))
-        mag = {which: _scaled(kind.entry, which, k)}
+        mag = {which: _scaled(kind.entry, which, k, SIZED_BASE.get(kind.entry))}
+    elif kind.entry in SIZED_BASE:
+        mag = {p: _scaled(kind.entry, p, k, SIZED_BASE[kind.entry]) for p in kind.sized}
     elif kind.entry not in CATALOGUE:  # (misalignment, until the catalogue has it)
         mag = {}
     else:
