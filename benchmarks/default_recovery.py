@@ -7,8 +7,10 @@ default method (output error) and every other option at its default, on each axi
 card's maneuvers excite (lat: aileron or rudder; lon: elevator), once with the standard
 data reduction (the default) and once with ``--raw``. Each estimate is scored against the
 truth the record carries. Per card: the share of (seed, estimated derivative) pairs within
-3 standard errors, and the share of the model's derivatives estimated (the rest withheld
-as not identifiable, or the whole model refused).
+3 standard errors, the share of the model's derivatives estimated (the rest withheld
+as not identifiable, or the whole model refused; ``unexcited`` lists those withheld
+because the card never moves their surface) and the estimates whose bound the structure
+check widened (``widened``, output error's ``fit['structure']``).
 
     python benchmarks/default_recovery.py --seeds 1-10 [--cards a,b] [--cache DIR]
     python benchmarks/default_recovery.py --seeds 1001-1010 --name heldout
@@ -65,7 +67,10 @@ def run_one(record, axis: str, reduced: bool) -> dict:
         return {"refused": str(exc)}
     rows = score(est, record).rows
     done = [r for r in rows if r.status == "estimated"]
+    unexcited = [r for r in rows if "is not excited" in r.reason]
     return {"estimated": len(done), "withheld": len(rows) - len(done),
+            "unexcited": [r.name for r in unexcited],
+            "widened": sorted(est.fit.get("structure", {})),
             "start": est.fit.get("start", ""),
             "inside": sum(abs(r.sigmas) <= 3 for r in done),
             "misses": [f"{r.name} {r.sigmas:+.1f}" for r in done if abs(r.sigmas) > 3]}
@@ -91,13 +96,13 @@ def main() -> None:
     for card in cards:
         axes = excited_axes(card)
         for seed in seeds:
+            if not axes:  # nothing to identify: not flown
+                rows.append({"card": card, "seed": seed, "axis": "-", "reduction": "-",
+                             "refused": "no maneuver on the elevator, aileron or rudder"})
+                continue
             record = _record(card, seed, cache)
             if args.fly_only:
                 print(f"flew {card} seed {seed}", flush=True)
-                continue
-            if not axes:
-                rows.append({"card": card, "seed": seed, "axis": "-", "reduction": "-",
-                             "refused": "no maneuver on the elevator, aileron or rudder"})
                 continue
             for axis in axes:
                 for reduced in [r == "standard" for r in args.reductions.split(",")]:

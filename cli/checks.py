@@ -25,6 +25,7 @@ from flightid.identification.data import time_base
 from flightid.identification.data.unit_sanity import check_units
 from flightid.identification.engine import resources
 from flightid.identification.engine.convergence import NotConvergedWarning
+from flightid.identification.engine.structure_bias import StructureBiasWarning
 from flightid.identification.methods import registry
 from flightid.record import FlightRecord, read
 
@@ -253,7 +254,7 @@ def check_aircraft_xml(aircraft: str) -> None:
 
 # warnings of the data a command prints as "flightid <command>: warning: ..." lines
 DATA_WARNINGS = (NotConvergedWarning, time_base.RegriddedWarning,
-                 nuisance.ImplausibleBiasWarning)
+                 nuisance.ImplausibleBiasWarning, StructureBiasWarning)
 
 
 @contextmanager

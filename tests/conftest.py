@@ -54,6 +54,7 @@ SLOW_MODULES: dict[str, float] = {
     "test_gap_benchmark.py": 42,
     "test_campaign_update.py": 41,
     "test_default_recovery.py": 38,
+    "test_default_recovery_cards.py": 213,  # pytest -n 0, the machine lightly loaded
     "test_frequency_response.py": 29,
     "badinput/test_generated.py": 26,
     "test_import_ascii.py": 22,

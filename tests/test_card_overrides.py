@@ -105,7 +105,7 @@ def test_ideal_suite_records_carry_what_identify_needs(tmp_path):
     assert {"qbar", "mass", "Ixx", "Izz", "Ixz"} <= set(record.channels)
     result = runner.invoke(app, ["identify", str(out), "--format", "json"])
     assert result.exit_code == 0, result.output
-    rows = {r["name"]: r for r in json.loads(result.output)["score"]["rows"]}
+    rows = {r["name"]: r for r in json.loads(result.stdout)["score"]["rows"]}
     # exact sensors: what is left is the linear model's structure error against the
     # nonlinear flight, 1.5 % at most on the well-excited derivatives (measured: 0.1-1.5 %)
     for name in ("CY_beta", "Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"):

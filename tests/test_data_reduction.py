@@ -73,15 +73,26 @@ def test_exact_sensors_off_the_cg_come_back_to_the_cg():
 def test_reduction_brings_the_mounting_biased_derivatives_within_3_sigma(research_flight):
     measured, _ = research_flight
     reduced = reduce_record(measured).record
-    raw = {r.name: r.sigmas for r in score(identify(measured, "oe", "lat"), measured).rows}
-    done = {r.name: r.sigmas for r in score(identify(reduced, "oe", "lat"), reduced).rows}
-    # vanes ahead of the CG read beta + x r/V and a 10 % sidewash scales beta: the side
-    # force and yaw derivatives of the raw record are off (measured on seed 1: CY_r -5.6,
-    # Cn_beta -5.6, Cn_r -4.6 sigma)
+
+    def rows(record, **options):
+        return {r.name: r for r in score(identify(record, "oe", "lat", **options), record).rows}
+
+    # the model's own bounds (no structure check, which widens the raw record's biased
+    # bounds too): vanes ahead of the CG read beta + x r/V and a 10 % sidewash scales beta,
+    # so the side force and yaw derivatives of the raw record are off (seed 1: CY_r -21 %,
+    # -4.0 sigma; Cn_beta -2.2 %, -6.5; Cn_r +4.0 %, -9.7)
+    raw, done = rows(measured, structure_check=False), rows(reduced, structure_check=False)
     moved = ("CY_r", "Cn_beta", "Cn_r")
-    assert all(abs(raw[n]) > 3 for n in moved), raw
-    assert all(abs(done[n]) <= 3 for n in moved), done
-    assert abs(done["Cl_beta"]) <= 3 and abs(done["Cl_r"]) <= 3
+    assert all(abs(raw[n].sigmas) > 3 for n in moved), raw
+    # reduced, the mounting errors are gone: CY_r +0.9 %, and Cn_beta, Cn_r at half their
+    # raw error or less (-1.1 %, +2.2 %): what is left is the propellers' differential
+    # thrust, which the linear model lacks (docs/validation.md, twinotter-lateral-0alpha)
+    assert abs(done["CY_r"].sigmas) <= 3
+    assert all(abs(done[n].error) < 0.6 * abs(raw[n].error) for n in moved), done
+    assert abs(done["Cl_beta"].sigmas) <= 3 and abs(done["Cl_r"].sigmas) <= 3
+    # with the defaults the structure check widens the bounds of the two it cannot fit
+    checked = rows(reduced)
+    assert all(abs(checked[n].sigmas) <= 3 for n in moved), checked
 
 
 def test_identify_prints_the_reduction_and_raw_skips_it(research_flight):

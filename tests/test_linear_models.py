@@ -159,3 +159,25 @@ def test_longitudinal_trim_balance_and_thrust_input():
     np.testing.assert_allclose(
         B[:, 1], [np.cos(c.alpha) / c.mass, alphadot, k_m * mad * alphadot, 0.0])
     assert np.all(D[:, 1] == 0.0)  # body-x force: no az
+
+
+def test_reference_condition_is_the_trim_before_the_first_maneuver():
+    # a record whose speed runs away after its maneuver starts (2 s): the model is
+    # linearised about the trim before it, not about the record's mean
+    t = np.arange(0, 10, 0.02)
+    speed = np.where(t < 2.0, 50.0, 50.0 + (t - 2.0))
+    chans = {"V": speed, "qbar": 0.6 * speed**2, "alpha": 0.05 + 0 * t,
+             "theta": 0.05 + 0 * t, "mass": 1000 + 0 * t, "Ixx": 1 + 0 * t,
+             "Iyy": 1 + 0 * t, "Izz": 1 + 0 * t, "Ixz": 0 * t}
+    maneuvers = [{"kind": "doublet", "surfaces": ["de"], "start": 2.0, "end": 3.0}]
+    listed = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0),
+                                                extra={"maneuvers": maneuvers}))
+    cond = lm.condition_from_record(listed)
+    assert cond.V == pytest.approx(50.0) and cond.qbar == pytest.approx(1500.0)
+    unlisted = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0)))
+    assert lm.condition_from_record(unlisted).V == pytest.approx(np.mean(speed))
+    # less than MIN_TRIM_S of trim before the maneuver: the mean again
+    late = [{**maneuvers[0], "start": 0.3}]
+    short = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0),
+                                               extra={"maneuvers": late}))
+    assert lm.condition_from_record(short).V == pytest.approx(np.mean(speed))

@@ -182,7 +182,8 @@ def maximum_likelihood(
         if not step.accepted:
             converged, reason = step.at_minimum, step.reason
             break
-        step_history.append(float(np.max(np.abs(step.theta - theta) / step.std)))
+        with np.errstate(divide="ignore", invalid="ignore"):  # a fixed parameter: std 0
+            step_history.append(float(np.max(np.abs(step.theta - theta) / step.std)))
         theta = step.theta
         lam = step.lam
     return MaximumLikelihoodFit(names, dict(zip(names, theta, strict=True)), y, sens, v, noise,

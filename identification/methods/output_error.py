@@ -26,8 +26,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flightid.derivatives import is_derivative, split
-from flightid.identification.data.coefficients import THRUST_COEFFICIENTS
 from flightid.identification.data.multistep_input import MultistepParameters, from_measurement
 from flightid.identification.engine import identifiability as ident
 from flightid.identification.engine import problem as problem_skeleton
@@ -38,7 +36,10 @@ from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
-from flightid.identification.methods import equation_error
+from flightid.identification.methods.equation_error_reference import (
+    check_structure,
+    start_from_equation_error,
+)
 from flightid.identification.methods.protocol import (
     HeldOptions,
     Method,
@@ -303,37 +304,6 @@ def estimate(
         full_noise_covariance=full_noise_covariance)
 
 
-_EE_TERMS = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
-             "de": "de", "da": "da", "dr": "dr"}
-
-
-def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[str, float]:
-    """Start values for ``model``'s derivatives from equation error on the same record.
-
-    As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
-    (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
-    regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
-    a thrust channel), keep the model's start values.
-    """
-    groups: dict[str, list[str]] = {}
-    for name in model.parameters:
-        if is_derivative(name):
-            coef, var = split(name)
-            if var in _EE_TERMS:
-                groups.setdefault(f"C{coef}", []).append(var)
-    out: dict[str, float] = {}
-    for coefficient, variables in groups.items():
-        if (coefficient in THRUST_COEFFICIENTS and coefficient not in record
-                and "thrust" not in record):
-            continue  # no thrust channel: the x force cannot be made aerodynamic
-        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables])
-        for var in variables:
-            name = f"{coefficient}_{var}"
-            if name in fit.names and name not in fit.unidentifiable:
-                out[name] = fit[name]
-    return out
-
-
 # ----------------------------------------------------------------------------- protocol
 @dataclass(frozen=True)
 class Options(HeldOptions, OutputErrorOptions):
@@ -350,6 +320,9 @@ class Options(HeldOptions, OutputErrorOptions):
     multistep_inputs: list[str] = option(
         [], "inputs flown as multisteps whose levels and edge times are estimated")
     max_iterations: int = option(50, "Gauss-Newton iteration limit")
+    structure_check: bool = option(
+        True, "widen the bounds where equation error on the same record disagrees beyond "
+              "3 combined bounds (a model structure error)")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
@@ -392,6 +365,8 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                     f"parameters withheld, at a higher cost")
             est = retry
     est.method = ID
+    if options.structure_check:
+        check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
     est.fit["start"] = note
     if unmeasured:

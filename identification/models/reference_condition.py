@@ -1,5 +1,6 @@
 """The reference condition of a linear perturbation model: the trim flight condition, mass
-properties and reference geometry (SI units, rad), taken from a record's channel means."""
+properties and reference geometry (SI units, rad), taken from a record's channel means
+(the flight condition over the trim before the first listed maneuver, when there is one)."""
 
 from __future__ import annotations
 
@@ -49,8 +50,34 @@ class ReferenceCondition:
 CONDITION_CHANNELS = ("V", "qbar", "alpha", "theta", "mass", "Ixx", "Iyy", "Izz", "Ixz")
 
 
+# the flight condition a perturbation model is linearised about: the trim before the
+# maneuver, when the record says where its maneuvers start. The record's mean was 1.4 %
+# above the trim dynamic pressure on twinotter-21-elevator (the phugoid after the
+# doublet), and Cm_de came out 1-2 % small in magnitude, 6-14 bounds (docs/validation.md)
+TRIM_CHANNELS = ("V", "qbar", "alpha", "theta")
+MIN_TRIM_S = 0.5  # s of trim before the first maneuver needed to take the condition from it
+
+
+def trim_lead(record: FlightRecord) -> np.ndarray | None:
+    """Boolean mask of the samples before the record's first listed maneuver
+    (``meta.extra['maneuvers']``), or None when it lists none or they span less than
+    ``MIN_TRIM_S``."""
+    listed = record.meta.extra.get("maneuvers") or []
+    if not listed:
+        return None
+    first = min(float(m["start"]) for m in listed)
+    t = np.asarray(record.time, dtype=float)
+    mask = t < first
+    if not mask.any() or first - t[0] < MIN_TRIM_S:
+        return None
+    return mask
+
+
 def condition_from_record(record: FlightRecord, **override: float) -> ReferenceCondition:
     """Reference condition of a record: channel means (SI) and meta.reference geometry.
+
+    V, qbar, alpha and theta are the means over the trim before the record's first listed
+    maneuver (``trim_lead``) when it lists them, else over the whole record.
 
     Any field of ReferenceCondition can be given as a keyword to override the record (needed
     when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
@@ -65,6 +92,11 @@ def condition_from_record(record: FlightRecord, **override: float) -> ReferenceC
                 f"{name}=<value in SI units> to condition_from_record"
             )
         values[name] = float(np.mean(record[name]))
+    lead = trim_lead(record)
+    if lead is not None:
+        for name in TRIM_CHANNELS:
+            if name in values:
+                values[name] = float(np.mean(np.asarray(record[name])[lead]))
     ref = record.meta.reference
     if ref is None and not {"area", "span", "chord"} <= set(override):
         raise ValueError(

@@ -84,7 +84,7 @@ from flightid.sim.jsbsim.model import (
     Model,
     as_model,
 )
-from flightid.sim.jsbsim.trim import Trim, apply
+from flightid.sim.jsbsim.trim import Trim, apply, steady_engines
 from flightid.units import FT
 
 SURFACE_MODES = ("commanded", "driven")
@@ -219,6 +219,7 @@ class Simulation:
             fdm.set_trim_status(False)
         fdm.get_propulsion().get_steady_state()
         fdm.run_ic()
+        steady_engines(model)
         if self.atmosphere.wind_ned_m_s[2]:
             # run_ic resets the wind to the IC's (horizontal only): add the vertical part
             # and re-evaluate every model at t = 0 without integrating

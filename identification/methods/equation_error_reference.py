@@ -1,0 +1,77 @@
+"""Equation error on the record and model an output-error fit uses: the fit's start
+values and the reference of its model-structure check.
+
+As in Morelli & Klein (2016) example 6.1, one least-squares fit per coefficient (CY, Cl,
+Cn, CL, CD, Cm) on the variables the linear model gives it. The start values take the
+plain regressions; the structure check (``engine.structure_bias``) takes them as
+``--method ee`` runs them (regressors smoothed with a differentiated moment coefficient,
+a priori values held).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from flightid.derivatives import is_derivative, split
+from flightid.identification.data.coefficients import THRUST_COEFFICIENTS
+from flightid.identification.engine.structure_bias import widen_for_structure
+from flightid.identification.estimate import Estimate
+from flightid.identification.methods import equation_error
+from flightid.identification.models.linear import LinearModel
+from flightid.record import FlightRecord
+
+_EE_TERMS = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
+             "de": "de", "da": "da", "dr": "dr"}
+
+
+def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[str, float]:
+    """Start values for ``model``'s derivatives from equation error on the same record.
+
+    As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
+    (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
+    regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
+    a thrust channel), keep the model's start values.
+    """
+    return {name: value for name, (value, _) in equation_error_fits(record, model).items()}
+
+
+def equation_error_fits(record: FlightRecord, model: LinearModel,
+                        consistent_smoothing: bool = False,
+                        held: Mapping[str, float] | None = None,
+                        ) -> dict[str, tuple[float, float]]:
+    """Equation error's (value, standard error corrected for colored residuals) of each of
+    ``model``'s derivatives it can estimate from ``record``: the start values
+    (``start_from_equation_error``) and, with ``consistent_smoothing`` and the ``held``
+    (a priori) values as ``--method ee`` takes them, the structure check's reference."""
+    held = dict(held or {})
+    groups: dict[str, list[str]] = {}
+    for name in model.parameters:
+        if is_derivative(name) and name not in held:
+            coef, var = split(name)
+            if var in _EE_TERMS:
+                groups.setdefault(f"C{coef}", []).append(var)
+    out: dict[str, tuple[float, float]] = {}
+    for coefficient, variables in groups.items():
+        if (coefficient in THRUST_COEFFICIENTS and coefficient not in record
+                and "thrust" not in record):
+            continue  # no thrust channel: the x force cannot be made aerodynamic
+        fixed = {n: v for n, v in held.items() if n.startswith(f"{coefficient}_")}
+        fit = equation_error.estimate(record, coefficient, [_EE_TERMS[v] for v in variables],
+                                      consistent_smoothing=consistent_smoothing,
+                                      a_priori=fixed or None)
+        for var in variables:
+            name = f"{coefficient}_{var}"
+            if name in fit.names and name not in fit.unidentifiable:
+                out[name] = (fit[name], fit.std_of(name))
+    return out
+
+
+def check_structure(est: Estimate, record: FlightRecord, model: LinearModel,
+                     free: Sequence[str], held: Mapping[str, float]) -> None:
+    """Widen the bounds of the free derivatives on which equation error, as ``--method ee``
+    runs it, disagrees (``engine.structure_bias``); nothing when it cannot run."""
+    try:
+        fits = equation_error_fits(record, model, consistent_smoothing=True, held=held)
+    except (KeyError, ValueError):  # no accelerometers or coefficients: no reference
+        return
+    widen_for_structure(est, {n: f for n, f in fits.items() if n in free})
