@@ -24,7 +24,7 @@ from flightid.identification import nuisance
 from flightid.identification.agreement import Agreement
 from flightid.identification.agreement import compare as compare_estimates
 from flightid.identification.data.input_denoising import denoise_channels
-from flightid.identification.data.reduction import reduce_record
+from flightid.identification.data.reduction import SKIPPED, standard_reduction
 from flightid.identification.engine import convergence
 from flightid.identification.estimate import Estimate
 from flightid.identification.evaluation.report import write_html
@@ -91,9 +91,7 @@ def identify_command(
              "whether the methods agree within their bounds, or why not")] = None,
     strict: opts.Strict = False,
     force: opts.Force = False,
-    raw: Annotated[bool, typer.Option(
-        "--raw", help="skip the standard data reduction (accelerometers and vanes to the CG, "
-                      "vane scale and bias; docs/record.md)")] = False,
+    raw: opts.Raw = False,
 ) -> None:
     """Identify stability and control derivatives from a flight record and score them."""
     check_choice("--format", format, ("table", "json"))
@@ -110,11 +108,10 @@ def identify_command(
         if isinstance(span, tuple) and (span[1] <= data.time[0] or span[0] >= data.time[-1]):
             raise ValueError(f"--window {window}: outside the record ({data.time[0]:g} .. "
                              f"{data.time[-1]:g} s)")
-        reduction = None if raw else reduce_record(data)
-        if reduction is not None:
-            data = reduction.record
-            for text in reduction.warnings:
-                typer.echo(f"flightid identify: warning: {text}", err=True)
+        reduction = standard_reduction(data, raw)
+        data = reduction.record
+        for text in reduction.warnings:
+            typer.echo(f"flightid identify: warning: {text}", err=True)
         if multistep_input and method == "oe":
             options["multistep_inputs"] = list(multistep_input)
         elif multistep_input:
@@ -140,13 +137,13 @@ def identify_command(
                       if not isinstance(v, list) or len(v) < 1000}
         if scored is not None:
             out["score"] = scored.as_dict()
-        out["data_reduction"] = "skipped (--raw)" if raw else reduction.applied
+        out["data_reduction"] = SKIPPED if raw else reduction.applied
         if agreement is not None:
             out["agreement"] = agreement.to_json()
         print(json.dumps(out, indent=2, default=str))
         return
     console = Console()
-    for line in ["skipped (--raw)"] if raw else reduction.applied:
+    for line in reduction.applied:
         typer.echo(f"data reduction: {line}")
     console.print(estimate_table(est))
     biases = nuisance.from_fit(est)

@@ -102,9 +102,11 @@ def montecarlo_command(
     set_: opts.Set = None,
     turbulence: opts.Turbulence = None,
     sensors: opts.Sensors = None,
+    raw: opts.Raw = False,
 ) -> None:
-    """Fly a card N times, identify each flight, and summarize bias, scatter and the
-    coverage of the reported bounds; a rerun continues the study in -o."""
+    """Fly a card N times, identify each flight as identify does (--raw: without the data
+    reduction), and summarize bias, scatter and the coverage of the reported bounds; a
+    rerun continues the study in -o."""
     check_choice("--format", format, ("table", "json"))
     if dask and dask_scheduler_file:
         raise ValueError("give --dask or --dask-scheduler-file, not both")
@@ -117,7 +119,7 @@ def montecarlo_command(
     specs = [*(read_dispersions(disperse_file) if disperse_file else []), *(disperse or [])]
     kwargs = dict(method=method, model=model, options=options, study_dir=output,
                   workers=workers, dask_address=dask, seed=seed,
-                  dask_scheduler_file=dask_scheduler_file, disperse=specs)
+                  dask_scheduler_file=dask_scheduler_file, disperse=specs, raw=raw)
     with count_progress(f"Monte Carlo {card}", show=not quiet) as update:
         progress = (lambda done, total: update(done, total)) if update else None
         summary = montecarlo.run(card, n, progress=progress, **kwargs)

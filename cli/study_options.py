@@ -35,3 +35,7 @@ Strict = Annotated[bool, typer.Option(
 Force = Annotated[bool, typer.Option(
     "--force", help="run when the memory estimate exceeds what is available, and write the "
                     "outputs over an existing file of another kind")]
+# identify and montecarlo: the standard data reduction is skipped
+Raw = Annotated[bool, typer.Option(
+    "--raw", help="skip the standard data reduction (accelerometers and vanes to the CG, "
+                  "vane scale and bias; docs/record.md)")]

@@ -34,6 +34,7 @@ from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 
 POSITIONS_KEY = "sensor_positions"
+SKIPPED = "skipped (--raw)"
 REDUCTION_KEY = "data_reduction"
 VANE_KEYS = {"alpha": "alpha_vane", "beta": "beta_vane"}
 VANE_SCALES = {"alpha": "upwash_alpha", "beta": "sidewash_beta"}
@@ -177,3 +178,20 @@ def reduce_record(record: FlightRecord,
         reduced = _with(reduced, {}, left, out.applied)
     out.record = reduced
     return out
+
+
+def standard_reduction(record: FlightRecord, raw: bool = False) -> Reduction:
+    """What ``flightid identify`` (and each realization of ``flightid montecarlo``) does to
+    a record before identifying it: ``reduce_record`` with the record's own sensor
+    positions, or, with ``raw`` (``--raw``), nothing (``applied`` is [``SKIPPED``]).
+
+    Parameters
+    ----------
+    record : a flight record in SI units.
+    raw : skip the reduction.
+
+    Returns a Reduction (see ``reduce_record``). Raises ValueError for malformed positions.
+    """
+    if raw:
+        return Reduction(record, applied=[SKIPPED])
+    return reduce_record(record)

@@ -320,6 +320,9 @@ class Options(HeldOptions, OutputErrorOptions):
     multistep_inputs: list[str] = option(
         [], "inputs flown as multisteps whose levels and edge times are estimated")
     max_iterations: int = option(50, "Gauss-Newton iteration limit")
+    propulsive_moments: bool = option(
+        True, "drive the lateral model with the record's L_prop, N_prop (N m) where it has "
+              "them, as equation error removes them: aerodynamic derivatives")
     structure_check: bool = option(
         True, "widen the bounds where equation error on the same record disagrees beyond "
               "3 combined bounds (a model structure error)")
@@ -339,6 +342,10 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                   if o in model_structure.OPTIONAL_OUTPUTS and o not in record]
     if unmeasured:
         linear = lm.without_outputs(linear, unmeasured)
+    moments = lm.PROPULSIVE_MOMENTS.get(linear.name, ())
+    driven = options.propulsive_moments and moments and all(c in record for c in moments)
+    if driven:
+        linear = lm.with_propulsive_moments(linear)
     start, start_note = options.start, ""
     if start == "equation_error":
         try:  # the free parameters' start values; the held ones keep theirs
@@ -368,6 +375,8 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
     if options.structure_check:
         check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
+    if driven:
+        est.fit["propulsive_moments"] = f"{', '.join(moments)} (N m) as measured inputs"
     est.fit["start"] = note
     if unmeasured:
         est.fit["outputs_left_out"] = {o: "not in the record (state integrated from the "

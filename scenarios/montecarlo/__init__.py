@@ -34,11 +34,14 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
         workers: int | None = None, dask_address: str | None = None,
         progress: Callable[[int, int], None] | None = None, *, seed: int | None = None,
         dask_scheduler_file: str | Path | None = None, report: bool = True,
-        disperse: Sequence[str] = ()) -> Summary:
+        disperse: Sequence[str] = (), raw: bool = False) -> Summary:
     """Run (or continue, or extend) a Monte Carlo study of one card.
 
-    Realizations already stored are not recomputed; a stored study described otherwise
-    (card, method, model, options, seed, dispersions) is refused (StudyMismatch).
+    Each flight is identified as ``flightid identify`` does: the standard data reduction
+    (accelerometers and vanes to the CG, vane scale and bias;
+    ``reduction.standard_reduction``) unless ``raw``, then ``identify``. Realizations
+    already stored are not recomputed; a stored study described otherwise (card, method,
+    model, options, seed, dispersions, data reduction) is refused (StudyMismatch).
 
     Parameters
     ----------
@@ -76,7 +79,7 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
     """
     dispersions = parse_all(disperse)  # a bad spec fails here, not once per realization
     description = Study(str(card), int(n), method, model, dict(options or {}), seed,
-                        tuple(d.text() for d in dispersions))
+                        tuple(d.text() for d in dispersions), bool(raw))
     loaded = dry_run(description)  # method, model, options, seed, trim: before any write
     folder = Path(study_dir) if study_dir is not None else \
         Path("montecarlo") / f"{loaded.name}-{method}-{model}"

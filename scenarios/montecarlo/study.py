@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from flightid.identification.data.reduction import standard_reduction
 from flightid.identification.evaluation.scoring import record_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.methods import registry
@@ -41,8 +42,9 @@ REALIZATION_ERRORS = (DepartureError, TrimError, ValueError, np.linalg.LinAlgErr
 @dataclass(frozen=True)
 class Study:
     """A Monte Carlo study: fly ``card`` (library name or TOML path) ``n`` times, identify
-    each flight with ``method`` and ``model`` (``options`` as for ``identify``); seeds
-    derived from the base ``seed`` (None: the card's seed)."""
+    each flight as ``flightid identify`` does, with ``method`` and ``model`` (``options``
+    as for ``identify``) after the standard data reduction (``raw``: without it, as
+    ``--raw``); seeds derived from the base ``seed`` (None: the card's seed)."""
 
     card: str
     n: int
@@ -51,6 +53,7 @@ class Study:
     options: dict[str, Any] = field(default_factory=dict)
     seed: int | None = None
     disperse: tuple[str, ...] = ()
+    raw: bool = False
 
     def base_seed(self, card: Card | None = None) -> int:
         """The base seed: the study's, else the card's."""
@@ -76,6 +79,7 @@ class Study:
             "model": self.model,
             "options": {k: _plain(v) for k, v in sorted(self.options.items())},
             "seed": self.base_seed(card),
+            "data_reduction": "raw" if self.raw else "standard",
         }
 
     def as_dict(self) -> dict[str, Any]:
@@ -139,7 +143,8 @@ def _realization(description: Study, index: int) -> list[dict[str, Any]]:
         base.update({COLUMN_PREFIX + k: v for k, v in values.items()})
     try:
         measured, truth_record = fly_card(card, seed)
-        est = identify(measured, description.method, description.model,
+        record = standard_reduction(measured, description.raw).record  # as identify does
+        est = identify(record, description.method, description.model,
                        **dict(description.options))
     except REALIZATION_ERRORS as exc:
         return [_failure(base, f"{type(exc).__name__}: {exc}")]
