@@ -323,6 +323,9 @@ class Options(HeldOptions, OutputErrorOptions):
     propulsive_moments: bool = option(
         True, "drive the lateral model with the record's L_prop, N_prop (N m) where it has "
               "them, as equation error removes them: aerodynamic derivatives")
+    dynamic_pressure: bool = option(
+        True, "lateral model: the aerodynamic terms follow the measured qbar(t)/qbar_ref "
+              "(second-order terms with the measured states and inputs as pseudo-inputs)")
     structure_check: bool = option(
         True, "widen the bounds where equation error on the same record disagrees beyond "
               "3 combined bounds (a model structure error)")
@@ -342,6 +345,15 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                   if o in model_structure.OPTIONAL_OUTPUTS and o not in record]
     if unmeasured:
         linear = lm.without_outputs(linear, unmeasured)
+    scheduled = (options.dynamic_pressure and linear.name in lm.QBAR_SCHEDULED
+                 and "qbar" in record)
+    if scheduled:
+        record = lm.with_dynamic_pressure_channels(record, linear)
+        linear = lm.with_dynamic_pressure(linear)
+        if linear.name in lm.KINEMATIC_INPUTS and all(c in record
+                                                        for c in lm.KINEMATIC_CHANNELS):
+            record = lm.with_kinematics_channels(record, linear)
+            linear = lm.with_kinematics(linear)
     moments = lm.PROPULSIVE_MOMENTS.get(linear.name, ())
     driven = options.propulsive_moments and moments and all(c in record for c in moments)
     if driven:
@@ -375,6 +387,9 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
     if options.structure_check:
         check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
+    if scheduled:
+        est.fit["dynamic_pressure"] = (f"aerodynamic terms times qbar(t)/"
+                                       f"{linear.condition.qbar:.1f} Pa")
     if driven:
         est.fit["propulsive_moments"] = f"{', '.join(moments)} (N m) as measured inputs"
     est.fit["start"] = note

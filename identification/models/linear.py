@@ -17,12 +17,14 @@ differentiation of the matrices, ``matrix_sensitivities``, is exact to rounding)
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from flightid.channels import LATERAL_INPUTS
+from flightid.derivatives import is_derivative
 from flightid.identification.models.reference_condition import (
     ReferenceCondition,
     condition_from_record,
@@ -510,6 +512,156 @@ def with_propulsive_moments(model: LinearModel) -> LinearModel:
                        model.parameters, dict(model.start), build, model.condition,
                        f"{model.description}, driven by the measured {', '.join(extra)}",
                        dict(model.state_channels))
+
+
+# the presets whose aerodynamic terms ``with_dynamic_pressure`` makes follow the measured
+# dynamic pressure and airspeed (the longitudinal ones carry the speed as a state and its
+# 2 dV/V terms), with, per preset, the powers of 1/V beyond qbar of the state equations
+# (betadot = qbar S/(m V) CY + ...) and of the variables (phat = p b/2V, rhat = r b/2V)
+QBAR_SCHEDULED: dict[str, tuple[dict[str, int], dict[str, int]]] = {
+    "lateral": ({"beta": 1}, {"p": 1, "r": 1}),
+}
+QBAR_SUFFIX = "*dqbar"
+
+
+def _scheduled_sources(model: LinearModel) -> list[tuple[str, int]]:
+    """(state or input, power of 1/V) of each pseudo-input of ``with_dynamic_pressure``."""
+    rows, cols = QBAR_SCHEDULED[model.name]
+    powers = sorted({0, *rows.values()})
+    return [(x, cols.get(x, 0) + k) for x in (*model.states, *model.inputs) for k in powers]
+
+
+def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
+    """The pseudo-input channels of ``with_dynamic_pressure``: '<x>*dqbar<k>' for each
+    state and input x of ``model`` and power k of 1/V."""
+    return tuple(f"{x}{QBAR_SUFFIX}{k}" for x, k in _scheduled_sources(model))
+
+
+def with_dynamic_pressure_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
+    """``record`` with the pseudo-inputs of ``with_dynamic_pressure(model)``:
+    eps_k(t) x(t), eps_k = (qbar/qbar_ref) (V_ref/V)^k - 1, for each measured state and
+    input x (reference qbar (Pa) and V (m/s) those of the model)."""
+    c = model.condition
+    ratio = record["qbar"] / c.qbar
+    names = dynamic_pressure_inputs(model)
+    extra, units = {}, dict(record.meta.units)
+    for name, (x, k) in zip(names, _scheduled_sources(model), strict=True):
+        channel = model.state_channels.get(x, x)
+        extra[name] = (ratio * (c.V / record["V"]) ** k - 1.0) * record[channel]
+        units[name] = record.unit(channel)
+    return FlightRecord(record.time, {**record.channels, **extra},
+                        dataclasses.replace(record.meta, units=units))
+
+
+def with_dynamic_pressure(model: LinearModel) -> LinearModel:
+    """``model`` whose aerodynamic terms follow the measured dynamic pressure and airspeed.
+
+    The model holds qbar and V at their reference values, but in a large lateral maneuver
+    the airspeed, and so qbar, drops while the forces and moments are largest: on
+    twinotter-lateral-0alpha (NASA's 2.8 deg rudder 2-1-1 and 6 deg aileron doublet)
+    qbar falls by 1 %, and output error read the force and moment derivatives 0.5-1.7 %
+    small in magnitude on the exact truth record (Cl_da -0.94 %, Cl_dr -1.6 %, CY_dr
+    -1.0 %), an error that falls with the square of the input amplitude (Cl_da -0.24 % and
+    -0.06 % at half and a quarter of it). Each aerodynamic term, qbar S (...) C with
+    (...) carrying 1/V^k (k from the state equation's and the variable's 1/V,
+    ``QBAR_SCHEDULED``), is written as at the reference times (1 + eps_k),
+    eps_k = (qbar/qbar_ref) (V_ref/V)^k - 1; the second-order part takes the measured
+    states and inputs as pseudo-inputs '<x>*dqbar<k>' = eps_k x
+    (``with_dynamic_pressure_channels``) through the same aerodynamic matrix columns
+    (measured variables as pseudo-control inputs, Jategaonkar 2015 ch. 4; their noise
+    enters multiplied by eps, about 0.01). The aerodynamic columns are the difference of
+    the matrices at the parameter values and with every derivative at zero (the builders
+    are linear in the derivatives), so the sensitivities stay exact. A model of another
+    preset is returned unchanged."""
+    if model.name not in QBAR_SCHEDULED or model.condition is None:
+        return model
+    rows, _ = QBAR_SCHEDULED[model.name]
+    zero = {p: 0.0 for p in model.parameters if is_derivative(p)}
+    m = len(model.inputs)
+    sources = _scheduled_sources(model)
+    column = {x: j for j, x in enumerate((*model.states, *model.inputs))}
+    state_power = np.array([rows.get(x, 0) for x in model.states])
+    output_power = np.array([rows.get(y, 0) if y in rows and y not in model.states else 0
+                             for y in model.outputs])
+
+    def build(values: Mapping[str, complex]) -> Matrices:
+        A, B, C, D = model.build(values)
+        A0, B0, C0, D0 = model.build({**values, **zero})
+        aero_x = np.concatenate([A - A0, B[:, :m] - B0[:, :m]], axis=1)
+        aero_y = np.concatenate([C - C0, D[:, :m] - D0[:, :m]], axis=1)
+        bx, dy = [], []
+        for x, k in sources:
+            j, own = column[x], k - _scheduled_power(model, x)
+            bx.append(aero_x[:, j] * (state_power == own))
+            dy.append(aero_y[:, j] * (output_power == own))
+        return (A, np.concatenate([B[:, :m], np.stack(bx, axis=1), B[:, m:]], axis=1), C,
+                np.concatenate([D[:, :m], np.stack(dy, axis=1), D[:, m:]], axis=1))
+
+    return LinearModel(model.name, model.states,
+                       (*model.inputs, *dynamic_pressure_inputs(model)), model.outputs,
+                       model.parameters, dict(model.start), build, model.condition,
+                       f"{model.description}, its aerodynamic terms following qbar(t), V(t)",
+                       dict(model.state_channels))
+
+
+# the lateral model's kinematic terms beyond their linearisation, computed from measured
+# channels and fed in as known inputs of the state equations (``with_kinematics``)
+KINEMATIC_INPUTS: dict[str, dict[str, str]] = {
+    "lateral": {"beta": "betadot_kinematics", "phi": "phidot_kinematics"}}
+KINEMATIC_CHANNELS = ("V", "alpha", "theta", "phi", "p", "q", "r")
+
+
+def with_kinematics_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
+    """``record`` with the known inputs of ``with_kinematics(model)`` (rad/s): the
+    lateral kinematics less their linearisation about the model's reference condition,
+      betadot: p (sin alpha - sin alpha0) - r (cos alpha - cos alpha0)
+               + g (cos theta sin phi / V - cos theta0 phi / V0)
+      phidot:  tan theta (q sin phi + r cos phi) - tan theta0 r
+    (Etkin & Reid 1996 ch. 4; small beta), from the measured channels."""
+    c = model.condition
+    a, th, ph = record["alpha"], record["theta"], record["phi"]
+    p, q, r = record["p"], record["q"], record["r"]
+    names = KINEMATIC_INPUTS[model.name]
+    extra = {
+        names["beta"]: (p * (np.sin(a) - np.sin(c.alpha)) - r * (np.cos(a) - np.cos(c.alpha))
+                        + c.g * (np.cos(th) * np.sin(ph) / record["V"]
+                                 - np.cos(c.theta) * ph / c.V)),
+        names["phi"]: np.tan(th) * (q * np.sin(ph) + r * np.cos(ph)) - np.tan(c.theta) * r,
+    }
+    units = {**record.meta.units, **{n: "rad/s" for n in extra}}
+    return FlightRecord(record.time, {**record.channels, **extra},
+                        dataclasses.replace(record.meta, units=units))
+
+
+def with_kinematics(model: LinearModel) -> LinearModel:
+    """``model`` with the known inputs of ``with_kinematics_channels``, one per state
+    equation they complete (coefficient 1, no parameter). On twinotter-lateral-0alpha
+    (bank to 10 deg, alpha moving 0.3 deg, theta 1.4 deg) the linearised kinematics left
+    output error's yaw derivatives 0.4-2.5 % off on the exact truth record once the
+    dynamic pressure was followed (``with_dynamic_pressure``). A model of another preset
+    is returned unchanged."""
+    names = KINEMATIC_INPUTS.get(model.name)
+    if not names or model.condition is None:
+        return model
+    rows = [model.states.index(s) for s in names]
+    m = len(model.inputs)
+
+    def build(values: Mapping[str, complex]) -> Matrices:
+        A, B, C, D = model.build(values)
+        known = np.zeros((B.shape[0], len(rows)), dtype=B.dtype)
+        known[rows, range(len(rows))] = 1.0
+        return (A, np.concatenate([B[:, :m], known, B[:, m:]], axis=1), C,
+                np.concatenate([D[:, :m], np.zeros((D.shape[0], len(rows)), D.dtype),
+                                D[:, m:]], axis=1))
+
+    return LinearModel(model.name, model.states, (*model.inputs, *names.values()),
+                       model.outputs, model.parameters, dict(model.start), build,
+                       model.condition, f"{model.description}, with its full kinematics",
+                       dict(model.state_channels))
+
+
+def _scheduled_power(model: LinearModel, x: str) -> int:
+    return QBAR_SCHEDULED[model.name][1].get(x, 0)
 
 
 def _check_names(names: Sequence[str], allowed: Sequence[str], model: str) -> None:
