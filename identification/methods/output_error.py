@@ -346,7 +346,7 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
     if unmeasured:
         linear = lm.without_outputs(linear, unmeasured)
     scheduled = (options.dynamic_pressure and linear.name in lm.QBAR_SCHEDULED
-                 and "qbar" in record)
+                 and "qbar" in record and "V" in record)
     if scheduled:
         record = lm.with_dynamic_pressure_channels(record, linear)
         linear = lm.with_dynamic_pressure(linear)

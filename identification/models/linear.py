@@ -525,10 +525,20 @@ QBAR_SUFFIX = "*dqbar"
 
 
 def _scheduled_sources(model: LinearModel) -> list[tuple[str, int]]:
-    """(state or input, power of 1/V) of each pseudo-input of ``with_dynamic_pressure``."""
+    """(state or input, power of 1/V) of each pseudo-input of ``with_dynamic_pressure``:
+    the states and inputs some derivative multiplies (a structural test: the matrices with
+    every derivative at 1 against at 0), so an attitude (kinematic only) needs no channel."""
     rows, cols = QBAR_SCHEDULED[model.name]
     powers = sorted({0, *rows.values()})
-    return [(x, cols.get(x, 0) + k) for x in (*model.states, *model.inputs) for k in powers]
+    names = [p for p in model.parameters if is_derivative(p)]
+    on = model.build({**model.start, **dict.fromkeys(names, 1.0)})
+    off = model.build({**model.start, **dict.fromkeys(names, 0.0)})
+    m = len(model.inputs)
+    moved = np.concatenate([np.abs(on[0] - off[0]), np.abs(on[1] - off[1])[:, :m]], axis=1)
+    moved_y = np.concatenate([np.abs(on[2] - off[2]), np.abs(on[3] - off[3])[:, :m]], axis=1)
+    used = (moved.sum(axis=0) + moved_y.sum(axis=0)) > 0
+    sources = [x for x, u in zip((*model.states, *model.inputs), used, strict=True) if u]
+    return [(x, cols.get(x, 0) + k) for x in sources for k in powers]
 
 
 def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
