@@ -4,8 +4,8 @@ Each seed: the card flown (fly_card), the standard data reduction (reduce_record
 ``identify`` with the default method (output error) and every option at its default, on
 one axis; per derivative, the share of seeds whose truth lies within 1.96 standard errors,
 against the 99 % binomial band of 95 % for that number of seeds
-(``scenarios.montecarlo.intervals.binomial_band``). Unlike ``flightid montecarlo`` (which
-identifies the raw record), the record is reduced first, as ``flightid identify`` does.
+(``scenarios.montecarlo.intervals.binomial_band``). The record is reduced first, as
+``flightid identify`` and ``flightid montecarlo`` do; the seeds are ``fly_card`` seeds.
 
     python benchmarks/default_coverage.py twinotter-lateral-0alpha --seeds 2001-2200
 
