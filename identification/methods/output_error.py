@@ -452,11 +452,17 @@ def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, floa
         return {}
     params = [n for n in names if n in model.parameters]
     _, (dA, dB, dC, dD) = matrix_sensitivities(model, {**model.start, **values}, params)
-    only = ident.input_only_parameters(params, dA, dB, dC, dD)
+    # a pseudo-input of the dynamic pressure ('dr*dqbar0') belongs to its input ('dr')
+    sources = [lm.pseudo_input_source(c) for c in (*model.inputs, "1")]
+    touched = np.any(dB != 0, axis=1) | np.any(dD != 0, axis=1)  # (parameter, column)
+    only = {}
+    for k, name in enumerate(params):
+        used = {sources[j] for j in np.flatnonzero(touched[k])}
+        if not (np.any(dA[k]) or np.any(dC[k])) and len(used) == 1:
+            only[name] = used.pop()
     out = {}
-    for name, col in only.items():
-        if col < len(model.inputs) and model.inputs[col] in flat:
-            inp = model.inputs[col]
+    for name, inp in only.items():
+        if inp in flat:
             out[name] = (
                 f"input {inp} is not excited (peak-to-peak {flat[inp]:.3g} rad < "
                 f"{min_range:g}): {name} multiplies only {inp}, so it cannot be separated "

@@ -547,6 +547,12 @@ def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
     return tuple(f"{x}{QBAR_SUFFIX}{k}" for x, k in _scheduled_sources(model))
 
 
+def pseudo_input_source(name: str) -> str:
+    """The state or input a pseudo-input of ``with_dynamic_pressure`` is made of ('dr' for
+    'dr*dqbar0'); any other input name unchanged."""
+    return name.split(QBAR_SUFFIX, 1)[0]
+
+
 def with_dynamic_pressure_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
     """``record`` with the pseudo-inputs of ``with_dynamic_pressure(model)``:
     eps_k(t) x(t), eps_k = (qbar/qbar_ref) (V_ref/V)^k - 1, for each measured state and
