@@ -5,7 +5,8 @@ every point identified, the estimates set against the model's tables across the 
     result = campaign.run("twinotter-envelope", "campaigns/twinotter")
 
 Modules: ``card`` (the campaign card), ``point`` (fly, reduce, identify, score one point),
-``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html).
+``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html),
+``update`` (the database update), ``global_model`` (one model over every point).
 The points run on the Monte Carlo executors (local processes or Dask) and are stored as
 the Monte Carlo store stores realizations (one Parquet file per point, atomically), so a
 rerun continues. docs/campaign.md.
