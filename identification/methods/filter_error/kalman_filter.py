@@ -184,6 +184,8 @@ class FilterEvaluation:
     gradient: np.ndarray | None = None
     information: np.ndarray | None = None
     hessian: np.ndarray | None = None
+    sensitivities: np.ndarray | None = None  # dnu/dtheta (N, ny, np)
+    covariance_sensitivities: np.ndarray | None = None  # dS/dtheta (np, ny, ny)
 
 
 def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
@@ -243,6 +245,7 @@ def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarr
     grad += 0.5 * n * np.einsum("jaa->j", sd) - 0.5 * np.einsum("jab,bc,ca->j", sd, S_inv, V)
     ev.gradient = grad
     ev.information = 0.5 * (info + info.T)
+    ev.sensitivities, ev.covariance_sensitivities = dnu, dS
     # Hessian without the expectation E[nu nu^T] = S (second derivatives of nu and S
     # dropped): differs from M when the residuals do not match S, i.e. while R is wrong
     #   H = sum dnu^T W dnu - (B + B^T) + tr(W dS_j W dS_l W V) - N/2 tr(W dS_j W dS_l),
@@ -358,3 +361,36 @@ def compensate_process_noise(prob: FilterProblem, theta: np.ndarray, R_old: np.n
     return theta
 
 
+
+def score_contributions(sensitivities: np.ndarray, covariance_sensitivities: np.ndarray,
+                        innovations: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Per-sample gradient of J (N, np): g_k = dnu_k^T W nu_k + 1/2 tr(W dS_j)
+    - 1/2 nu_k^T W dS_j W nu_k, W = S^-1; their sum is the gradient of ``evaluate``."""
+    weight = np.linalg.inv(S)
+    wnu = innovations @ weight
+    g = np.einsum("iaj,ia->ij", sensitivities, wnu)
+    g += 0.5 * np.einsum("ab,jba->j", weight, covariance_sensitivities)[None, :]
+    g -= 0.5 * np.einsum("ia,jab,ib->ij", wnu, covariance_sensitivities, wnu)
+    return g
+
+
+def robust_covariance(hessian: np.ndarray, sensitivities: np.ndarray,
+                      covariance_sensitivities: np.ndarray, innovations: np.ndarray,
+                      S: np.ndarray) -> np.ndarray:
+    """Parameter covariance of the filter-error estimate when the filter's noise model is
+    not the flight's: the sandwich H^-1 [sum_k g_k g_k^T] H^-1 (Huber 1967; White,
+    "Maximum likelihood estimation of misspecified models", Econometrica 50, 1982).
+
+    H (np, np) is the Hessian of J at the estimate (``evaluate``), g_k the per-sample
+    score (``score_contributions``, centred) with the innovations ``innovations`` (N, ny),
+    their sensitivities dnu/dtheta (N, ny, np) and dS/dtheta (np, ny, ny), which carry the
+    Kalman gain's dependence on the parameters. When the model is right, E[g g^T] = H = M
+    and this is the Cramer-Rao bound M^-1 (Jategaonkar 2015 eq. 5.22); in turbulence the
+    innovations are neither white nor of covariance S and the two differ. Parameter units
+    squared.
+    """
+    g = score_contributions(sensitivities, covariance_sensitivities, innovations, S)
+    g -= g.mean(axis=0)
+    inv = np.linalg.pinv(hessian)
+    cov = inv @ (g.T @ g) @ inv
+    return 0.5 * (cov + cov.T)
