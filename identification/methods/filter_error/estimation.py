@@ -304,8 +304,9 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
             innovations = ev.nu + scaled  # those of the model that follows the condition
         crb = cramer_rao_covariance(fit.information)
         crb = 0.5 * (crb + crb.T)
-        cov = robust_covariance(ev.hessian, ev.sensitivities, ev.covariance_sensitivities,
-                                innovations, ev.flt.S) if colored else crb
+        cov = robust_covariance(fit.information, ev.hessian, ev.sensitivities,
+                                ev.covariance_sensitivities, innovations,
+                                ev.flt.S) if colored else crb
         kind = StdKind.CRAMER_RAO_COLORED if colored else StdKind.CRAMER_RAO
     else:
         crb = cov = np.zeros((0, 0))
