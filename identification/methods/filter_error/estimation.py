@@ -65,7 +65,7 @@ from flightid.identification.methods.filter_error.flight_condition import (
     ConditionDeparture,
     condition_correction,
     condition_departure,
-    scaled_sensitivity,
+    innovation_change,
 )
 from flightid.identification.methods.filter_error.kalman_filter import (
     PROCESS_NOISE_PREFIX,
@@ -298,7 +298,7 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
     if names:
         innovations = ev.nu
         if departure is not None:
-            scaled = scaled_sensitivity(names, fit.theta, ev.sensitivities, departure)
+            scaled = innovation_change(names, fit.theta, ev, d, departure)
             correction = condition_correction(fit.information, ev.sensitivities,
                                               np.linalg.inv(ev.flt.S), scaled)
             innovations = ev.nu + scaled  # those of the model that follows the condition

@@ -14,11 +14,13 @@ bounds on CY_beta, correlated +1.00 across flights with the information-weighted
 
 The correction is the first-order (one Gauss-Newton step) difference between the fit of
 the constant-condition model and that of the model whose aerodynamic terms scale with the
-measured condition, s_jk = q_k / q0 - 1 (s_jk = q_k / q0 - V_k / V0 for the rate
-derivatives). At the true parameters the constant model's innovations are the time-varying
-model's (white) innovations e_k minus sum_j theta_j s_jk dnu_k / dtheta_j, so
+measured condition, each aerodynamic term scaled by 1 + s_k, s_k = q_k / q0 - 1
+(q_k / q0 - V_k / V0 for the rate derivatives). At the true parameters the constant
+model's innovations are the time-varying model's (white) innovations e_k minus their
+first-order change d_k (``innovation_change``: the predictor's sensitivity recursion
+driven by s_k, the Kalman gain held), so
 
-    theta_hat - theta = M^-1 sum_k dnu_k^T S^-1 sum_j theta_j s_jk dnu_k / dtheta_j,
+    theta_hat - theta = M^-1 sum_k dnu_k^T S^-1 d_k,
 
 M the filter's information matrix at the estimate. Only models without an airspeed state
 are corrected: a model with V as a state already varies its dynamic pressure.
@@ -31,6 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flightid.identification.methods.filter_error.kalman_filter import FilterEvaluation
+from flightid.identification.methods.output_error import Problem
+from flightid.identification.models.discrete import propagate
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
@@ -71,25 +76,40 @@ def is_aerodynamic(name: str) -> bool:
     return name.startswith("C") and "_" in name
 
 
-def scaled_sensitivity(names: Sequence[str], theta: np.ndarray, sensitivities: np.ndarray,
-                       departure: ConditionDeparture) -> np.ndarray:
-    """sum_j theta_j s_jk dnu_k / dtheta_j (N, ny): the innovations' first-order change
-    when the aerodynamic terms follow the measured condition instead of the reference.
+def innovation_change(names: Sequence[str], theta: np.ndarray, ev: FilterEvaluation,
+                      data: Problem, departure: ConditionDeparture) -> np.ndarray:
+    """d (N, ny): the innovations' first-order change when the aerodynamic terms follow the
+    measured condition, sample by sample, instead of the reference (the Kalman gain held).
 
-    ``sensitivities`` (N, ny, np) dnu/dtheta at ``theta`` (np,), in the order of ``names``.
+    The aerodynamic part of the filter's matrices at sample k is scaled by 1 + s_k: with
+    the directions dPhi = sum_j theta_j dPhi/dtheta_j over the static (or the rate)
+    derivatives, and the same for Gamma, C and D, the predictor's sensitivity recursion
+    (``kalman_filter.evaluate``) is driven by s_k times its forcing. ``ev`` is the
+    filter's evaluation at ``theta`` (with sensitivities), ``data`` its record.
     """
     aero = np.array([is_aerodynamic(n) for n in names])
     rate = np.array([is_aerodynamic(n) and n.endswith(RATE_SUFFIXES) for n in names])
-    static = np.where(aero & ~rate, theta, 0.0)
-    rates = np.where(rate, theta, 0.0)
-    q, v = departure.qbar[:, None], departure.airspeed[:, None]
-    return sensitivities @ static * q + sensitivities @ rates * (q - v)
+    flt, x, grads = ev.flt, ev.x, ev.matrix_sensitivities
+    gain = flt.phi @ flt.K
+    closed = flt.phi - gain @ flt.C
+    change = np.zeros_like(ev.nu)
+    for weights, s in ((np.where(aero & ~rate, theta, 0.0), departure.qbar),
+                       (np.where(rate, theta, 0.0), departure.qbar - departure.airspeed)):
+        d_phi, d_gamma, d_c, d_d = (np.tensordot(weights, grads[m], axes=1)
+                                    for m in ("phi", "gamma", "C", "D"))
+        d_gain = d_phi @ flt.K
+        d_closed = d_phi - d_gain @ flt.C - gain @ d_c
+        forcing = s[:, None] * (x @ d_closed.T + (data.z - data.u @ flt.D.T) @ d_gain.T
+                                - data.u @ d_d.T @ gain.T + data.w @ d_gamma.T)
+        sens = propagate(closed, forcing, np.zeros(x.shape[1]))
+        change -= sens @ flt.C.T + s[:, None] * (x @ d_c.T + data.u @ d_d.T)
+    return change
 
 
 def condition_correction(information: np.ndarray, sensitivities: np.ndarray,
                          innovation_weight: np.ndarray, scaled: np.ndarray) -> np.ndarray:
     """The parameter error the drifting condition causes, M^-1 sum_k dnu_k^T W d_k (np,),
-    to subtract from the estimate; W = S^-1 (ny, ny), d = ``scaled_sensitivity`` (N, ny).
+    to subtract from the estimate; W = S^-1 (ny, ny), d = ``innovation_change`` (N, ny).
     """
     rhs = np.einsum("iaj,ab,ib->j", sensitivities, innovation_weight, scaled)
     return np.linalg.solve(information, rhs)

@@ -186,6 +186,8 @@ class FilterEvaluation:
     hessian: np.ndarray | None = None
     sensitivities: np.ndarray | None = None  # dnu/dtheta (N, ny, np)
     covariance_sensitivities: np.ndarray | None = None  # dS/dtheta (np, ny, ny)
+    # d/dtheta of the filter's phi, gamma, C, D, each (np, rows, columns)
+    matrix_sensitivities: dict[str, np.ndarray] | None = None
 
 
 def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
@@ -246,6 +248,7 @@ def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarr
     ev.gradient = grad
     ev.information = 0.5 * (info + info.T)
     ev.sensitivities, ev.covariance_sensitivities = dnu, dS
+    ev.matrix_sensitivities = {m: grads[m] for m in ("phi", "gamma", "C", "D")}
     # Hessian without the expectation E[nu nu^T] = S (second derivatives of nu and S
     # dropped): differs from M when the residuals do not match S, i.e. while R is wrong
     #   H = sum dnu^T W dnu - (B + B^T) + tr(W dS_j W dS_l W V) - N/2 tr(W dS_j W dS_l),
