@@ -58,11 +58,11 @@ from flightid.units import DEG
 # per structure: (p-value below which, share at or above which it is found). The share is
 # the energy the structure explains beyond the known set, less chance, over what the known
 # set leaves of the target. Set on seed 0 of the blind check (docs/gap.md, "Nonlinear
-# structure"): the pitch kink at 1e-10 and 0.2 (null flights: p > 1e-4, shares <= 0.06;
-# breaks: p < 1e-100, shares 0.75-0.92); the vane play at 1e-7 and 0.03 (null flights
-# reached 1e-6 on the alpha vane); the odd vane term at 1e-40 and 0.35, above the c172p's
-# own null flights (its side force is itself odd-nonlinear in beta: p down to 1e-28,
-# shares to 0.30, on flights with nothing injected)
+# structure"; 100 null flights): the pitch kink at 1e-10 and 0.2 (null flights: p >= 1e-5,
+# shares <= 0.11; breaks: p 1e-14 or less, shares 0.35-0.92); the vane play at 1e-7 and
+# 0.03 (null flights reached 1e-6 on the alpha vane); the odd vane term at 1e-40 and 0.1,
+# above the c172p's null flights (nothing injected, so its own side force is not linear in
+# beta: p to 1e-28, shares to 0.30)
 LEVELS = {"vane_odd": (1e-40, 0.1), "vane_play": (1e-7, 0.03), "alpha_kink": (1e-10, 0.2)}
 PLAY_WIDTHS_RAD = (0.2 * DEG, 0.5 * DEG)  # small plays: the direction the vane last moved
 SURFACE_WIDTHS_RAD = (0.5 * DEG, 1.0 * DEG)  # the catalogue's surface backlash, deadband
