@@ -79,9 +79,10 @@ CONFIGS = {
 }
 
 
-def travel_limit(env: gymnasium.Env) -> gymnasium.Env:
-    """The agent's action [-1, 1] times ``AMPLITUDE`` of the travel."""
-    return gymnasium.wrappers.TransformAction(env, lambda a: AMPLITUDE * a, env.action_space)
+def travel_limit(env: gymnasium.Env, scale: float | np.ndarray = AMPLITUDE) -> gymnasium.Env:
+    """The agent's action [-1, 1] times ``scale`` of the travel (a number, or one per
+    surface de, da, dr)."""
+    return gymnasium.wrappers.TransformAction(env, lambda a: scale * a, env.action_space)
 
 
 class Curve(BaseCallback):

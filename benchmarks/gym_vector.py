@@ -1,6 +1,6 @@
 """Vector-environment throughput of flightid/Excitation-v0; writes a results file.
 
-Usage: python benchmarks/gym_vector.py [out.txt] [--repeats N] [--workers N] [--chunk K]
+Usage: python benchmarks/gym_vector.py [out.txt] [--repeats N] [--workers N] [--chunks K ...]
 
 Steps per second of wall-clock time (``time.perf_counter``; parallel work is what a
 vector environment is for, so process CPU time would not show it), for one 20 s episode
@@ -10,8 +10,8 @@ per environment (1000 decisions at 50 Hz, a 3211 on aileron then rudder):
 - sync: ``gymnasium.vector.SyncVectorEnv`` of ``--workers`` environments (one process);
 - async: ``gymnasium.vector.AsyncVectorEnv`` of ``--workers`` environments, one worker
   process each (shared-memory observations, the default);
-- async-chunks: the same with each environment wrapped in ``DecisionChunks`` (``--chunk``
-  decisions per worker call: one pipe round trip per chunk).
+- chunks K: the same with each environment wrapped in ``DecisionChunks`` (K decisions
+  per worker call, for each K of ``--chunks``: one pipe round trip per chunk).
 
 Steps count every environment's decision. The cases run interleaved, ``--repeats`` times;
 the speed-up is the median over the repeats of async / single (back to back). Resets and
@@ -22,6 +22,12 @@ the CPU time is counted too (``/proc``, summed over the repeats): the main proce
 the workers' CPU seconds per decision under async against the single environment's. Their
 ratio is the efficiency of the vector (1: the pipe costs nothing); with ``--workers``
 free cores async can step at most workers x efficiency x the single rate.
+
+Where the time goes: the vector's own cost per decision in one process (sync CPU minus
+single CPU per decision: stacking observations, merging ``info``), and per call of an
+``AsyncVectorEnv`` of ``NullEnv`` (the spaces, no work) with and without the step's
+``info`` (wall, and CPU of the main process and the workers), and pickling plus
+unpickling that ``info``.
 """
 
 from __future__ import annotations
@@ -29,20 +35,38 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
+import pickle
 import platform
 import statistics
 import time
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 
 import gymnasium
 import numpy as np
+from gymnasium import spaces
 
-from flightid.scenarios.gym import DecisionChunks, ExcitationEnv
+from flightid.scenarios.gym import OBS_CHANNELS, DecisionChunks, ExcitationEnv
 from flightid.scenarios.gym.baselines import three211
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_vector.txt"
 TICK = os.sysconf("SC_CLK_TCK")
+QUIET_CORES = 0.25  # a repeat is quiet when the rest of the machine used less than this
+
+
+def machine_busy() -> float:
+    """CPU seconds all cores have been busy since boot (``/proc/stat``: user, nice, system,
+    irq, softirq, steal)."""
+    fields = Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]
+    user, nice, system, _idle, _iowait, irq, softirq, steal = map(int, fields[:8])
+    return (user + nice + system + irq + softirq + steal) / TICK
+
+
+def others(busy0: float, own_cpu: float, wall: float) -> float:
+    """Cores the rest of the machine used since ``machine_busy()`` was ``busy0``, given this
+    run's CPU seconds in that time and the wall-clock seconds (a floor of 0)."""
+    return max(machine_busy() - busy0 - own_cpu, 0.0) / wall
 
 
 def cpu_seconds(pids: Sequence[int]) -> float:
@@ -54,86 +78,158 @@ def cpu_seconds(pids: Sequence[int]) -> float:
     return total / TICK
 
 
-def main(out: Path, repeats: int = 15, workers: int = 2, chunk: int = 10) -> str:
+class NullEnv(gymnasium.Env):
+    """The environment's spaces and no work: a step returns zeros and ``info`` (the
+    vector's own cost per call)."""
+
+    def __init__(self, info: dict | None = None) -> None:
+        self.observation_space = spaces.Box(-np.inf, np.inf, (len(OBS_CHANNELS),), np.float64)
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.info = info or {}
+        self.zeros = np.zeros(self.observation_space.shape)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        return self.zeros, dict(self.info)
+
+    def step(self, action: np.ndarray):
+        return self.zeros, 0.0, False, False, dict(self.info)
+
+
+def pipe_costs(info: dict, calls: int = 2000, workers: int = 2) -> dict[str, float]:
+    """Per call (us): pickling and unpickling ``info`` (one worker's reply); and wall
+    and main-process + workers CPU time of ``AsyncVectorEnv`` of ``NullEnv`` with no
+    ``info`` and with ``info``."""
+    out = {}
+    c0 = time.process_time()
+    for _ in range(calls):
+        pickle.loads(pickle.dumps(info))
+    out["pickle info"] = (time.process_time() - c0) / calls * 1e6
+    for name, inf in (("no info", {}), ("info", info)):
+        venv = gymnasium.vector.AsyncVectorEnv([partial(NullEnv, inf)] * workers)
+        venv.reset(seed=0)
+        pids = [proc.pid for proc in venv.processes]
+        action = np.zeros((workers, 3), np.float32)
+        c0, w0, t0 = time.process_time(), cpu_seconds(pids), time.perf_counter()
+        for _ in range(calls):
+            venv.step(action)
+        out[f"null {name}, wall"] = (time.perf_counter() - t0) / calls * 1e6
+        out[f"null {name}, CPU main"] = (time.process_time() - c0) / calls * 1e6
+        out[f"null {name}, CPU workers"] = (cpu_seconds(pids) - w0) / calls * 1e6
+        venv.close()
+    return out
+
+
+def main(out: Path, repeats: int = 15, workers: int = 2, chunks: Sequence[int] = (10, 50),
+         episodes: int = 2) -> str:
     single = ExcitationEnv()
     actions = three211(single, 0).astype(np.float32)
     n = len(actions)
     batch = np.repeat(actions[:, None, :], workers, axis=1)
     sync = gymnasium.vector.SyncVectorEnv([ExcitationEnv] * workers)
     asyn = gymnasium.vector.AsyncVectorEnv([ExcitationEnv] * workers)
-    chunked = gymnasium.vector.AsyncVectorEnv(
-        [lambda: DecisionChunks(ExcitationEnv(), chunk)] * workers)
-    n_chunks = (n - 1) // chunk  # whole chunks before the episode's last decision
-    chunks = batch[:n_chunks * chunk].reshape(n_chunks, chunk, workers, 3).swapaxes(1, 2)
+    venvs = {"sync": (sync, [], batch[:-1]), "async": (asyn, [p.pid for p in asyn.processes],
+                                                       batch[:-1])}
+    for k in chunks:
+        chunked = gymnasium.vector.AsyncVectorEnv(
+            [partial(lambda k: DecisionChunks(ExcitationEnv(), k), k)] * workers)
+        n_chunks = (n - 1) // k  # whole chunks before the episode's last decision
+        rows = batch[:n_chunks * k].reshape(n_chunks, k, workers, 3).swapaxes(1, 2)
+        venvs[f"chunks {k}"] = (chunked, [p.pid for p in chunked.processes], rows)
+    cpu = {"single": 0.0, **{f"{k} {w}": 0.0 for k in venvs for w in ("main", "workers")}}
+    decisions = {"single": n, **{k: (rows.shape[0] * rows.size // rows.shape[0] // 3)
+                                 for k, (_, _, rows) in venvs.items()}}
 
-    workers_pids = [proc.pid for proc in asyn.processes]
-    chunked_pids = [proc.pid for proc in chunked.processes]
-    cpu = {"single": 0.0, "async main": 0.0, "async workers": 0.0,
-           "async-chunks main": 0.0, "async-chunks workers": 0.0}
+    def one() -> tuple[float, float]:
+        busy0, c_all, wall = machine_busy(), time.process_time(), 0.0
+        for _ in range(episodes):
+            single.reset(seed=0)
+            step = single.step
+            c0, t0 = time.process_time(), time.perf_counter()
+            for a in actions:
+                step(a)
+            wall += time.perf_counter() - t0
+            cpu["single"] += time.process_time() - c0
+        own = time.process_time() - c_all
+        return episodes * n / wall, others(busy0, own, wall)
 
-    def one() -> float:
-        single.reset(seed=0)
-        step = single.step
-        c0, t0 = time.process_time(), time.perf_counter()
-        for a in actions:
-            step(a)
-        t1 = time.perf_counter()
-        cpu["single"] += time.process_time() - c0
-        return n / (t1 - t0)
-
-    def vector(venv: gymnasium.vector.VectorEnv, pids: Sequence[int] = (), name: str = "async",
-               actions: np.ndarray = batch[:-1]) -> float:
-        venv.reset(seed=list(range(workers)))
-        step = venv.step
-        c0, w0, t0 = time.process_time(), cpu_seconds(pids), time.perf_counter()
-        for a in actions:  # (the episode's last step would autoreset)
-            step(a)
-        t1 = time.perf_counter()
-        if pids:
+    def vector(name: str) -> tuple[float, float]:
+        venv, pids, rows = venvs[name]
+        busy0, c_all, w_all, wall = machine_busy(), time.process_time(), cpu_seconds(pids), 0.0
+        for _ in range(episodes):
+            venv.reset(seed=list(range(workers)))
+            step = venv.step
+            c0, w0, t0 = time.process_time(), cpu_seconds(pids), time.perf_counter()
+            for a in rows:  # (the episode's last step would autoreset)
+                step(a)
+            wall += time.perf_counter() - t0
             cpu[f"{name} main"] += time.process_time() - c0
             cpu[f"{name} workers"] += cpu_seconds(pids) - w0
-        return actions.shape[0] * (actions.size // actions.shape[0] // 3) / (t1 - t0)
+        own = time.process_time() - c_all + cpu_seconds(pids) - w_all
+        return episodes * decisions[name] / wall, others(busy0, own, wall)
 
-    cases = {"single": one, "sync": lambda: vector(sync),
-             "async": lambda: vector(asyn, workers_pids),
-             "async-chunks": lambda: vector(chunked, chunked_pids, "async-chunks", chunks)}
+    cases = {"single": one, **{k: partial(vector, k) for k in venvs}}
     rates: dict[str, list[float]] = {k: [] for k in cases}
+    busy: dict[str, list[float]] = {k: [] for k in cases}  # cores the rest of the machine used
+    loads = [os.getloadavg()[0]]
+    one()  # (the first step in a process compiles or loads the kernels)
     for _ in range(repeats):
         for k, fn in cases.items():
-            rates[k].append(fn())
-    load = os.getloadavg()
-    sync.close()
-    asyn.close()
-    chunked.close()
+            rate, rest = fn()
+            rates[k].append(rate)
+            busy[k].append(rest)
+        loads.append(os.getloadavg()[0])
+    for venv, _, _ in venvs.values():
+        venv.close()
+    single.reset(seed=0)
+    info = single.step(actions[0])[4]
+    pipe = pipe_costs(info, workers=workers)
     speedup = {k: [a / s for a, s in zip(rates[k], rates["single"], strict=True)]
-               for k in ("async", "async-chunks")}
+               for k in venvs}
+    quiet = {k: [r for r, a, b in zip(v, busy[k], busy["single"], strict=True)
+                 if max(a, b) < QUIET_CORES] for k, v in speedup.items()}
     lines = [f"flightid/Excitation-v0 vector environments, {datetime.date.today().isoformat()}: "
              f"{single.aircraft}, {single.episode_s:g} s episodes = {n} decisions at "
              f"{single.decision_hz:g} Hz, {workers} environments per vector, chunks of "
-             f"{chunk} decisions, "
+             f"{', '.join(map(str, chunks))} decisions, "
              f"{os.cpu_count()} cores (shared with other work), python "
              f"{platform.python_version()}, gymnasium {gymnasium.__version__}; wall-clock "
              f"steps/s (all environments' decisions), best and median of {repeats}, "
-             "interleaved", "",
-             f"{'case':<10}{'best':>10}{'median':>10}"]
+             "interleaved", f"load average (1 min) over the run: {min(loads):.1f}-"
+             f"{max(loads):.1f}, median {statistics.median(loads):.1f}", "",
+             f"{episodes} episodes per case and repeat; 'rest': cores the rest of the machine "
+             "used during the case (/proc/stat busy time less this run's processes), median; "
+             f"'quiet': the repeats where the rest used < {QUIET_CORES} core during both "
+             "cases of the ratio", "",
+             f"{'case':<12}{'best':>8}{'median':>8}{'rest':>6}{'/ single: median':>18}"
+             f"{'range':>12}{'quiet: n, median':>20}"]
     for k, v in rates.items():
-        lines.append(f"{k:<10}{max(v):>10.0f}{statistics.median(v):>10.0f}")
-    decisions = {"single": n, "async": (n - 1) * workers, "async-chunks": n_chunks * chunk
-                 * workers}
-    per = {k: v / (repeats * decisions[k.split()[0]]) * 1e6 for k, v in cpu.items()}
-    lines.append("")
-    for k, ratios in speedup.items():
-        lines.append(f"{k} / single, median of the {repeats} back-to-back ratios: "
-                     f"{statistics.median(ratios):.2f} (range {min(ratios):.2f}-"
-                     f"{max(ratios):.2f})")
-    lines += [f"load average at the end {load[0]:.1f} on {os.cpu_count()} cores", "",
-              "CPU time per decision (us; async: per decision of any environment)",
+        ratio = speedup.get(k)
+        head = (f"{k:<12}{max(v):>8.0f}{statistics.median(v):>8.0f}"
+                f"{statistics.median(busy[k]):>6.2f}")
+        if not ratio:
+            lines.append(head + f"{1:>18}")
+            continue
+        q = (f"{len(quiet[k]):>14d}, {statistics.median(quiet[k]):.2f}" if quiet[k]
+             else f"{0:>14d}, -")
+        lines.append(head + f"{statistics.median(ratio):>18.2f}{min(ratio):>7.2f}-"
+                     f"{max(ratio):<5.2f}" + q)
+    per = {k: v / (repeats * episodes * decisions[k.rsplit(' ', 1)[0]]) * 1e6
+           for k, v in cpu.items()}
+    lines += ["", "CPU time per decision (us; vectors: per decision of any environment)",
               *(f"  {k:<22}{v:>8.1f}" for k, v in per.items()), ""]
-    for k in ("async", "async-chunks"):
+    for k in venvs:
+        if k == "sync":
+            continue
         efficiency = per["single"] / (per[f"{k} main"] + per[f"{k} workers"])
         lines.append(f"{k}: efficiency single / (main + workers) {efficiency:.2f}; on "
                      f"{workers} free cores it would step at most {workers * efficiency:.2f} x "
                      "single")
+    lines += ["", f"where the time goes, per call of {workers} environments (us):",
+              f"  sync - single, per decision (the vector's stacking and info merge): "
+              f"{per['sync main'] - per['single']:.1f}",
+              *(f"  {k:<28}{v:>8.1f}" for k, v in pipe.items()),
+              f"  (the observation is {single.observation_space.shape[0]} float64 = "
+              f"{single.observation_space.shape[0] * 8} bytes, in shared memory)"]
     text = "\n".join(lines) + "\n"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
@@ -145,6 +241,7 @@ if __name__ == "__main__":
     parser.add_argument("out", nargs="?", type=Path, default=DEFAULT_OUT)
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--chunk", type=int, default=10)
+    parser.add_argument("--chunks", type=int, nargs="+", default=[10, 50])
+    parser.add_argument("--episodes", type=int, default=2, help="episodes per case and repeat")
     args = parser.parse_args()
-    print(main(args.out, args.repeats, args.workers, args.chunk))
+    print(main(args.out, args.repeats, args.workers, args.chunks, args.episodes))

@@ -85,4 +85,7 @@ def campaign_command(
     if result.update is not None:
         Console().print(update_table(result.update))
         typer.echo(f"wrote {result.aircraft}")
+    if result.global_model is not None:
+        typer.echo(f"wrote {result.folder / campaigns.GLOBAL} (one model over points "
+                   f"{', '.join(map(str, result.global_model['points']))})")
     typer.echo(f"wrote {result.folder / campaigns.ESTIMATES} and {result.report}")

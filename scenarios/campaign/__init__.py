@@ -5,7 +5,8 @@ every point identified, the estimates set against the model's tables across the 
     result = campaign.run("twinotter-envelope", "campaigns/twinotter")
 
 Modules: ``card`` (the campaign card), ``point`` (fly, reduce, identify, score one point),
-``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html).
+``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html),
+``update`` (the database update), ``global_model`` (one model over every point).
 The points run on the Monte Carlo executors (local processes or Dask) and are stored as
 the Monte Carlo store stores realizations (one Parquet file per point, atomically), so a
 rerun continues. docs/campaign.md.
@@ -20,8 +21,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign, TestPoint, load_campaign, point_card
 from flightid.scenarios.campaign.curve import model_curve
+from flightid.scenarios.campaign.global_model import fit_global, has_global_model
+from flightid.scenarios.campaign.global_model import summary as global_summary
 from flightid.scenarios.campaign.point import run_point
 from flightid.scenarios.campaign.report import PointScore, point_scores, write_report
 from flightid.scenarios.campaign.update import (
@@ -37,6 +41,7 @@ from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_l
 ESTIMATES = "estimates.parquet"
 CURVE = "model_curve.parquet"
 UPDATE = "update.json"
+GLOBAL = "global_model.json"
 
 __all__ = ["Campaign", "CampaignResult", "TestPoint", "load_campaign", "point_card", "run"]
 
@@ -53,6 +58,7 @@ class CampaignResult:
     report: Path
     update: dict | None = None  # corrections and held-out gaps (``update.summary``)
     aircraft: Path | None = None  # the updated aircraft's XML
+    global_model: dict | None = None  # one model over every point (``global_model``)
 
 
 def run(card: str | Path | Campaign, output: str | Path, workers: int | None = None,
@@ -65,7 +71,9 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     per CPU) or a Dask scheduler; ``progress(done, total)`` after each point. A folder
     holding another campaign is refused (``store.StudyMismatch``). ``update_aircraft``:
     write the model aircraft with its tables relocated to the flight points there, fly the
-    held-out points and put the gap before and after into OUTPUT/update.json."""
+    held-out points and put the gap before and after into OUTPUT/update.json. A method
+    that fits several records at once (``mof``) also fits one global model over every
+    point's record (``global_model``), written to OUTPUT/global_model.json."""
     campaign = card if isinstance(card, Campaign) else load_campaign(card)
     folder = Path(output)
 
@@ -86,9 +94,12 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     df = df[df["index"] < campaign.n].reset_index(drop=True)
     df.to_parquet(folder / ESTIMATES, index=False)
     curve = _curve(campaign, df, folder)
+    pooled = _global_model(campaign, df, folder)
+    notes = _global_notes(pooled)
     if update_aircraft is None:
-        report = write_report(folder, campaign, df, curve)
-        return CampaignResult(folder, campaign, df, curve, point_scores(df), report)
+        report = write_report(folder, campaign, df, curve, notes=notes)
+        return CampaignResult(folder, campaign, df, curve, point_scores(df), report,
+                              global_model=pooled)
     fitted = corrections(campaign, df)
     effects = correction_effects(campaign, df, fitted)
     xml = write_updated(campaign, effects, update_aircraft)
@@ -96,9 +107,30 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     result["aircraft"] = str(xml)
     result["effects"] = [e.to_dict() for e in effects]
     (folder / UPDATE).write_text(json.dumps(result, indent=2, default=str) + "\n")
-    report = write_report(folder, campaign, df, curve, notes=_notes(result),
+    report = write_report(folder, campaign, df, curve, notes=notes + _notes(result),
                           updated=updated_curve(campaign, curve, effects))
-    return CampaignResult(folder, campaign, df, curve, point_scores(df), report, result, xml)
+    return CampaignResult(folder, campaign, df, curve, point_scores(df), report, result, xml,
+                          pooled)
+
+
+def _global_model(campaign: Campaign, df: pd.DataFrame, folder: Path) -> dict | None:
+    """With a method that fits several records (``global_model.POOLED``): one model over
+    the records of every point that did not fail, written to OUTPUT/global_model.json."""
+    if not has_global_model(campaign):
+        return None
+    estimated = df["status"] == STATUS_ESTIMATED
+    indices = sorted(int(i) for i in df.loc[estimated, "index"].unique())
+    result = global_summary(fit_global(campaign, indices), indices)
+    (folder / GLOBAL).write_text(json.dumps(result, indent=2, default=str) + "\n")
+    return result
+
+
+def _global_notes(pooled: dict | None) -> list[str]:
+    if pooled is None:
+        return []
+    return [f"global model over points {', '.join(map(str, pooled['points']))}: "
+            + "; ".join(f"{c} {len(v['terms'])} terms (R^2 {v.get('R2', float('nan')):.3f})"
+                        for c, v in pooled["coefficients"].items())]
 
 
 def updated_curve(campaign: Campaign, curve: pd.DataFrame, effects: list) -> pd.DataFrame:

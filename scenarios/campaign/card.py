@@ -12,6 +12,9 @@ A campaign card (TOML; lengths m, speeds m/s, angles rad or degrees with ``_deg`
     seed = 1                        # base seed; each point's seed derives from it
     x = "speed"                     # what the report plots against: speed, altitude, alpha
                                     # (the point's trim alpha), flaps, mass, cg_x
+    start = "method"                # each point's fit starts where the method starts it
+                                    # ("method", default), or from the model aircraft's
+                                    # derivatives at the point ("model"; oe6dof)
     [options]                       # the method's options
     propulsive_moments = true
 
@@ -50,14 +53,19 @@ from pathlib import Path
 from typing import Any
 
 from flightid.identification.methods import registry
+from flightid.identification.methods.nonlinear_6dof.estimation import aerodynamic_parameters
 from flightid.scenarios.cards import Card, CardError, card_from_dict, find_card, load_card
 from flightid.scenarios.toml_locate import line_index, line_of
 from flightid.units import DEG
 
 TOP_FIELDS = ("name", "description", "source", "card", "method", "model", "seed", "x",
-              "options", "point", "matrix", "held_out", "maneuver", "effect")
+              "start", "options", "point", "matrix", "held_out", "maneuver", "effect")
 POINT_FIELDS = ("altitude", "speed", "flaps", "flaps_deg", "mass", "cg_x")
 X_CHOICES = ("speed", "altitude", "alpha", "flaps", "mass", "cg_x")
+START_CHOICES = ("method", "model")
+# the methods a point's fit can start from the model's derivatives (start = "model"):
+# (model, options) -> the parameters their start mapping takes
+MODEL_START = {"oe6dof": aerodynamic_parameters}
 
 
 @dataclass(frozen=True)
@@ -92,6 +100,7 @@ class Campaign:
     seed: int = 1
     x: str = "speed"
     description: str = ""
+    start: str = "method"  # START_CHOICES: where each point's fit starts
 
     @property
     def n(self) -> int:
@@ -107,7 +116,8 @@ class Campaign:
         """What makes two campaigns the same (a stored campaign continues only under it)."""
         text = json.dumps({"card": self.card_data, "points": [p.as_dict() for p in self.points],
                            "method": self.method, "model": self.model,
-                           "options": self.options, "seed": self.seed},
+                           "options": self.options, "seed": self.seed,
+                           **({"start": self.start} if self.start != "method" else {})},
                           sort_keys=True, default=str)
         return {"card": self.path, "card_sha256": hashlib.sha256(text.encode()).hexdigest()}
 
@@ -115,6 +125,7 @@ class Campaign:
         """The description as plain data (campaign.json)."""
         return {"name": self.name, "card": self.path, "n": self.n, "method": self.method,
                 "model": self.model, "options": self.options, "seed": self.seed, "x": self.x,
+                "start": self.start,
                 "points": [p.as_dict() for p in self.points],
                 "held_out": [p.as_dict() for p in self.held_out]}
 
@@ -209,6 +220,17 @@ def campaign_from_dict(data: dict[str, Any], path: str = "<campaign>",
     x = data.get("x", "speed")
     if x not in X_CHOICES:
         raise _fail(path, index, ("x",), f"must be one of {', '.join(X_CHOICES)}, got {x!r}")
+    start = data.get("start", "method")
+    if start not in START_CHOICES:
+        raise _fail(path, index, ("start",),
+                    f"must be one of {', '.join(START_CHOICES)}, got {start!r}")
+    if start == "model" and method not in MODEL_START:
+        raise _fail(path, index, ("start",),
+                    f"'model' needs a method that takes start values ({', '.join(MODEL_START)}), "
+                    f"not {method}")
+    if start == "model" and "start" in options:
+        raise _fail(path, index, ("start",), "'model' and the option start both set the start "
+                                              "values: give one")
     card_data = dict(base.data)
     card_data.pop("a_priori", None)
     if "maneuver" in data:
@@ -219,7 +241,7 @@ def campaign_from_dict(data: dict[str, Any], path: str = "<campaign>",
     campaign = Campaign(name=str(name), path=str(path), card_data=card_data,
                         points=tuple(points), held_out=held, method=method, model=model,
                         options=dict(options), seed=int(seed), x=x,
-                        description=str(data.get("description", "")))
+                        description=str(data.get("description", "")), start=str(start))
     for i, p in enumerate(points):  # every point's card must be a valid card
         point_card(campaign, p, f"{path} (point {i})")
     return campaign

@@ -21,7 +21,9 @@ from threadpoolctl import threadpool_limits
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED, record_truth, score
 from flightid.identification.identify import identify
-from flightid.scenarios.campaign.card import Campaign, TestPoint, point_card
+from flightid.identification.methods import registry
+from flightid.record import FlightRecord
+from flightid.scenarios.campaign.card import MODEL_START, Campaign, TestPoint, point_card
 from flightid.scenarios.cards import Card, fly_card, sub_seed, trim_card
 from flightid.scenarios.montecarlo.study import FLOAT_COLUMNS, REALIZATION_ERRORS
 from flightid.sim.jsbsim.model import quiet
@@ -51,27 +53,38 @@ def run_point(campaign: Campaign, index: int) -> list[dict[str, Any]]:
         return _point_rows(campaign, index, campaign.points[int(index)])
 
 
+def fly_point(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, FlightRecord]:
+    """Test point ``index`` flown with its own seed: (its flight card, the measured record
+    after the standard data reduction, the truth record). A pure function of the campaign
+    and the index: the same records in a worker and in the process that pools them.
+    Raises what ``fly_card`` and ``reduce_record`` raise (``REALIZATION_ERRORS``)."""
+    card = point_card(campaign, campaign.points[int(index)])
+    with quiet(), contextlib.redirect_stdout(io.StringIO()):
+        measured, truth_record = fly_card(card, point_seed(campaign, index))
+    return card, reduce_record(measured).record, truth_record
+
+
 def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[str, Any]]:
     seed = point_seed(campaign, index)
     base: dict[str, Any] = {"index": int(index), "seed": int(seed), **point.as_dict(),
                             "alpha": math.nan}
     try:
-        card = point_card(campaign, point)
-        with quiet(), contextlib.redirect_stdout(io.StringIO()):
-            measured, truth_record = fly_card(card, seed)
+        card, record, truth_record = fly_point(campaign, index)
         base["alpha"] = float(truth_record.meta.extra["truth"]["trim"]["alpha"])
-        record = reduce_record(measured).record
-        est = identify(record, campaign.method, campaign.model, **dict(campaign.options))
+        truth = record_truth(truth_record)
+        if card.augmentation and any(e.name not in ("mass_scale", "cg_offset")
+                                     for e in card.augmentation):
+            _, model = model_values(point_card(campaign, point, with_effects=False))
+        else:
+            model = truth
+        options = dict(campaign.options)
+        if campaign.start == "model":
+            options["start"] = model_start(campaign, model)
+        est = identify(record, campaign.method, campaign.model, **options)
     except REALIZATION_ERRORS as exc:
         return [_failure(base, f"{type(exc).__name__}: {exc}")]
     if est.fit.get("converged") is False:
         return [_failure(base, "not converged")]
-    truth = record_truth(truth_record)
-    if card.augmentation and any(e.name not in ("mass_scale", "cg_offset")
-                                 for e in card.augmentation):
-        _, model = model_values(point_card(campaign, point, with_effects=False))
-    else:
-        model = truth
     rows = []
     for r in score(est, truth).rows:
         flown = flown_condition(record, r.name)
@@ -82,6 +95,18 @@ def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[s
     if not any(r["status"] == STATUS_ESTIMATED for r in rows):
         return [_failure(base, "the estimate scored no derivative")]
     return rows
+
+
+def model_start(campaign: Campaign, model: dict[str, float]) -> dict[str, float]:
+    """The start values of a point's fit from the model aircraft's derivatives at the
+    point (``model``: body axes, per rad, rates nondimensional): the value of every
+    parameter the method takes a start for that the tables give (campaign field
+    ``start = "model"``). The model's tables are the a priori values a flight test starts
+    from (Jategaonkar 2015 ch. 4: start values from wind-tunnel data); the fit
+    then converges to the same minimum as from equation error's start."""
+    spec = registry.get(campaign.method)
+    names = MODEL_START[campaign.method](campaign.model, spec.make_options(campaign.options))
+    return {n: float(model[n]) for n in names if n in model and math.isfinite(model[n])}
 
 
 # the record channel whose excursions carry a derivative's information, by its variable
@@ -98,8 +123,8 @@ def flown_condition(record: Any, derivative: str) -> dict[str, float]:
     weight (x - x0)^2 (Morelli & Klein 2016 eq. 5.10 for one regressor), so where the
     derivative changes with the condition, the estimate belongs to this weighted mean,
     not to the trim: on twinotter-hidden-trend the phugoid after the elevator input put
-    the sideslip-weighted airspeed 1.1 m/s above the 62 m/s trim, which moved Cn_beta by
-    -0.0013 (10 of its standard errors). Without the channel: the record's mean."""
+    the sideslip-weighted airspeed 0.76 m/s above the 68 m/s trim, which moves Cn_beta by
+    -0.0009 (5 of its standard errors). Without the channel: the record's mean."""
     var = derivative.partition("_")[2]
     channel = VARIABLE_CHANNEL.get(var)
     out = {}
@@ -129,4 +154,4 @@ def _failure(base: dict[str, Any], reason: str) -> dict[str, Any]:
     return row
 
 
-__all__ = ["model_values", "point_seed", "run_point"]
+__all__ = ["fly_point", "model_start", "model_values", "point_seed", "run_point"]

@@ -3,7 +3,9 @@ Kalman filter inside.
 
 ``estimation`` (the relaxation between the Gauss-Newton passes and the noise step, the
 result, the method's options and protocol entry), ``kalman_filter`` (the steady-state
-filter, its likelihood, one Gauss-Newton pass and the noise step). The package exports
+filter, its likelihood, one Gauss-Newton pass, the noise step and the robust bounds),
+``flight_condition`` (the derivatives corrected for the measured dynamic pressure and
+airspeed leaving the reference condition). The package exports
 the method's API.
 """
 

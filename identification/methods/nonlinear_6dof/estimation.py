@@ -78,6 +78,7 @@ from flightid.identification.models.six_dof import (
     MODELS,
     ROTOR,
     SixDofModel,
+    default_structure,
     parameter_name,
 )
 from flightid.record import FlightRecord
@@ -273,6 +274,32 @@ def run(record: FlightRecord, model: str = "6dof", options: Options | None = Non
         max_iterations=options.max_iterations, **options.tuning())
     est.method = ID
     return est
+
+
+def aerodynamic_parameters(model: str = "6dof", options: Options | None = None
+                           ) -> tuple[str, ...]:
+    """The aerodynamic parameters ``run`` estimates for ``model`` and ``options``, known
+    before the record: every coefficient's derivatives, then its bias C_0 (what a start
+    mapping, ``options.start``, may hold besides h_engine and L_engine).
+
+    Parameters
+    ----------
+    model : str
+        '6dof' (body-axis forces) or '6dof_stability' (lift and drag).
+    options : Options or None
+        The method's options (their ``structure`` and ``alphadot``).
+
+    Returns
+    -------
+    tuple of str
+        Names such as 'Cm_alpha', 'Cm_0'.
+    """
+    options = options or Options()
+    if model not in MODELS:
+        raise ValueError(f"6-DOF output error takes model {' or '.join(MODELS)}, got {model!r}")
+    structure = options.structure or default_structure(MODELS[model], options.alphadot)
+    return (*(parameter_name(c, v) for c, terms in structure.items() for v in terms),
+            *(parameter_name(c, "0") for c in structure))
 
 
 def channels(model: str) -> tuple[str, ...]:

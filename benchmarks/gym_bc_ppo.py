@@ -1,0 +1,252 @@
+"""A learned policy that starts from the best hand-designed input: behaviour cloning of a
+multisine, then PPO fine-tuning on ``reward="accuracy"``; held-out evaluation beside the
+baselines. Writes a results file and a plot.
+
+Usage: python benchmarks/gym_bc_ppo.py [--limit 0.2|ce] [--timesteps N] [--max-cpu-s S]
+                                       [--out FILE] [--no-baselines]
+
+Needs the optional extra ``[rl]`` (stable-baselines3, with the CPU build of torch).
+
+The policy. Its input is the scaled observation (``observation="scaled"``, 16 channels)
+and ``HARMONICS`` pairs of time features sin, cos(2 pi k t / ``PERIOD``), k = 1..H, of
+the observed elapsed time t; its action mean is linear in them (SB3 ``MlpPolicy`` with no
+hidden policy layer; the value function has two hidden layers of 64). The multisine
+baselines are sums of those harmonics (``baselines.multisine``), so a linear map of the
+time features reproduces them exactly, and the state weights let fine-tuning add feedback.
+The action [-1, 1] is times the travel limit: ``--limit 0.2`` (the baselines' 0.2 of
+travel on every surface) or ``--limit ce`` (the CE-tuned multisine's own peaks,
+``CE_TUNED``: aileron 0.361, rudder 0.428 of travel, elevator 0.2).
+
+1. Behaviour cloning: the demonstration is the multisine on the decision grid, normalised
+   by the limit (``--limit 0.2``: the CE-tuned multisine's shape, its highest frequency
+   1.38 Hz, at peak 0.2 on aileron and rudder, since the CE-tuned one exceeds 0.2;
+   ``--limit ce``: the CE-tuned multisine itself). Its actions depend on time alone: the
+   least-squares fit of them on the time features (and a bias) sets the policy's weights,
+   the state weights 0. The cloned policy's mean flies the demonstration (checked: the
+   largest difference of its actions from the demonstration's on a training seed is
+   written with the results).
+2. The value function alone (policy weights frozen) is trained by PPO for
+   ``WARMUP_STEPS`` on the accuracy reward, so that fine-tuning starts from a critic of
+   the cloned policy rather than from noise.
+3. PPO fine-tuning of everything on ``reward="accuracy"`` (``PPO_SETTINGS``: small steps,
+   clip 0.1, target KL 0.02, exploration std ``exp(LOG_STD_INIT)``), 4 environments in one
+   process seeded from ``gym_ppo.TRAIN_SEED`` (100, 101, ...), rewards normalised, until
+   ``--timesteps`` or ``--max-cpu-s`` of process CPU (warm-up included).
+
+Evaluation, in the default-reward environment with ``baselines.evaluate`` (returns under
+each reward, relative bound and error), on two held-out seed sets fixed before any
+evaluation (``EVAL_SETS``): 0-3 (the baselines' table) and 1000-1015: the hand-designed
+inputs (``--no-baselines`` skips them), the cloned policy before fine-tuning, and the
+fine-tuned one, deterministic (its mean) and stochastic (sampled, torch seeded per
+episode with the episode's seed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+import stable_baselines3
+import torch
+from gymnasium import spaces
+from stable_baselines3 import PPO
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import VecNormalize
+
+from flightid.scenarios.gym import ENV_ID, ExcitationEnv
+from flightid.scenarios.gym.baselines import (
+    AMPLITUDE,
+    HEADER,
+    OTHER_REWARDS,
+    POLICIES,
+    closed_loop,
+    evaluate,
+    multisine,
+    per_target,
+    plot,
+)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from gym_ppo import CE_TUNED, N_ENVS, TRAIN_SEED, CpuBudget, Curve, travel_limit  # noqa: E402
+
+DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_bc_ppo.txt"
+PERIOD = 20.0  # s, the multisines' period (baselines.multisine)
+HARMONICS = 30  # time features up to 30 / PERIOD = 1.5 Hz
+EVAL_SETS = {"held-out seeds 0-3": tuple(range(4)),
+             "held-out seeds 1000-1015": tuple(range(1000, 1016))}
+WARMUP_STEPS = 40_960  # 10 rollouts of 4 x 1024
+LOG_STD_INIT = -1.5  # exploration std 0.22 of the limit
+PPO_SETTINGS = {"n_steps": 1024, "batch_size": 512, "n_epochs": 10, "gamma": 0.999,
+                "gae_lambda": 0.95, "learning_rate": 1e-4, "clip_range": 0.1,
+                "target_kl": 0.02, "ent_coef": 0.0}
+LIMITS = {"0.2": np.array([AMPLITUDE, AMPLITUDE, AMPLITUDE]),
+          "ce": np.array([AMPLITUDE, CE_TUNED[0], CE_TUNED[1]])}
+
+
+def time_features(t: np.ndarray) -> np.ndarray:
+    """sin, cos(2 pi k t / PERIOD), k = 1..HARMONICS, of times ``t`` (s): (n, 2 H)."""
+    phase = 2 * np.pi * np.outer(np.atleast_1d(t), np.arange(1, HARMONICS + 1)) / PERIOD
+    return np.hstack([np.sin(phase), np.cos(phase)])
+
+
+class TimeFeatures(gymnasium.ObservationWrapper):
+    """The scaled observation followed by ``time_features`` of its elapsed time."""
+
+    def __init__(self, env: gymnasium.Env) -> None:
+        super().__init__(env)
+        self.episode_s = env.unwrapped.episode_s
+        n = env.observation_space.shape[0] + 2 * HARMONICS
+        self.observation_space = spaces.Box(-np.inf, np.inf, (n,), np.float32)
+
+    def observation(self, observation: np.ndarray) -> np.ndarray:
+        return features(observation, self.episode_s)
+
+
+def features(scaled: np.ndarray, episode_s: float) -> np.ndarray:
+    """The policy's input from a scaled observation (its t is elapsed time / episode_s)."""
+    return np.concatenate([scaled, time_features(scaled[0] * episode_s)[0]]).astype(np.float32)
+
+
+def demonstration(env: ExcitationEnv, limit: str) -> np.ndarray:
+    """The demonstrated schedule (n x 3, travel units) for ``limit``."""
+    if limit == "ce":
+        return multisine(env, 0, *CE_TUNED)
+    return multisine(env, 0, AMPLITUDE, AMPLITUDE, CE_TUNED[2])
+
+
+def clone(model: PPO, env: ExcitationEnv, demo: np.ndarray, scale: np.ndarray) -> float:
+    """Set the policy's mean to the least-squares fit of the demonstration's normalised
+    actions on the time features (state weights 0); the fit's largest residual."""
+    t = np.arange(env.n_decisions) / env.decision_hz  # the observed t before decision k
+    x = np.hstack([time_features(t), np.ones((len(t), 1))])
+    target = demo / scale
+    coef, *_ = np.linalg.lstsq(x, target, rcond=None)
+    net = model.policy.action_net
+    n_state = net.weight.shape[1] - 2 * HARMONICS
+    with torch.no_grad():
+        net.weight.zero_()
+        net.weight[:, n_state:] = torch.as_tensor(coef[:-1].T, dtype=net.weight.dtype)
+        net.bias[:] = torch.as_tensor(coef[-1], dtype=net.bias.dtype)
+    return float(np.max(np.abs(x @ coef - target)))
+
+
+def policy_schedule(model: PPO, scale: np.ndarray, deterministic: bool, episode_s: float):
+    """The model's policy as a baselines ``Schedule`` (stochastic: torch seeded with the
+    episode's seed)."""
+
+    def schedule(e: ExcitationEnv, s: int) -> np.ndarray:
+        torch.manual_seed(s)
+        return closed_loop(lambda obs: model.predict(features(obs, episode_s),
+                                                     deterministic=deterministic)[0],
+                           scale)(e, s)
+
+    return schedule
+
+
+def snapshot(model: PPO) -> PPO:
+    """A frozen copy of the model's policy (for evaluating the cloned policy later)."""
+    copy = PPO("MlpPolicy", model.env, policy_kwargs=model.policy_kwargs, device="cpu")
+    copy.policy.load_state_dict(model.policy.state_dict())
+    return copy
+
+
+def main(limit: str, timesteps: int, out: Path, max_cpu_s: float = float("inf"),
+         baselines: bool = True, seed: int = 0) -> str:
+    torch.set_num_threads(1)
+    scale = LIMITS[limit]
+    env = ExcitationEnv()
+    demo = demonstration(env, limit)
+    wrap = partial(lambda e, s: TimeFeatures(travel_limit(e, s)), s=scale)
+    venv = make_vec_env(ENV_ID, n_envs=N_ENVS, seed=TRAIN_SEED,
+                        env_kwargs={"observation": "scaled", "reward": "accuracy"},
+                        wrapper_class=wrap)
+    venv = VecNormalize(venv, norm_obs=False, norm_reward=True, gamma=PPO_SETTINGS["gamma"])
+    kwargs = {"net_arch": {"pi": [], "vf": [64, 64]}, "log_std_init": LOG_STD_INIT}
+    model = PPO("MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=kwargs,
+                **PPO_SETTINGS)
+    residual = clone(model, env, demo, scale)
+    cloned = snapshot(model)
+    check = policy_schedule(cloned, scale, True, env.episode_s)(env, TRAIN_SEED)
+    clone_diff = float(np.max(np.abs(check - demo)))
+
+    curve, budget = Curve(), CpuBudget(max_cpu_s)
+    t0 = time.process_time()
+    frozen = [model.policy.action_net.weight, model.policy.action_net.bias,
+              model.policy.log_std]
+    for p in frozen:
+        p.requires_grad_(False)
+    model.learn(total_timesteps=WARMUP_STEPS, callback=[curve, budget])
+    for p in frozen:
+        p.requires_grad_(True)
+    if timesteps > model.num_timesteps:
+        model.learn(total_timesteps=timesteps - model.num_timesteps, callback=[curve, budget],
+                    reset_num_timesteps=False)
+    cpu = time.process_time() - t0
+    weights = model.policy.action_net.weight.detach().numpy()
+    n_state = weights.shape[1] - 2 * HARMONICS
+
+    others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
+    name = "CE shape at 0.2" if limit == "0.2" else "CE-tuned"
+    policies = {}
+    if baselines:
+        policies.update({k: v for k, v in POLICIES.items()
+                         if k in ("zero", "doublet", "3211", "multisine")})
+        policies["multisine (CE-tuned)"] = lambda e, s: multisine(e, s, *CE_TUNED)
+        policies["multisine (CE at 0.2)"] = lambda e, s: multisine(e, s, AMPLITUDE, AMPLITUDE,
+                                                                   CE_TUNED[2])
+    policies[f"BC ({name})"] = policy_schedule(cloned, scale, True, env.episode_s)
+    policies["BC+PPO (determ.)"] = policy_schedule(model, scale, True, env.episode_s)
+    policies["BC+PPO (stoch.)"] = policy_schedule(model, scale, False, env.episode_s)
+    lines = [f"flightid/Excitation-v0, behaviour cloning + PPO against the baselines, "
+             f"{datetime.date.today().isoformat()}: {env.aircraft}, lateral targets, research "
+             f"sensors, {env.episode_s:g} s episodes at {env.decision_hz:g} Hz; evaluation "
+             f"under reward {env.reward!r} (return), {', '.join(OTHER_REWARDS)} (the same "
+             "episodes' returns)",
+             f"policy: linear in the scaled observation and {HARMONICS} time-harmonic pairs "
+             f"(period {PERIOD:g} s), action x {scale.tolist()} of travel (de, da, dr; limit "
+             f"{limit!r}); value MLP 64-64",
+             f"behaviour cloning of the multisine ({name}): least-squares residual "
+             f"{residual:.1e}, largest closed-loop action difference from the demonstration "
+             f"on training seed {TRAIN_SEED}: {clone_diff:.1e} of travel",
+             f"training: stable-baselines3 {stable_baselines3.__version__} PPO, torch "
+             f"{torch.__version__} (1 thread), {N_ENVS} environments in one process, seeds "
+             f"{TRAIN_SEED}+, reward 'accuracy', rewards normalised, value warm-up "
+             f"{WARMUP_STEPS} timesteps (policy frozen), then fine-tuning; "
+             f"{model.num_timesteps} timesteps ({model.num_timesteps / env.n_decisions:.0f} "
+             f"episodes), {cpu:.0f} s process CPU; log std init {LOG_STD_INIT}, final "
+             f"{model.policy.log_std.detach().numpy().round(2).tolist()}; {PPO_SETTINGS}",
+             f"fine-tuned policy weights: time features |w| max "
+             f"{np.abs(weights[:, n_state:]).max():.3f}, state |w| max "
+             f"{np.abs(weights[:, :n_state]).max():.3f}; change from the clone (max |dw|) "
+             f"{np.abs(weights - cloned.policy.action_net.weight.detach().numpy()).max():.4f}"]
+    all_results = []
+    for title, seeds in EVAL_SETS.items():
+        results = [evaluate(env, n, p, seeds, others) for n, p in policies.items()]
+        all_results.append(results)
+        lines += ["", f"{title}: {list(seeds)}", HEADER, *(r.line() for r in results)]
+    lines += ["", "held-out seeds 0-3:", *per_target(env, all_results[0]), "",
+              "learning curve: timesteps, mean training accuracy return of the last 20 episodes",
+              *(f"{n:>9d} {r:8.1f}" for n, r in curve.points)]
+    text = "\n".join(lines) + "\n"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    plot(env, all_results[1], out.with_suffix(".png"))
+    return text
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--limit", choices=sorted(LIMITS), default="0.2")
+    parser.add_argument("--timesteps", type=int, default=1_000_000)
+    parser.add_argument("--max-cpu-s", type=float, default=float("inf"),
+                        help="stop training after this much process CPU (s)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    parser.add_argument("--no-baselines", action="store_true")
+    args = parser.parse_args()
+    print(main(args.limit, args.timesteps, args.out, args.max_cpu_s, not args.no_baselines))

@@ -1,0 +1,70 @@
+"""A campaign's global model: one fit over every test point's record, maneuvers and
+conditions pooled, by a method that fits several records at once.
+
+NASA's global modeling identifies one model valid across the envelope from many
+maneuvers (Morelli 1995; Morelli & Klein 2016 sec. 5.5): ``mof.fit_records`` is that fit,
+the one ``flightid identify --method mof`` runs on a single record. The campaign re-flies
+its points (``point.fly_point``: a pure function of the campaign and the index, so the
+records are those its workers identified) and passes them to it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from flightid.identification.estimate import Estimate
+from flightid.identification.methods import mof, registry
+from flightid.record import FlightRecord
+from flightid.scenarios.campaign.card import Campaign
+from flightid.scenarios.campaign.point import fly_point
+
+# the methods with a fit over several records: (records, model, options) -> one Estimate
+POOLED: dict[str, Callable[[Sequence[FlightRecord], str, Any], Estimate]] = {
+    mof.ID: mof.fit_records}
+
+
+def has_global_model(campaign: Campaign) -> bool:
+    """Whether the campaign's method fits one model over several records."""
+    return campaign.method in POOLED
+
+
+def fit_global(campaign: Campaign, indices: Sequence[int]) -> Estimate:
+    """One model over the records of the test points ``indices`` (the points that did not
+    fail), by the campaign's method, model and options.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        A campaign whose method has a pooled fit (``has_global_model``).
+    indices : sequence of int
+        The test points pooled.
+
+    Returns
+    -------
+    Estimate
+        Every coefficient's chosen terms (``fit['coefficients'][C]['steps']``), their
+        values and standard errors, as the method gives for one record.
+    """
+    if not has_global_model(campaign):
+        raise ValueError(f"method {campaign.method} fits one record at a time; a global "
+                         f"model needs one of: {', '.join(POOLED)}")
+    if not indices:
+        raise ValueError("no test point to pool: every point failed")
+    options = registry.get(campaign.method).make_options(campaign.options)
+    records = [fly_point(campaign, i)[1] for i in indices]
+    return POOLED[campaign.method](records, campaign.model, options)
+
+
+def summary(est: Estimate, indices: Sequence[int]) -> dict[str, Any]:
+    """The global model as plain data (global_model.json): the points pooled, every term
+    with its value and standard error, and per coefficient the chosen terms, R^2 and
+    predicted square error (PSE) of the fit and its number of samples."""
+    coefficients = est.fit.get("coefficients", {})
+    return {"method": est.method, "points": [int(i) for i in indices],
+            "terms": {n: {"estimate": float(est[n]), "std": float(est.std_of(n))}
+                      for n in est.names},
+            "coefficients": {c: {"terms": [n for n in est.names if n.startswith(c + "_")],
+                                 **{k: v for k, v in fit.items()
+                                    if k in ("R2", "PSE", "N")}}
+                             for c, fit in coefficients.items()}}
