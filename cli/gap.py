@@ -208,6 +208,8 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
         console.print("null-level test of the model as is (p-value, held-out input-"
                       "explained share): " + ", ".join(
                           f"{c} {p_text(t.p_value)} {t.share:+.4f}" for c, t in tests.items()))
+    if g.structure is not None and g.structure.gap:
+        console.print(f"structure outside the catalogue: {g.structure.text()}")
     t = Table(title="gap map (residual / measured energy, mean over windows)")
     per = {c: d for c, d in g.where.by_channel().items() if c in g.linearised.model.outputs}
     cols = list(next(iter(per.values()))) if per else []

@@ -38,11 +38,12 @@ def _kind(name: str) -> str:
 def kind_table(summary: dict[str, Any], title: str) -> Table:
     """The figures per kind and overall, 78 columns wide at most: the kind (entry/axis,
     "pair", "null"), the cases flown, and each figure that counts for it."""
-    t = Table(title=title, title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False)
+    t = Table(title=title, title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False,
+              collapse_padding=True)
     t.add_column("kind", no_wrap=True)
-    t.add_column("n", justify="right")
-    for head, _ in COLUMNS:
-        t.add_column(head, justify="right")
+    t.add_column("n", justify="right", no_wrap=True)
+    for head, _ in COLUMNS:  # whole headings: never cut to "shri…"
+        t.add_column(head, justify="right", no_wrap=True, min_width=max(len(head), 5))
 
     def row(name: str, f: dict[str, Any], style: str | None = None) -> None:
         t.add_row(name, str(f["cases"] - f["failed"]), *(_pct(f[key]) for _, key in COLUMNS),

@@ -16,7 +16,7 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.cli.gap_benchmark import kind_table
+from flightid.cli.gap_benchmark import COLUMNS, kind_table
 from flightid.identification.gap.candidates.build import Candidate, pair
 from flightid.identification.gap.rank import Ranked
 from flightid.scenarios.gap_benchmark import (
@@ -291,3 +291,22 @@ def test_command_rejects_an_unwritable_output(tmp_path):
     assert afile.read_text() == "keep me"
     r = CliRunner().invoke(app, ["gap-benchmark", "-o", str(afile / "sub")])
     assert r.exit_code == 2 and "--output" in r.output, r.output
+
+
+def test_kind_table_headings_whole_with_every_kind(flown):
+    """Every kind the check draws, each figure at its widest ("100%", three-digit counts):
+    at 80 columns no heading is cut ("shri…" before) and no line is wider."""
+    s = summary(flown)
+    row = {**s["by_kind"]["null"], "cases": 100, "failed": 0}
+    row.update({key: 1.0 for _, key in COLUMNS})
+    kinds = [k.name for k in KINDS] + [f"{o}/{a}" for o, axes in OUTSIDE.items()
+                                        for a in axes] + ["pair", "null"]
+    s = {**s, "cases": 999, "failed": 0, "by_kind": {k: dict(row) for k in kinds}}
+    s.update({key: 1.0 for _, key in COLUMNS})
+    console = Console(width=80, record=True)
+    console.print(kind_table(s, "gap blind check"))
+    text = console.export_text()
+    assert max(len(line.rstrip()) for line in text.splitlines()) <= 80
+    assert "…" not in text
+    header = next(line for line in text.splitlines() if line.split()[:1] == ["kind"])
+    assert header.split() == ["kind", "n", *(head for head, _ in COLUMNS)]

@@ -2,7 +2,7 @@
 entry as a gap candidate (``derivative_table``): Twin Otter flights at three airspeeds
 of an aircraft whose Cn_beta falls with airspeed (the hidden table of the library's
 ``twinotter-hidden-trend`` campaign), diagnosed against the plain twinotter
-(identification/gap/envelope.py; measured values in docs/gap.md).
+(identification/gap/envelope/; measured values in docs/gap.md).
 
 The cards: the gap tests' lateral card (each surface moved twice, 44 s, calm air,
 research sensors at 25 Hz with the vanes and lever arm corrected to the CG) at 1800 m and
@@ -21,7 +21,7 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.identification.gap.envelope import conditions, envelope
-from flightid.identification.gap.trend import Point, trend
+from flightid.identification.gap.envelope.trend import Point, trend
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import card_from_dict, fly_card
 from flightid.sim.effects.airframe import DerivativeTable

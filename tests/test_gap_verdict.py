@@ -27,7 +27,10 @@ from flightid.identification.gap.shrink import shrink_text
 from flightid.identification.gap.verdict import (
     ALPHA,
     MATERIAL,
+    MODEL_ALPHA,
+    MODEL_MATERIAL,
     NO_GAP,
+    ChannelTest,
     channel_test,
     worst,
 )
@@ -232,3 +235,41 @@ def test_band_limited_test_sees_a_pitch_break_the_unfiltered_one_did_not():
                       try_pairs=False, steps=1)
     assert result.null_before.gap, result.null_before.to_json()
     assert result.verdict != NO_GAP
+
+
+def test_focused_test_judges_against_the_input_driven_energy():
+    """The focused test's share is the input-explained energy less chance over the
+    model's input-driven energy: a residual whose regressor-driven part is 10 % of that
+    energy but 0.4 % of a turbulence-inflated measured energy is a gap by the focused rule
+    and not by the main one's materiality."""
+    rng = np.random.default_rng(1)
+    n = 2000
+    x = np.column_stack([np.convolve(rng.standard_normal(n), np.ones(40) / 40, "same")
+                         for _ in range(3)])
+    v = 0.02 * np.convolve(rng.standard_normal(n + 49), np.ones(50) / 50, "valid")
+    part = x @ np.array([1.0, -0.5, 0.3])
+    driven = float(np.sum(part**2)) / 0.1  # the model's own input-driven energy
+    spread = driven * 25  # the measured energy, turbulence included
+    t = channel_test(v + part, x, spread, "c", driven)
+    assert t.p_value < MODEL_ALPHA and t.share < MATERIAL
+    assert abs(t.model_share - 0.1) < 0.02
+    test = ChannelTest("c", 0.0, 0, 1.0, t.share, focused=t)
+    assert test.gap
+
+
+def test_focused_test_sees_a_delay_the_main_test_left_at_the_null_level():
+    """A 0.134 s delay on the Twin Otter's alpha vane, light turbulence (seed 0's case 1
+    of the blind check, a development case of this rule): the main test left it at the
+    null level (alpha p 6.8e-3, share -0.005); the focused test sees it (measured p 1.9e-3,
+    0.051 of the input-driven energy) and the lag or delay on alpha is named."""
+    effect = Effect("delay", "longitudinal", "measured", {"channel": "alpha"},
+                    {"tau": 0.13388007883094583})
+    result = diagnose([fly_case(Case(1, 2077960003, "twinotter", "single", (effect,)),
+                                "light")], "twinotter", axis="longitudinal",
+                      try_pairs=False, steps=1)
+    alpha = result.null_before.channels["alpha"]
+    assert not (alpha.p_value < ALPHA and alpha.share >= MATERIAL)
+    assert alpha.focused.p_value < MODEL_ALPHA
+    assert alpha.focused.model_share >= MODEL_MATERIAL
+    assert result.named and same(effect, result.named[0]), [r.candidate.label
+                                                            for r in result.named]

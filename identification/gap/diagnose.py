@@ -32,6 +32,7 @@ from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.model.linearise import Linearised, linearise
 from flightid.identification.gap.model.surfaces import actuated
+from flightid.identification.gap.nonlinearity import NonlinearTest, nonlinear_test
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
@@ -40,6 +41,8 @@ from flightid.identification.gap.trim_level import TrimOffset, trim_offsets
 from flightid.identification.gap.verdict import (
     EXPLAINED,
     NO_GAP,
+    PARTLY,
+    UNEXPLAINED,
     NullTest,
     axis_verdict,
     null_test,
@@ -91,6 +94,9 @@ class GapResult:
     # against the model's trim; ``trim_note`` says why it was not made ("" when it was)
     trim: list[TrimOffset] = field(default_factory=list)
     trim_note: str = ""
+    # the nonlinear-structure test of the model as is (``nonlinearity``): structure the
+    # linear test and the catalogue cannot express; when found, the axis is not explained
+    structure: NonlinearTest | None = None
 
     @property
     def trim_named(self) -> list[TrimOffset]:
@@ -188,6 +194,7 @@ class GapResult:
                                for e in even_terms(self.linearised.kinks, self.linearised.axes)],
                 "null_before": self.null_before.to_json() if self.null_before else None,
                 "null_after": self.null_after.to_json() if self.null_after else None,
+                "structure": self.structure.to_json() if self.structure else None,
                 "named": [r.candidate.label for r in self.named]}
 
     def axes(self) -> dict[str, GapResult]:
@@ -346,11 +353,13 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     before = null_test(ranker.base, _by_label(fit_windows), inputs)
+    structure = nonlinear_test(ranker.base, _by_label(fit_windows), inputs, axis)
     unseen = not_identifiable(lin.model, records, surfaces=lin.surfaces)
-    if not before.gap:  # at the null level: nothing to name
+    if not before.gap:  # at the null level of the linear test: nothing to name
         return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
-                         verdict="no_gap", null_before=before, evidence=evidence,
-                         not_identifiable=unseen)
+                         verdict=UNEXPLAINED if structure.gap else NO_GAP,
+                         null_before=before, evidence=evidence, not_identifiable=unseen,
+                         structure=structure)
     ranker.above = before.above()
     ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
     both = pairs(ranker, ranked) if try_pairs else []
@@ -380,10 +389,13 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         for effect in named:
             corrected = fixed(corrected, effect)
         after = tested(corrected)
+    verdict = axis_verdict(before, bool(named), after)
+    if structure.gap:  # a structure no catalogue effect expresses: not explained
+        verdict = PARTLY if named else UNEXPLAINED
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows,
-                     floor=ranker.floor, verdict=axis_verdict(before, bool(named), after),
+                     floor=ranker.floor, verdict=verdict,
                      null_before=before, null_after=after, evidence=evidence,
-                     not_identifiable=unseen)
+                     not_identifiable=unseen, structure=structure)
 
 
 def _by_label(windows: list[Segment]) -> dict[str, FlightRecord]:

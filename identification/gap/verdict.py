@@ -40,6 +40,13 @@ docs/gap_benchmark.md.) Development figures (seeds 11-13, the blind
 check's lateral card, three aircraft, calm, light and moderate turbulence, nothing
 injected): 27 of 27 no_gap (docs/gap.md).
 
+A focused test per output (``ChannelTest.focused``) repeats the regression with
+``FOCUSED_LAGUERRE`` Laguerre filter per input (fewer degrees of freedom, more power
+against an error in the model's gain or timing) and judges its input-explained energy
+less chance against the energy of the model's own output as simulated from the inputs
+(``model_share``; turbulence inflates the measured energy, not this one): a gap when
+p < ``MODEL_ALPHA`` and ``model_share`` >= ``MODEL_MATERIAL``.
+
 A second, separate test per output looks at the high band, where a structural mode or a
 fast sensor or actuator effect shows and the slow regressors above do not reach:
 ``FAST_LAGUERRE`` Laguerre filters of the inputs with a 0.08 s time constant, significant
@@ -80,6 +87,17 @@ HIGH_HZ = 1.0
 HIGH_ALPHA = 1e-6  # stricter: a turbulent record's high band is where gusts and noise live
 HIGH_MATERIAL = 0.05  # input-explained share of the measured energy above HIGH_HZ
 LAGUERRE = 4  # Laguerre filters per input
+# the focused test (the rules for the seed-5 run): the same regression with one Laguerre
+# filter per input (fewer degrees of freedom: 7 on the lateral axis instead of 15), its
+# input-explained share less chance judged against the energy of the model's own output
+# as simulated from the inputs (the input-driven energy, which turbulence does not
+# inflate as it does the measured one), at a looser significance. Measured on seed 0 of
+# the blind check (65 null flights, 57 singles the seed-4 rules missed;
+# docs/gap_benchmark.md, the rules for the seed-5 run): null false alarms 1 -> 2 of 65,
+# singles seen 16 -> 21 of 58 (at 0.05 instead of 0.02: 1 -> 1 and 16 -> 17)
+FOCUSED_LAGUERRE = 1
+MODEL_ALPHA = 3e-3
+MODEL_MATERIAL = 0.02
 LAGUERRE_TAU_S = 0.7  # their time constant (s): the band of the short period and Dutch roll
 # the main test's band: residual and regressors through the same 2nd-order Butterworth
 # high-pass at this corner (rad/s) before the Wald test, per window. A linear filter applied
@@ -109,21 +127,31 @@ class ChannelTest:
     p_value: float
     share: float  # input-explained energy less chance, / measured energy
     explained: float = 0.0  # input-explained energy / measured energy (chance included)
+    # input-explained energy less chance, / the energy of the model's own output as
+    # simulated from the inputs (the input-driven energy; ``MODEL_MATERIAL``); nan unknown
+    model_share: float = math.nan
     high: ChannelTest | None = None  # the high band's test (``fast_regressors``)
+    # the focused test: ``FOCUSED_LAGUERRE`` filters per input, judged on ``model_share``
+    focused: ChannelTest | None = None
     slow: bool = False  # in ``SLOW_CHANNELS``: only the high band tested
 
     @property
     def gap(self) -> bool:
         """Significant and material in the main test, or in the high band's."""
         return bool(self.p_value < ALPHA and self.share >= MATERIAL) or bool(
+            self.focused is not None and self.focused.p_value < MODEL_ALPHA
+            and self.focused.model_share >= MODEL_MATERIAL) or bool(
             self.high is not None and self.high.p_value < HIGH_ALPHA
             and self.high.explained >= HIGH_MATERIAL)
 
     def to_json(self) -> dict:
         out = {"statistic": self.statistic, "dof": self.dof, "p_value": self.p_value,
-               "share": self.share, "gap": self.gap}
+               "share": self.share, "model_share": self.model_share, "gap": self.gap}
         if self.slow:
             out["main_test"] = "not run: a slow channel (high band only)"
+        if self.focused is not None:
+            out["focused"] = {"p_value": self.focused.p_value,
+                              "model_share": self.focused.model_share}
         if self.high is not None:
             out["high_band"] = {"p_value": self.high.p_value,
                                 "share_above_hz": self.high.explained, "hz": HIGH_HZ}
@@ -166,8 +194,10 @@ def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
     return out
 
 
-def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> np.ndarray:
-    """(N, k) input-driven regressors of one window (module docstring)."""
+def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
+               n: int = LAGUERRE) -> np.ndarray:
+    """(N, k) input-driven regressors of one window (module docstring), ``n`` Laguerre
+    filters per input."""
     t = fit.time
     dt = float(np.median(np.diff(t)))
     cols: list[np.ndarray] = []
@@ -176,7 +206,7 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> n
             continue
         u = np.interp(t, record.time, record[s])
         u = u - u[0]
-        cols += [u, *laguerre(u, dt)]
+        cols += [u, *laguerre(u, dt, n)]
     for m in fit.model.values():
         cols.append(m - np.mean(m))
     x = np.column_stack(cols)
@@ -184,9 +214,10 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> n
 
 
 def channel_test(residual: np.ndarray, x: np.ndarray, spread: float,
-                 channel: str) -> ChannelTest:
+                 channel: str, driven: float = math.nan) -> ChannelTest:
     """The Wald test of ``residual`` (N,) on the regressors ``x`` (N, k); ``spread``: the
-    channel's measured energy (means removed)."""
+    channel's measured energy (means removed); ``driven``: the energy of the model's
+    output of that channel as simulated from the inputs (means removed; nan: unknown)."""
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
     scale = np.sqrt(np.sum(x * x, axis=0))
@@ -206,7 +237,8 @@ def channel_test(residual: np.ndarray, x: np.ndarray, spread: float,
     explained = float(theta @ m @ theta)
     chance = float(np.trace(m @ cov))
     return ChannelTest(channel, w, k, float(stats.chi2.sf(w, k)),
-                       (explained - chance) / spread, explained / spread)
+                       (explained - chance) / spread, explained / spread,
+                       (explained - chance) / driven if driven > 0 else math.nan)
 
 
 def _independent(x: np.ndarray) -> np.ndarray:
@@ -259,6 +291,8 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
         return out
     dts = {k: float(np.median(np.diff(fits[k].time))) for k in labels}
     xs = [highpass(regressors(fits[k], records[k], inputs), dts[k]) for k in labels]
+    xf = np.vstack([highpass(regressors(fits[k], records[k], inputs, FOCUSED_LAGUERRE),
+                             dts[k]) for k in labels])
     xh = np.vstack([fast_regressors(fits[k], records[k], inputs) for k in labels])
     for ch in fits[labels[0]].residual:
         raw = [fits[k].residual[ch] - np.mean(fits[k].residual[ch]) for k in labels]
@@ -268,8 +302,12 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
         v = np.concatenate(vs)
         if not np.all(np.isfinite(v)):
             continue
+        driven = sum(float(np.sum((fits[k].model[ch] - np.mean(fits[k].model[ch])) ** 2))
+                     for k in labels)
         test = (ChannelTest(ch, 0.0, 0, 1.0, 0.0, slow=True) if ch in SLOW_CHANNELS
-                else channel_test(v, np.vstack(xs), spread, ch))
+                else channel_test(v, np.vstack(xs), spread, ch, driven))
+        if not test.slow:
+            test.focused = channel_test(v, xf, spread, ch, driven)
         high = sum(band_energy(fits[k].measured[ch], dts[k], HIGH_HZ) for k in labels)
         test.high = channel_test(np.concatenate(raw), xh, high, ch)
         out.channels[ch] = test

@@ -45,12 +45,12 @@ import numpy as np
 from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap.diagnose import GapResult, Records, _records, diagnose
+from flightid.identification.gap.envelope.trend import Point, Trend, trend
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.model.linearise import record_condition
 from flightid.identification.gap.rank import combine, overall
 from flightid.identification.gap.segments import segments, split
 from flightid.identification.gap.sequence import STEPS
-from flightid.identification.gap.trend import Point, Trend, trend
 from flightid.identification.gap.verdict import worst
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment
