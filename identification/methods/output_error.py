@@ -48,6 +48,7 @@ from flightid.identification.methods.protocol import (
 )
 from flightid.identification.models import a_priori
 from flightid.identification.models import linear as lm
+from flightid.identification.models import measured_inputs as mi
 from flightid.identification.models import structure as model_structure
 from flightid.identification.models.discrete import (
     HOLDS,
@@ -345,19 +346,19 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                   if o in model_structure.OPTIONAL_OUTPUTS and o not in record]
     if unmeasured:
         linear = lm.without_outputs(linear, unmeasured)
-    scheduled = (options.dynamic_pressure and linear.name in lm.QBAR_SCHEDULED
+    scheduled = (options.dynamic_pressure and linear.name in mi.QBAR_SCHEDULED
                  and "qbar" in record and "V" in record)
     if scheduled:
-        record = lm.with_dynamic_pressure_channels(record, linear)
-        linear = lm.with_dynamic_pressure(linear)
-        if linear.name in lm.KINEMATIC_INPUTS and all(c in record
-                                                        for c in lm.KINEMATIC_CHANNELS):
-            record = lm.with_kinematics_channels(record, linear)
-            linear = lm.with_kinematics(linear)
-    moments = lm.PROPULSIVE_MOMENTS.get(linear.name, ())
+        record = mi.with_dynamic_pressure_channels(record, linear)
+        linear = mi.with_dynamic_pressure(linear)
+        if linear.name in mi.KINEMATIC_INPUTS and all(c in record
+                                                        for c in mi.KINEMATIC_CHANNELS):
+            record = mi.with_kinematics_channels(record, linear)
+            linear = mi.with_kinematics(linear)
+    moments = mi.PROPULSIVE_MOMENTS.get(linear.name, ())
     driven = options.propulsive_moments and moments and all(c in record for c in moments)
     if driven:
-        linear = lm.with_propulsive_moments(linear)
+        linear = mi.with_propulsive_moments(linear)
     start, start_note = options.start, ""
     if start == "equation_error":
         try:  # the free parameters' start values; the held ones keep theirs
@@ -453,7 +454,7 @@ def _unexcited(problem: Problem, names: Sequence[str], values: Mapping[str, floa
     params = [n for n in names if n in model.parameters]
     _, (dA, dB, dC, dD) = matrix_sensitivities(model, {**model.start, **values}, params)
     # a pseudo-input of the dynamic pressure ('dr*dqbar0') belongs to its input ('dr')
-    sources = [lm.pseudo_input_source(c) for c in (*model.inputs, "1")]
+    sources = [mi.pseudo_input_source(c) for c in (*model.inputs, "1")]
     touched = np.any(dB != 0, axis=1) | np.any(dD != 0, axis=1)  # (parameter, column)
     only = {}
     for k, name in enumerate(params):

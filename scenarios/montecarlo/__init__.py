@@ -71,6 +71,9 @@ def run(card: str | Path, n: int, method: str = "oe", model: str = "lat",
         Dispersion specs such as ``mass_scale:0.05`` (``disperse.parse``), drawn anew for
         each realization; their values are stored in its rows and its truth is the
         dispersed aircraft's.
+    raw : bool
+        Identify each record as flown, without the standard data reduction (as
+        ``flightid identify --raw``).
 
     Returns
     -------
