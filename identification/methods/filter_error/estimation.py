@@ -43,14 +43,13 @@ Both steps use the shared engine (``identification.engine``): the damped Newton 
 ``gauss_newton`` on the filter's likelihood. At the converged point the derivatives are
 corrected for the measured dynamic pressure and airspeed departing from the reference
 condition (``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1)
-(M&K eq. 6.50) or, with ``colored`` (the method's default), the colored-innovation
-sandwich (``kalman_filter.colored_innovation_covariance``: M&K eq. 6.54 on the
-innovations, whose sensitivities include the gain's). R is taken as known: adding ln R to
-the parameters changed the Cramer-Rao bounds by under 1 % on navion-demo. Output error
-supplies the
-start values and decides which parameters the flight cannot determine; the same checks of
-``identifiability`` are repeated on the filter's information matrix, and a relaxation is
-refitted without the parameters they find (``refit.refit_without_unidentifiable``).
+(M&K eq. 6.50) or, with ``colored`` (the method's default), the score sandwich of
+``kalman_filter.robust_covariance``. With ``joint_noise`` the information matrix holds the
+sigma_<output> too, so the bounds carry the uncertainty of the estimated R. Output error
+supplies the start values and decides which parameters the flight cannot determine; the
+same checks of ``identifiability`` are repeated on the filter's information matrix, and
+the fit is repeated without the parameters they find
+(``refit.refit_without_unidentifiable``).
 """
 
 from __future__ import annotations
