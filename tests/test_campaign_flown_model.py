@@ -7,13 +7,15 @@ recovered exactly."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import campaign_from_dict
-from flightid.scenarios.campaign.curve import model_at
+from flightid.scenarios.campaign.curve import _trim_alpha, model_at
 from flightid.scenarios.campaign.update import corrections, flown_model
 
 CARD = """name = "c172p-flown"
@@ -77,3 +79,20 @@ def test_a_correction_on_a_sloped_curve_uses_the_model_at_the_flown_condition(c1
     # ends) is left in the model
     (old,) = corrections(c172p, df.assign(model_flown=df["model"]))
     assert old.form == "none" and "no form fits" in old.reason
+
+
+def test_with_alpha_as_x_the_model_is_read_where_it_trims_at_that_alpha(c172p):
+    # x = alpha: the path's condition whose trim alpha is the flown alpha (a secant on the
+    # trim alpha against airspeed). The trim alpha of 31 m/s, asked from the 34 m/s point,
+    # gives back the model at 31 m/s: Cm_de to within the secant's 1e-5 rad alpha
+    # tolerance times the curve's slope in alpha (Cm_de changes by about 0.09 per m/s and
+    # the trim alpha by about 0.01 rad per m/s, so 1e-5 rad is about 1e-4 of Cm_de)
+    by_alpha = dataclasses.replace(c172p, x="alpha")
+    point = by_alpha.points[2]  # 34 m/s
+    alpha31 = _trim_alpha(by_alpha, point, 31.0)
+    at31 = model_at(c172p, point, 31.0)
+    found = model_at(by_alpha, point, alpha31)
+    assert found["Cm_de"] == pytest.approx(at31["Cm_de"], abs=1e-3)
+    assert found["CY_beta"] == pytest.approx(at31["CY_beta"], abs=1e-3)
+    # and not the model at the point's own 34 m/s: Cm_de there differs by about 0.2
+    assert abs(model_at(c172p, point, 34.0)["Cm_de"] - at31["Cm_de"]) > 0.1
