@@ -220,7 +220,8 @@ def cross_entropy(env: ExcitationEnv, seeds: Sequence[int] = TRAIN_SEEDS, iterat
     """
     rng = np.random.default_rng(rng_seed)
     lo, hi = np.array([0.02, 0.02, 0.3]), np.array([limit, limit, 3.0])
-    mean, std = np.array([limit, limit, 1.5]), np.array([0.15, 0.15, 0.6])
+    start = min(AMPLITUDE, limit)
+    mean, std = np.array([start, start, 1.5]), np.array([0.15, 0.15, 0.6])
     history = []
     best, best_score = mean.copy(), -np.inf
     for _ in range(iterations):
