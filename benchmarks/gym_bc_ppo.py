@@ -22,8 +22,8 @@ limit, ``CE_TUNED``: aileron 0.361, rudder 0.428 of travel, elevator 0.2).
    by the limit (``--limit 0.2``: the CE-tuned multisine of the search limited to 0.2 of
    travel, ``CE_02``; ``--limit ce``: the unlimited search's ``CE_TUNED``). Its actions
    depend on time alone: the least-squares fit of them on the time features (and a bias)
-   sets the policy's weights,
-   the state weights 0. The cloned policy's mean flies the demonstration (checked: the
+   sets the policy's weights, the state weights 0. The cloned policy's mean flies the
+   demonstration (checked: the
    largest difference of its actions from the demonstration's on a training seed is
    written with the results).
 2. The value function alone (policy weights frozen) is trained by PPO for
