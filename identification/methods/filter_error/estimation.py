@@ -19,7 +19,13 @@ gives the innovations nu, and the negative log-likelihood (Jategaonkar ch. 5)
 
     J(theta) = 1/2 sum_k nu_k^T S^-1 nu_k + N/2 ln det S.
 
-Estimation is Jategaonkar's two-step relaxation:
+Estimation (default, ``joint_noise``): Gauss-Newton on the derivatives, biases, the
+diagonal of F and the measurement-noise standard deviations sigma_<output> together, on
+the full likelihood J (Maine & Iliff 1985; the R-dependence of K and S enters the
+sensitivities through the same central differences). On navion-demo in light turbulence
+the relaxation below stopped far from the likelihood's minimum (J 500-1200 higher on the
+flights where it put R_p at its lower bound; docs/montecarlo.md, "Filter error").
+The relaxation, ``joint_noise=False``, is Jategaonkar's two-step scheme:
 1. with R fixed, Gauss-Newton on the derivatives, biases and the diagonal of F, with the
    Fisher information M_jl = sum_k dnu_j^T S^-1 dnu_l + N/2 tr(S^-1 dS_j S^-1 dS_l)
    (its observed form while the residuals do not yet match S) and Levenberg-Marquardt
@@ -37,14 +43,13 @@ Both steps use the shared engine (``identification.engine``): the damped Newton 
 ``gauss_newton`` on the filter's likelihood. At the converged point the derivatives are
 corrected for the measured dynamic pressure and airspeed departing from the reference
 condition (``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1)
-(M&K eq. 6.50) or, with ``colored`` (the method's default), the colored-innovation
-sandwich (``kalman_filter.colored_innovation_covariance``: M&K eq. 6.54 on the
-innovations, whose sensitivities include the gain's). R is taken as known: adding ln R to
-the parameters changed the Cramer-Rao bounds by under 1 % on navion-demo. Output error
-supplies the
-start values and decides which parameters the flight cannot determine; the same checks of
-``identifiability`` are repeated on the filter's information matrix, and a relaxation is
-refitted without the parameters they find (``refit.refit_without_unidentifiable``).
+(M&K eq. 6.50) or, with ``colored`` (the method's default), the score sandwich of
+``kalman_filter.robust_covariance``. With ``joint_noise`` the information matrix holds the
+sigma_<output> too, so the bounds carry the uncertainty of the estimated R. Output error
+supplies the start values and decides which parameters the flight cannot determine; the
+same checks of ``identifiability`` are repeated on the filter's information matrix, and
+the fit is repeated without the parameters they find
+(``refit.refit_without_unidentifiable``).
 """
 
 from __future__ import annotations
@@ -73,7 +78,9 @@ from flightid.identification.methods.filter_error.kalman_filter import (
     FilterProblem,
     evaluate,
     gauss_newton_pass,
+    is_noise_parameter,
     measurement_noise,
+    measurement_noise_name,
     noise_step,
     process_noise_name,
     robust_covariance,
@@ -111,7 +118,7 @@ def estimate(
     process_noise_start: Mapping[str, float] | None = None,
     initial_state: str = "measured",
     hold: str = "foh",
-    max_iterations: int = 30,
+    max_iterations: int = 60,
     max_relaxations: int = 20,
     step_tolerance: float = 1e-3,
     cost_tolerance: float = 1e-6,
@@ -119,6 +126,7 @@ def estimate(
     check_identifiability: bool = True,
     condition_correction: bool = True,
     colored: bool = False,
+    joint_noise: bool = True,
 ) -> Estimate:
     """Filter-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
 
@@ -140,6 +148,9 @@ def estimate(
     without an airspeed state, records with qbar and V channels).
     colored: standard errors from ``colored_innovation_covariance`` (the sandwich for
     colored innovations) instead of the Cramer-Rao bounds M^-1.
+    joint_noise: estimate the measurement-noise standard deviations sigma_<output> (output
+    units) with the other parameters, by Gauss-Newton on the full likelihood (the
+    default), instead of the relaxation with the closed-form R update.
     """
     if initial_state not in ("measured", "zero"):
         raise ValueError(
@@ -180,6 +191,11 @@ def estimate(
     values = {n: (oe_fit[n] if n in oe_fit.names else model.start[n]) for n in names}
     values.update(f_start)
     all_names = [n for n in names if n not in unidentifiable] + list(f_start)
+    if joint_noise:
+        sigma_start = {measurement_noise_name(o): float(np.sqrt(R[j, j]))
+                       for j, o in enumerate(model.outputs)}
+        values.update(sigma_start)
+        all_names += list(sigma_start)
 
     # lower bound of R: a fixed fraction of the output-error residual variance
     floor = np.maximum(data.noise_floor, MIN_NOISE_FRACTION**2 * np.diag(R))
@@ -195,15 +211,19 @@ def estimate(
                         noise_states,
                         {n: 0.0 for n in f_start if n not in active})
         theta = np.array([current[n] for n in active])
-        relaxed = _relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
-                         step_tolerance, cost_tolerance, noise_tolerance, floor)
+        if joint_noise:
+            relaxed = _joint(prob, theta, R, data.x0, max_iterations, step_tolerance,
+                             cost_tolerance, floor)
+        else:
+            relaxed = _relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
+                             step_tolerance, cost_tolerance, noise_tolerance, floor)
         R = relaxed.R
         return relaxed
 
     def singular(active: list[str], relaxed: _Relaxed) -> dict[str, str]:
         if not (check_identifiability and active):
             return {}
-        keep = [n for n in active if n.startswith(("bias_", PROCESS_NOISE_PREFIX))]
+        keep = [n for n in active if n.startswith("bias_") or is_noise_parameter(n)]
         return ident.unidentifiable(active, relaxed.information, relaxed.theta,
                                     prefer_keep=keep)
 
@@ -232,6 +252,23 @@ class _Relaxed:
     def values(self) -> dict[str, float]:
         """{name: value} of the estimated parameters."""
         return dict(zip(self.problem.names, self.theta, strict=True))
+
+
+def _joint(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
+           max_iterations: int, step_tol: float, cost_tol: float, floor: np.ndarray
+           ) -> _Relaxed:
+    """Gauss-Newton on the derivatives, biases, F and the measurement-noise standard
+    deviations together: the likelihood's own minimum over R (Maine & Iliff 1985)."""
+    gn = gauss_newton_pass(prob, theta, R, x0, max_iterations, step_tol, cost_tol)
+    theta = gn.theta.copy()
+    for j, name in enumerate(prob.names):
+        if is_noise_parameter(name):
+            theta[j] = abs(theta[j])
+    R = prob.noise(theta, R)
+    final = evaluate(prob, theta, R, x0, sensitivities=True)
+    info = final.information if final.information is not None else np.zeros((0, 0))
+    return _Relaxed(prob, theta, R, final, info, gn.converged, gn.reason, 1, gn.iterations,
+                    list(gn.cost_history), [np.diag(R).copy()], floor)
 
 
 def _relax(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
@@ -314,7 +351,7 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
     std = standard_errors(cov)
     values = fit.theta - correction
     for j, name in enumerate(names):
-        if name.startswith(PROCESS_NOISE_PREFIX):
+        if is_noise_parameter(name):
             values[j] = abs(values[j])
     predicted = d.z - ev.nu
     outputs = {
@@ -379,7 +416,8 @@ class Options(HeldOptions):
         None, "start values of F_<state> (state units per sqrt(s))")
     initial_state: str = option("measured", "'measured' or 'zero' (the filter forgets it)")
     hold: str = option("foh", "inputs between samples: 'foh' (linear) or 'zoh' (held)")
-    max_iterations: int = option(30, "Gauss-Newton iterations per relaxation")
+    max_iterations: int = option(60, "Gauss-Newton iterations (per relaxation without "
+                                     "joint_noise)")
     max_relaxations: int = option(20, "limit of alternating parameter / R updates")
     step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
     cost_tolerance: float = option(1e-6, "or when the cost changes less than this (relative)")
@@ -389,6 +427,8 @@ class Options(HeldOptions):
         True, "correct the derivatives for the measured qbar and V leaving the reference")
     colored: bool = option(True, "bounds corrected for colored innovations (Morelli & Klein "
                                  "2016 eq. 6.54 on the innovations)")
+    joint_noise: bool = option(True, "estimate the measurement noise with the other "
+                                      "parameters instead of by relaxation")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
@@ -408,7 +448,8 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
         step_tolerance=options.step_tolerance, cost_tolerance=options.cost_tolerance,
         noise_tolerance=options.noise_tolerance,
         check_identifiability=options.check_identifiability,
-        condition_correction=options.condition_correction, colored=options.colored)
+        condition_correction=options.condition_correction, colored=options.colored,
+        joint_noise=options.joint_noise)
     est.fit["a_priori"] = a_priori.describe(record, held)
     return est
 

@@ -25,6 +25,8 @@ from flightid.identification.models.linear import LinearModel
 
 # Euler angles follow from the rates by kinematics: turbulence does not enter them
 PROCESS_NOISE_PREFIX = "F_"
+# the measurement-noise standard deviation of an output when it is estimated jointly
+MEASUREMENT_NOISE_PREFIX = "sigma_"
 # relative step of the central differences of the filter matrices: truncation error
 # ~1e-10, rounding of the Riccati solution (~1e-13 relative) amplified to ~1e-8
 RELATIVE_STEP = 1e-5
@@ -33,6 +35,16 @@ RELATIVE_STEP = 1e-5
 def process_noise_name(state: str) -> str:
     """Parameter name of the process-noise standard deviation of a state equation."""
     return f"{PROCESS_NOISE_PREFIX}{state}"
+
+
+def measurement_noise_name(output: str) -> str:
+    """Parameter name of the measurement-noise standard deviation of an output."""
+    return f"{MEASUREMENT_NOISE_PREFIX}{output}"
+
+
+def is_noise_parameter(name: str) -> bool:
+    """True for F_<state> and sigma_<output>: the noise parameters, not the model's."""
+    return name.startswith((PROCESS_NOISE_PREFIX, MEASUREMENT_NOISE_PREFIX))
 
 
 @dataclass
@@ -162,17 +174,27 @@ class FilterProblem:
         for name, value in zip(self.names, theta, strict=True):
             if name.startswith(PROCESS_NOISE_PREFIX):
                 f_values[name] = value
-            else:
+            elif not name.startswith(MEASUREMENT_NOISE_PREFIX):
                 values[name] = value
         states = self.data.model.states
         diag = [f_values.get(process_noise_name(s), 0.0) for s in states]
         return values, np.diag(np.asarray(diag, dtype=float))
 
+    def noise(self, theta: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """R with the diagonal entries of the estimated sigma_<output> taken from theta."""
+        R = np.array(R, dtype=float)
+        outputs = self.data.model.outputs
+        for name, value in zip(self.names, theta, strict=True):
+            if name.startswith(MEASUREMENT_NOISE_PREFIX):
+                j = outputs.index(name[len(MEASUREMENT_NOISE_PREFIX):])
+                R[j, j] = value**2
+        return R
+
     def filter(self, theta: np.ndarray, R: np.ndarray) -> SteadyStateFilter:
         values, F = self.split(theta)
         A, B, C, D = self.data.model.build(values)
-        return steady_state_filter(np.real(A), np.real(B), np.real(C), np.real(D), F, R,
-                                   self.data.dt, self.data.hold)
+        return steady_state_filter(np.real(A), np.real(B), np.real(C), np.real(D), F,
+                                   self.noise(theta, R), self.data.dt, self.data.hold)
 
 
 @dataclass
