@@ -64,8 +64,11 @@ MAX_VANE_BIAS = np.radians(5.0)
 MAX_VANE_SCALE_STD = 0.02
 MAX_VANE_BIAS_STD = np.radians(0.5)
 # reconstruction residual over the vane's white noise (``white_noise_std``): 1.1-2.0 in calm
-# air on the library cards, 29-65 in light turbulence (twinotter-lateral-0alpha)
+# air on the library cards, 29-65 in light turbulence (twinotter-lateral-0alpha); the noise
+# is taken as at least RESIDUAL_FLOOR, the kinematic model's own error (noise-free vanes: beta
+# residual 0.024 deg; light turbulence: 0.4-1.1 deg)
 MAX_RESIDUAL_RATIO = 5.0
+RESIDUAL_FLOOR = np.radians(0.02)
 SKIPPED_CALIBRATION = (
     "the flow-angle derivatives (CY_beta, Cl_beta, Cn_beta, CL_alpha, Cm_alpha) then carry "
     "the vanes' flow amplification 1/K: 5 % low in magnitude for K = 1.05, 9 % for 1.10 "
@@ -131,22 +134,24 @@ def calibration_doubts(record: FlightRecord, est: Estimate) -> list[str]:
     est : the reconstruction's Estimate (``compatibility.reconstruct``, Cramer-Rao bounds).
 
     Returns one reason per failed check: alpha or beta residuals above
-    ``MAX_RESIDUAL_RATIO`` times the vane's white noise (wind or turbulence the kinematics
-    cannot see; Jategaonkar 2015 ch. 10), a flow amplification K = 1 + k outside
-    1 +- ``MAX_VANE_SCALE``, a bias beyond ``MAX_VANE_BIAS`` (rad), or Cramer-Rao bounds
-    above ``MAX_VANE_SCALE_STD`` / ``MAX_VANE_BIAS_STD`` (not identified to the accuracy
-    a calibration needs).
+    ``MAX_RESIDUAL_RATIO`` times the vane's white noise, at least ``RESIDUAL_FLOOR`` (wind
+    or turbulence the kinematics cannot see; Jategaonkar 2015 ch. 10), a flow
+    amplification K = 1 + k outside 1 +- ``MAX_VANE_SCALE``, a bias beyond
+    ``MAX_VANE_BIAS`` (rad), or Cramer-Rao bounds above ``MAX_VANE_SCALE_STD`` /
+    ``MAX_VANE_BIAS_STD`` (not identified to the accuracy a calibration needs).
     """
     doubts = []
     residual = est.fit.get("noise_std", {})
     for angle in VANE_KEYS:
         if angle in residual and angle in record:
-            ratio = residual[angle] / max(white_noise_std(record[angle]), 1e-12)
-            if ratio > MAX_RESIDUAL_RATIO:
+            noise = max(white_noise_std(record[angle]), RESIDUAL_FLOOR)
+            if residual[angle] > MAX_RESIDUAL_RATIO * noise:
                 doubts.append(
-                    f"the reconstruction leaves {angle} residuals {ratio:.0f}x the vane's "
-                    f"noise (calm air: 1-2x): the flow angles carry wind or turbulence that "
-                    f"the kinematics cannot see, which the fit takes for vane errors")
+                    f"the reconstruction leaves {angle} residuals of "
+                    f"{np.degrees(residual[angle]):.2f} deg rms, {residual[angle] / noise:.0f}x "
+                    f"the vane's noise ({np.degrees(noise):.3f} deg; calm air: under 2x): the flow "
+                    f"angles carry wind or turbulence that the kinematics cannot see, which "
+                    f"the fit takes for vane errors")
     found = dict(zip(est.names, zip(est.values, est.std, strict=True), strict=True))
     for angle, name in VANE_SCALES.items():
         if name in found:
