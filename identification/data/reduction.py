@@ -64,9 +64,9 @@ MAX_VANE_BIAS = np.radians(5.0)
 MAX_VANE_SCALE_STD = 0.02
 MAX_VANE_BIAS_STD = np.radians(0.5)
 # reconstruction residual over the vane's white noise (``white_noise_std``): 1.1-2.0 in calm
-# air on the library cards, 29-65 in light turbulence (twinotter-lateral-0alpha); the noise
+# air on the library cards, 20-58 in light turbulence (twinotter-lateral-0alpha); the noise
 # is taken as at least RESIDUAL_FLOOR, the kinematic model's own error (noise-free vanes: beta
-# residual 0.024 deg; light turbulence: 0.4-1.1 deg)
+# residual 0.024 deg; light turbulence: 0.4-1.2 deg)
 MAX_RESIDUAL_RATIO = 5.0
 RESIDUAL_FLOOR = np.radians(0.02)
 SKIPPED_CALIBRATION = (
