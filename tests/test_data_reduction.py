@@ -145,7 +145,7 @@ def test_turbulence_is_not_taken_for_vane_errors(research_flight, tmp_path):
     assert "vane scale and bias not applied" in reduction.applied[-1]
     (warning,) = reduction.warnings
     assert warning.startswith("vane scale and bias from flight path reconstruction not "
-                              "applied: the reconstruction leaves alpha residuals")
+                              "applied: the reconstruction leaves residuals of alpha")
     assert "turbulence" in warning and "1/K" in warning
     # the reconstruction's own estimates, out of the physical range, are named
     assert "outside the physical 0.8-1.2" in warning

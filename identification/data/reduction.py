@@ -142,16 +142,18 @@ def calibration_doubts(record: FlightRecord, est: Estimate) -> list[str]:
     """
     doubts = []
     residual = est.fit.get("noise_std", {})
+    windy = []
     for angle in VANE_KEYS:
         if angle in residual and angle in record:
             noise = max(white_noise_std(record[angle]), RESIDUAL_FLOOR)
             if residual[angle] > MAX_RESIDUAL_RATIO * noise:
-                doubts.append(
-                    f"the reconstruction leaves {angle} residuals of "
-                    f"{np.degrees(residual[angle]):.2f} deg rms, {residual[angle] / noise:.0f}x "
-                    f"the vane's noise ({np.degrees(noise):.3f} deg; calm air: under 2x): the flow "
-                    f"angles carry wind or turbulence that the kinematics cannot see, which "
-                    f"the fit takes for vane errors")
+                windy.append(f"{angle} {np.degrees(residual[angle]):.2f} deg rms, "
+                             f"{residual[angle] / noise:.0f}x the vane's noise "
+                             f"({np.degrees(noise):.3f} deg)")
+    if windy:
+        doubts.append(f"the reconstruction leaves residuals of {', '.join(windy)} (calm air: "
+                      f"under 2x): the flow angles carry wind or turbulence that the "
+                      f"kinematics cannot see, which the fit takes for vane errors")
     found = dict(zip(est.names, zip(est.values, est.std, strict=True), strict=True))
     for angle, name in VANE_SCALES.items():
         if name in found:
