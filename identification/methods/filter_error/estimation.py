@@ -277,8 +277,7 @@ def _two_starts(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.nd
                 max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
                 noise_tol: float, floor: np.ndarray) -> _Relaxed:
     """The joint Gauss-Newton from the output-error start and from the relaxation's end
-    point (Jategaonkar 2015 sec. 5.8); the one with the lower J. The likelihood over F
-    and R has more than one minimum, so neither start alone finds the lower one."""
+    point (Jategaonkar 2015 sec. 5.8), the lower J kept: J has several minima in F, R."""
     sigma = np.array([n.startswith(MEASUREMENT_NOISE_PREFIX) for n in prob.names])
     relax_prob = FilterProblem(prob.data, [n for n, s in zip(prob.names, sigma, strict=True)
                                            if not s],
@@ -455,7 +454,7 @@ class Options(HeldOptions):
                                      "joint_noise)")
     max_relaxations: int = option(20, "limit of alternating parameter / R updates")
     step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
-    cost_tolerance: float = option(1e-6, "or when the cost changes less than this (relative)")
+    cost_tolerance: float = option(1e-6, "or when the cost falls less than this times |cost|")
     noise_tolerance: float = option(1e-3, "and R changes less than this (relative)")
     check_identifiability: bool = option(True, "report parameters the data cannot determine")
     condition_correction: bool = option(
@@ -463,7 +462,8 @@ class Options(HeldOptions):
     colored: bool = option(True, "bounds corrected for colored innovations (Morelli & Klein "
                                  "2016 eq. 6.54 on the innovations)")
     joint_noise: bool = option(True, "estimate the measurement noise with the other "
-                                      "parameters instead of by relaxation")
+                                      "parameters, from the output-error and the "
+                                      "relaxation's end point, lower J kept")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
