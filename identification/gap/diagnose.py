@@ -26,6 +26,7 @@ from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_a
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
 from flightid.identification.gap.candidates.identifiable import not_identifiable
+from flightid.identification.gap.candidates.linkage import is_linkage, transformed
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
 from flightid.identification.gap.jsbsim.refine import refine as refit
@@ -374,7 +375,9 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                          _by_label(fit_windows), inputs)
 
     after = None
-    if named:
+    if named and is_linkage(named[0].candidate):  # on the surface, not in the model
+        after = _linkage_tested(lin, named[0], fit_windows, inputs)
+    elif named:
         tests: dict[int, tuple[Linearised, NullTest]] = {}  # the model kept: its id stays
 
         def cached(current: Linearised) -> NullTest:
@@ -396,6 +399,17 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                      floor=ranker.floor, verdict=verdict,
                      null_before=before, null_after=after, evidence=evidence,
                      not_identifiable=unseen, structure=structure)
+
+
+def _linkage_tested(lin: Linearised, effect: Ranked, windows: list[Segment],
+                    inputs: Sequence[str]) -> NullTest:
+    """The null test of the model as is on ``windows`` with the surface passed through the
+    named nonlinear actuator ``effect`` at its fitted value (``candidates.linkage``)."""
+    c = effect.candidate
+    (name,) = c.free
+    records = {s.label: transformed(s.record, c.entry, c.options["surface"],
+                                    effect.values[name]) for s in windows}
+    return null_test({k: fit(lin.model, r) for k, r in records.items()}, records, inputs)
 
 
 def _by_label(windows: list[Segment]) -> dict[str, FlightRecord]:

@@ -26,6 +26,13 @@ import numpy as np
 
 from flightid.identification.gap.candidates.build import Candidate, pair
 from flightid.identification.gap.candidates.classes import prefer_model_terms
+from flightid.identification.gap.candidates.linkage import (
+    GRIDS,
+    is_linkage,
+    refined_minimum,
+    scan,
+    transformed,
+)
 from flightid.identification.gap.candidates.ranges import out_of_range
 from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
 from flightid.identification.gap.model.linearise import Linearised
@@ -221,19 +228,73 @@ class Ranker:
                 after.append(h)
                 dheld += h.cost - b.cost
                 labels.append(s.label)
-        if before:
-            r.heldout_before, r.heldout_after = pooled_fractions(before), pooled_fractions(after)
-            r.heldout_cost_change, r.heldout_windows = dheld, labels
-            gain = overall(r.heldout_before) - overall(r.heldout_after)
-            level = (MIN_EXCESS_SHRINK * overall(self.above) if self.above
-                     else MIN_SHRINK * overall(r.heldout_before))
-            r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and gain >= MIN_GAIN
-                               and gain >= level)
-        else:
-            r.note = "no held-out window: not confirmed"
+        self.judge(r, before, after, dheld, labels)
         if family := out_of_range(cand, r.parameters, self.lin.model):
             r.confirmed, r.family = False, family
             r.note = f"outside its physical range: {family}"
+        return r
+
+    def judge(self, r: Ranked, before: list[WindowFit], after: list[WindowFit],
+              dheld: float, labels: list[str]) -> None:
+        """Set ``r``'s held-out figures from the held-out windows' fits ``before`` (the
+        model as is) and ``after`` (with the effect) and confirm it (module note)."""
+        if not before:
+            r.note = "no held-out window: not confirmed"
+            return
+        r.heldout_before, r.heldout_after = pooled_fractions(before), pooled_fractions(after)
+        r.heldout_cost_change, r.heldout_windows = dheld, labels
+        gain = overall(r.heldout_before) - overall(r.heldout_after)
+        level = (MIN_EXCESS_SHRINK * overall(self.above) if self.above
+                 else MIN_SHRINK * overall(r.heldout_before))
+        r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and gain >= MIN_GAIN
+                           and gain >= level)
+
+    def evaluate_linkage(self, cand: Candidate) -> Ranked | None:
+        """A nonlinear actuator candidate (``candidates.linkage``): the model as is on the
+        windows with the surface passed through the entry, its value found on the entry's
+        grid over the fitted windows (over the other windows for each held-out one); None
+        when the best value is at the grid's edge (no estimate)."""
+        model, grid = self.lin.model, GRIDS[cand.entry]
+        surface, (name,) = cand.options["surface"], cand.free
+        fit_records = {s.label: s.record for s in self.folds.fit}
+        table = scan(model, fit_records, cand)
+
+        def best(labels: list[str]) -> tuple[float, float] | None:
+            cost = [sum(table[k][i].cost if table[k][i] is not None else math.inf
+                        for k in labels) for i in range(len(grid))]
+            return refined_minimum(grid, cost)
+
+        found = best(list(fit_records))
+        if found is None:
+            return None
+        value, std = found
+        dbic, dcost = 0.0, 0.0
+        for label, rec in fit_records.items():
+            try:
+                f = fit(model, transformed(rec, cand.entry, surface, value))
+            except (ValueError, np.linalg.LinAlgError):
+                continue
+            d = f.cost - self.base[label].cost
+            dcost += d
+            dbic += 2 * d + math.log(f.samples)
+        r = Ranked(cand, {name: value}, {name: std},
+                   cand.parameters({name: value}, {name: std}, model), dbic, dcost)
+        before, after, dheld, labels = [], [], 0.0, []
+        for train, test in self.folds.folds:
+            part = best([self.folds.fit[i].label for i in train])
+            if part is None:
+                continue
+            for s in test:
+                try:
+                    h = fit(model, transformed(s.record, cand.entry, surface, part[0]))
+                except (ValueError, np.linalg.LinAlgError):
+                    continue
+                b = self.base_held[s.label]
+                before.append(b)
+                after.append(h)
+                dheld += h.cost - b.cost
+                labels.append(s.label)
+        self.judge(r, before, after, dheld, labels)
         return r
 
 
@@ -241,13 +302,17 @@ def rank(ranker: Ranker, candidates: list[Candidate],
          keep: int | None = SCREEN_KEEP) -> list[Ranked]:
     """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
     the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
-    check, the physical range; all of them when ``keep`` is None); sorted by ``rank_key``
-    after the held-out Occam rule of ``nested``."""
+    check, the physical range; all of them when ``keep`` is None), the nonlinear actuator
+    candidates (``candidates.linkage``) scored in full beside them (``Ranker.evaluate_linkage``);
+    sorted by ``rank_key`` after the held-out Occam rule of ``nested``."""
+    linkage = [c for c in candidates if is_linkage(c)]
+    candidates = [c for c in candidates if not is_linkage(c)]
     if keep is not None and len(candidates) > keep:
         scores = [ranker.screen(c) for c in candidates]
         order = sorted(range(len(candidates)), key=scores.__getitem__)
         candidates = [candidates[i] for i in order[:keep]]
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
+    out += [r for c in linkage if (r := ranker.evaluate_linkage(c)) is not None]
     nested(out)
     prefer_model_terms(out, MIN_SHRINK)
     return sorted(out, key=rank_key)
@@ -295,8 +360,10 @@ def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
     if ranker.above is not None and gain >= PAIR_SHARE * overall(ranker.above):
         return []
     top = ranked[0]
+    if is_linkage(top.candidate):  # not a model edit: a pair cannot carry it
+        return []
     out = []
-    for other in ranked[1:1 + PAIR_TOP]:
+    for other in [r for r in ranked[1:] if not is_linkage(r.candidate)][:PAIR_TOP]:
         c = pair(top.candidate, other.candidate)
         if c is None or (r := ranker.evaluate(c)) is None:
             continue

@@ -15,6 +15,7 @@ import dataclasses
 from collections.abc import Callable
 
 from flightid.identification.gap.candidates.build import Candidate, catalogue_candidates
+from flightid.identification.gap.candidates.linkage import is_linkage
 from flightid.identification.gap.model.linearise import Linearised
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, rank
 
@@ -52,6 +53,8 @@ def _taken(named: list[Ranked]) -> tuple[set[str], set[str]]:
 
 
 def _open(c: Candidate, params: set[str], surfaces: set[str]) -> bool:
+    if is_linkage(c):  # a surface nonlinearity is no model edit (``candidates.linkage``)
+        return False
     if set(c.free) & params:
         return False
     if c.entry == "control_effectiveness" and c.options["surface"] in surfaces:

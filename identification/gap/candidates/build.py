@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 
 from flightid.identification.gap.candidates.actuator import actuator_candidates
+from flightid.identification.gap.candidates.linkage import linkage_candidates
 from flightid.identification.gap.candidates.mass import mass_candidates
 from flightid.identification.gap.candidates.sensor import sensor_candidates
 from flightid.identification.gap.model.edits import Candidate, extended, identity
@@ -105,7 +106,8 @@ def catalogue_candidates(model: LinearModel, axes: str = "body", *,
     out += [tail] if tail else []
     out += sensor_candidates(model)
     out += mass_candidates(model)
-    return out + actuator_candidates(model, surfaces_of(records, surfaces))
+    kind = surfaces_of(records, surfaces)
+    return out + actuator_candidates(model, kind) + linkage_candidates(model.inputs, kind)
 
 
 TAIL_ICE = {"elevator": ("Cm_de",), "stability": ("Cm_alpha",),

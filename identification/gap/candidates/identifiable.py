@@ -50,15 +50,13 @@ ALWAYS: dict[str, str] = {
             "regimes show it); not a model error",
     "turbulence": "turbulence is no model error: it is part of the null level (process "
                   "noise)",
-    "rate_limit": "nonlinear (the limit acts only on fast, large commands): not in the "
-                  "linear screening; scored with the JSBSim aircraft itself "
-                  "(identification.effect_fit.fit_effect) on a record of the commands",
-    "deadband": "nonlinear (no response within the band): not in the linear screening; "
-                "scored with the JSBSim aircraft itself (identification.effect_fit."
-                "fit_effect) on a record of the commands",
-    "backlash": "nonlinear (hysteresis): not in the linear screening; scored with the "
-                "JSBSim aircraft itself (identification.effect_fit.fit_effect) on a "
-                "record of the commands",
+    "rate_limit": "a candidate on records of commands only (gap.candidates.linkage): on "
+                  "a record of positions the limit has already acted on what was recorded",
+    "deadband": "a candidate on the aileron and rudder (gap.candidates.linkage); the "
+                "elevator is trimmed away from zero, where a deadband is a constant "
+                "offset: the trim-level check's 'elevator bias or Cm_0 mismatch'",
+    "backlash": "a candidate on the model's surface inputs (gap.candidates.linkage); the "
+                "model has none",
     "actuator_bias": BIAS + "; the trim-level check (gap.trim_level) names a surface's "
                      "steady deflection against the model's trim one as 'elevator bias "
                      "or Cm_0 mismatch', 'aileron bias or Cl_0 mismatch' or 'rudder bias "
