@@ -20,7 +20,9 @@ that level is not known. Confirmed effects rank first, by their held-out cost ch
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -37,6 +39,7 @@ from flightid.identification.gap.candidates.ranges import out_of_range
 from flightid.identification.gap.fit import WindowFit, fit, held, noise_energy
 from flightid.identification.gap.model.linearise import Linearised
 from flightid.identification.gap.segments import Segment
+from flightid.record import FlightRecord
 
 MIN_SHRINK = 0.10  # relative shrink of the held-out gap that confirms an effect
 # with the null level known (``Ranker.above``): the held-out gain that confirms an effect,
@@ -213,14 +216,29 @@ class Ranker:
             dcost += d
             dbic += 2 * d + len(cand.free) * math.log(f.samples)
         r = Ranked(cand, values, std, cand.parameters(values, std, self.lin.model), dbic, dcost)
+        self.judge(r, *self.held_out(
+            lambda train: combine([fits[i] for i in train if fits[i] is not None], cand.free),
+            lambda part, record: held(model, part[0], record)))
+        if family := out_of_range(cand, r.parameters, self.lin.model):
+            r.confirmed, r.family = False, family
+            r.note = f"outside its physical range: {family}"
+        return r
+
+    def held_out(self, trained: Callable[[Sequence[int]], Any],
+                 tested: Callable[[Any, FlightRecord], WindowFit]
+                 ) -> tuple[list[WindowFit], list[WindowFit], float, list[str]]:
+        """The held-out windows' fits of the model as is and with an effect: for each fold,
+        ``trained(train)`` the effect fitted on the fold's windows (None: skipped) and
+        ``tested(part, record)`` the fit of a held-out window with it; returns the fits
+        before and after, the summed cost change and the windows' labels."""
         before, after, dheld, labels = [], [], 0.0, []
         for train, test in self.folds.folds:
-            part = combine([fits[i] for i in train if fits[i] is not None], cand.free)
+            part = trained(train)
             if part is None:
                 continue
             for s in test:
                 try:
-                    h = held(model, part[0], s.record)
+                    h = tested(part, s.record)
                 except (ValueError, np.linalg.LinAlgError):
                     continue
                 b = self.base_held[s.label]
@@ -228,11 +246,7 @@ class Ranker:
                 after.append(h)
                 dheld += h.cost - b.cost
                 labels.append(s.label)
-        self.judge(r, before, after, dheld, labels)
-        if family := out_of_range(cand, r.parameters, self.lin.model):
-            r.confirmed, r.family = False, family
-            r.note = f"outside its physical range: {family}"
-        return r
+        return before, after, dheld, labels
 
     def judge(self, r: Ranked, before: list[WindowFit], after: list[WindowFit],
               dheld: float, labels: list[str]) -> None:
@@ -279,22 +293,9 @@ class Ranker:
             dbic += 2 * d + math.log(f.samples)
         r = Ranked(cand, {name: value}, {name: std},
                    cand.parameters({name: value}, {name: std}, model), dbic, dcost)
-        before, after, dheld, labels = [], [], 0.0, []
-        for train, test in self.folds.folds:
-            part = best([self.folds.fit[i].label for i in train])
-            if part is None:
-                continue
-            for s in test:
-                try:
-                    h = fit(model, transformed(s.record, cand.entry, surface, part[0]))
-                except (ValueError, np.linalg.LinAlgError):
-                    continue
-                b = self.base_held[s.label]
-                before.append(b)
-                after.append(h)
-                dheld += h.cost - b.cost
-                labels.append(s.label)
-        self.judge(r, before, after, dheld, labels)
+        self.judge(r, *self.held_out(
+            lambda train: best([self.folds.fit[i].label for i in train]),
+            lambda part, record: fit(model, transformed(record, cand.entry, surface, part[0]))))
         return r
 
 
