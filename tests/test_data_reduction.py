@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.data.reduction import NO_POSITIONS, reduce_record
+from flightid.identification.data.reduction import NO_POSITIONS, calibration_doubts, reduce_record
 from flightid.identification.evaluation.scoring import score
 from flightid.identification.identify import identify
 from flightid.record import FlightRecord
@@ -128,3 +128,41 @@ def test_a_record_without_positions_gets_a_warning_naming_the_bias(research_flig
     assert result.exit_code == 0, result.output
     assert "warning: the record carries no sensor positions" in result.stderr
     assert "CY_beta" in result.stderr and "1/K" in result.stderr
+
+
+# `flightid montecarlo twinotter-lateral-0alpha --turbulence light --seed 9100`, realization 3
+TURBULENT_SEED = 3517412064
+
+
+def test_turbulence_is_not_taken_for_vane_errors(research_flight, tmp_path):
+    # flight path reconstruction assumes steady air: in light turbulence it fitted the gusts
+    # as K_alpha = -0.005 and a beta bias of +5.15 deg, the reduced alpha reached 85 rad and
+    # identify refused the record ("alpha looks like degrees")
+    card = overridden_card(load_card("twinotter-lateral-0alpha"), turbulence="light")
+    measured, _ = fly_card(card, TURBULENT_SEED)
+    reduction = reduce_record(measured)
+    assert not any("from flight path reconstruction (" in a for a in reduction.applied)
+    assert "vane scale and bias not applied" in reduction.applied[-1]
+    (warning,) = reduction.warnings
+    assert warning.startswith("vane scale and bias from flight path reconstruction not "
+                              "applied: the reconstruction leaves residuals of alpha")
+    assert "turbulence" in warning and "1/K" in warning
+    # the reconstruction's own estimates, out of the physical range, are named
+    assert "outside the physical 0.8-1.2" in warning
+    reduced = reduction.record
+    # light turbulence moves alpha by +-3 deg about its 0.6 deg trim: only the position
+    # effect (x q / V, under 0.1 deg here) separates it from the vane reading
+    assert np.max(np.abs(reduced["alpha"])) < 0.1
+    assert np.max(np.abs(reduced["alpha"] - measured["alpha"])) < np.radians(0.5)
+    rows = {r.name: r for r in score(identify(reduced, "oe", "lat"), reduced).rows}
+    # the uncorrected sidewash (K_beta 1.10) is inside the fit's bounds (measured: -0.1 %)
+    assert abs(rows["CY_beta"].sigmas) <= 3, rows["CY_beta"]
+    # calm air: the calibration passes every check and is applied
+    assert calibration_doubts(*research_flight[:1], reduce_record(research_flight[0])
+                              .reconstruction) == []
+    path = tmp_path / "turbulent.parquet"
+    measured.write(path)
+    result = runner.invoke(app, ["identify", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "warning: vane scale and bias from flight path reconstruction not applied" \
+        in result.stderr

@@ -16,6 +16,15 @@ As the F-111C reduction procedure (Cooper, Drobik & Martin, ARL Flight Mechanics
   then removed exactly (``compatibility.correct``). Without the channels a reconstruction
   needs (phi, theta), only the position effect is removed and the scale is reported left.
 
+The reconstruction assumes steady air (Jategaonkar 2015 ch. 10; Morelli & Klein 2016
+ch. 10): wind and turbulence move the vanes but not the kinematics, and the fit then
+takes the gusts for vane errors (twinotter-lateral-0alpha in light turbulence: K_alpha
+0.0-0.21, beta bias -28 to +40 deg, alpha reduced to 86 rad). A calibration is applied only
+when it passes ``calibration_doubts``: residuals at the vanes' noise level (calm air),
+K within 0.8-1.2, biases within 5 deg, and Cramer-Rao bounds under 0.02 (K) and 0.5 deg
+(bias). Otherwise only the position effect is removed, and a warning says why and which
+bias to expect.
+
 The positions are the record's ``meta.extra['sensor_positions']`` (docs/record.md). A record
 without them is returned unchanged, with a warning naming the bias to expect.
 """
@@ -30,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.compatibility import reconstruction as compatibility
+from flightid.identification.compatibility.reconstruction import white_noise_std
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 
@@ -45,6 +55,26 @@ NO_POSITIONS = (
     "CY_beta), vanes ahead of the CG read alpha - x q/V and beta + x r/V (Cm_q, CL_q, "
     "CY_r, Cn_r, Cl_r), and an uncalibrated vane scale K scales every flow-angle "
     "derivative by 1/K (CY_beta, Cl_beta, Cn_beta, CL_alpha, Cm_alpha)")
+# physical range of a vane calibration: flow amplification K = 1 + k of boom vanes 1.02-1.20
+# (Cooper, Drobik & Martin 1990: K_alpha 1.06, K_beta 1.06-1.20), mounting biases of a degree
+# or two; and the accuracy a calibration must reach to be worth applying (their Table 1:
+# vanes +-0.5 deg; a scale known to 2 % moves the flow-angle derivatives by 2 %)
+MAX_VANE_SCALE = 0.2  # |k|: K within 0.8-1.2
+MAX_VANE_BIAS = np.radians(5.0)
+MAX_VANE_SCALE_STD = 0.02
+MAX_VANE_BIAS_STD = np.radians(0.5)
+# reconstruction residual over the vane's white noise (``white_noise_std``): 1.1-2.0 in calm
+# air on the library cards, 20-58 in light turbulence (twinotter-lateral-0alpha); the noise
+# is taken as at least RESIDUAL_FLOOR, the kinematic model's own error (noise-free vanes: beta
+# residual 0.024 deg; light turbulence: 0.4-1.2 deg)
+MAX_RESIDUAL_RATIO = 5.0
+RESIDUAL_FLOOR = np.radians(0.02)
+SKIPPED_CALIBRATION = (
+    "the flow-angle derivatives (CY_beta, Cl_beta, Cn_beta, CL_alpha, Cm_alpha) then carry "
+    "the vanes' flow amplification 1/K: 5 % low in magnitude for K = 1.05, 9 % for 1.10 "
+    "(boom vanes: 1.06-1.20, Cooper, Drobik & Martin 1990), and a vane bias moves the "
+    "trim flow angle by as much; calibrate the vanes on a calm-air flight and correct the "
+    "record, or widen the bounds by that much")
 
 
 @dataclass
@@ -94,6 +124,58 @@ def _with(record: FlightRecord, channels: Mapping[str, np.ndarray],
     return FlightRecord(record.time.copy(), {**record.channels, **channels}, meta)
 
 
+def calibration_doubts(record: FlightRecord, est: Estimate) -> list[str]:
+    """Why a flight path reconstruction's vane calibration must not be applied (empty: it
+    may be).
+
+    Parameters
+    ----------
+    record : the record the reconstruction was fitted to (SI units).
+    est : the reconstruction's Estimate (``compatibility.reconstruct``, Cramer-Rao bounds).
+
+    Returns one reason per failed check: alpha or beta residuals above
+    ``MAX_RESIDUAL_RATIO`` times the vane's white noise, at least ``RESIDUAL_FLOOR`` (wind
+    or turbulence the kinematics cannot see; Jategaonkar 2015 ch. 10), a flow
+    amplification K = 1 + k outside 1 +- ``MAX_VANE_SCALE``, a bias beyond
+    ``MAX_VANE_BIAS`` (rad), or Cramer-Rao bounds above ``MAX_VANE_SCALE_STD`` /
+    ``MAX_VANE_BIAS_STD`` (not identified to the accuracy a calibration needs).
+    """
+    doubts = []
+    residual = est.fit.get("noise_std", {})
+    windy = []
+    for angle in VANE_KEYS:
+        if angle in residual and angle in record:
+            noise = max(white_noise_std(record[angle]), RESIDUAL_FLOOR)
+            if residual[angle] > MAX_RESIDUAL_RATIO * noise:
+                windy.append(f"{angle} {np.degrees(residual[angle]):.2f} deg rms, "
+                             f"{residual[angle] / noise:.0f}x the vane's noise "
+                             f"({np.degrees(noise):.3f} deg)")
+    if windy:
+        doubts.append(f"the reconstruction leaves residuals of {', '.join(windy)} (calm air: "
+                      f"under 2x): the flow angles carry wind or turbulence that the "
+                      f"kinematics cannot see, which the fit takes for vane errors")
+    found = dict(zip(est.names, zip(est.values, est.std, strict=True), strict=True))
+    for angle, name in VANE_SCALES.items():
+        if name in found:
+            k, s = found[name]
+            if not abs(k) <= MAX_VANE_SCALE:
+                doubts.append(f"{angle} vane flow amplification K = {1 + k:.3f} is outside "
+                              f"the physical {1 - MAX_VANE_SCALE:g}-{1 + MAX_VANE_SCALE:g}")
+            elif not s <= MAX_VANE_SCALE_STD:
+                doubts.append(f"{angle} vane flow amplification K = {1 + k:.3f} +- {s:.3f} "
+                              f"is not identified (bound > {MAX_VANE_SCALE_STD:g})")
+        bias = f"bias_{angle}"
+        if bias in found:
+            b, s = np.degrees(found[bias])
+            if not abs(b) <= np.degrees(MAX_VANE_BIAS):
+                doubts.append(f"{angle} vane bias {b:+.2f} deg is beyond the physical "
+                              f"+-{np.degrees(MAX_VANE_BIAS):g} deg")
+            elif not s <= np.degrees(MAX_VANE_BIAS_STD):
+                doubts.append(f"{angle} vane bias {b:+.2f} +- {s:.2f} deg is not identified "
+                              f"(bound > {np.degrees(MAX_VANE_BIAS_STD):g} deg)")
+    return doubts
+
+
 def _vanes(record: FlightRecord, vanes: dict[str, tuple[float, float, float]],
            out: Reduction) -> FlightRecord:
     """Vane scale and bias by flight path reconstruction, position effect removed."""
@@ -113,6 +195,15 @@ def _vanes(record: FlightRecord, vanes: dict[str, tuple[float, float, float]],
     else:
         _, est = compatibility.reconstruct(record, fixed=fixed, uncertainty="cramer-rao")
         out.reconstruction = est
+        doubts = calibration_doubts(record, est)
+        if doubts:
+            out.warnings.append(
+                f"vane scale and bias from flight path reconstruction not applied: "
+                f"{'; '.join(doubts)}; {SKIPPED_CALIBRATION}")
+            out.applied.append(f"flow angles: {where}: position effect removed; vane scale "
+                               f"and bias not applied (implausible or unidentified, see the "
+                               f"warning)")
+            return compatibility.correct(record, values)
         found = dict(zip(est.names, zip(est.values, est.std, strict=True), strict=True))
         parts = []
         for angle in vanes:

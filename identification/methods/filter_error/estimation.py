@@ -22,10 +22,10 @@ gives the innovations nu, and the negative log-likelihood (Jategaonkar ch. 5)
 Estimation (default, ``joint_noise``): Gauss-Newton on the derivatives, biases, the
 diagonal of F and the measurement-noise standard deviations sigma_<output> together, on
 the full likelihood J (Maine & Iliff 1985; the R-dependence of K and S enters the
-sensitivities through the same central differences). On navion-demo in light turbulence
-the relaxation below stopped far from the likelihood's minimum (J 500-1200 higher on the
-flights where it put R_p at its lower bound; docs/montecarlo.md, "Filter error").
-The relaxation, ``joint_noise=False``, is Jategaonkar's two-step scheme:
+sensitivities through the same central differences), started twice, from output error
+and from the relaxation's end point; the lower J is kept (the likelihood over F and R
+has several minima; docs/montecarlo.md, "Filter error").
+The relaxation, ``joint_noise=False``, is Jategaonkar's two-step scheme (sec. 5.8):
 1. with R fixed, Gauss-Newton on the derivatives, biases and the diagonal of F, with the
    Fisher information M_jl = sum_k dnu_j^T S^-1 dnu_l + N/2 tr(S^-1 dS_j S^-1 dS_l)
    (its observed form while the residuals do not yet match S) and Levenberg-Marquardt
@@ -39,17 +39,16 @@ The relaxation, ``joint_noise=False``, is Jategaonkar's two-step scheme:
    next pass starts where the last one ended. The R step is damped until it lowers J, so
    both steps descend the same likelihood. While R still moves by more than 10 % the
    Gauss-Newton passes are cut to a few steps.
-Both steps use the shared engine (``identification.engine``): the damped Newton step of
-``gauss_newton`` on the filter's likelihood. At the converged point the derivatives are
-corrected for the measured dynamic pressure and airspeed departing from the reference
-condition (``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1)
-(M&K eq. 6.50) or, with ``colored`` (the method's default), the score sandwich of
-``kalman_filter.robust_covariance``. With ``joint_noise`` the information matrix holds the
-sigma_<output> too, so the bounds carry the uncertainty of the estimated R. Output error
-supplies the start values and decides which parameters the flight cannot determine; the
-same checks of ``identifiability`` are repeated on the filter's information matrix, and
-the fit is repeated without the parameters they find
-(``refit.refit_without_unidentifiable``).
+Both use the damped Newton step of ``engine.gauss_newton`` on the filter's likelihood.
+At the converged point the derivatives are corrected for the measured dynamic pressure
+and airspeed departing from the reference condition (``flight_condition``), and the
+bounds are the Cramer-Rao bounds sqrt(diag M^-1) (M&K eq. 6.50) or, with ``colored``
+(the method's default), the score sandwich of ``kalman_filter.robust_covariance``. With
+``joint_noise`` the information matrix holds the sigma_<output> too, so the bounds carry
+the uncertainty of the estimated R. Output error supplies the start values and decides
+which parameters the flight cannot determine; the same checks of ``identifiability`` are
+repeated on the filter's information matrix, and the fit is repeated without the
+parameters they find (``refit.refit_without_unidentifiable``).
 """
 
 from __future__ import annotations
@@ -73,6 +72,7 @@ from flightid.identification.methods.filter_error.flight_condition import (
     innovation_change,
 )
 from flightid.identification.methods.filter_error.kalman_filter import (
+    MEASUREMENT_NOISE_PREFIX,
     PROCESS_NOISE_PREFIX,
     FilterEvaluation,
     FilterProblem,
@@ -141,16 +141,17 @@ def estimate(
     ``colored`` those of ``colored_innovation_covariance`` (the Cramer-Rao bounds are then
     in ``fit['cramer_rao_std']``).
     Converged when a Gauss-Newton pass moved no parameter by more than ``step_tolerance``
-    of its standard error and the R update changed no variance by more than
-    ``noise_tolerance`` (relative).
+    of its standard error (or J by less than ``cost_tolerance`` of |J|) and the R update
+    changed no variance by more than ``noise_tolerance`` (relative).
     condition_correction: subtract the first-order effect of the measured dynamic pressure
     and airspeed departing from the reference condition (``flight_condition``; models
     without an airspeed state, records with qbar and V channels).
     colored: standard errors from ``colored_innovation_covariance`` (the sandwich for
     colored innovations) instead of the Cramer-Rao bounds M^-1.
     joint_noise: estimate the measurement-noise standard deviations sigma_<output> (output
-    units) with the other parameters, by Gauss-Newton on the full likelihood (the
-    default), instead of the relaxation with the closed-form R update.
+    units) with the other parameters, by Gauss-Newton on the full likelihood from the
+    output-error start and from the relaxation's end point, keeping the lower J (the
+    default), instead of the relaxation alone with the closed-form R update.
     """
     if initial_state not in ("measured", "zero"):
         raise ValueError(
@@ -200,7 +201,6 @@ def estimate(
     # lower bound of R: a fixed fraction of the output-error residual variance
     floor = np.maximum(data.noise_floor, MIN_NOISE_FRACTION**2 * np.diag(R))
 
-
     def fit(active: list[str], current: dict[str, float]) -> _Relaxed:
         # parameters found unidentifiable stay at the values of the fit that found them,
         # and the next relaxation starts from its R
@@ -212,8 +212,8 @@ def estimate(
                         {n: 0.0 for n in f_start if n not in active})
         theta = np.array([current[n] for n in active])
         if joint_noise:
-            relaxed = _joint(prob, theta, R, data.x0, max_iterations, step_tolerance,
-                             cost_tolerance, floor)
+            relaxed = _two_starts(prob, theta, R, data.x0, max_iterations, max_relaxations,
+                                  step_tolerance, cost_tolerance, noise_tolerance, floor)
         else:
             relaxed = _relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
                              step_tolerance, cost_tolerance, noise_tolerance, floor)
@@ -247,6 +247,8 @@ class _Relaxed:
     cost_history: list[float]
     noise_history: list[np.ndarray]
     lower: np.ndarray
+    start: str = "output error"
+    start_costs: dict[str, float] | None = None
 
     @property
     def values(self) -> dict[str, float]:
@@ -269,6 +271,36 @@ def _joint(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray
     info = final.information if final.information is not None else np.zeros((0, 0))
     return _Relaxed(prob, theta, R, final, info, gn.converged, gn.reason, 1, gn.iterations,
                     list(gn.cost_history), [np.diag(R).copy()], floor)
+
+
+def _two_starts(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
+                max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
+                noise_tol: float, floor: np.ndarray) -> _Relaxed:
+    """The joint Gauss-Newton from the output-error start and from the relaxation's end
+    point (Jategaonkar 2015 sec. 5.8), the lower J kept: J has several minima in F, R."""
+    sigma = np.array([n.startswith(MEASUREMENT_NOISE_PREFIX) for n in prob.names])
+    relax_prob = FilterProblem(prob.data, [n for n, s in zip(prob.names, sigma, strict=True)
+                                           if not s],
+                               prob.fixed, prob.noise_states, prob.fixed_noise)
+    relaxed = _relax(relax_prob, theta[~sigma], R, x0, max_iterations, max_relaxations,
+                     step_tol, cost_tol, noise_tol, floor)
+    fits = {"output error": _joint(prob, theta, R, x0, max_iterations, step_tol, cost_tol,
+                                   floor)}
+    if np.isfinite(relaxed.evaluation.cost):
+        from_relaxed = theta.copy()
+        from_relaxed[~sigma] = relaxed.theta
+        outputs = prob.data.model.outputs
+        from_relaxed[sigma] = [np.sqrt(relaxed.R[j, j]) for j in (
+            outputs.index(n[len(MEASUREMENT_NOISE_PREFIX):]) for n, s in
+            zip(prob.names, sigma, strict=True) if s)]
+        fits["relaxation"] = _joint(prob, from_relaxed, relaxed.R, x0, max_iterations,
+                                    step_tol, cost_tol, floor)
+    costs = {k: float(f.evaluation.cost) for k, f in fits.items()}
+    best = min(costs, key=lambda k: costs[k] if np.isfinite(costs[k]) else np.inf)
+    fit = fits[best]
+    fit.start, fit.start_costs = best, {**costs, "relaxation alone": relaxed.evaluation.cost}
+    fit.passes += relaxed.passes
+    return fit
 
 
 def _relax(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
@@ -366,6 +398,8 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
         "reason": fit.reason,
         "iterations": fit.iterations,
         "relaxation_steps": fit.passes,
+        "start": fit.start,
+        "start_costs": fit.start_costs,
         "cost_history": list(fit.cost_history),
         "cost": ev.cost,
         "noise_std": {o: float(np.sqrt(fit.R[j, j])) for j, o in enumerate(outs)},
@@ -420,7 +454,7 @@ class Options(HeldOptions):
                                      "joint_noise)")
     max_relaxations: int = option(20, "limit of alternating parameter / R updates")
     step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
-    cost_tolerance: float = option(1e-6, "or when the cost changes less than this (relative)")
+    cost_tolerance: float = option(1e-6, "or when the cost falls less than this times |cost|")
     noise_tolerance: float = option(1e-3, "and R changes less than this (relative)")
     check_identifiability: bool = option(True, "report parameters the data cannot determine")
     condition_correction: bool = option(
@@ -428,7 +462,8 @@ class Options(HeldOptions):
     colored: bool = option(True, "bounds corrected for colored innovations (Morelli & Klein "
                                  "2016 eq. 6.54 on the innovations)")
     joint_noise: bool = option(True, "estimate the measurement noise with the other "
-                                      "parameters instead of by relaxation")
+                                      "parameters, from the output-error and the "
+                                      "relaxation's end point, lower J kept")
 
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None

@@ -300,7 +300,11 @@ class FilterPass:
 def gauss_newton_pass(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
                   max_iterations: int, step_tol: float, cost_tol: float) -> FilterPass:
     """Minimise J(theta) with R fixed: Gauss-Newton with Levenberg-Marquardt damping
-    (``engine.gauss_newton.damped_newton_step`` on the filter's H, M and gradient)."""
+    (``engine.gauss_newton.damped_newton_step`` on the filter's H, M and gradient).
+
+    Converged when no parameter moved by more than ``step_tol`` of its standard error, or
+    when J fell by less than ``cost_tol`` times max(|J|, 1) (relative).
+    """
     lam = 0.0
     history: list[float] = []
 
@@ -325,11 +329,11 @@ def gauss_newton_pass(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0:
             return FilterPass(theta, ev, step.at_minimum, step.reason, iteration, history)
         change = float(np.max(np.abs(step.step) / step.std))
         theta = step.theta
-        if change < step_tol or ev.cost - step.cost < cost_tol:
+        if change < step_tol or ev.cost - step.cost < cost_tol * max(abs(ev.cost), 1.0):
             final = evaluate(prob, theta, R, x0, sensitivities=True)
             history.append(final.cost)
             why = (f"parameter change below {step_tol:g} standard errors" if change < step_tol
-                   else f"cost change below {cost_tol:g}")
+                   else f"cost change below {cost_tol:g} (relative)")
             return FilterPass(theta, final, True, why, iteration + 1, history)
     raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
 
