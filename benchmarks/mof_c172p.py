@@ -9,7 +9,13 @@ reduction) and compares with the same model of order 1 (linear terms only):
 
 - ``held-out``: 33 m/s, elevator doublet, aileron and rudder 2-1-1, seed 2; it was
   scored while the method was changed;
-- ``confirmation``: 30 m/s, elevator 2-1-1, aileron 3211, rudder doublet, seed 3.
+- ``confirmation``: 30 m/s, elevator 2-1-1, aileron 3211, rudder doublet, seed 3;
+- ``confirmation-2``: 35 m/s, elevator 3211 -6 deg, aileron doublet, rudder 3211,
+  seed 7; named before the search's regeneration of the orthogonal functions was
+  measured on the c172p;
+- ``confirmation-3``: 31 m/s, elevator doublet -7 deg, aileron 3211, rudder doublet,
+  seed 8; named after confirmation-2 showed the first version of the regeneration losing
+  Cl_p, before its fix was measured.
 
 Neither is used by the fit. Writes benchmarks/results/mof_c172p-<sensors>.txt.
 
@@ -52,7 +58,21 @@ CONFIRM = [{"kind": "211", "surface": "de", "start": 2.0, "base": 0.8, "amplitud
            {"kind": "3211", "surface": "da", "start": 11.0, "base": 0.6, "amplitude_deg": 6.0},
            {"kind": "doublet", "surface": "dr", "start": 21.0, "base": 1.2,
             "amplitude_deg": 7.0}]
-FLIGHTS = {"held-out": (TEST, 2, 33.0), "confirmation": (CONFIRM, 3, 30.0)}
+# named before the method's regeneration of the orthogonal functions was measured on the
+# c172p (2026-11-28, 14:55 UTC): a third held-out flight, never scored before
+CONFIRM_2 = [{"kind": "3211", "surface": "de", "start": 2.0, "base": 0.6, "amplitude_deg": -6.0},
+             {"kind": "doublet", "surface": "da", "start": 13.0, "base": 1.0,
+              "amplitude_deg": 7.0},
+             {"kind": "3211", "surface": "dr", "start": 20.0, "base": 0.5, "amplitude_deg": 6.0}]
+# named after confirmation-2 showed the first regeneration losing Cl_p (a cycle of chosen
+# sets), before its fix (the least-PSE set of the searches kept) was measured on the c172p
+CONFIRM_3 = [{"kind": "doublet", "surface": "de", "start": 2.0, "base": 1.0,
+              "amplitude_deg": -7.0},
+             {"kind": "3211", "surface": "da", "start": 12.0, "base": 0.5, "amplitude_deg": 7.0},
+             {"kind": "doublet", "surface": "dr", "start": 21.0, "base": 1.0,
+              "amplitude_deg": 6.0}]
+FLIGHTS = {"held-out": (TEST, 2, 33.0), "confirmation": (CONFIRM, 3, 30.0),
+           "confirmation-2": (CONFIRM_2, 7, 35.0), "confirmation-3": (CONFIRM_3, 8, 31.0)}
 
 
 def record(maneuvers: list, seed: int, sensors: str, speed: float = 33.0):

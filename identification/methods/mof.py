@@ -45,6 +45,8 @@ ID = "mof"
 # (nearly) a linear combination of the functions in: R_j^2 > 0.99^2, the threshold of the
 # equation-error estimate's identifiability check (VIF above 1/(1 - 0.99^2))
 DEPENDENT = 1.0 - ee.COLLINEAR_R**2
+# the functions are generated again with the chosen candidates first at most this often
+REGENERATIONS = 10
 
 
 def candidate_terms(variables: Sequence[str], order: int = 3) -> list[str]:
@@ -67,21 +69,77 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
 
     Morelli (1995) sec. 3; Morelli & Klein (2016) sec. 5.5: the candidates, ordered
     from simple to complex (``candidate_terms`` gives every linear term before any
-    square, every square before any cube), are made orthogonal once by Gram-Schmidt in
-    that order, so each function holds only what the simpler candidates before it do not.
-    A cube of a doublet input, whose levels are only +-A and 0, is then left with almost
-    none of its norm after its linear term and never enters: the data cannot tell it from
-    the linear term, and the simpler one is kept. The functions are ranked by their error
-    reduction (p_j' z)^2 / (p_j' p_j), entered in that order (a candidate the estimate
-    could not separate from those in is skipped), and the model of least PSE is kept."""
+    square, every square before any cube), are made orthogonal by Gram-Schmidt in that
+    order, so each function holds only what the candidates before it do not. A
+    candidate left with less than ``DEPENDENT`` of its norm never enters: a cube of a
+    doublet input, whose levels are only +-A and 0, after its linear term. The functions
+    are ranked by their error reduction (p_j' z)^2 / (p_j' p_j), entered in that order (a
+    candidate the estimate could not separate from those in is skipped), and the model
+    of least PSE is kept.
+
+    A chosen function expands into its own candidate and every candidate before it
+    (p_j = xi_j - sum_k gamma_kj p_k): a function of the elevator chosen alone carries
+    the parts of alpha and the pitch rate it was made orthogonal to. So the functions are
+    generated again with the chosen candidates first (in their order of entry) and the
+    others after them in the simple-first order, and the search repeated until the chosen
+    candidates are the first ones of the order (the chosen functions then span exactly
+    the chosen candidates, and the model expands back into them without loss), until a
+    chosen set repeats, or ``REGENERATIONS`` times. Of the searches, the chosen set whose
+    own least-squares fit has the least PSE is kept; the steps give its terms in their
+    order of entry with the R^2 and PSE of the least-squares fit of the terms in so far.
+    Without it, on the Twin Otter card the selection path claimed R^2 0.999 for Cm while
+    its chosen terms fitted 0.63."""
     n, m = x.shape
     z = y - y.mean()
     sst = float(z @ z)
-    sigma2 = sst / n
     q = x - x.mean(axis=0)  # orthogonal to the bias
+    limit = min(m, max_terms or m, n - 2)
+    order = list(range(m))
+    kept: tuple[float, list[int]] | None = None
+    seen: set[frozenset[int]] = set()
+    for _ in range(REGENERATIONS):
+        chosen = _search(z, q, x, order, limit)
+        # the PSE of the least-squares fit of the chosen terms themselves
+        pse = _sse(z, q[:, chosen]) / n + (sst / n) * len(chosen) / n
+        if kept is None or pse < kept[0]:
+            kept = (pse, chosen)
+        if set(chosen) == set(order[:len(chosen)]) or frozenset(chosen) in seen:
+            break  # the chosen functions span the chosen candidates; or a cycle
+        seen.add(frozenset(chosen))
+        order = [*chosen, *(j for j in range(m) if j not in chosen)]
+    assert kept is not None
+    best = kept[1]
+    steps = []
+    for k in range(1, len(best) + 1):
+        r2 = 100.0 * (1.0 - _sse(z, q[:, best[:k]]) / sst) if sst > 0 else 100.0
+        pse = (1.0 - r2 / 100.0) * sst / n + (sst / n) * k / n
+        steps.append({"action": "enter", "term": names[best[k - 1]], "R2": r2, "PSE": pse,
+                      "why": f"largest error reduction of the orthogonal functions left; "
+                             f"R^2 {r2:.3f} %, PSE {pse:.4g}"})
+    steps.append({"action": "select", "term": ", ".join(names[i] for i in best),
+                  "R2": float("nan"), "PSE": kept[0],
+                  "why": f"the model of least PSE ({kept[0]:.4g}): {len(best)} terms"})
+    return best, steps
+
+
+def _sse(z: np.ndarray, x: np.ndarray) -> float:
+    """Residual sum of squares of the least-squares fit of z (mean removed) on x."""
+    if x.shape[1] == 0:
+        return float(z @ z)
+    theta, *_ = np.linalg.lstsq(x, z, rcond=None)
+    r = z - x @ theta
+    return float(r @ r)
+
+
+def _search(z: np.ndarray, q: np.ndarray, x: np.ndarray, order: Sequence[int], limit: int
+            ) -> list[int]:
+    """One orthogonal-function search over the columns of q generated in ``order``: the
+    chosen columns, in their order of entry, up to the least PSE along the path."""
+    n = len(z)
+    sst = float(z @ z)
     functions: list[np.ndarray] = []
     columns: list[int] = []
-    for j in range(m):
+    for j in order:
         p = q[:, j].copy()
         norm0 = float(p @ p)
         for f in functions:
@@ -91,11 +149,9 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
             columns.append(j)
     gains = np.array([(f @ z) ** 2 / (f @ f) for f in functions])
     chosen: list[int] = []
-    steps: list[dict] = []
     sse = sst
     path = [(sse / n, 0)]
-    limit = min(m, max_terms or m, n - 2)
-    for k in np.argsort(-gains):
+    for k in np.argsort(-gains, kind="stable"):
         if len(chosen) >= limit:
             break
         j = columns[int(k)]
@@ -103,18 +159,9 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
             continue
         chosen.append(j)
         sse -= float(gains[k])
-        pse = sse / n + sigma2 * len(chosen) / n
-        path.append((pse, len(chosen)))
-        steps.append({"action": "enter", "term": names[j], "R2": 100.0 * (1 - sse / sst),
-                      "PSE": pse, "why": f"largest error reduction of the orthogonal "
-                                         f"functions left; R^2 {100 * (1 - sse / sst):.3f} %, "
-                                         f"PSE {pse:.4g}"})
-    best_pse, size = min(path, key=lambda item: item[0])
-    best = chosen[:size]
-    steps.append({"action": "select", "term": ", ".join(names[i] for i in best), "R2": float(
-        "nan"), "PSE": best_pse, "why": f"the model of least PSE ({best_pse:.4g}): "
-                                         f"{len(best)} of {len(chosen)} functions entered"})
-    return best, steps
+        path.append((sse / n + (sst / n) * len(chosen) / n, len(chosen)))
+    _, size = min(path, key=lambda item: item[0])
+    return chosen[:size]
 
 
 def _separable(x: np.ndarray, columns: list[int]) -> bool:
@@ -210,6 +257,34 @@ def fit_records(records: Sequence[FlightRecord], model: str = "global",
                  colored=options.colored, max_terms=options.max_terms,
                  consistent_smoothing=options.consistent_smoothing)
         for c, t in structure.items()])
+
+
+def predict(est: Estimate, record: FlightRecord, coefficient: str) -> np.ndarray:
+    """The time history of ``coefficient`` (dimensionless) that a global model
+    (``fit_records`` or ``run``) predicts on another record, from that record's
+    variables with the fit's reference values and smoothing (``equation_error.predict``).
+
+    Parameters
+    ----------
+    est : Estimate
+        A ``mof`` estimate with ``fit['coefficients'][coefficient]``.
+    record : FlightRecord
+        The record predicted (reduced as the training records were).
+    coefficient : str
+        One of the model's coefficients (CL, CD, Cm, CY, Cl, Cn).
+
+    Returns
+    -------
+    numpy.ndarray
+        The predicted coefficient at every sample of ``record``.
+    """
+    fits = est.fit.get("coefficients", {})
+    if coefficient not in fits:
+        raise ValueError(f"the model has no {coefficient} (it has {', '.join(fits)})")
+    names = [n for n in est.names if n.startswith(coefficient + "_")]
+    part = Estimate(est.method, names, [est[n] for n in names],
+                    [est.std_of(n) for n in names], fit=dict(fits[coefficient]))
+    return ee.predict(part, record)
 
 
 # ----------------------------------------------------------------------------- protocol

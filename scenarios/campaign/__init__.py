@@ -24,13 +24,14 @@ import pandas as pd
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign, TestPoint, load_campaign, point_card
 from flightid.scenarios.campaign.curve import model_curve
-from flightid.scenarios.campaign.global_model import fit_global, has_global_model
+from flightid.scenarios.campaign.global_model import fit_global, has_global_model, validate
 from flightid.scenarios.campaign.global_model import summary as global_summary
 from flightid.scenarios.campaign.point import run_point
 from flightid.scenarios.campaign.report import PointScore, point_scores, write_report
 from flightid.scenarios.campaign.update import (
     correction_effects,
     corrections,
+    flown_model,
     held_out_gaps,
     summary,
     write_updated,
@@ -73,7 +74,8 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     write the model aircraft with its tables relocated to the flight points there, fly the
     held-out points and put the gap before and after into OUTPUT/update.json. A method
     that fits several records at once (``mof``) also fits one global model over every
-    point's record (``global_model``), written to OUTPUT/global_model.json."""
+    point's record (``global_model``), written to OUTPUT/global_model.json with its
+    prediction of the held-out points (``global_model.validate``)."""
     campaign = card if isinstance(card, Campaign) else load_campaign(card)
     folder = Path(output)
 
@@ -100,8 +102,9 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
         report = write_report(folder, campaign, df, curve, notes=notes)
         return CampaignResult(folder, campaign, df, curve, point_scores(df), report,
                               global_model=pooled)
-    fitted = corrections(campaign, df)
-    effects = correction_effects(campaign, df, fitted)
+    flown = flown_model(campaign, df)
+    fitted = corrections(campaign, flown)
+    effects = correction_effects(campaign, flown, fitted)
     xml = write_updated(campaign, effects, update_aircraft)
     result = summary(fitted, held_out_gaps(campaign, effects))
     result["aircraft"] = str(xml)
@@ -120,7 +123,9 @@ def _global_model(campaign: Campaign, df: pd.DataFrame, folder: Path) -> dict | 
         return None
     estimated = df["status"] == STATUS_ESTIMATED
     indices = sorted(int(i) for i in df.loc[estimated, "index"].unique())
-    result = global_summary(fit_global(campaign, indices), indices)
+    est = fit_global(campaign, indices)
+    result = global_summary(est, indices)
+    result["held_out"] = validate(campaign, est)
     (folder / GLOBAL).write_text(json.dumps(result, indent=2, default=str) + "\n")
     return result
 
@@ -128,9 +133,16 @@ def _global_model(campaign: Campaign, df: pd.DataFrame, folder: Path) -> dict | 
 def _global_notes(pooled: dict | None) -> list[str]:
     if pooled is None:
         return []
-    return [f"global model over points {', '.join(map(str, pooled['points']))}: "
-            + "; ".join(f"{c} {len(v['terms'])} terms (R^2 {v.get('R2', float('nan')):.3f})"
-                        for c, v in pooled["coefficients"].items())]
+    lines = [f"global model over points {', '.join(map(str, pooled['points']))}: "
+             + "; ".join(f"{c} {len(v['terms'])} terms (R^2 {v.get('R2', float('nan')):.3f})"
+                         for c, v in pooled["coefficients"].items())]
+    held = pooled.get("held_out") or {}
+    if held:
+        lines.append(f"global model predicting the {len(held['points'])} held-out points "
+                     "(nothing refitted): " + "; ".join(
+                         f"{c} R^2 {v['R2']:.3f}, Theil {v['Theil']:.3f}"
+                         for c, v in held["coefficients"].items()))
+    return lines
 
 
 def updated_curve(campaign: Campaign, curve: pd.DataFrame, effects: list) -> pd.DataFrame:

@@ -11,6 +11,9 @@ body axes), so the curve is what the aircraft's tables say between the flight po
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
+import io
 import math
 from typing import Any
 
@@ -19,6 +22,8 @@ import pandas as pd
 
 from flightid.scenarios.campaign.card import Campaign, TestPoint, point_card
 from flightid.scenarios.campaign.point import model_values
+from flightid.scenarios.cards import trim_card
+from flightid.sim.jsbsim.model import quiet
 from flightid.sim.jsbsim.trim import TrimError
 
 STEPS = 3  # conditions per segment between two neighbouring points (the first included)
@@ -79,3 +84,61 @@ def model_curve(campaign: Campaign, alphas: dict[int, float] | None = None,
             rows.append({"condition": k, **cond.as_dict(), "alpha": alpha, "name": name,
                          "model": float(value)})
     return pd.DataFrame(rows, columns=list(CURVE_COLUMNS))
+
+
+# the secant search for the speed whose trim alpha is a given alpha: at most this many
+# trims, stopped within this many rad
+ALPHA_TRIMS = 6
+ALPHA_TOLERANCE = 1e-5
+
+
+def model_at(campaign: Campaign, point: TestPoint, x: float) -> dict[str, float]:
+    """The model aircraft's derivatives (body axes; ``sim.jsbsim.truth.derivatives``) on
+    the campaign's path at the point where the campaign's x takes the value ``x``: the
+    point's condition with its airspeed set to ``x`` (m/s) when x is speed; with the
+    airspeed at which the model trims at alpha ``x`` (rad) when x is alpha (secant on the
+    trim alpha against airspeed); and the point itself for any other x.
+
+    The curve the database update relocates is the model trimmed along the path
+    (``model_curve``); an estimate stands for its flown condition
+    (``point.flown_condition``), so the model's value it is compared with is the curve's
+    there, not at the trim.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its x and flight card).
+    point : TestPoint
+        The test point the estimate belongs to.
+    x : float
+        The value of the campaign's x (m/s for speed, rad for alpha).
+
+    Returns
+    -------
+    dict
+        {derivative: value}, per rad and per unit nondimensional rate. Raises
+        ``TrimError`` where the model cannot be trimmed.
+    """
+    if campaign.x == "speed":
+        return model_values(point_card(campaign, dataclasses.replace(point, speed=float(x)),
+                                       with_effects=False))[1]
+    if campaign.x != "alpha":
+        return model_values(point_card(campaign, point, with_effects=False))[1]
+    speeds = [point.speed, point.speed * 1.02]
+    alphas = [_trim_alpha(campaign, point, v) for v in speeds]
+    for _ in range(ALPHA_TRIMS):
+        if abs(alphas[-1] - x) < ALPHA_TOLERANCE or alphas[-1] == alphas[-2]:
+            break
+        v = speeds[-1] + (x - alphas[-1]) * (speeds[-1] - speeds[-2]) / (alphas[-1]
+                                                                          - alphas[-2])
+        speeds.append(float(v))
+        alphas.append(_trim_alpha(campaign, point, v))
+    return model_values(point_card(campaign, dataclasses.replace(point, speed=speeds[-1]),
+                                   with_effects=False))[1]
+
+
+def _trim_alpha(campaign: Campaign, point: TestPoint, speed: float) -> float:
+    card = point_card(campaign, dataclasses.replace(point, speed=float(speed)),
+                      with_effects=False)
+    with quiet(), contextlib.redirect_stdout(io.StringIO()):
+        return float(trim_card(card)[1].alpha)

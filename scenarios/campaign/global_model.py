@@ -13,12 +13,19 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+import numpy as np
+
+from flightid.identification.engine.metrics import r_squared, theil_inequality
 from flightid.identification.estimate import Estimate
+from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods import mof, registry
 from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign
-from flightid.scenarios.campaign.point import fly_point
+from flightid.scenarios.campaign.point import fly_held_out, fly_point
 
+# their prediction of one coefficient on another record: (model, record, coefficient)
+POOLED_PREDICT: dict[str, Callable[[Estimate, FlightRecord, str], np.ndarray]] = {
+    mof.ID: mof.predict}
 # the methods with a fit over several records: (records, model, options) -> one Estimate
 POOLED: dict[str, Callable[[Sequence[FlightRecord], str, Any], Estimate]] = {
     mof.ID: mof.fit_records}
@@ -68,3 +75,44 @@ def summary(est: Estimate, indices: Sequence[int]) -> dict[str, Any]:
                                  **{k: v for k, v in fit.items()
                                     if k in ("R2", "PSE", "N")}}
                              for c, fit in coefficients.items()}}
+
+
+def validate(campaign: Campaign, est: Estimate) -> dict[str, Any]:
+    """The global model's prediction of the held-out points' coefficients
+    (``[[held_out]]``, flown and reduced as for the database update: ``point.fly_held_out``).
+
+    Model validation by prediction on maneuvers the fit never saw (Morelli & Klein 2016,
+    model validation): the model is fixed, nothing is refitted, not even the bias (a
+    global model holds the levels across the envelope). Per coefficient, R^2 and the Theil
+    inequality coefficient of the measured against the predicted time history, pooled over
+    the held-out points and per point.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign whose global model ``est`` is (``fit_global``).
+    est : Estimate
+        The global model.
+
+    Returns
+    -------
+    dict
+        ``points``: the held-out conditions (altitude m, speed m/s); ``coefficients``:
+        {C: {"R2", "Theil", "per_point": [{"R2", "Theil"}, ...]}}; empty without held-out
+        points.
+    """
+    if not campaign.held_out:
+        return {}
+    predict = POOLED_PREDICT[campaign.method]
+    records = [fly_held_out(campaign, i)[1] for i in range(len(campaign.held_out))]
+    out: dict[str, Any] = {
+        "points": [{"altitude": p.altitude, "speed": p.speed} for p in campaign.held_out],
+        "coefficients": {}}
+    for c in est.fit.get("coefficients", {}):
+        pairs = [(ee.channel_values(r, c), predict(est, r, c)) for r in records]
+        y, m = (np.concatenate(v) for v in zip(*pairs, strict=True))
+        out["coefficients"][c] = {
+            "R2": float(r_squared(y, m)), "Theil": float(theil_inequality(y, m)),
+            "per_point": [{"R2": float(r_squared(a, b)), "Theil": float(theil_inequality(a, b))}
+                          for a, b in pairs]}
+    return out

@@ -64,6 +64,22 @@ def fly_point(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, Fligh
     return card, reduce_record(measured).record, truth_record
 
 
+def held_out_seed(campaign: Campaign, index: int) -> int:
+    """The seed of held-out point ``index`` (independent of the test points)."""
+    return sub_seed(campaign.seed, f"held_out:{int(index)}")
+
+
+def fly_held_out(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, FlightRecord]:
+    """Held-out point ``index`` (``[[held_out]]``) flown with the flown aircraft (the
+    campaign's effects included) and its own seed: (its flight card, the measured record
+    after the standard data reduction, the truth record), as ``fly_point`` flies a test
+    point."""
+    card = point_card(campaign, campaign.held_out[int(index)])
+    with quiet(), contextlib.redirect_stdout(io.StringIO()):
+        measured, truth_record = fly_card(card, held_out_seed(campaign, index))
+    return card, reduce_record(measured).record, truth_record
+
+
 def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[str, Any]]:
     seed = point_seed(campaign, index)
     base: dict[str, Any] = {"index": int(index), "seed": int(seed), **point.as_dict(),
@@ -154,4 +170,5 @@ def _failure(base: dict[str, Any], reason: str) -> dict[str, Any]:
     return row
 
 
-__all__ = ["fly_point", "model_start", "model_values", "point_seed", "run_point"]
+__all__ = ["fly_held_out", "fly_point", "held_out_seed", "model_start", "model_values",
+           "point_seed", "run_point"]

@@ -35,7 +35,6 @@ import numpy as np
 import pandas as pd
 
 from flightid.identification.data.axes import AXIS_INPUTS
-from flightid.identification.data.reduction import reduce_record
 from flightid.identification.effect_fit import CACHE
 from flightid.identification.envelope_fit import Correction, fit_correction
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
@@ -45,8 +44,9 @@ from flightid.identification.gap.model.linearise import AXIS_OUTPUTS, start_cond
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign, point_card
-from flightid.scenarios.campaign.point import model_values
-from flightid.scenarios.cards import augmented, card_from_dict, fly_card, sub_seed
+from flightid.scenarios.campaign.curve import model_at
+from flightid.scenarios.campaign.point import fly_held_out, model_values
+from flightid.scenarios.cards import augmented, card_from_dict
 from flightid.sim.augment import augment, augment_cached
 from flightid.sim.effects.airframe import (
     DERIVATIVES,
@@ -55,7 +55,7 @@ from flightid.sim.effects.airframe import (
     DerivativeTable,
 )
 from flightid.sim.jsbsim.model import load, quiet
-from flightid.sim.jsbsim.trim import trim
+from flightid.sim.jsbsim.trim import TrimError, trim
 
 SCHEDULES = {"speed": "airspeed", "alpha": "alpha"}
 # the condition each estimate stands for (point.flown_condition), by the campaign's x
@@ -68,16 +68,56 @@ def _x(campaign: Campaign, rows: pd.DataFrame) -> np.ndarray:
     return rows[column if column in rows else campaign.x].to_numpy()
 
 
+def flown_model(campaign: Campaign, df: pd.DataFrame) -> pd.DataFrame:
+    """The estimated rows of ``df`` with ``model_flown``: the model's value on the
+    campaign's path at each estimate's x (``_x``: its flown condition,
+    ``point.flown_condition``), from the JSBSim tables (``curve.model_at``; one trim per
+    point and distinct flown x). Where the estimate has no flown condition, or the model
+    cannot be trimmed there, the model's value at the trim (``model``).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign whose estimates ``df`` are.
+    df : pandas.DataFrame
+        The campaign's estimates (``estimates.parquet``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows with status 'estimated', with the column ``model_flown``.
+    """
+    est = df[df["status"] == STATUS_ESTIMATED].copy()
+    x = _x(campaign, est)
+    values = est["model"].to_numpy(dtype=float).copy()
+    if campaign.x in FLOWN:
+        cache: dict[tuple[int, float], dict[str, float]] = {}
+        for k, (index, name) in enumerate(zip(est["index"], est["name"], strict=True)):
+            if not np.isfinite(x[k]):
+                continue
+            key = (int(index), float(x[k]))
+            if key not in cache:
+                try:
+                    cache[key] = model_at(campaign, campaign.points[key[0]], key[1])
+                except TrimError:
+                    cache[key] = {}
+            values[k] = cache[key].get(str(name), values[k])
+    est["model_flown"] = values
+    return est
+
+
 def corrections(campaign: Campaign, df: pd.DataFrame) -> list[Correction]:
-    """Per estimated derivative, its model curve relocated to the flight points."""
-    est = df[df["status"] == STATUS_ESTIMATED]
+    """Per estimated derivative, its model curve relocated to the flight points: each
+    estimate against the model's value at its flown condition (``flown_model``)."""
+    est = df if "model_flown" in df else flown_model(campaign, df)
+    est = est[est["status"] == STATUS_ESTIMATED]
     out = []
     for name, rows in est.groupby("name", sort=True):
         trend = campaign.x in SCHEDULES and not (
             campaign.x == "alpha" and str(name).endswith(("_alpha", "_alphadot")))
         out.append(fit_correction(str(name), _x(campaign, rows),
                                   rows["estimate"].to_numpy(), rows["std"].to_numpy(),
-                                  rows["model"].to_numpy(), trend=trend))
+                                  rows["model_flown"].to_numpy(), trend=trend))
     return out
 
 
@@ -85,13 +125,14 @@ def correction_effects(campaign: Campaign, df: pd.DataFrame, fitted: list[Correc
                        ) -> list[AugmentEffect]:
     """The catalogue effects that write the kept corrections into the model aircraft."""
     effects: list[AugmentEffect] = []
-    est = df[df["status"] == STATUS_ESTIMATED]
+    est = df if "model_flown" in df else flown_model(campaign, df)
+    est = est[est["status"] == STATUS_ESTIMATED]
     for c in fitted:
         if c.form == "none" or c.name not in DERIVATIVES:
             continue
         rows = est[est["name"] == c.name]
         order = np.argsort(_x(campaign, rows))
-        x, m = _x(campaign, rows)[order], rows["model"].to_numpy()[order]
+        x, m = _x(campaign, rows)[order], rows["model_flown"].to_numpy()[order]
         if c.form == "shift" or campaign.x not in SCHEDULES or np.ptp(x) == 0:
             delta = float(np.mean(c.delta(x, m)))
             effects.append(DerivativeDelta(delta=delta, derivative=c.name, axes="body"))
@@ -143,10 +184,8 @@ def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[Held
     out = []
     for i, p in enumerate(campaign.held_out):
         gap = HeldOutGap(i, p.altitude, p.speed)
+        _, record, _ = fly_held_out(campaign, i)
         with quiet(), contextlib.redirect_stdout(io.StringIO()):
-            measured, _ = fly_card(point_card(campaign, p), sub_seed(campaign.seed,
-                                                                       f"held_out:{i}"))
-            record = reduce_record(measured).record
             model = point_card(campaign, p, with_effects=False)
             data = dict(model.data)
             data["effect"] = [*data.get("effect", []), *(e.to_dict() for e in effects)]
