@@ -27,7 +27,7 @@ flow angle (``FLOW_ANGLES``: it follows the gusts) is not checked on such a span
 Telemaster's 2 s sideslip segment put null flights at 4.2 sigma with n_eff, at 5.7 sigma
 and 3 deg with one sample).
 
-A difference is named when |d| > ``Z`` sigma (two-sided p = ``verdict.ALPHA``) and
+A difference is named when |d| > ``Z`` sigma (two-sided p = 1e-3) and
 |d| >= ``MATERIAL``, as its equivalence class (``CHECKED``: the offset and the model's
 zero term are one constant to a record at one condition), with its value in catalogue
 units (rad: ``bias.value`` = measured minus true; ``actuator_bias.bias`` = aerodynamic
@@ -51,7 +51,7 @@ from flightid.record import FlightRecord
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import Trim, TrimError, trim
 
-Z = 3.29  # two-sided p = 1e-3 (verdict.ALPHA) under a normal difference
+Z = 3.29  # two-sided p = 1e-3 under a normal difference
 # rad: the largest null offset of the seed-0 development flights was 0.115 deg (a c172p
 # aileron at 3.4 sigma); the blind check draws biases of 0.25 deg and more
 MATERIAL = math.radians(0.15)

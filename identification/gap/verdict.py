@@ -18,12 +18,19 @@ input-driven regressors:
   alarm, p ~ 1e-7 to 1e-11, and added no detection.)
 
 All regressors are functions of the measured inputs only, so under the null (open-loop
-inputs) they are uncorrelated with the turbulence response and the noise. The least-squares
-coefficients theta = M^-1 X^T v (M = X^T X) are tested with the Wald statistic
-W = theta^T C^-1 theta, chi-square with k degrees of freedom, where C is their covariance
-corrected for the colored residual (Morelli & Klein 2016 eq. 6.54 with the leverage
-correction of ``engine.bounds``): turbulence makes the residual colored, and a test that
-assumed it white would call every gusty day a model error.
+inputs) they are uncorrelated with the turbulence response and the noise. Beside them,
+and not tested, the **other outputs' residuals** of the axis and ``PARTIAL_LAGUERRE``
+Laguerre filters of each (``other_outputs``): one gust drives every output of an axis, so
+the other residuals explain most of this one's turbulence response, and under the null
+they too are independent of the inputs, so the input regressors' coefficients stay
+zero-mean (a partial regression, the instrument of Granger-type tests; the innovations of
+a Kalman predictor whiten the same turbulence with a model of it, Ljung 1999 sec. 16.6).
+The least-squares coefficients of the input regressors, theta (of the joint fit), are
+tested with the Wald statistic W = theta^T C^-1 theta, chi-square with k degrees of
+freedom, where C is their covariance corrected for the colored residual (Morelli & Klein
+2016 eq. 6.54 with the leverage correction of ``engine.bounds``): turbulence makes the
+residual colored, and a test that assumed it white would call every gusty day a model
+error.
 
 The chi-square null is itself only approximate: C is estimated from the same few 10 s
 windows as the residual, and on the blind check's null flights in light turbulence the
@@ -34,16 +41,18 @@ surrogates, each window's regressors circularly shifted against its residual by 
 ``SURROGATE_SHIFT_S`` (surrogate data, Theiler et al. 1992: the shift keeps the residual's
 and the regressors' autocorrelations and destroys any relation between them), and p is
 read from the scaled chi-square c chi2(nu) with the surrogates' mean and variance
-(Satterthwaite 1946), so that ``ALPHA`` = 1e-3 is resolved by 100 surrogates; never below
+(Satterthwaite 1946), so that a p of ``ALPHA`` is resolved by 100 surrogates; never below
 the chi-square p. The high band's test is calibrated the same way.
 
 Significance alone is not a gap: the linearised model of the exact JSBSim aircraft leaves a
 small, input-correlated misfit that a long calm record makes significant (p ~ 1e-10 at an
-energy share of 1e-4 on the telemaster), and in turbulence the chi-square form is only
-approximate (the colored covariance is itself estimated from the record). A gap is
-therefore significant (p below ``ALPHA`` on a channel) *and* material: the input-explained
-energy, less what the regression explains by chance (trace(M C)), is at least
-``MATERIAL`` of the channel's measured energy. The null level thus counts the
+energy share of 1e-4 on the telemaster), and that the turbulence taken out by the other
+outputs makes significant in turbulence too (p down to 1e-50 at shares of 0.002-0.013 on
+the blind check's null flights). A gap is therefore significant (p below ``ALPHA`` on a
+channel) *and* material: the input-explained energy, less what the regression explains by
+chance (trace(M C)), is at least ``MATERIAL`` of the channel's measured energy. The share
+without the other outputs (``ChannelTest.level``) is the gap above the null level that
+confirmation is judged against (``NullTest.above``), as before. The null level thus counts the
 linearisation misfit of the exact model. (Taking the misfit off instead, as what the
 linearised model leaves on the exact aircraft re-flown with the record's surfaces, moved
 the light-turbulence null flights' shares by less than 0.01, and made two of six calm
@@ -80,11 +89,19 @@ from flightid.record import FlightRecord
 NO_GAP, EXPLAINED, PARTLY, UNEXPLAINED = ("no_gap", "explained", "partly_unexplained",
                                          "unexplained")
 VERDICTS = (NO_GAP, EXPLAINED, PARTLY, UNEXPLAINED)  # in order of severity
-ALPHA = 1e-3  # per channel; five channels an axis: about 0.5 % family-wise (Bonferroni)
-# input-explained share (chance removed) of a channel's measured energy that is material:
-# above the development null flights' significant ones (1e-4 in calm air; 0.0034 in light
-# turbulence), below the effects' (0.014-0.11 in light turbulence; docs/gap.md)
-MATERIAL = 0.005
+# the main (partial) test's levels (the rules for the seed-7 run, docs/gap_benchmark.md):
+# per channel, four channels an axis at most. With the other outputs' residuals as
+# nuisance regressors the test sees the exact linearised model's own input-correlated
+# misfit on a long turbulent record (p 1e-5 to 1e-50 at shares of 0.002-0.013, most of
+# them Telemaster yaw rate), so the share decides: MATERIAL sits above most of that misfit
+# and below the effects'. Measured on the blind check's null flights (light turbulence,
+# seeds 0-5, 568 flights): 6 false alarms of the main test at these levels, 17 at ALPHA
+# 1e-3 with phi tested, 13 at MATERIAL 0.015, 4 at 0.03 (the seed-6 rules: 27 with the
+# high band); the development cases: docs/gap_benchmark.md
+ALPHA = 1e-4
+# the main test's input-explained share (chance removed) of a channel's measured energy
+# that is material (the partial test's: the coefficients of the input regressors only)
+MATERIAL = 0.02
 # the high band (a structural mode, a fast sensor or actuator effect): fast Laguerre
 # filters of the inputs, tested on their own against the channel's energy above HIGH_HZ
 FAST_LAGUERRE, FAST_TAU_S = 4, 0.08
@@ -92,6 +109,14 @@ HIGH_HZ = 1.0
 HIGH_ALPHA = 1e-6  # stricter: a turbulent record's high band is where gusts and noise live
 HIGH_MATERIAL = 0.05  # input-explained share of the measured energy above HIGH_HZ
 LAGUERRE = 4  # Laguerre filters per input
+# the main test's nuisance regressors (``other_outputs``): each other output's high-passed
+# residual and this many Laguerre filters of it (time constant LAGUERRE_TAU_S). Turbulence
+# drives every output of an axis at once; under the null the other outputs' residuals are
+# independent of the inputs as this one's is, so fitting them beside the input regressors
+# keeps the test's null and takes most of the turbulence response out of its noise: on the
+# blind check's development flights the chance term of the share fell from 0.02-0.2 to
+# 0.001-0.01 (docs/gap_benchmark.md, the rules for the seed-7 run)
+PARTIAL_LAGUERRE = 2
 # the main test's null calibrated per record (the rules for the seed-6 run): where the
 # chi-square p says a channel is a gap, W is recomputed on SURROGATES surrogates, each
 # window's regressors circularly shifted against its residual by at least
@@ -112,15 +137,18 @@ LAGUERRE_TAU_S = 0.7  # their time constant (s): the band of the short period an
 # correlates by chance with the slow regressors; the maneuvers' 0.6-3 rad/s are kept
 # (docs/gap_benchmark.md, the rules for the seed-3 run)
 HIGHPASS_RAD_S = 0.6
-# longitudinal outputs left out of the main test (the high band still tests them): the
-# pitch attitude integrates q (its residual is the integral of q's, dominated by the slow
-# turbulence response) and the airspeed is the phugoid's; a longitudinal model error shows
-# in q, alpha and az, which are tested. Measured on seed 0 of the blind check (100 null and
-# 36 single cases, light turbulence, high-passed): 8 null cases of 100 were false alarms
-# with them, 3 without; the singles seen went from 9 to 7, the two lost biases, which the
-# test cannot see (means removed): chance (docs/gap_benchmark.md). The bank angle stays:
-# a Navion Cn_beta delta of 30 % in light turbulence is seen on phi only (p 1.6e-8)
-SLOW_CHANNELS = ("V", "theta")
+# outputs left out of the main test (the high band still tests them, and their residuals
+# are nuisance regressors of the others): the attitudes integrate the rates (the residual
+# of theta, phi is the integral of q's, p's, dominated by the slow turbulence response)
+# and the airspeed is the phugoid's; a model error shows in the tested rates, flow angles
+# and accelerations. V and theta since the seed-3 rules (seed 0: 8 null false alarms of 100
+# with them, 3 without); phi since the seed-7 rules: with the other outputs as nuisance,
+# 5 of the 11 null false alarms of seeds 0-5 at ALPHA 1e-4 were on phi (Telemaster), and
+# no development case was seen on phi alone (docs/gap_benchmark.md)
+SLOW_CHANNELS = ("V", "theta", "phi")
+# channels left out of the gap above the null level (``NullTest.above``, what confirmation
+# and pairs are judged against): V and theta, as since the seed-3 rules (phi stays in it)
+UNLEVELLED = ("V", "theta")
 
 
 @dataclass
@@ -137,6 +165,9 @@ class ChannelTest:
     slow: bool = False  # in ``SLOW_CHANNELS``: only the high band tested
     # the chi-square p where ``p_value`` was calibrated on surrogates (``calibrated_p``)
     chi2_p: float = math.nan
+    # the gap above the null level: the input-explained share less chance of the residual
+    # regressed on the regressors alone (no other outputs' residuals), / measured energy
+    level: float = 0.0
 
     @property
     def gap(self) -> bool:
@@ -147,7 +178,8 @@ class ChannelTest:
 
     def to_json(self) -> dict:
         out = {"statistic": self.statistic, "dof": self.dof, "p_value": self.p_value,
-               "chi2_p_value": self.chi2_p, "share": self.share, "gap": self.gap}
+               "chi2_p_value": self.chi2_p, "share": self.share, "above_null": self.level,
+               "gap": self.gap}
         if self.slow:
             out["main_test"] = "not run: a slow channel (high band only)"
         if self.high is not None:
@@ -169,9 +201,11 @@ class NullTest:
         return any(c.gap for c in self.channels.values())
 
     def above(self) -> dict[str, float]:
-        """Per channel of the main test: the input-explained share less chance (>= 0): the
-        gap above the null level of noise and turbulence (slow channels left out)."""
-        return {c: max(t.share, 0.0) for c, t in self.channels.items() if not t.slow}
+        """Per channel of the main test: the input-explained share less chance (>= 0) of the
+        residual on the input-driven regressors alone (``ChannelTest.level``): the gap
+        above the null level of noise and turbulence (``UNLEVELLED`` channels left out)."""
+        return {c: max(t.level, 0.0) for c, t in self.channels.items()
+                if math.isfinite(t.level)}
 
     def gap_channels(self) -> list[str]:
         return [c for c, t in self.channels.items() if t.gap]
@@ -212,28 +246,31 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
     return x - x.mean(axis=0)
 
 
-def channel_test(residual: np.ndarray, x: np.ndarray, spread: float,
-                 channel: str) -> ChannelTest:
+def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: str,
+                 nuisance: np.ndarray | None = None) -> ChannelTest:
     """The Wald test of ``residual`` (N,) on the regressors ``x`` (N, k), p from chi-square
-    with k degrees of freedom; ``spread``: the channel's measured energy (means removed)."""
+    with k degrees of freedom; ``spread``: the channel's measured energy (means removed).
+    ``nuisance`` (N, m): regressors fitted beside ``x`` and not tested (the other outputs'
+    residuals, ``PARTIAL_LAGUERRE``): only the coefficients of ``x`` enter W and the share."""
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
-    scale = np.sqrt(np.sum(x * x, axis=0))
-    keep = scale > 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)
-    x = x[:, keep] / scale[keep]
-    x = _independent(x)
+    x = _independent(_unit(x))
     k = x.shape[1]
     if k == 0 or spread <= 0:
         return ChannelTest(channel, 0.0, 0, 1.0, 0.0)
-    m = x.T @ x
-    theta = np.linalg.solve(m, x.T @ v)
-    cov = colored_residual_covariance(x[:, None, :], (v - x @ theta)[:, None], np.eye(1), m)
+    full = x if nuisance is None else _independent(np.hstack([x, _unit(nuisance)]), first=k)
+    m = full.T @ full
+    theta_all = np.linalg.solve(m, full.T @ v)
+    cov_all = colored_residual_covariance(full[:, None, :], (v - full @ theta_all)[:, None],
+                                          np.eye(1), m)
+    theta, cov = theta_all[:k], cov_all[:k, :k]
     try:
         w = float(theta @ np.linalg.solve(cov, theta))
     except np.linalg.LinAlgError:
         w = float(theta @ np.linalg.pinv(cov) @ theta)
-    explained = float(theta @ m @ theta)
-    chance = float(np.trace(m @ cov))
+    mx = x.T @ x
+    explained = float(theta @ mx @ theta)
+    chance = float(np.trace(mx @ cov))
     return ChannelTest(channel, w, k, float(stats.chi2.sf(w, k)),
                        (explained - chance) / spread, explained / spread)
 
@@ -252,18 +289,19 @@ def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURR
 
 
 def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.ndarray],
-                 shifts: np.ndarray, spread: float) -> float:
+                 shifts: np.ndarray, spread: float, nuisance: np.ndarray | None = None) -> float:
     """The p-value of ``test`` (the Wald test of ``residual`` on the stacked ``blocks``,
     one per window) against its surrogates: ``W`` recomputed with each window's
     regressors circularly shifted by ``shifts`` (Theiler et al. 1992; a shift keeps the
     residual's and the regressors' autocorrelations and destroys any relation between
     them), and judged against c chi2(nu) with the surrogates' mean and variance
     (Satterthwaite 1946: c = var / (2 mean), nu = 2 mean^2 / var), so that a p of
-    ``ALPHA`` is resolved by a hundred surrogates. Never below the chi-square p."""
+    ``ALPHA`` is resolved by a hundred surrogates. Never below the chi-square p.
+    ``nuisance``: as in ``channel_test``, kept aligned with the residual (not shifted)."""
     ws = np.array([channel_test(residual, np.vstack([np.roll(x, int(s), axis=0)
                                                      for x, s in zip(blocks, row,
                                                                      strict=True)]),
-                                spread, test.channel).statistic for row in shifts])
+                                spread, test.channel, nuisance).statistic for row in shifts])
     mean, var = float(np.mean(ws)), float(np.var(ws, ddof=1))
     if not (mean > 0 and var > 0):
         return test.p_value
@@ -271,12 +309,33 @@ def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.nd
     return max(test.p_value, float(stats.chi2.sf(test.statistic / c, nu)))
 
 
-def _independent(x: np.ndarray) -> np.ndarray:
-    """The columns of ``x`` that are linearly independent (rank-revealing QR)."""
+def _unit(x: np.ndarray) -> np.ndarray:
+    """The columns of ``x`` scaled to unit norm, those that are (numerically) zero dropped."""
+    scale = np.sqrt(np.sum(x * x, axis=0))
+    keep = scale > 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)
+    return x[:, keep] / scale[keep]
+
+
+def _independent(x: np.ndarray, first: int = 0) -> np.ndarray:
+    """The columns of ``x`` that are linearly independent (rank-revealing QR), in their
+    order; the ``first`` columns (independent themselves) always kept."""
+    if first:
+        q, _ = np.linalg.qr(x[:, :first])
+        tail = x[:, first:]
+        rest = tail - q @ (q.T @ tail)  # what the first columns do not span
+        live = np.sqrt(np.sum(rest**2, axis=0)) > 1e-6 * np.sqrt(np.sum(tail**2, axis=0))
+        tail, rest = tail[:, live], rest[:, live]
+        return np.hstack([x[:, :first], tail[:, _independent_index(rest)]]) if rest.size \
+            else x[:, :first]
+    return x[:, _independent_index(x)]
+
+
+def _independent_index(x: np.ndarray) -> np.ndarray:
+    """Indices of the linearly independent columns of ``x`` (rank-revealing QR), sorted."""
     _, r, piv = linalg.qr(x, mode="economic", pivoting=True)
     d = np.abs(np.diag(r))
     rank = int(np.sum(d > 1e-8 * d[0])) if d.size else 0
-    return x[:, np.sort(piv[:rank])]
+    return np.sort(piv[:rank])
 
 
 def highpass(x: np.ndarray, dt: float, corner: float = HIGHPASS_RAD_S) -> np.ndarray:
@@ -311,6 +370,27 @@ def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str])
     return x - x.mean(axis=0)
 
 
+def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
+                  dts: Sequence[float]) -> np.ndarray | None:
+    """(N, m) the main test's nuisance regressors of ``channel``: every other output's
+    high-passed residual (``high_passed``: {channel: one array per window}) and
+    ``PARTIAL_LAGUERRE`` Laguerre filters of it, window by window; None when
+    ``PARTIAL_LAGUERRE`` is negative (no nuisance)."""
+    if PARTIAL_LAGUERRE < 0:
+        return None
+    blocks = []
+    for j, dt in enumerate(dts):
+        cols: list[np.ndarray] = []
+        for other, vs in high_passed.items():
+            if other != channel and np.all(np.isfinite(vs[j])):
+                cols += [vs[j], *laguerre(vs[j], dt, PARTIAL_LAGUERRE)]
+        if not cols:
+            return None
+        z = np.column_stack(cols)
+        blocks.append(z - z.mean(axis=0))
+    return np.vstack(blocks)
+
+
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
               inputs: Sequence[str]) -> NullTest:
     """Each output's input-correlation test over the windows ``fits`` ({label: fit of the
@@ -323,31 +403,39 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
     xs = [highpass(regressors(fits[k], records[k], inputs), dts[k]) for k in labels]
     xh = [fast_regressors(fits[k], records[k], inputs) for k in labels]
     shifts = surrogate_shifts([x.shape[0] for x in xs], [dts[k] for k in labels])
-    # (test, residual, regressor blocks, energy, its alpha) of each chi-square gap
-    flagged: list[tuple[ChannelTest, np.ndarray, list[np.ndarray], float, float]] = []
-    for ch in fits[labels[0]].residual:
-        raw = [fits[k].residual[ch] - np.mean(fits[k].residual[ch]) for k in labels]
-        vs = [highpass(v, dts[k]) for k, v in zip(labels, raw, strict=True)]
+    raws = {ch: [fits[k].residual[ch] - np.mean(fits[k].residual[ch]) for k in labels]
+            for ch in fits[labels[0]].residual}
+    high_passed = {ch: [highpass(v, dts[k]) for k, v in zip(labels, raw, strict=True)]
+                   for ch, raw in raws.items()}
+    # (test, residual, regressor blocks, energy, its alpha, nuisance) of each chi-square gap
+    flagged: list[tuple[ChannelTest, np.ndarray, list[np.ndarray], float, float,
+                        np.ndarray | None]] = []
+    for ch, raw in raws.items():
         spread = sum(float(np.sum((fits[k].measured[ch] - np.mean(fits[k].measured[ch])) ** 2))
                      for k in labels)
-        v = np.concatenate(vs)
+        v = np.concatenate(high_passed[ch])
         if not np.all(np.isfinite(v)):
             continue
         if ch in SLOW_CHANNELS:
-            test = ChannelTest(ch, 0.0, 0, 1.0, 0.0, slow=True)
+            test = ChannelTest(ch, 0.0, 0, 1.0, 0.0, slow=True, level=math.nan)
+            if ch not in UNLEVELLED:
+                test.level = channel_test(v, np.vstack(xs), spread, ch).share
         else:
-            test = channel_test(v, np.vstack(xs), spread, ch)
+            z = other_outputs(high_passed, ch, [dts[k] for k in labels])
+            test = channel_test(v, np.vstack(xs), spread, ch, z)
+            test.level = channel_test(v, np.vstack(xs), spread, ch).share if z is not None \
+                else test.share
             if test.p_value < ALPHA and test.share >= MATERIAL:  # a gap by chi-square
-                flagged.append((test, v, xs, spread, ALPHA))
+                flagged.append((test, v, xs, spread, ALPHA, z))
         high = sum(band_energy(fits[k].measured[ch], dts[k], HIGH_HZ) for k in labels)
         test.high = channel_test(np.concatenate(raw), np.vstack(xh), high, ch)
         if test.high.p_value < HIGH_ALPHA and test.high.explained >= HIGH_MATERIAL:
-            flagged.append((test.high, np.concatenate(raw), xh, high, HIGH_ALPHA))
+            flagged.append((test.high, np.concatenate(raw), xh, high, HIGH_ALPHA, None))
         out.channels[ch] = test
     # the chi-square gaps calibrated, the strongest first, until one stands: the axis is
     # then a gap whatever the others give, and they keep their chi-square p (chi2_p nan)
-    for t, v, blocks, spread, alpha in sorted(flagged, key=lambda f: f[0].p_value / f[4]):
-        t.chi2_p, t.p_value = t.p_value, calibrated_p(t, v, blocks, shifts, spread)
+    for t, v, blocks, spread, alpha, z in sorted(flagged, key=lambda f: f[0].p_value / f[4]):
+        t.chi2_p, t.p_value = t.p_value, calibrated_p(t, v, blocks, shifts, spread, z)
         if t.p_value < alpha:
             break
     return out
