@@ -8,11 +8,15 @@ compared on the same flights (docs/gap_benchmark.md, the rules for the seed-6 ru
     .venv/bin/python benchmarks/gap_window_calibration.py surrogates -o study/calibration
     .venv/bin/python benchmarks/gap_window_calibration.py variants -o study/calibration
 
+    .venv/bin/python benchmarks/gap_window_calibration.py rules -o study/calibration
+
 ``fly`` stores one pickle per case (the axis's window fits and input channels);
 ``surrogates`` adds one line per case and axis to ``surrogates.jsonl`` (each channel's
 tests, and the statistic on 100 surrogates where the chi-square p is below 0.01, 1e-4 in
 the high band); ``variants`` prints, per seed and category, the cases with a gap on an
-axis (null cases) or on the effect's axis (drawn cases) under each variant of the test.
+axis (null cases) or on the effect's axis (drawn cases) under each variant of the test
+(the seed-6 rules' development); ``rules`` the same under the present ``verdict.null_test``
+(the seed-7 rules' development: docs/gap_benchmark.md).
 """
 
 from __future__ import annotations
@@ -154,7 +158,7 @@ def tests(out: Path):
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=("fly", "surrogates", "variants"))
+    ap.add_argument("what", choices=("fly", "surrogates", "variants", "rules"))
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--nulls", type=int, default=100)
     ap.add_argument("--n", type=int, default=150)
@@ -164,6 +168,9 @@ def main() -> None:
     with threadpool_limits(1):
         if a.what == "fly":
             fly(a.seed, a.nulls, set(a.kinds.split(",")), a.n, a.output)
+            return
+        if a.what == "rules":
+            present_rules(a.output)
             return
         if a.what == "surrogates":
             done = a.output / "surrogates.jsonl"
@@ -188,6 +195,26 @@ def main() -> None:
             print(name, counts(rows, v))
 
 
+
+
+def present_rules(out: Path) -> None:
+    """Per seed and category: the stored cases with a gap (null: any axis; drawn: the
+    effect's axis) under the present ``verdict.null_test``, and the null cases' channels."""
+    seen: dict[str, list[int]] = {}
+    for name, d in tests(out):
+        case = d["case"]
+        tested = {a: verdict.null_test(*fits) for a, fits in d["axes"].items()}
+        want = {e["axis"] for e in case["effects"]}
+        axes = set(tested) if case["category"] == "null" or "both" in want \
+            else want & set(tested)
+        gap = any(tested[a].gap for a in axes)
+        key = f"{name.split('_')[0]} {case['category']}"
+        seen.setdefault(key, [0, 0])
+        seen[key][0] += int(gap)
+        seen[key][1] += 1
+        if gap and case["category"] == "null":
+            print(name, case["aircraft"], {a: t.gap_channels() for a, t in tested.items()})
+    print({k: f"{g} of {n}" for k, (g, n) in sorted(seen.items())})
 
 
 def surrogate_rows(fits, chans, inputs, b: int = 100, min_shift_s: float = 1.5, seed: int = 0,
