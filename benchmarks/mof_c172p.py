@@ -7,7 +7,8 @@ surfaces and the thrust coefficient) on three flights at 1000 m, pooled: 33 m/s
 Predicts the coefficients of five held-out flights (research sensors, the standard data
 reduction) and compares with the same model of order 1 (linear terms only) and with the
 model trained on a fourth flight too, at 28 m/s (trim alpha 11.2 deg, elevator 3211 of
--2.5 deg, 17.6 s above 11 deg alpha: the top of the pre-stall range):
+-2.5 deg, 17.6 s above 11 deg alpha: the top of the pre-stall range), and with the
+backward elimination (``mof.Options(backward=True)``):
 
 - ``held-out``: 33 m/s, elevator doublet, aileron and rudder 2-1-1, seed 2; it was
   scored while the method was changed;
@@ -124,6 +125,7 @@ def main() -> None:
     est = mof.fit_records(training, "global")
     lin = mof.fit_records(training, "global", mof.Options(order=1))
     four = mof.fit_records([rec for rec, _ in flown.values()], "global")
+    back = mof.fit_records(training, "global", mof.Options(backward=True))
     alpha = np.degrees(np.concatenate([flown[name][1]["alpha"] for name in TRAINING]))
     lines = [f"mof on c172p, {args.sensors} sensors, global model, trained on "
              f"{len(training)} flights ({', '.join(TRAINING)}); training alpha "
@@ -133,21 +135,30 @@ def main() -> None:
                  f"{name} {float(np.sum(np.degrees(t['alpha']) > 11.0)) * t.dt:.1f} s "
                  f"(max {np.degrees(t['alpha'].max()):.1f} deg)"
                  for name, (_, t) in flown.items())]
+    for c in est.fit["coefficients"]:
+        kept = [n for n in back.names if n.startswith(c + "_")]
+        gone = [n for n in est.names if n.startswith(c + "_") and n not in back.names]
+        lines.append(f"backward elimination, {c}: {len(kept)} terms, removed "
+                     f"{', '.join(gone) or 'none'}"
+                     + (f"; entered {', '.join(n for n in kept if n not in est.names)}"
+                        if set(kept) - set(est.names) else ""))
     for flight, (maneuvers, seed, speed) in FLIGHTS.items():
         test, tt = record(maneuvers, seed, args.sensors, speed)
         lines += [f"{flight} flight (seed {seed}, {speed:g} m/s; alpha "
                   f"{np.degrees(tt['alpha'].min()):.1f} to {np.degrees(tt['alpha'].max()):.1f}"
                   " deg)",
                   "coefficient  mof R2  mof Theil  linear R2  linear Theil  + 28 m/s R2"
-                  "  Theil  terms"]
+                  "  Theil  backward R2  Theil  terms"]
         for c in est.fit["coefficients"]:
             y = ee.channel_values(test, c)
             m, lpart = ee.predict(part(est, c), test), ee.predict(part(lin, c), test)
             fpart = ee.predict(part(four, c), test)
+            bpart = ee.predict(part(back, c), test)
             terms = [n for n in est.names if n.startswith(c + "_")]
             lines.append(f"{c:<12} {r_squared(y, m):6.3f} {theil_inequality(y, m):9.3f} "
                          f"{r_squared(y, lpart):9.3f} {theil_inequality(y, lpart):12.3f} "
-                         f"{r_squared(y, fpart):12.3f} {theil_inequality(y, fpart):6.3f}  "
+                         f"{r_squared(y, fpart):12.3f} {theil_inequality(y, fpart):6.3f} "
+                         f"{r_squared(y, bpart):12.3f} {theil_inequality(y, bpart):6.3f}  "
                          f"{', '.join(terms)}")
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"mof_c172p-{args.sensors}.txt").write_text("\n".join(lines) + "\n")
