@@ -3,8 +3,8 @@
 Trains the global model (every coefficient over alpha, beta, the three rates, the three
 surfaces and the thrust coefficient) on three flights at 1000 m, pooled: 33 m/s
 (elevator 3211 -7 deg, aileron and rudder doublets 8 deg), 29 m/s and 38 m/s (other
-3211 and 2-1-1 inputs); alpha -1.5 to 14.2 deg, below the stall hysteresis near 16 deg.
-Predicts the coefficients of five held-out flights (research sensors, the standard data
+3211 and 2-1-1 inputs); alpha -1.5 to 14.2 deg, below the lift peak at 16 deg.
+Predicts the coefficients of six held-out flights (research sensors, the standard data
 reduction) and compares with the same model of order 1 (linear terms only) and with the
 model trained on a fourth flight too, at 28 m/s (trim alpha 11.2 deg, elevator 3211 of
 -2.5 deg, 17.6 s above 11 deg alpha: the top of the pre-stall range), and with the

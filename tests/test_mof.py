@@ -102,7 +102,7 @@ def test_global_model_predicts_held_out_c172p_maneuvers():
     # issue 35: R^2 >= 0.95 and Theil <= 0.1 on held-out maneuvers, pre-stall, research
     # sensors. The held-out flights (the first: elevator doublet, aileron and rudder 2-1-1,
     # its own seed) are never used by the fit; each excites all six coefficients. The training
-    # flights stay below 14.3 deg alpha, under the c172p's stall hysteresis (16 deg).
+    # flights stay below 14.3 deg alpha, below the c172p's lift peak (16 deg).
     flights = [_c172p_flight(*f) for f in TRAINING]
     assert max(float(np.max(t["alpha"])) for _, t in flights) < np.radians(14.3)
     est = mof.fit_records([r for r, _ in flights], "global")
