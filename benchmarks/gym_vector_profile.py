@@ -2,6 +2,7 @@
 single environment: one case per process, for a whole-process timer run A B A B.
 
 Usage: python benchmarks/gym_vector_profile.py CASE [--episodes N] [--workers W] [--chunk K]
+                                                    [--pin]
        python benchmarks/gym_vector_profile.py --summarize FILE [FILE ...]
 
 Every case flies the same decisions: W x N episodes of 20 s (1000 decisions at 50 Hz, a
@@ -25,7 +26,16 @@ each call, from ``time.perf_counter`` in the main process and in each worker aro
 - ``off_cpu``: a worker's wall in ``step`` less its CPU (the kernel ran something else);
 - ``straggler``: the slowest worker's wall in ``step`` less the mean (the others wait);
 - ``pipe``: the main process's wall for the call less the slowest worker's wall in
-  ``step`` (sending the actions, the workers' wake-up, the replies, merging ``info``).
+  ``step`` (sending the actions, the workers' wake-up, the replies, merging ``info``);
+
+and, what free cores would see, CPU only: ``cpu_straggler`` (the slower worker's CPU in
+``step`` less the mean), ``workers_pipe_cpu`` (a worker's CPU outside ``step``: the
+pipe's work, from ``/proc``) and ``main_cpu`` (the main process's); the time a worker
+waited for a processor (``/proc/thread-self/schedstat``) in ``step`` (``runq_in_step``)
+and once woken by the main process's message (``runq_woken``); ``same_cpu``, the share of
+calls at whose start both workers were on one processor. ``--pin`` holds worker i to
+processor i. Every case also gives the cores the whole machine used (``machine_cores``,
+this run included) and the hypervisor's steal (``steal_cores``).
 
 ``--summarize`` reads files of such lines (one run's output appended per run) and prints
 the medians per case and the speed-ups of the pairs in the order the runs were made.
@@ -49,7 +59,7 @@ import numpy as np
 from flightid.scenarios.gym import DecisionChunks, ExcitationEnv
 from flightid.scenarios.gym.baselines import three211
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # (when imported from the tests)
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling script, from anywhere
 from gym_vector import chunk_rows, cpu_seconds, machine_busy  # noqa: E402
 
 CASES = ("single", "procs", "async")
