@@ -34,7 +34,11 @@ pipe's work, from ``/proc``) and ``main_cpu`` (the main process's); the time a w
 waited for a processor (``/proc/thread-self/schedstat``) in ``step`` (``runq_in_step``)
 and once woken by the main process's message (``runq_woken``); ``same_cpu``, the share of
 calls at whose start both workers were on one processor. ``--pin`` holds worker i to
-processor i. Every case also gives the cores the whole machine used (``machine_cores``,
+processor i. ``--autoreset NextStep|SameStep``: the vector resets its workers itself
+(that ``autoreset_mode``), worker i's episodes 20 (1 - 0.15 i) s long so that they end in
+different calls; it prints the share of each worker's calls that flew no decision
+(``idle_share``: under NextStep the call after an episode's end only resets) and the
+decisions flown. Every case also gives the cores the whole machine used (``machine_cores``,
 this run included) and the hypervisor's steal (``steal_cores``).
 
 ``--summarize`` reads files of such lines (one run's output appended per run) and prints
@@ -82,29 +86,32 @@ class Timed(gymnasium.Wrapper):
     def __init__(self, env: gymnasium.Env) -> None:
         super().__init__(env)
         self.calls: list[tuple[float, ...]] = []
+        self.flown: list[int] = []  # decisions flown in each call
         self._waited = sched_now()[1]
 
     def step(self, action):
         cpu0, waited0 = sched_now()
+        k0 = self.env.unwrapped._k
         t0, c0 = time.perf_counter(), time.thread_time()
         out = self.env.step(action)
         t1, c1 = time.perf_counter(), time.thread_time()
         waited1 = sched_now()[1]
         self.calls.append((t0, t1, c1 - c0, waited1 - waited0, waited0 - self._waited, cpu0))
+        self.flown.append(self.env.unwrapped._k - k0)
         self._waited = waited1
         return out
 
     def clear(self) -> None:
         """Forget the calls so far."""
-        self.calls = []
+        self.calls, self.flown = [], []
 
 
-def timed_env(k: int, cpu: int | None = None) -> gymnasium.Env:
+def timed_env(k: int, cpu: int | None = None, episode_s: float = 20.0) -> gymnasium.Env:
     """A worker's environment: ``DecisionChunks`` of ``k`` (none for 1), timed; with
     ``cpu``, the worker process is held to that processor."""
     if cpu is not None:
         os.sched_setaffinity(0, {cpu})
-    env = ExcitationEnv()
+    env = ExcitationEnv(episode_s=episode_s)
     return Timed(env if k == 1 else DecisionChunks(env, k))
 
 
@@ -131,7 +138,8 @@ def proc_worker(actions, seeds, barrier, queue) -> None:
     queue.put(fly(env, actions, seeds))
 
 
-def run(case: str, episodes: int, workers: int, chunk: int, pin: bool = False) -> dict:
+def run(case: str, episodes: int, workers: int, chunk: int, pin: bool = False,
+        autoreset: str | None = None) -> dict:
     """One case's figures (module docstring): seconds, and per decision in us."""
     actions = three211(ExcitationEnv(), 0).astype(np.float32)
     n = len(actions)
@@ -162,6 +170,9 @@ def run(case: str, episodes: int, workers: int, chunk: int, pin: bool = False) -
                    cpu_per_decision=sum(g["step_cpu"] for g in got) / len(seeds) / n * 1e6,
                    worker_wall_per_decision=max(g["step_wall"] for g in got)
                    / episodes / n * 1e6)
+    elif autoreset:
+        out.update(autoreset_profile(actions, episodes * len(chunk_rows(actions[:, None], chunk)),
+                                     workers, chunk, autoreset))
     else:
         out.update(async_profile(actions, episodes, workers, chunk, pin))
     wall = time.perf_counter() - start
@@ -234,6 +245,40 @@ def async_profile(actions: np.ndarray, episodes: int, workers: int, chunk: int,
 
 
 
+
+def autoreset_profile(actions: np.ndarray, calls: int, workers: int, chunk: int,
+                      mode: str) -> dict:
+    """``calls`` calls of an ``AsyncVectorEnv`` that resets its workers itself
+    (``autoreset_mode`` ``mode``), worker i's episodes 20 (1 - 0.15 i) s long, so that they
+    end in different calls: the share of each worker's calls that flew no decision, and
+    the decisions flown per second of wall clock and per CPU second of the workers."""
+    lengths = [20.0 * (1 - 0.15 * i) for i in range(workers)]
+    rows = chunk_rows(np.repeat(actions[:, None], workers, axis=1), chunk)
+    venv = gymnasium.vector.AsyncVectorEnv(
+        [partial(timed_env, chunk, None, s) for s in lengths],
+        autoreset_mode=gymnasium.vector.AutoresetMode(mode),
+        observation_mode="different")  # (the bound of t is the episode's length)
+    pids = [p.pid for p in venv.processes]
+    try:
+        venv.reset(seed=list(range(workers)))
+        for j in range(len(rows) + 1):  # loads the kernels, not counted
+            venv.step(rows[j % len(rows)])
+        venv.call("clear")
+        w0, t0 = cpu_seconds(pids), time.perf_counter()
+        for j in range(calls):
+            venv.step(rows[j % len(rows)])
+        wall, cpu = time.perf_counter() - t0, cpu_seconds(pids) - w0
+        flown = venv.get_attr("flown")
+    finally:
+        venv.close()
+    total = sum(map(sum, flown))
+    return {"chunk": chunk, "autoreset": mode, "calls": calls, "episode_s": lengths,
+            "idle_share": [1 - sum(1 for f in w if f) / calls for w in flown],
+            "decisions_flown": total, "flown_per_s": total / wall,
+            "wall_per_decision": wall / total * workers * 1e6,
+            "workers_cpu_per_decision": cpu / total * 1e6}
+
+
 def summarize(files: list[Path], skip: int = 1) -> str:
     """Medians per case, and run-by-run speed-ups of cases with as many runs, from files
     of JSON lines, the first ``skip`` lines of each (warm-up runs) left out."""
@@ -243,13 +288,15 @@ def summarize(files: list[Path], skip: int = 1) -> str:
     by_case: dict[str, list[dict]] = {}
     for r in runs:
         name = r["case"] + (f" {r['chunk']}" if "chunk" in r else "") + (
-            " pinned" if r.get("pinned") else "")
+            " pinned" if r.get("pinned") else "") + (
+            f" autoreset {r['autoreset']}" if "autoreset" in r else "")
         by_case.setdefault(name, []).append(r)
     keys = ("wall_per_decision", "cpu_per_decision", "off_cpu_per_decision",
             "straggler_per_decision", "pipe_per_decision", "pipe_per_call",
             "cpu_straggler_per_decision", "workers_pipe_cpu_per_decision",
             "main_cpu_per_decision", "runq_in_step_per_decision",
-            "runq_woken_per_decision", "same_cpu", "machine_cores", "steal_cores")
+            "runq_woken_per_decision", "same_cpu", "decisions_flown",
+            "workers_cpu_per_decision", "machine_cores", "steal_cores")
     for case, rs in by_case.items():
         figures = ", ".join(f"{k} {statistics.median(r[k] for r in rs):.1f}"
                             for k in keys if k in rs[0])
@@ -278,6 +325,9 @@ if __name__ == "__main__":
     parser.add_argument("--chunk", type=int, default=200, help="decisions per worker call")
     parser.add_argument("--pin", action="store_true",
                         help="async: hold worker i to processor i (of those allowed)")
+    parser.add_argument("--autoreset", choices=("NextStep", "SameStep"),
+                        help="async: no resets of its own, the vector's autoreset mode, "
+                        "episodes of unequal length, as many calls as N episodes of 20 s")
     parser.add_argument("--summarize", type=Path, nargs="+")
     parser.add_argument("--skip", type=int, default=1,
                         help="--summarize: first lines of each file left out (warm-up runs)")
@@ -290,4 +340,5 @@ if __name__ == "__main__":
     for name in ("episodes", "workers", "chunk"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1; got {getattr(args, name)}")
-    print(json.dumps(run(args.case, args.episodes, args.workers, args.chunk, args.pin)))
+    print(json.dumps(run(args.case, args.episodes, args.workers, args.chunk, args.pin,
+                         args.autoreset)))

@@ -68,3 +68,43 @@ def test_async_chunked_workers_fly_the_sequential_episodes(k):
         np.testing.assert_array_equal(obs, np.array([o for o, _ in want]))
     finally:
         venv.close()
+
+
+def test_same_step_autoreset_of_chunked_workers_flies_the_sequential_episodes():
+    """``autoreset_mode=SameStep`` with ``DecisionChunks`` of 7 and episodes of 50 and 40
+    decisions (they end in different calls): the call that ends an episode returns its
+    final observation in ``info['final_obs']`` and the next episode's first observation,
+    and the next episode is the one a sequential environment flies after ``reset()``;
+    no call flies nothing (under NextStep the call after an end only resets)."""
+    k, lengths, seeds = 7, [1.0, 0.8], [3, 4]
+    actions = three211(ExcitationEnv(episode_s=1.0), 0)[:50].astype(np.float32) * 4.0
+    want_end, want_next = [], []
+    for s, length in zip(seeds, lengths, strict=True):
+        env = ExcitationEnv(episode_s=length)
+        env.reset(seed=s)
+        n = int(round(length * env.decision_hz))
+        want_end.append([env.step(a) for a in actions[:n]][-1][0])
+        obs, _ = env.reset()
+        want_next.append([obs] + [env.step(a)[0] for a in actions[:k]])
+    venv = gymnasium.vector.AsyncVectorEnv(
+        [partial(lambda k, s: DecisionChunks(ExcitationEnv(episode_s=s), k), k, s)
+         for s in lengths],
+        autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP, observation_mode="different")
+    try:
+        venv.reset(seed=seeds)
+        rows = vector_bench.chunk_rows(np.repeat(actions[:, None], 2, axis=1), k)
+        ended = [None, None]
+        for j, call in enumerate(rows):
+            obs, _, terminated, truncated, info = venv.step(call)
+            assert not terminated.any()
+            for i in np.flatnonzero(truncated):
+                np.testing.assert_array_equal(info["final_obs"][i], want_end[i])
+                np.testing.assert_array_equal(obs[i], want_next[i][0])
+                ended[i] = j
+        assert ended == [7, 5]  # 50 decisions end in call 8 of 7, 40 in call 6
+        first = np.zeros((2, k, 3), np.float32)
+        first[:] = actions[:k]
+        obs = venv.step(first)[0]  # worker 0 starts its second episode now, worker 1 did
+        np.testing.assert_array_equal(obs[0], want_next[0][k])
+    finally:
+        venv.close()
