@@ -254,6 +254,7 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
     }
     r2 = r_squared_by_output(d.z, ev.nu, d.model.outputs)
     outs = d.model.outputs
+    joint = {o for o in outs if measurement_noise_name(o) in names}
     fit_stats = {
         "model": d.model.name,
         "converged": fit.converged,
@@ -265,8 +266,12 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
         "cost_history": list(fit.cost_history),
         "cost": ev.cost,
         "noise_std": {o: float(np.sqrt(fit.R[j, j])) for j, o in enumerate(outs)},
-        "noise_at_lower_bound": [o for j, o in enumerate(outs)
-                                 if fit.R[j, j] <= fit.lower[j] * (1 + 1e-9)],
+        # the relaxation's R update stops at the floor; the joint fit's sigma_<output> has
+        # no bound, and one estimated below the floor is reported as such
+        "noise_at_lower_bound": [o for j, o in enumerate(outs) if o not in joint
+                                 and fit.R[j, j] <= fit.lower[j] * (1 + 1e-9)],
+        "noise_below_floor": [o for j, o in enumerate(outs) if o in joint
+                              and fit.R[j, j] < fit.lower[j]],
         "noise_covariance": fit.R,
         "noise_history": [dict(zip(outs, np.sqrt(r).tolist(), strict=True))
                           for r in fit.noise_history],
