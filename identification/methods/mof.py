@@ -62,8 +62,8 @@ def candidate_terms(variables: Sequence[str], order: int = 3) -> list[str]:
     return terms
 
 
-def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | None = None
-           ) -> tuple[list[int], list[dict]]:
+def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | None = None,
+           backward: bool = False) -> tuple[list[int], list[dict]]:
     """Multivariate orthogonal functions of the columns of x for y (a bias always in):
     the chosen columns and the steps (term, R^2 in percent, PSE, why).
 
@@ -88,7 +88,13 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     own least-squares fit has the least PSE is kept; the steps give its terms in their
     order of entry with the R^2 and PSE of the least-squares fit of the terms in so far.
     Without it, on the Twin Otter card the selection path claimed R^2 0.999 for Cm while
-    its chosen terms fitted 0.63."""
+    its chosen terms fitted 0.63.
+
+    ``backward``: then remove, one at a time, the chosen term whose removal lowers the PSE
+    of the least-squares fit most, while one does (the backward step of stepwise
+    regression, Morelli & Klein 2016 ch. 5, with the PSE as the criterion): a term that
+    entered to carry part of another's and is left near zero once the other is in. The
+    steps list each removal."""
     n, m = x.shape
     z = y - y.mean()
     sst = float(z @ z)
@@ -116,10 +122,34 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
         steps.append({"action": "enter", "term": names[best[k - 1]], "R2": r2, "PSE": pse,
                       "why": f"largest error reduction of the orthogonal functions left; "
                              f"R^2 {r2:.3f} %, PSE {pse:.4g}"})
+    pse = kept[0]
+    if backward:
+        best, pse, removals = _eliminate(z, q, best, pse)
+        steps += [{**r, "term": names[r["term"]]} for r in removals]
     steps.append({"action": "select", "term": ", ".join(names[i] for i in best),
-                  "R2": float("nan"), "PSE": kept[0],
-                  "why": f"the model of least PSE ({kept[0]:.4g}): {len(best)} terms"})
+                  "R2": float("nan"), "PSE": pse,
+                  "why": f"the model of least PSE ({pse:.4g}): {len(best)} terms"})
     return best, steps
+
+
+def _eliminate(z: np.ndarray, q: np.ndarray, chosen: Sequence[int], pse: float
+               ) -> tuple[list[int], float, list[dict]]:
+    """Backward elimination by the PSE: (the columns left, their PSE, the removals with
+    the R^2 in percent and PSE after each; ``term`` the column)."""
+    n, sst = len(z), float(z @ z)
+    left, removals = list(chosen), []
+    while left:
+        trials = [(_sse(z, q[:, [i for i in left if i != j]]) / n
+                   + (sst / n) * (len(left) - 1) / n, j) for j in left]
+        trial, j = min(trials)
+        if trial >= pse:
+            break
+        left.remove(j)
+        pse = trial
+        r2 = 100.0 * (1.0 - (pse - (sst / n) * len(left) / n) * n / sst) if sst > 0 else 100.0
+        removals.append({"action": "remove", "term": j, "R2": r2, "PSE": pse,
+                         "why": f"its removal lowers the PSE most, to {pse:.4g}"})
+    return left, pse, removals
 
 
 def _sse(z: np.ndarray, x: np.ndarray) -> float:
@@ -179,7 +209,8 @@ def _separable(x: np.ndarray, columns: list[int]) -> bool:
 
 def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
              candidates: Iterable[str], *, reference: str = "mean", colored: bool = True,
-             max_terms: int | None = None, consistent_smoothing: bool = True) -> Estimate:
+             max_terms: int | None = None, consistent_smoothing: bool = True,
+             backward: bool = False) -> Estimate:
     """Multivariate orthogonal functions for ``coefficient`` over candidate terms, from one
     record or from several (maneuvers and conditions pooled, as a global model is
     identified: Morelli 1995): the Estimate of the chosen terms (least squares),
@@ -188,13 +219,14 @@ def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
     ones never enters). ``reference``: regressors as perturbations from the pooled
     'mean', the first record's 'initial' value, or 'none'. ``consistent_smoothing``:
     regressors of a coefficient from smoothed rate derivatives go through the same filter
-    (``equation_error.estimate``), each record on its own."""
+    (``equation_error.estimate``), each record on its own. ``backward``: remove the chosen
+    terms whose removal lowers the PSE (``select``)."""
     recs = [records] if isinstance(records, FlightRecord) else list(records)
     if not recs:
         raise ValueError("mof needs at least one record")
     terms = [ee.parse_term(t) for t in candidates]
     y, x, refs = _stacked(recs, coefficient, terms, reference, consistent_smoothing)
-    chosen, steps = select(y, x, [t.text for t in terms], max_terms)
+    chosen, steps = select(y, x, [t.text for t in terms], max_terms, backward)
     selected = [terms[i].text for i in sorted(chosen)]
     if len(recs) == 1:
         est = ee.estimate(recs[0], coefficient, selected, reference=reference,
@@ -255,7 +287,8 @@ def fit_records(records: Sequence[FlightRecord], model: str = "global",
     return merge(ID, [
         estimate(records, c, candidate_terms(t, options.order), reference=options.reference,
                  colored=options.colored, max_terms=options.max_terms,
-                 consistent_smoothing=options.consistent_smoothing)
+                 consistent_smoothing=options.consistent_smoothing,
+                 backward=options.backward)
         for c, t in structure.items()])
 
 
@@ -300,6 +333,8 @@ class Options(RegressionOptions):
     consistent_smoothing: bool = option(
         True, "pass the regressors of a moment coefficient computed from smoothed rate "
               "derivatives through the same filter (search, fit and prediction)")
+    backward: bool = option(False, "then remove the chosen terms whose removal lowers the "
+                                   "predicted square error (backward elimination)")
 
     def __post_init__(self) -> None:
         if not 1 <= self.order <= 4:

@@ -6,7 +6,8 @@ every point identified, the estimates set against the model's tables across the 
 
 Modules: ``card`` (the campaign card), ``point`` (fly, reduce, identify, score one point),
 ``curve`` (the model's derivatives between the points), ``report`` (DIR/report.html),
-``update`` (the database update), ``global_model`` (one model over every point).
+``update`` (the database update), ``global_model`` (one model over every point),
+``neighbour`` (warm starts from a flown neighbour).
 The points run on the Monte Carlo executors (local processes or Dask) and are stored as
 the Monte Carlo store stores realizations (one Parquet file per point, atomically), so a
 rerun continues. docs/campaign.md.
@@ -15,18 +16,20 @@ rerun continues. docs/campaign.md.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import pandas as pd
 
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
+from flightid.scenarios.campaign import neighbour
 from flightid.scenarios.campaign.card import Campaign, TestPoint, load_campaign, point_card
 from flightid.scenarios.campaign.curve import model_curve
 from flightid.scenarios.campaign.global_model import fit_global, has_global_model, validate
 from flightid.scenarios.campaign.global_model import summary as global_summary
-from flightid.scenarios.campaign.point import run_point
+from flightid.scenarios.campaign.point import run_point, run_point_from
 from flightid.scenarios.campaign.report import PointScore, point_scores, write_report
 from flightid.scenarios.campaign.update import (
     correction_effects,
@@ -85,13 +88,15 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     if dask_address is not None or dask_scheduler_file is not None:
         with dask_client(dask_address, dask_scheduler_file) as client:
             store.open_study(folder, campaign)  # type: ignore[arg-type]
-            todo = sorted(set(range(campaign.n)) - store.done(folder))
-            run_dask(campaign, todo, keep, client, progress, task=run_point,
-                     key=f"flightid-campaign-{campaign.identity()['card_sha256'][:12]}")
+            key = f"flightid-campaign-{campaign.identity()['card_sha256'][:12]}"
+            for todo, task, offset in _waves(campaign, folder):
+                run_dask(campaign, todo, keep, client, _offset(progress, offset, campaign.n),
+                         task=task, key=f"{key}-{offset}")
     else:
         store.open_study(folder, campaign)  # type: ignore[arg-type]
-        todo = sorted(set(range(campaign.n)) - store.done(folder))
-        run_local(campaign, todo, keep, workers, progress, task=run_point)
+        for todo, task, offset in _waves(campaign, folder):
+            run_local(campaign, todo, keep, workers, _offset(progress, offset, campaign.n),
+                      task=task)
     df = store.load(folder)
     df = df[df["index"] < campaign.n].reset_index(drop=True)
     df.to_parquet(folder / ESTIMATES, index=False)
@@ -114,6 +119,31 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
                           updated=updated_curve(campaign, curve, effects))
     return CampaignResult(folder, campaign, df, curve, point_scores(df), report, result, xml,
                           pooled)
+
+
+def _waves(campaign: Campaign, folder: Path) -> Iterator[tuple[list[int], Callable, int]]:
+    """The points still to fly, as (indices, task, points done before them): one wave, or
+    with ``start = "neighbour"`` the anchors and then the others, each started from its
+    nearest anchor's stored estimates (``neighbour``)."""
+    done = store.done(folder)
+    todo = sorted(set(range(campaign.n)) - done)
+    if campaign.start != "neighbour":
+        yield todo, run_point, len(done)
+        return
+    first = [i for i in todo if i in set(neighbour.anchors(campaign))]
+    yield first, run_point, len(done)
+    rest = [i for i in todo if i not in first]
+    if rest:
+        starts = neighbour.neighbour_starts(campaign, store.load(folder), rest)
+        yield rest, partial(run_point_from, starts), len(done) + len(first)
+
+
+def _offset(progress: Callable[[int, int], None] | None, before: int, total: int
+            ) -> Callable[[int, int], None] | None:
+    """``progress`` of a wave, counted over the whole campaign."""
+    if progress is None:
+        return None
+    return lambda finished, _: progress(before + finished, total)
 
 
 def _global_model(campaign: Campaign, df: pd.DataFrame, folder: Path) -> dict | None:

@@ -13,8 +13,10 @@ A campaign card (TOML; lengths m, speeds m/s, angles rad or degrees with ``_deg`
     x = "speed"                     # what the report plots against: speed, altitude, alpha
                                     # (the point's trim alpha), flaps, mass, cg_x
     start = "method"                # each point's fit starts where the method starts it
-                                    # ("method", default), or from the model aircraft's
-                                    # derivatives at the point ("model"; oe6dof)
+                                    # ("method", default), from the model aircraft's
+                                    # derivatives at the point ("model"; oe6dof), or from
+                                    # the nearest flown point's estimates ("neighbour";
+                                    # oe6dof; campaign.neighbour)
     [options]                       # the method's options
     propulsive_moments = true
 
@@ -62,7 +64,7 @@ TOP_FIELDS = ("name", "description", "source", "card", "method", "model", "seed"
               "start", "options", "point", "matrix", "held_out", "maneuver", "effect")
 POINT_FIELDS = ("altitude", "speed", "flaps", "flaps_deg", "mass", "cg_x")
 X_CHOICES = ("speed", "altitude", "alpha", "flaps", "mass", "cg_x")
-START_CHOICES = ("method", "model")
+START_CHOICES = ("method", "model", "neighbour")
 # the methods a point's fit can start from the model's derivatives (start = "model"):
 # (model, options) -> the parameters their start mapping takes
 MODEL_START = {"oe6dof": aerodynamic_parameters}
@@ -224,13 +226,13 @@ def campaign_from_dict(data: dict[str, Any], path: str = "<campaign>",
     if start not in START_CHOICES:
         raise _fail(path, index, ("start",),
                     f"must be one of {', '.join(START_CHOICES)}, got {start!r}")
-    if start == "model" and method not in MODEL_START:
+    if start != "method" and method not in MODEL_START:
         raise _fail(path, index, ("start",),
-                    f"'model' needs a method that takes start values ({', '.join(MODEL_START)}), "
-                    f"not {method}")
-    if start == "model" and "start" in options:
-        raise _fail(path, index, ("start",), "'model' and the option start both set the start "
-                                              "values: give one")
+                    f"{start!r} needs a method that takes start values "
+                    f"({', '.join(MODEL_START)}), not {method}")
+    if start != "method" and "start" in options:
+        raise _fail(path, index, ("start",), f"{start!r} and the option start both set the "
+                                              "start values: give one")
     card_data = dict(base.data)
     card_data.pop("a_priori", None)
     if "maneuver" in data:

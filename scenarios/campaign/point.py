@@ -53,6 +53,18 @@ def run_point(campaign: Campaign, index: int) -> list[dict[str, Any]]:
         return _point_rows(campaign, index, campaign.points[int(index)])
 
 
+def run_point_from(starts: dict[int, tuple[int, dict[str, float]]], campaign: Campaign,
+                   index: int) -> list[dict[str, Any]]:
+    """``run_point`` with the fit started from a neighbour's estimates (campaign field
+    ``start = "neighbour"``): ``starts[index]`` is (the neighbour, its estimates by
+    derivative name), from ``neighbour.neighbour_starts``; a point not in ``starts``
+    starts where the method starts it. A module-level function of picklable arguments
+    (``functools.partial(run_point_from, starts)`` is an executor's task)."""
+    start = starts.get(int(index))
+    with threadpool_limits(1):
+        return _point_rows(campaign, index, campaign.points[int(index)], start)
+
+
 def fly_point(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, FlightRecord]:
     """Test point ``index`` flown with its own seed: (its flight card, the measured record
     after the standard data reduction, the truth record). A pure function of the campaign
@@ -80,10 +92,13 @@ def fly_held_out(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, Fl
     return card, reduce_record(measured).record, truth_record
 
 
-def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[str, Any]]:
+def _point_rows(campaign: Campaign, index: int, point: TestPoint,
+                neighbour: tuple[int, dict[str, float]] | None = None
+                ) -> list[dict[str, Any]]:
     seed = point_seed(campaign, index)
     base: dict[str, Any] = {"index": int(index), "seed": int(seed), **point.as_dict(),
-                            "alpha": math.nan}
+                            "alpha": math.nan,
+                            "start_from": float(neighbour[0]) if neighbour else math.nan}
     try:
         card, record, truth_record = fly_point(campaign, index)
         base["alpha"] = float(truth_record.meta.extra["truth"]["trim"]["alpha"])
@@ -96,6 +111,9 @@ def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[s
         options = dict(campaign.options)
         if campaign.start == "model":
             options["start"] = model_start(campaign, model)
+        elif campaign.start == "neighbour" and neighbour:
+            # the neighbour's flight estimates; what it did not estimate, from the tables
+            options["start"] = model_start(campaign, {**model, **neighbour[1]})
         est = identify(record, campaign.method, campaign.model, **options)
     except REALIZATION_ERRORS as exc:
         return [_failure(base, f"{type(exc).__name__}: {exc}")]
@@ -107,7 +125,8 @@ def _point_rows(campaign: Campaign, index: int, point: TestPoint) -> list[dict[s
         rows.append({**base, **flown, "name": r.name, "truth": _num(r.truth),
                      "estimate": _num(r.estimate), "std": _num(r.std), "error": _num(r.error),
                      "sigmas": _num(r.sigmas), "status": r.status, "reason": r.reason or "",
-                     "model": float(model.get(r.name, math.nan))})
+                     "model": float(model.get(r.name, math.nan)),
+                     "iterations": float(est.fit.get("iterations", math.nan))})
     if not any(r["status"] == STATUS_ESTIMATED for r in rows):
         return [_failure(base, "the estimate scored no derivative")]
     return rows
@@ -165,10 +184,10 @@ def _num(x: Any) -> float:
 def _failure(base: dict[str, Any], reason: str) -> dict[str, Any]:
     row: dict[str, Any] = {**base, "name": "", "status": STATUS_FAILED, "reason": reason,
                            "model": math.nan, "speed_flown": math.nan,
-                           "alpha_flown": math.nan}
+                           "alpha_flown": math.nan, "iterations": math.nan}
     row.update({c: float("nan") for c in FLOAT_COLUMNS})
     return row
 
 
 __all__ = ["fly_held_out", "fly_point", "held_out_seed", "model_start", "model_values",
-           "point_seed", "run_point"]
+           "point_seed", "run_point", "run_point_from"]
