@@ -11,11 +11,16 @@ per environment (1000 decisions at 50 Hz, a 3211 on aileron then rudder):
 - async: ``gymnasium.vector.AsyncVectorEnv`` of ``--workers`` environments, one worker
   process each (shared-memory observations, the default);
 - chunks K: the same with each environment wrapped in ``DecisionChunks`` (K decisions
-  per worker call, for each K of ``--chunks``: one pipe round trip per chunk).
+  per worker call, for each K of ``--chunks``: one pipe round trip per chunk; the last
+  call of an episode is padded with zero rows that are not flown, so any K >= 1 flies
+  the whole episode, in one call when K is the episode's decisions or more).
 
-Steps count every environment's decision. The cases run interleaved, ``--repeats`` times;
-the speed-up is the median over the repeats of async / single (back to back). Resets and
-the workers' start are outside the timed part.
+Every case flies every environment's whole episode (checked: the last call truncates
+all of them); steps count every environment's decision. The cases run interleaved,
+``--repeats`` times; the speed-up is the median over the repeats of async / single (back
+to back). Resets and the workers' start are outside the timed part, and so is a first,
+uncounted round of every case (the first step in each process loads the compiled
+kernels).
 
 On a machine whose cores are busy with other work the wall-clock figures say little, so
 the CPU time is counted too (``/proc``, summed over the repeats): the main process's and
@@ -119,6 +124,32 @@ def pipe_costs(info: dict, calls: int = 2000, workers: int = 2) -> dict[str, flo
     return out
 
 
+def chunk_rows(batch: np.ndarray, k: int) -> np.ndarray:
+    """The calls of ``DecisionChunks(env, k)`` workers that fly a whole episode.
+
+    Parameters
+    ----------
+    batch : numpy.ndarray
+        The episode's actions, ``(decisions, workers, 3)``.
+    k : int
+        Decisions per call, >= 1 (more than the episode's decisions: one call).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(calls, workers, k, 3)``, ``calls = ceil(decisions / k)``; the last call's rows
+        past the episode's end are zeros, which ``DecisionChunks`` does not fly (the
+        episode ends within that call).
+    """
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise ValueError(f"--chunks: decisions per call must be integers >= 1; got {k!r}")
+    n, workers = batch.shape[:2]
+    calls = -(-n // k)
+    padded = np.zeros((calls * k, workers, 3), batch.dtype)
+    padded[:n] = batch
+    return padded.reshape(calls, k, workers, 3).swapaxes(1, 2)
+
+
 def main(out: Path, repeats: int = 15, workers: int = 2, chunks: Sequence[int] = (10, 50),
          episodes: int = 2) -> str:
     single = ExcitationEnv()
@@ -127,17 +158,15 @@ def main(out: Path, repeats: int = 15, workers: int = 2, chunks: Sequence[int] =
     batch = np.repeat(actions[:, None, :], workers, axis=1)
     sync = gymnasium.vector.SyncVectorEnv([ExcitationEnv] * workers)
     asyn = gymnasium.vector.AsyncVectorEnv([ExcitationEnv] * workers)
-    venvs = {"sync": (sync, [], batch[:-1]), "async": (asyn, [p.pid for p in asyn.processes],
-                                                       batch[:-1])}
+    venvs = {"sync": (sync, [], batch), "async": (asyn, [p.pid for p in asyn.processes],
+                                                  batch)}
     for k in chunks:
         chunked = gymnasium.vector.AsyncVectorEnv(
             [partial(lambda k: DecisionChunks(ExcitationEnv(), k), k)] * workers)
-        n_chunks = (n - 1) // k  # whole chunks before the episode's last decision
-        rows = batch[:n_chunks * k].reshape(n_chunks, k, workers, 3).swapaxes(1, 2)
-        venvs[f"chunks {k}"] = (chunked, [p.pid for p in chunked.processes], rows)
+        venvs[f"chunks {k}"] = (chunked, [p.pid for p in chunked.processes],
+                                chunk_rows(batch, k))
     cpu = {"single": 0.0, **{f"{k} {w}": 0.0 for k in venvs for w in ("main", "workers")}}
-    decisions = {"single": n, **{k: (rows.shape[0] * rows.size // rows.shape[0] // 3)
-                                 for k, (_, _, rows) in venvs.items()}}
+    decisions = {"single": n, **{k: workers * n for k in venvs}}  # whole episodes
 
     def one() -> tuple[float, float]:
         busy0, c_all, wall = machine_busy(), time.process_time(), 0.0
@@ -159,8 +188,10 @@ def main(out: Path, repeats: int = 15, workers: int = 2, chunks: Sequence[int] =
             venv.reset(seed=list(range(workers)))
             step = venv.step
             c0, w0, t0 = time.process_time(), cpu_seconds(pids), time.perf_counter()
-            for a in rows:  # (the episode's last step would autoreset)
-                step(a)
+            for a in rows:
+                truncated = step(a)[3]
+            if not truncated.all():  # every environment flew its whole episode
+                raise RuntimeError(f"{name}: an episode did not end with its last call")
             wall += time.perf_counter() - t0
             cpu[f"{name} main"] += time.process_time() - c0
             cpu[f"{name} workers"] += cpu_seconds(pids) - w0
@@ -171,7 +202,9 @@ def main(out: Path, repeats: int = 15, workers: int = 2, chunks: Sequence[int] =
     rates: dict[str, list[float]] = {k: [] for k in cases}
     busy: dict[str, list[float]] = {k: [] for k in cases}  # cores the rest of the machine used
     loads = [os.getloadavg()[0]]
-    one()  # (the first step in a process compiles or loads the kernels)
+    for fn in cases.values():  # not counted: the first step in a process (the main one
+        fn()                   # and each worker) compiles or loads the kernels
+    cpu.update(dict.fromkeys(cpu, 0.0))
     for _ in range(repeats):
         for k, fn in cases.items():
             rate, rest = fn()
@@ -244,4 +277,9 @@ if __name__ == "__main__":
     parser.add_argument("--chunks", type=int, nargs="+", default=[10, 50])
     parser.add_argument("--episodes", type=int, default=2, help="episodes per case and repeat")
     args = parser.parse_args()
+    for name in ("repeats", "workers", "episodes"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name} must be >= 1; got {getattr(args, name)}")
+    if min(args.chunks) < 1:
+        parser.error(f"--chunks: decisions per call must be >= 1; got {min(args.chunks)}")
     print(main(args.out, args.repeats, args.workers, args.chunks, args.episodes))

@@ -208,7 +208,7 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
         console.print("null-level test of the model as is (p-value, held-out input-"
                       "explained share): " + ", ".join(
                           f"{c} {p_text(t.p_value)} {t.share:+.4f}" for c, t in tests.items()))
-    if g.structure is not None and g.structure.gap:
+    if g.structure is not None and (g.structure.gap or g.structure.sensor):
         console.print(f"structure outside the catalogue: {g.structure.text()}")
     t = Table(title="gap map (residual / measured energy, mean over windows)")
     per = {c: d for c, d in g.where.by_channel().items() if c in g.linearised.model.outputs}
@@ -254,6 +254,10 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
         console.print(f"named: {s['effect']}; held-out gap {s['overall']['before']:.3f} -> "
                       f"{s['overall']['after']:.3f} ({shrink_text(s['overall']['shrink'])} "
                       "shrink)")
+    for r in g.named:
+        if r.alternatives:
+            console.print(f"{r.candidate.label}: not told apart on held-out data from "
+                          + ", ".join(a.candidate.label for a in r.alternatives))
     if g.null_after is not None and g.null_after.gap:
         console.print("above the null level after the named effects: "
                       + ", ".join(g.null_after.gap_channels()))

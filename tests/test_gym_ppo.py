@@ -3,9 +3,7 @@ stable-baselines3 is an optional extra (``.[rl]``), so the test is skipped witho
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
+import benchmark_scripts
 import gymnasium
 import numpy as np
 import pytest
@@ -54,21 +52,12 @@ def test_ppo_smoke_training_is_deterministic_and_evaluates_like_the_baselines():
     assert info["logdet"] == closed and np.isfinite(total)
 
 
-def _benchmark(name: str):
-    """A script of benchmarks/ as a module."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_clone_and_best_checkpoint_on_training_seeds():
     """benchmarks/gym_bc_ppo.py: the cloned policy flies the multisine it copies (same
     accuracy return on the selection seeds, to the float32 rounding of its actions), and
     the checkpoint kept is the best of those evaluated, whose weights score the same when
     evaluated again (the selection is deterministic)."""
-    bc = _benchmark("gym_bc_ppo")
+    bc = benchmark_scripts.load("gym_bc_ppo")
     torch.set_num_threads(1)
     episode_s, seeds = 2.0, (100, 101)
     scale = bc.LIMITS["0.2"]

@@ -33,7 +33,11 @@ from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.model.linearise import Linearised, linearise
 from flightid.identification.gap.model.surfaces import actuated
-from flightid.identification.gap.nonlinearity import NonlinearTest, nonlinear_test
+from flightid.identification.gap.nonlinearity import (
+    NonlinearTest,
+    named_sensor,
+    nonlinear_test,
+)
 from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following
@@ -393,7 +397,8 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
             corrected = fixed(corrected, effect)
         after = tested(corrected)
     verdict = axis_verdict(before, bool(named), after)
-    if structure.gap:  # a structure no catalogue effect expresses: not explained
+    structure.sensor = named_sensor(structure, named)
+    if structure.gap or structure.sensor:  # a structure no catalogue effect expresses
         verdict = PARTLY if named else UNEXPLAINED
     return GapResult(str(aircraft), lin, where, ranked, both, named, windows,
                      floor=ranker.floor, verdict=verdict,

@@ -14,7 +14,9 @@ percent has no gap to name) and by ``MIN_EXCESS_SHRINK`` of the gap above the nu
 (``Ranker.above``: the input-explained share of the null test; turbulence and noise are
 no part of what an effect can close), or ``MIN_SHRINK`` of the whole held-out gap when
 that level is not known. Confirmed effects rank first, by their held-out cost change
-(``rank_key``), the others by delta BIC.
+(``rank_key``), the others by delta BIC. Effects whose held-out costs cannot be told apart
+(``tied``) are listed beside the one named (``Ranked.alternatives``), and the one that frees
+fewest parameters is named (``simplest``).
 """
 
 from __future__ import annotations
@@ -59,6 +61,9 @@ PAIR_TOP = 4  # pairs: the top effect with the next ones of the ranking
 # with the null level known: pairs are tried when the top effect closes less than this
 # share of the gap above it
 PAIR_SHARE = 0.7
+# two confirmed effects are not told apart when the sum over held-out windows of the
+# difference of their cost changes is within this many of its standard errors (``tied``)
+TIE_Z = 2.0
 
 
 def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
@@ -108,6 +113,10 @@ class Ranked:
     note: str = ""
     # outside the catalogue's physical range: the family that fits (``ranges.out_of_range``)
     family: str = ""
+    # per held-out window: the cost change with the effect (``heldout_cost_change`` summed)
+    heldout_changes: dict[str, float] = field(default_factory=dict)
+    # confirmed effects the held-out data cannot tell apart from this one (``simplest``)
+    alternatives: list[Ranked] = field(default_factory=list)
 
     @property
     def shrink(self) -> float:
@@ -124,7 +133,8 @@ class Ranked:
                              "heldout_shrink": self.shrink, "confirmed": self.confirmed,
                              "heldout_windows": self.heldout_windows},
                 "heldout_before": self.heldout_before, "heldout_after": self.heldout_after,
-                "note": self.note, "family": self.family or None}
+                "note": self.note, "family": self.family or None,
+                "not_told_apart_from": [a.candidate.label for a in self.alternatives]}
 
 
 def combine(fits: list[WindowFit], names: tuple[str, ...]
@@ -257,6 +267,9 @@ class Ranker:
             return
         r.heldout_before, r.heldout_after = pooled_fractions(before), pooled_fractions(after)
         r.heldout_cost_change, r.heldout_windows = dheld, labels
+        r.heldout_changes = {}
+        for label, b, a in zip(labels, before, after, strict=True):
+            r.heldout_changes[label] = r.heldout_changes.get(label, 0.0) + a.cost - b.cost
         gain = overall(r.heldout_before) - overall(r.heldout_after)
         level = (MIN_EXCESS_SHRINK * overall(self.above) if self.above
                  else MIN_SHRINK * overall(r.heldout_before))
@@ -316,7 +329,69 @@ def rank(ranker: Ranker, candidates: list[Candidate],
     out += [r for c in linkage if (r := ranker.evaluate_linkage(c)) is not None]
     nested(out)
     prefer_model_terms(out, MIN_SHRINK)
-    return sorted(out, key=rank_key)
+    return simplest(sorted(out, key=rank_key))
+
+
+def tied(a: Ranked, b: Ranked) -> bool:
+    """Whether the held-out data cannot tell ``a`` from ``b``: per held-out window the
+    difference of their cost changes, its sum within ``TIE_Z`` standard errors (the
+    windows' spread; a paired test of non-nested models on held-out blocks, Vuong 1989).
+    False with fewer than two common windows (no spread to judge by).
+
+    Parameters
+    ----------
+    a, b : Ranked
+        Two evaluated effects.
+
+    Returns
+    -------
+    bool
+    """
+    common = [w for w in a.heldout_changes if w in b.heldout_changes]
+    if len(common) < 2:
+        return False
+    d = np.array([a.heldout_changes[w] - b.heldout_changes[w] for w in common])
+    spread = math.sqrt(len(d)) * float(np.std(d, ddof=1))
+    return bool(abs(float(np.sum(d))) <= TIE_Z * spread)
+
+
+def simplest(ranked: list[Ranked]) -> list[Ranked]:
+    """``ranked`` (sorted by ``rank_key``) with the confirmed effects that the held-out data
+    cannot tell from the top one (``tied``) listed in its ``alternatives``, and the one that
+    frees fewest parameters among them put first (a tie kept in order): an extra parameter
+    that buys no held-out evidence is not named (Occam, as ``nested``). A nonlinear actuator
+    effect (``candidates.linkage``) tied with a linear effect of the same surface (a rate
+    limit with the surface's lag) gives way to it: the nonlinear one adds a law of
+    amplitude that the held-out data do not support.
+
+    Parameters
+    ----------
+    ranked : list of Ranked
+        The ranking, sorted by ``rank_key``.
+
+    Returns
+    -------
+    list of Ranked
+        The ranking, its top effect possibly replaced by a simpler tied one.
+    """
+    if not ranked or not ranked[0].confirmed:
+        return ranked
+    top = ranked[0]
+    group = [top] + [r for r in ranked[1:] if r.confirmed and tied(top, r)]
+    if len(group) == 1:
+        return ranked
+    first = min(group, key=lambda r: len(r.candidate.free))
+    if is_linkage(first.candidate):  # the same surface's linear effect: no amplitude law
+        first = next((r for r in group if not is_linkage(r.candidate)
+                      and r.candidate.options.get("surface") == first.candidate.options[
+                          "surface"] and len(r.candidate.free) <= len(first.candidate.free)),
+                     first)
+    first.alternatives = [r for r in group if r is not first]
+    if first is top:
+        return ranked
+    first.note = (f"named before {top.candidate.label}: not told apart on held-out data, "
+                  "fewer parameters")
+    return [first, *(r for r in ranked if r is not first)]
 
 
 def rank_key(r: Ranked) -> tuple[bool, float]:

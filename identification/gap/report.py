@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap.diagnose import GapResult
 from flightid.identification.gap.fit import held
+from flightid.identification.gap.rank import Ranked
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed
 from flightid.identification.gap.shrink import shrink_text
@@ -158,7 +159,7 @@ def html_report(result: GapResult, records: Records | None = None,
     verdicts = "".join(
         f"<tr><td>{a}</td><td><b>{html.escape(g.verdict)}</b></td><td>"
         f"{html.escape(g.evidence)}</td><td>"
-        + html.escape(", ".join(r.candidate.label for r in g.named) or "-") + "</td></tr>"
+        + html.escape(", ".join(_with_alternatives(r) for r in g.named) or "-") + "</td></tr>"
         for a, g in result.axes().items())
     verdicts += "".join(f"<tr><td>{a}</td><td>not diagnosed</td><td colspan=2>"
                         f"{html.escape(why)}</td></tr>" for a, why in result.undiagnosed.items())
@@ -269,3 +270,11 @@ def write_report(result: GapResult, path: str | Path, records: Records | None = 
     path = Path(path)
     path.write_text(html_report(result, records, validate, refly))
     return path
+
+
+def _with_alternatives(r: Ranked) -> str:
+    """A named effect's label, with the effects not told apart from it on held-out data."""
+    if not r.alternatives:
+        return r.candidate.label
+    return (f"{r.candidate.label} (not told apart from "
+            + ", ".join(a.candidate.label for a in r.alternatives) + ")")

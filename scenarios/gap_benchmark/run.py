@@ -300,6 +300,9 @@ class CaseResult:
     error: str = ""
     # named at trim level (``trim_level``), per axis: class -> entry(channel) value (rad)
     trim: dict[str, dict[str, str]] = field(default_factory=dict)
+    # single: the first named or an effect listed as not told apart from it
+    # (``rank.simplest``) in its class
+    listed: bool | None = None
 
     @property
     def excess_shrink(self) -> float:
@@ -315,7 +318,7 @@ class CaseResult:
     def to_json(self) -> dict[str, Any]:
         return {"case": self.case.to_json(), "label": self.case.label, "kind": self.case.kind,
                 "verdicts": self.verdicts, "named": self.named, "trim": self.trim,
-                "right": self.right,
+                "right": self.right, "listed": self.listed,
                 "all_named": self.all_named, "magnitude_error": json_safe(self.magnitude_error),
                 "before": self.before, "after": self.after, "null": self.null,
                 "excess_shrink": json_safe(self.excess_shrink),
@@ -330,7 +333,7 @@ class CaseResult:
                    d["before"], d["after"], d["null"],
                    nan if d["seconds"] is None else d["seconds"],
                    nan if d.get("cpu_seconds") is None else d["cpu_seconds"], d["error"],
-                   d.get("trim") or {})
+                   d.get("trim") or {}, d.get("listed"))
 
 
 def _effect_axes(e: Effect) -> tuple[str, ...]:
@@ -357,11 +360,13 @@ def score(case: Case, result: GapResult) -> CaseResult:
         firsts = [per_axis[a].named[0] for a in _effect_axes(e)
                   if a in per_axis and per_axis[a].named]
         out.right = any(classes.same(e, r) for r in firsts)
+        out.listed = out.right or any(classes.same(e, a) for r in firsts
+                                      for a in r.alternatives)
         exact = [r for r in firsts if classes.exact(e, r)]
         if exact:
             out.magnitude_error = _relative_error(e, exact[0])
         elif (offset := _at_trim(e, per_axis)) is not None:
-            out.right = True
+            out.right = out.listed = True
             if offset.entry == e.entry and e.magnitude.get(offset.parameter):
                 injected = e.magnitude[offset.parameter]
                 out.magnitude_error = abs(offset.value - injected) / abs(injected)

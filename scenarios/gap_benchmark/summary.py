@@ -42,6 +42,8 @@ def figures(results: list[CaseResult]) -> dict[str, Any]:
         "single": len(by[SINGLE]), "pair": len(by[PAIR]), "outside": len(by[OUT]),
         "null": len(by[NULL]),
         "right_first": _frac([bool(r.right) for r in by[SINGLE]]),
+        # no target: the injected effect named first or listed as not told apart from it
+        "right_listed": _frac([bool(r.listed) for r in by[SINGLE]]),
         "magnitude_error": _median([r.magnitude_error for r in by[SINGLE]]),
         "no_gap": _frac([bool(r.verdicts) and all(v == "no_gap" for v in r.verdicts.values())
                          for r in by[NULL]]),
