@@ -22,6 +22,7 @@ from flightid.cli.checks import (
     read_record,
 )
 from flightid.identification.compatibility.reconstruction import PARAMETERS, reconstruct
+from flightid.identification.data.reduction import calibration_doubts
 from flightid.identification.engine import convergence
 
 # display factors to deg, deg/s and g
@@ -44,6 +45,13 @@ def compatibility_command(
     with printed_warnings("compatibility"):
         rec = read_record(record, "compatibility", force=force)
         corrected, est = reconstruct(rec)
+        # the checks the standard data reduction applies before it trusts a vane
+        # calibration (calm air, physical, identified); -o writes the calibration anyway
+        doubts = calibration_doubts(rec, est)
+        for text in doubts:
+            typer.echo(f"flightid compatibility: warning: vane calibration doubtful: {text}"
+                       f"{'; the corrected record applies it anyway' if output else ''} "
+                       "(identify applies it only without doubts)", err=True)
     if strict:
         convergence.require(est, "compatibility")
     if output:
@@ -52,6 +60,7 @@ def compatibility_command(
         d = est.as_dict()
         d["fit"].pop("cost_history", None)
         d["units"] = est.fit["units"]
+        d["calibration_doubts"] = doubts
         print(json.dumps(d, indent=2, default=str))
         return
     console = Console()

@@ -166,3 +166,9 @@ def test_turbulence_is_not_taken_for_vane_errors(research_flight, tmp_path):
     assert result.exit_code == 0, result.output
     assert "warning: vane scale and bias from flight path reconstruction not applied" \
         in result.stderr
+    # compatibility runs the same checks on its own reconstruction and says so
+    result = runner.invoke(app, ["compatibility", str(path), "--format", "json"])
+    assert result.exit_code == 0, result.output
+    assert "warning: vane calibration doubtful: the reconstruction leaves residuals of " \
+        "alpha" in result.stderr
+    assert any("turbulence" in d for d in json.loads(result.stdout)["calibration_doubts"])

@@ -19,6 +19,8 @@ ch. 11).
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 from scipy.ndimage import convolve1d
 from scipy.signal import savgol_filter
@@ -29,6 +31,9 @@ MASS_PROPERTIES = ("mass", "Ixx", "Iyy", "Izz", "Ixz")
 COEFFICIENT_CHANNELS = ("CX", "CY", "CZ", "Cl", "Cm", "Cn", "CL", "CD")
 PROPULSIVE_MOMENTS = ("L_prop", "M_prop", "N_prop")
 SMOOTHING_WINDOW_S = 0.2  # s, span of the local fits that differentiate the rates
+# a spline factor of an angle: "(alpha-8deg)+" is (alpha - 8 deg)_+ = max(alpha - 8 deg, 0)
+# in rad, "(alpha+4deg)+" has its knot at -4 deg (Morelli 1995; Morelli & Klein 2016 ch. 5)
+HINGE = re.compile(r"^\((?P<channel>[A-Za-z_]\w*)(?P<knot>[-+]\d+(?:\.\d+)?)deg\)\+$")
 
 
 def _window_samples(size: int, dt: float, window_s: float, order: int) -> int:
@@ -220,11 +225,21 @@ def thrust_coefficient(record: FlightRecord) -> np.ndarray:
     return record["thrust"] / (record["qbar"] * _reference(record).area)
 
 
+def hinge_name(channel: str, knot_deg: float) -> str:
+    """The spline factor (channel - knot)_+ of an angle channel (rad), e.g. hinge_name(
+    'alpha', 8.0) = '(alpha-8deg)+'; ``knot_deg`` in deg."""
+    return f"({channel}{'-' if knot_deg >= 0 else '+'}{abs(knot_deg):g}deg)+"
+
+
 def channel_values(record: FlightRecord, channel: str) -> np.ndarray:
     """A channel of the record, or one derived from it (phat qhat rhat, alphadot_hat, the
-    thrust coefficient Tc)."""
+    thrust coefficient Tc, a spline factor such as '(alpha-8deg)+', see ``hinge_name``)."""
     if channel in record:
         return record[channel]
+    hinge = HINGE.match(channel)
+    if hinge:  # the knot's sign in the name is that of -knot
+        knot = -float(hinge["knot"])
+        return np.maximum(channel_values(record, hinge["channel"]) - np.radians(knot), 0.0)
     if channel in ("phat", "qhat", "rhat"):
         return nondimensional_rates(record)[channel]
     if channel == THRUST_COEFFICIENT:

@@ -34,6 +34,7 @@ import numpy as np
 from scipy.signal import fftconvolve
 
 from flightid.identification.data.coefficients import (
+    HINGE,
     channel_values,
     differentiated,
     smoothed,
@@ -67,7 +68,7 @@ REFERENCES = ("mean", "initial", "none")
 # any test input; the same limit as identification/engine/identifiability.py MIN_INPUT_RANGE.
 MIN_CONTROL_RANGE = {"de": 1e-3, "da": 1e-3, "dr": 1e-3, "df": 1e-3, "throttle": 1e-3}
 CONTROL_CHANNELS = tuple(MIN_CONTROL_RANGE)
-_TERM = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\^[1-9])?$")
+_TERM = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*|\([A-Za-z_]\w*[-+]\d+(?:\.\d+)?deg\)\+)(\^[1-9])?$")
 
 
 @dataclass(frozen=True)
@@ -93,7 +94,8 @@ def parse_term(text: str) -> Term:
         if not _TERM.match(part):
             raise ValueError(
                 f"regressor {text!r}: cannot read factor {part!r}; write channels joined by "
-                "'*' with optional powers, e.g. 'alpha', 'alpha^2', 'alpha*de'"
+                "'*' with optional powers, e.g. 'alpha', 'alpha^2', 'alpha*de', "
+                "'(alpha-8deg)+^2' (a spline: max(alpha - 8 deg, 0)^2)"
             )
         name, _, power = part.partition("^")
         factors.append((FACTOR_CHANNEL.get(name, name), int(power) if power else 1))
@@ -129,12 +131,10 @@ def reference_values(
         for channel, _ in term.factors:
             if channel in out:
                 continue
-            x = channel_values(record, channel)
+            x = channel_values(record, channel)  # a spline factor's origin is its knot
             out[channel] = (
-                float(np.mean(x)) if reference == "mean"
-                else float(x[0]) if reference == "initial"
-                else 0.0
-            )
+                0.0 if HINGE.match(channel) or reference == "none"
+                else float(np.mean(x)) if reference == "mean" else float(x[0]))
     return out
 
 

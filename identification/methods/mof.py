@@ -13,6 +13,9 @@ aerodynamics", and Morelli & Klein (2016) section 5.5 (SIDPAC's ``mof``):
 * consistent smoothing: a moment coefficient computed from smoothed derivatives of the
   rates has its regressors passed through the same filter, in the search, the fit and
   the prediction (Morelli & Klein 2016 sec. 11.2);
+* splines in alpha (option ``spline``): the candidates (alpha - alpha_k)^n_+, n = 1 to
+  ``order``, with knots fixed a priori on a grid (Morelli 1995; Morelli & Klein 2016
+  ch. 5 and 12), after the monomials: a polynomial cannot follow a slope break;
 * stop: the predicted square error (Morelli 1995 eq. 24; M&K eq. 5.96)
 
       PSE = (1/N) (z - y)'(z - y) + sigma_max^2 p / N,   sigma_max^2 = (1/N) sum (z - mean z)^2
@@ -30,10 +33,11 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from itertools import combinations_with_replacement
+from math import ceil, floor
 
 import numpy as np
 
-from flightid.identification.data.coefficients import differentiated
+from flightid.identification.data.coefficients import HINGE, differentiated, hinge_name
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
@@ -60,6 +64,45 @@ def candidate_terms(variables: Sequence[str], order: int = 3) -> list[str]:
                      for v in dict.fromkeys(combo)]
             terms.append("*".join(parts))
     return terms
+
+
+def spline_terms(records: Sequence[FlightRecord], spacing_deg: float, order: int = 3,
+                 channel: str = "alpha") -> list[str]:
+    """Spline candidates (channel - k)^n_+ with knots k at every multiple of
+    ``spacing_deg`` strictly inside the records' range of ``channel``, n = 1 to ``order``.
+
+    Morelli (1995) sec. 3; Morelli & Klein (2016) ch. 5 and 12: polynomial splines in
+    alpha with knots fixed a priori join the candidate pool, so the selection can follow
+    a slope break that no polynomial in alpha can. The knots depend on the training
+    records' range only, never on a model's tables nor on the records predicted.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The training records, pooled (``channel`` in rad).
+    spacing_deg : float
+        The knots' spacing, deg; 0 gives no spline candidate.
+    order : int
+        The highest power n of each spline (1 to 4).
+    channel : str
+        The angle the splines are in.
+
+    Returns
+    -------
+    list of str
+        Terms such as '(alpha-8deg)+' and '(alpha-8deg)+^2', every power 1 before any
+        power 2, each power's knots in increasing order.
+    """
+    if spacing_deg < 0:
+        raise ValueError(f"the spline spacing must be positive (deg) or 0, got {spacing_deg}")
+    if spacing_deg == 0 or not records:
+        return []
+    values = np.degrees(np.concatenate([ee.channel_values(r, channel) for r in records]))
+    lo, hi = float(np.min(values)), float(np.max(values))
+    knots = [k * spacing_deg for k in range(ceil(lo / spacing_deg), floor(hi / spacing_deg) + 1)
+             if lo < k * spacing_deg < hi]
+    return [hinge_name(channel, k) + (f"^{n}" if n > 1 else "")
+            for n in range(1, order + 1) for k in knots]
 
 
 def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | None = None,
@@ -248,7 +291,9 @@ def _stacked(records: Sequence[FlightRecord], coefficient: str, terms: Sequence[
     """The coefficient (N) and the candidates' regressors (N x terms) of the records one
     after another, as perturbations from the pooled reference values."""
     if reference == "mean":
-        pooled = {ch: float(np.mean(np.concatenate([ee.channel_values(r, ch) for r in records])))
+        # a spline factor's origin is its knot
+        pooled = {ch: 0.0 if HINGE.match(ch) else
+                  float(np.mean(np.concatenate([ee.channel_values(r, ch) for r in records])))
                   for ch in dict.fromkeys(c for t in terms for c, _ in t.factors)}
         refs = pooled
     else:
@@ -284,8 +329,11 @@ def fit_records(records: Sequence[FlightRecord], model: str = "global",
     and conditions pooled): one Estimate, as ``run`` gives for one record."""
     options = options or Options()
     structure = model_structure.regression(model, options.coefficients)
+    in_alpha = any("alpha" in t for t in structure.values())
+    splines = spline_terms(records, options.spline, options.order) if in_alpha else []
     return merge(ID, [
-        estimate(records, c, candidate_terms(t, options.order), reference=options.reference,
+        estimate(records, c, candidate_terms(t, options.order)
+                 + (splines if "alpha" in t else []), reference=options.reference,
                  colored=options.colored, max_terms=options.max_terms,
                  consistent_smoothing=options.consistent_smoothing,
                  backward=options.backward)
@@ -335,10 +383,16 @@ class Options(RegressionOptions):
               "derivatives through the same filter (search, fit and prediction)")
     backward: bool = option(False, "then remove the chosen terms whose removal lowers the "
                                    "predicted square error (backward elimination)")
+    spline: float = option(0.0, "spline candidates in alpha, (alpha - k)^n_+ for n = 1 to "
+                                "order, with knots k every this many deg inside the "
+                                "training alpha range (0: none)")
 
     def __post_init__(self) -> None:
         if not 1 <= self.order <= 4:
             raise ValueError(f"option order of method mof must be 1 to 4, got {self.order}")
+        if self.spline < 0:
+            raise ValueError(f"option spline of method mof must be 0 (none) or a positive "
+                             f"knot spacing in deg, got {self.spline}")
 
 
 def run(record: FlightRecord, model: str = "global", options: Options | None = None

@@ -327,6 +327,9 @@ class Options(HeldOptions, OutputErrorOptions):
     dynamic_pressure: bool = option(
         True, "lateral model: the aerodynamic terms follow the measured qbar(t)/qbar_ref "
               "(second-order terms with the measured states and inputs as pseudo-inputs)")
+    moment_axes: str = option(
+        "body", "lateral model: 'stability' for an aircraft whose rolling and yawing "
+                "moments are linear in the stability axes of the instantaneous alpha")
     structure_check: bool = option(
         True, "widen the bounds where equation error on the same record disagrees beyond "
               "3 combined bounds (a model structure error)")
@@ -346,19 +349,9 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
                   if o in model_structure.OPTIONAL_OUTPUTS and o not in record]
     if unmeasured:
         linear = lm.without_outputs(linear, unmeasured)
-    scheduled = (options.dynamic_pressure and linear.name in mi.QBAR_SCHEDULED
-                 and "qbar" in record and "V" in record)
-    if scheduled:
-        record = mi.with_dynamic_pressure_channels(record, linear)
-        linear = mi.with_dynamic_pressure(linear)
-        if linear.name in mi.KINEMATIC_INPUTS and all(c in record
-                                                        for c in mi.KINEMATIC_CHANNELS):
-            record = mi.with_kinematics_channels(record, linear)
-            linear = mi.with_kinematics(linear)
-    moments = mi.PROPULSIVE_MOMENTS.get(linear.name, ())
-    driven = options.propulsive_moments and moments and all(c in record for c in moments)
-    if driven:
-        linear = mi.with_propulsive_moments(linear)
+    record, linear = mi.driven_by_measurements(
+        record, linear, dynamic_pressure=options.dynamic_pressure,
+        propulsive_moments=options.propulsive_moments, moment_axes=options.moment_axes)
     start, start_note = options.start, ""
     if start == "equation_error":
         try:  # the free parameters' start values; the held ones keep theirs
@@ -388,11 +381,7 @@ def run(record: FlightRecord, model: str = "lateral", options: Options | None = 
     if options.structure_check:
         check_structure(est, record, linear, free, held)
     est.fit["a_priori"] = a_priori.describe(record, held)
-    if scheduled:
-        est.fit["dynamic_pressure"] = (f"aerodynamic terms times qbar(t)/"
-                                       f"{linear.condition.qbar:.1f} Pa")
-    if driven:
-        est.fit["propulsive_moments"] = f"{', '.join(moments)} (N m) as measured inputs"
+    est.fit.update(mi.known_input_notes(linear))
     est.fit["start"] = note
     if unmeasured:
         est.fit["outputs_left_out"] = {o: "not in the record (state integrated from the "

@@ -181,8 +181,8 @@ class OutputErrorOptions:
 
     step_tolerance: float = option(1e-3, "converged when no step exceeds this many std",
                                    tuning=True)
-    cost_tolerance: float = option(1e-7, "or when the cost changes less than this (relative)",
-                                   tuning=True)
+    cost_tolerance: float = option(1e-7, "or when the ML cost N/2 ln det R changes less than "
+                                         "this (absolute)", tuning=True)
     check_identifiability: bool = option(True, "report parameters the data cannot determine "
                                                "instead of estimating them", tuning=True)
     min_input_range: float = option(ident.MIN_INPUT_RANGE,

@@ -68,15 +68,7 @@ def _scheduled_sources(model: LinearModel) -> list[tuple[str, int]]:
     every derivative at 1 against at 0), so an attitude (kinematic only) needs no channel."""
     rows, cols = QBAR_SCHEDULED[model.name]
     powers = sorted({0, *rows.values()})
-    names = [p for p in model.parameters if is_derivative(p)]
-    on = model.build({**model.start, **dict.fromkeys(names, 1.0)})
-    off = model.build({**model.start, **dict.fromkeys(names, 0.0)})
-    m = len(model.inputs)
-    moved = np.concatenate([np.abs(on[0] - off[0]), np.abs(on[1] - off[1])[:, :m]], axis=1)
-    moved_y = np.concatenate([np.abs(on[2] - off[2]), np.abs(on[3] - off[3])[:, :m]], axis=1)
-    used = (moved.sum(axis=0) + moved_y.sum(axis=0)) > 0
-    sources = [x for x, u in zip((*model.states, *model.inputs), used, strict=True) if u]
-    return [(x, cols.get(x, 0) + k) for x in sources for k in powers]
+    return [(x, cols.get(x, 0) + k) for x in _aerodynamic_sources(model) for k in powers]
 
 
 def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
@@ -86,9 +78,10 @@ def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
 
 
 def pseudo_input_source(name: str) -> str:
-    """The state or input a pseudo-input of ``with_dynamic_pressure`` is made of ('dr' for
-    'dr*dqbar0'); any other input name unchanged."""
-    return name.split(QBAR_SUFFIX, 1)[0]
+    """The state or input a pseudo-input of ``with_dynamic_pressure`` or
+    ``with_stability_axes`` is made of ('dr' for 'dr*dqbar0' and 'dr*dalpha*dqbar0'); any
+    other input name unchanged."""
+    return name.split(QBAR_SUFFIX, 1)[0].split(ALPHA_SUFFIX, 1)[0]
 
 
 def with_dynamic_pressure_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
@@ -248,5 +241,166 @@ def with_kinematics(model: LinearModel) -> LinearModel:
                        dict(model.state_channels))
 
 
+def driven_by_measurements(record: FlightRecord, model: LinearModel, *,
+                           dynamic_pressure: bool = True, propulsive_moments: bool = True,
+                           moment_axes: str = "body") -> tuple[FlightRecord, LinearModel]:
+    """(record, model) with the known inputs a linear lateral model takes from ``record``,
+    as output error and filter error both use them.
+
+    Parameters
+    ----------
+    record : the flight; the pseudo-input channels are added to a copy.
+    model : a linear model (``linear.LinearModel``); other presets than the lateral one
+        come back unchanged.
+    dynamic_pressure : the aerodynamic terms follow the measured qbar (Pa) and V (m/s)
+        (``with_dynamic_pressure``), and with them the full kinematics and inertial
+        coupling (``with_kinematics``) where the record has their channels.
+    propulsive_moments : drive the model with the record's L_prop, N_prop (N m)
+        (``with_propulsive_moments``) where it has them.
+    moment_axes : 'body', or 'stability' for an aircraft whose lateral aerodynamics are
+        linear in the stability axes of the instantaneous alpha (``with_stability_axes``;
+        the record needs ``alpha``, rad).
+    """
+    if moment_axes not in MOMENT_AXES:
+        raise ValueError(f"moment_axes must be one of {', '.join(MOMENT_AXES)}, got "
+                         f"{moment_axes!r}")
+    if moment_axes == "stability" and model.name in STABILITY_AXES and model.condition:
+        if "alpha" not in record:
+            raise ValueError("moment_axes=stability needs the record's alpha channel (rad)")
+        record = with_stability_axes_channels(record, model)
+        model = with_stability_axes(model)
+    if (dynamic_pressure and model.name in QBAR_SCHEDULED and "qbar" in record
+            and "V" in record):
+        record = with_dynamic_pressure_channels(record, model)
+        model = with_dynamic_pressure(model)
+        if model.name in KINEMATIC_INPUTS and all(c in record for c in KINEMATIC_CHANNELS):
+            record = with_kinematics_channels(record, model)
+            model = with_kinematics(model)
+    moments = PROPULSIVE_MOMENTS.get(model.name, ())
+    if propulsive_moments and moments and all(c in record for c in moments):
+        model = with_propulsive_moments(model)
+    return record, model
+
+
+def known_input_notes(model: LinearModel) -> dict[str, str]:
+    """What ``driven_by_measurements`` gave ``model``, for an estimate's ``fit``:
+    {'dynamic_pressure' | 'propulsive_moments' | 'moment_axes': description}."""
+    notes = {}
+    if is_scheduled(model):
+        notes["dynamic_pressure"] = (f"aerodynamic terms times qbar(t)/"
+                                     f"{model.condition.qbar:.1f} Pa")
+    moments = [c for c in PROPULSIVE_MOMENTS.get(model.name, ()) if c in model.inputs]
+    if moments:
+        notes["propulsive_moments"] = f"{', '.join(moments)} (N m) as measured inputs"
+    if any(ALPHA_SUFFIX in name for name in model.inputs):
+        notes["moment_axes"] = "stability axes of the measured alpha"
+    return notes
+
+
+def is_scheduled(model: LinearModel) -> bool:
+    """True when ``model``'s aerodynamic terms follow the measured dynamic pressure
+    (``with_dynamic_pressure``)."""
+    return any(QBAR_SUFFIX in name for name in model.inputs)
+
+
 def _scheduled_power(model: LinearModel, x: str) -> int:
     return QBAR_SCHEDULED[model.name][1].get(x, 0)
+
+
+# the lateral moments and rates a preset rotates with the measured angle of attack when
+# the aircraft's aerodynamics are linear in stability axes (``with_stability_axes``):
+# (rows of the roll and yaw accelerations, columns of the roll and yaw rates)
+STABILITY_AXES: dict[str, tuple[str, str]] = {"lateral": ("p", "r")}
+ALPHA_SUFFIX = "*dalpha"
+MOMENT_AXES = ("body", "stability")
+
+
+def stability_axes_inputs(model: LinearModel) -> tuple[str, ...]:
+    """The pseudo-input channels of ``with_stability_axes``: '<x>*dalpha' for each state
+    and surface of ``model`` an aerodynamic derivative multiplies."""
+    return tuple(f"{x}{ALPHA_SUFFIX}" for x in _aerodynamic_sources(model))
+
+
+def with_stability_axes_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
+    """``record`` with the pseudo-inputs of ``with_stability_axes(model)``:
+    (alpha - alpha_ref) x for each measured state and surface x (alpha in rad, alpha_ref
+    the model's reference angle of attack)."""
+    d_alpha = record["alpha"] - model.condition.alpha
+    extra, units = {}, dict(record.meta.units)
+    for x, name in zip(_aerodynamic_sources(model), stability_axes_inputs(model), strict=True):
+        channel = model.state_channels.get(x, x)
+        extra[name] = d_alpha * record[channel]
+        units[name] = record.unit(channel)
+    return FlightRecord(record.time, {**record.channels, **extra},
+                        dataclasses.replace(record.meta, units=units))
+
+
+def with_stability_axes(model: LinearModel) -> LinearModel:
+    """``model`` for an aircraft whose lateral aerodynamics are linear in the stability
+    axes of the instantaneous angle of attack (JSBSim's frame="STABILITY", rates
+    p_s = p cos alpha + r sin alpha, r_s = r cos alpha - p sin alpha).
+
+    The parameters stay the body-axis derivatives at the reference alpha_0. At
+    alpha = alpha_0 + da the stability axes turn by da about y, so to first order in da
+    (Etkin & Reid 1996 sec. 4.3, the axis transformation of the derivatives)
+      [Cl; Cn] += da ([-Cn; Cl] + [C.._p rhat - C.._r phat]),  CY += da (CY_p rhat - CY_r phat),
+    the moments' rotation and the rates' (the derivatives' axis transformation,
+    Etkin & Reid eq. 4.3,5, taken along the flight). The second-order terms enter as
+    known inputs '<x>*dalpha' = da x (``with_stability_axes_channels``) through the
+    model's own aerodynamic columns, as ``with_dynamic_pressure`` does, so the
+    sensitivities stay exact. On navion-demo's exact truth record (stability-axis
+    aerodynamics, alpha within 0.25 deg of trim) a regression of the body-axis Cl on
+    beta, phat, rhat, da, dr put Cl_dr +1.7 %, Cn_da +4.5 %, Cn_p -0.9 % off; with the
+    stability-axis rates and moments it fits to 1e-8. A model of another preset is
+    returned unchanged."""
+    if model.name not in STABILITY_AXES or model.condition is None:
+        return model
+    roll, yaw = (model.states.index(s) for s in STABILITY_AXES[model.name])
+    c = model.condition
+    inertia = np.array([[c.Ixx, -c.Ixz], [-c.Ixz, c.Izz]])
+    # [pdot; rdot] = I^-1 [L; N]: the moment rotation [L; N] -> [-N; L] in acceleration rows
+    turn = np.linalg.solve(inertia, np.array([[0.0, -1.0], [1.0, 0.0]]) @ inertia)
+    zero = {p: 0.0 for p in model.parameters if is_derivative(p)}
+    sources = _aerodynamic_sources(model)
+    n_in = len(model.inputs)
+    names = (*model.states, *model.inputs)
+    column = {x: names.index(x) for x in sources}
+
+    def build(values: Mapping[str, complex]) -> Matrices:
+        A, B, C, D = model.build(values)
+        A0, B0, C0, D0 = model.build({**values, **zero})
+        aero_x = np.concatenate([A - A0, B[:, :n_in] - B0[:, :n_in]], axis=1)
+        aero_y = np.concatenate([C - C0, D[:, :n_in] - D0[:, :n_in]], axis=1)
+        bx = np.zeros((A.shape[0], len(sources)), dtype=A.dtype)
+        dy = np.zeros((C.shape[0], len(sources)), dtype=C.dtype)
+        for k, x in enumerate(sources):
+            bx[[roll, yaw], k] = turn @ aero_x[[roll, yaw], column[x]]
+            # the rates' rotation: p_s picks up da r, r_s loses da p
+            if x == model.states[yaw]:
+                bx[:, k] += aero_x[:, roll]
+                dy[:, k] += aero_y[:, roll]
+            elif x == model.states[roll]:
+                bx[:, k] -= aero_x[:, yaw]
+                dy[:, k] -= aero_y[:, yaw]
+        return (A, np.concatenate([B[:, :n_in], bx, B[:, n_in:]], axis=1), C,
+                np.concatenate([D[:, :n_in], dy, D[:, n_in:]], axis=1))
+
+    return LinearModel(model.name, model.states, (*model.inputs, *stability_axes_inputs(model)),
+                       model.outputs, model.parameters, dict(model.start), build,
+                       model.condition,
+                       f"{model.description}, its moments in stability axes",
+                       dict(model.state_channels))
+
+
+def _aerodynamic_sources(model: LinearModel) -> list[str]:
+    """The states and inputs of ``model`` that some derivative multiplies: a structural
+    test (the matrices with every derivative at 1 against at 0), so an attitude
+    (kinematic only) needs no channel."""
+    names = [p for p in model.parameters if is_derivative(p)]
+    on = model.build({**model.start, **dict.fromkeys(names, 1.0)})
+    off = model.build({**model.start, **dict.fromkeys(names, 0.0)})
+    m = len(model.inputs)
+    moved = np.concatenate([np.abs(on[0] - off[0]), np.abs(on[1] - off[1])[:, :m]], axis=1)
+    moved_y = np.concatenate([np.abs(on[2] - off[2]), np.abs(on[3] - off[3])[:, :m]], axis=1)
+    used = (moved.sum(axis=0) + moved_y.sum(axis=0)) > 0
+    return [x for x, u in zip((*model.states, *model.inputs), used, strict=True) if u]

@@ -1,20 +1,17 @@
 """``--method fem``: the filter-error method, maximum likelihood with a steady-state
 Kalman filter inside.
 
-``estimation`` (the relaxation between the Gauss-Newton passes and the noise step, the
-result, the method's options and protocol entry), ``kalman_filter`` (the steady-state
-filter, its likelihood, one Gauss-Newton pass, the noise step and the robust bounds),
+``estimation`` (the estimate and its result), ``relaxation`` (the relaxation between
+the Gauss-Newton passes and the noise step, the joint noise fit from two starts),
+``method`` (the options, the preset entry point and the registry entry),
+``kalman_filter`` (the steady-state filter, its likelihood, one Gauss-Newton pass, the
+noise step and the robust bounds),
 ``flight_condition`` (the derivatives corrected for the measured dynamic pressure and
 airspeed leaving the reference condition). The package exports
 the method's API.
 """
 
-from flightid.identification.methods.filter_error.estimation import (
-    ID,
-    METHOD,
-    Options,
-    estimate,
-    run,
-)
+from flightid.identification.methods.filter_error.estimation import ID, estimate
+from flightid.identification.methods.filter_error.method import METHOD, Options, run
 
 __all__ = ["ID", "METHOD", "Options", "estimate", "run"]

@@ -54,7 +54,6 @@ parameters they find (``refit.refit_without_unidentifiable``).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,36 +71,23 @@ from flightid.identification.methods.filter_error.flight_condition import (
     innovation_change,
 )
 from flightid.identification.methods.filter_error.kalman_filter import (
-    MEASUREMENT_NOISE_PREFIX,
-    PROCESS_NOISE_PREFIX,
-    FilterEvaluation,
     FilterProblem,
-    evaluate,
-    gauss_newton_pass,
     is_noise_parameter,
-    measurement_noise,
     measurement_noise_name,
-    noise_step,
     process_noise_name,
     robust_covariance,
 )
-from flightid.identification.methods.protocol import HeldOptions, Method, option
-from flightid.identification.models import a_priori
-from flightid.identification.models import structure as model_structure
+from flightid.identification.methods.filter_error.relaxation import Relaxed, relax, two_starts
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
 ID = "fem"
 KINEMATIC_STATES = ("phi", "theta", "psi")
-# relaxation: Gauss-Newton passes of EARLY_ITERATIONS steps while R still changes by more
-# than ROUGH_NOISE_CHANGE (relative) per update, full passes after that
-EARLY_ITERATIONS = 3
 # smallest measurement-noise standard deviation, as a fraction of the output-error residual
 # standard deviation of the same output: on real data the process noise can explain all
 # of an output's innovation, which drives R to zero (K C -> I, the filter then follows the
 # measured states and the method degenerates towards equation error)
 MIN_NOISE_FRACTION = 0.01
-ROUGH_NOISE_CHANGE = 0.1
 
 
 # ------------------------------------------------------------------ estimation
@@ -201,7 +187,7 @@ def estimate(
     # lower bound of R: a fixed fraction of the output-error residual variance
     floor = np.maximum(data.noise_floor, MIN_NOISE_FRACTION**2 * np.diag(R))
 
-    def fit(active: list[str], current: dict[str, float]) -> _Relaxed:
+    def fit(active: list[str], current: dict[str, float]) -> Relaxed:
         # parameters found unidentifiable stay at the values of the fit that found them,
         # and the next relaxation starts from its R
         nonlocal R
@@ -212,15 +198,15 @@ def estimate(
                         {n: 0.0 for n in f_start if n not in active})
         theta = np.array([current[n] for n in active])
         if joint_noise:
-            relaxed = _two_starts(prob, theta, R, data.x0, max_iterations, max_relaxations,
+            relaxed = two_starts(prob, theta, R, data.x0, max_iterations, max_relaxations,
                                   step_tolerance, cost_tolerance, noise_tolerance, floor)
         else:
-            relaxed = _relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
+            relaxed = relax(prob, theta, R, data.x0, max_iterations, max_relaxations,
                              step_tolerance, cost_tolerance, noise_tolerance, floor)
         R = relaxed.R
         return relaxed
 
-    def singular(active: list[str], relaxed: _Relaxed) -> dict[str, str]:
+    def singular(active: list[str], relaxed: Relaxed) -> dict[str, str]:
         if not (check_identifiability and active):
             return {}
         keep = [n for n in active if n.startswith("bias_") or is_noise_parameter(n)]
@@ -233,131 +219,7 @@ def estimate(
     return _result(final.problem, final, unidentifiable, oe_fit, departure, colored)
 
 
-@dataclass
-class _Relaxed:
-    problem: FilterProblem
-    theta: np.ndarray
-    R: np.ndarray
-    evaluation: FilterEvaluation
-    information: np.ndarray
-    converged: bool
-    reason: str
-    passes: int
-    iterations: int
-    cost_history: list[float]
-    noise_history: list[np.ndarray]
-    lower: np.ndarray
-    start: str = "output error"
-    start_costs: dict[str, float] | None = None
-
-    @property
-    def values(self) -> dict[str, float]:
-        """{name: value} of the estimated parameters."""
-        return dict(zip(self.problem.names, self.theta, strict=True))
-
-
-def _joint(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
-           max_iterations: int, step_tol: float, cost_tol: float, floor: np.ndarray
-           ) -> _Relaxed:
-    """Gauss-Newton on the derivatives, biases, F and the measurement-noise standard
-    deviations together: the likelihood's own minimum over R (Maine & Iliff 1985)."""
-    gn = gauss_newton_pass(prob, theta, R, x0, max_iterations, step_tol, cost_tol)
-    theta = gn.theta.copy()
-    for j, name in enumerate(prob.names):
-        if is_noise_parameter(name):
-            theta[j] = abs(theta[j])
-    R = prob.noise(theta, R)
-    final = evaluate(prob, theta, R, x0, sensitivities=True)
-    info = final.information if final.information is not None else np.zeros((0, 0))
-    return _Relaxed(prob, theta, R, final, info, gn.converged, gn.reason, 1, gn.iterations,
-                    list(gn.cost_history), [np.diag(R).copy()], floor)
-
-
-def _two_starts(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
-                max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
-                noise_tol: float, floor: np.ndarray) -> _Relaxed:
-    """The joint Gauss-Newton from the output-error start and from the relaxation's end
-    point (Jategaonkar 2015 sec. 5.8), the lower J kept: J has several minima in F, R."""
-    sigma = np.array([n.startswith(MEASUREMENT_NOISE_PREFIX) for n in prob.names])
-    relax_prob = FilterProblem(prob.data, [n for n, s in zip(prob.names, sigma, strict=True)
-                                           if not s],
-                               prob.fixed, prob.noise_states, prob.fixed_noise)
-    relaxed = _relax(relax_prob, theta[~sigma], R, x0, max_iterations, max_relaxations,
-                     step_tol, cost_tol, noise_tol, floor)
-    fits = {"output error": _joint(prob, theta, R, x0, max_iterations, step_tol, cost_tol,
-                                   floor)}
-    if np.isfinite(relaxed.evaluation.cost):
-        from_relaxed = theta.copy()
-        from_relaxed[~sigma] = relaxed.theta
-        outputs = prob.data.model.outputs
-        from_relaxed[sigma] = [np.sqrt(relaxed.R[j, j]) for j in (
-            outputs.index(n[len(MEASUREMENT_NOISE_PREFIX):]) for n, s in
-            zip(prob.names, sigma, strict=True) if s)]
-        fits["relaxation"] = _joint(prob, from_relaxed, relaxed.R, x0, max_iterations,
-                                    step_tol, cost_tol, floor)
-    costs = {k: float(f.evaluation.cost) for k, f in fits.items()}
-    best = min(costs, key=lambda k: costs[k] if np.isfinite(costs[k]) else np.inf)
-    fit = fits[best]
-    fit.start, fit.start_costs = best, {**costs, "relaxation alone": relaxed.evaluation.cost}
-    fit.passes += relaxed.passes
-    return fit
-
-
-def _relax(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
-           max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
-           noise_tol: float, floor: np.ndarray) -> _Relaxed:
-    """Alternate Gauss-Newton passes (R fixed) and R updates with F compensation."""
-    history: list[float] = []
-    noise_history = [np.diag(R).copy()]
-    iterations = 0
-    converged, reason = False, f"R still changing after {max_relaxations} relaxation steps"
-    change = np.inf
-    passes = 0
-    while passes < max_relaxations:
-        passes += 1
-        # while R is far from its final value the likelihood surface in theta is skewed
-        # and Gauss-Newton creeps: a few steps, then a new R (Jategaonkar sec. 5.5)
-        early = change > ROUGH_NOISE_CHANGE
-        gn = gauss_newton_pass(prob, theta, R, x0, EARLY_ITERATIONS if early else max_iterations,
-                           step_tol, cost_tol)
-        iterations += gn.iterations
-        history.extend(gn.cost_history)
-        theta = gn.theta
-        if not gn.converged and not (early and np.isfinite(gn.evaluation.cost)):
-            converged, reason = False, gn.reason
-            break
-        R_new = measurement_noise(gn.evaluation, floor)
-        change = float(np.max(np.abs(np.diag(R_new) / np.diag(R) - 1.0)))
-        if change < noise_tol and gn.converged:
-            converged = True
-            reason = (f"{gn.reason}; measurement noise changed by less than {noise_tol:g} "
-                      "(relative)")
-            break
-        step = noise_step(prob, theta, R, R_new, gn.evaluation, x0)
-        if step is None:
-            if not gn.converged:
-                change = 0.0  # finish the Gauss-Newton pass before trying R again
-                continue
-            # no R between the old and the new one lowers the likelihood: R is at its
-            # optimum for these parameters, as far as this update can tell
-            converged = True
-            reason = f"{gn.reason}; no update of the measurement noise lowers the cost"
-            break
-        theta, R_next = step
-        change = float(np.max(np.abs(np.diag(R_next) / np.diag(R) - 1.0)))
-        R = R_next
-        noise_history.append(np.diag(R).copy())
-    # F enters only through F F^T: report the non-negative root
-    for j, name in enumerate(prob.names):
-        if name.startswith(PROCESS_NOISE_PREFIX):
-            theta[j] = abs(theta[j])
-    final = evaluate(prob, theta, R, x0, sensitivities=True)
-    info = final.information if final.information is not None else np.zeros((0, 0))
-    return _Relaxed(prob, theta, R, final, info, converged, reason, passes, iterations, history,
-                    noise_history, floor)
-
-
-def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
+def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
             oe_fit: Estimate, departure: ConditionDeparture | None,
             colored: bool) -> Estimate:
     names = prob.names
@@ -392,6 +254,7 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
     }
     r2 = r_squared_by_output(d.z, ev.nu, d.model.outputs)
     outs = d.model.outputs
+    joint = {o for o in outs if measurement_noise_name(o) in names}
     fit_stats = {
         "model": d.model.name,
         "converged": fit.converged,
@@ -403,8 +266,12 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
         "cost_history": list(fit.cost_history),
         "cost": ev.cost,
         "noise_std": {o: float(np.sqrt(fit.R[j, j])) for j, o in enumerate(outs)},
-        "noise_at_lower_bound": [o for j, o in enumerate(outs)
-                                 if fit.R[j, j] <= fit.lower[j] * (1 + 1e-9)],
+        # the relaxation's R update stops at the floor; the joint fit's sigma_<output> has
+        # no bound, and one estimated below the floor is reported as such
+        "noise_at_lower_bound": [o for j, o in enumerate(outs) if o not in joint
+                                 and fit.R[j, j] <= fit.lower[j] * (1 + 1e-9)],
+        "noise_below_floor": [o for j, o in enumerate(outs) if o in joint
+                              and fit.R[j, j] < fit.lower[j]],
         "noise_covariance": fit.R,
         "noise_history": [dict(zip(outs, np.sqrt(r).tolist(), strict=True))
                           for r in fit.noise_history],
@@ -435,66 +302,3 @@ def _result(prob: FilterProblem, fit: _Relaxed, unidentifiable: dict[str, str],
         time=d.time.copy(),
         std_kind=kind,
     )
-
-
-# ----------------------------------------------------------------------------- protocol
-@dataclass(frozen=True)
-class Options(HeldOptions):
-    """Options of ``--method fem``."""
-
-    free: list[str] | None = option(None, "parameters to estimate (default: all not held)")
-    start: dict[str, float] | None = option(None, "start (a priori) values")
-    process_noise: list[str] | None = option(
-        None, "states with process noise (default: all but the Euler angles)")
-    process_noise_start: dict[str, float] | None = option(
-        None, "start values of F_<state> (state units per sqrt(s))")
-    initial_state: str = option("measured", "'measured' or 'zero' (the filter forgets it)")
-    hold: str = option("foh", "inputs between samples: 'foh' (linear) or 'zoh' (held)")
-    max_iterations: int = option(60, "Gauss-Newton iterations (per relaxation without "
-                                     "joint_noise)")
-    max_relaxations: int = option(20, "limit of alternating parameter / R updates")
-    step_tolerance: float = option(1e-3, "converged when no step exceeds this many std")
-    cost_tolerance: float = option(1e-6, "or when the cost falls less than this times |cost|")
-    noise_tolerance: float = option(1e-3, "and R changes less than this (relative)")
-    check_identifiability: bool = option(True, "report parameters the data cannot determine")
-    condition_correction: bool = option(
-        True, "correct the derivatives for the measured qbar and V leaving the reference")
-    colored: bool = option(True, "bounds corrected for colored innovations (Morelli & Klein "
-                                 "2016 eq. 6.54 on the innovations)")
-    joint_noise: bool = option(True, "estimate the measurement noise with the other "
-                                      "parameters, from the output-error and the "
-                                      "relaxation's end point, lower J kept")
-
-
-def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
-        ) -> Estimate:
-    """Filter error with a linear-model preset ('lateral', 'longitudinal', 'short_period')
-    at the record's reference condition, a priori parameters held."""
-    options = options or Options()
-    linear, free, held = a_priori.linear_model(
-        model_structure.linear(model), record, options.derivatives, options.a_priori,
-        "filter error")
-    est = estimate(
-        record, linear, free=free if options.free is None else list(options.free),
-        start=options.start, process_noise=options.process_noise,
-        process_noise_start=options.process_noise_start,
-        initial_state=options.initial_state, hold=options.hold,
-        max_iterations=options.max_iterations, max_relaxations=options.max_relaxations,
-        step_tolerance=options.step_tolerance, cost_tolerance=options.cost_tolerance,
-        noise_tolerance=options.noise_tolerance,
-        check_identifiability=options.check_identifiability,
-        condition_correction=options.condition_correction, colored=options.colored,
-        joint_noise=options.joint_noise)
-    est.fit["a_priori"] = a_priori.describe(record, held)
-    return est
-
-
-METHOD = Method(
-    id=ID, name="filter error",
-    summary="maximum likelihood with a steady-state Kalman filter in the loop: process "
-            "noise (turbulence) and measurement noise together",
-    reference="Jategaonkar, Flight Vehicle System Identification: A Time-Domain "
-              "Methodology, 2nd ed., 2015, ch. 5; Morelli & Klein 2016 ch. 6",
-    options=Options, models=model_structure.LINEAR, default_model="lateral",
-    channels=model_structure.linear_channels, run=run, contract_model="lateral",
-)

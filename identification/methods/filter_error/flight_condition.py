@@ -23,7 +23,9 @@ driven by s_k, the Kalman gain held), so
     theta_hat - theta = M^-1 sum_k dnu_k^T S^-1 d_k,
 
 M the filter's information matrix at the estimate. Only models without an airspeed state
-are corrected: a model with V as a state already varies its dynamic pressure.
+are corrected: a model with V as a state already varies its dynamic pressure, and so does
+one driven by ``measured_inputs.with_dynamic_pressure`` (filter error's lateral default,
+exact rather than first order).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from flightid.identification.methods.filter_error.kalman_filter import FilterEva
 from flightid.identification.methods.output_error import Problem
 from flightid.identification.models.discrete import propagate
 from flightid.identification.models.linear import LinearModel
+from flightid.identification.models.measured_inputs import is_scheduled
 from flightid.record import FlightRecord
 
 # nondimensional rate derivatives: the rate enters as p b / 2V (q c / 2V, alphadot c / 2V)
@@ -57,10 +60,12 @@ def condition_departure(record: FlightRecord, time: np.ndarray,
                         model: LinearModel) -> ConditionDeparture | None:
     """The departures of ``record``'s qbar and V channels (Pa, m/s) from ``model``'s
     reference condition at ``time`` (s), or None when the correction does not apply: the
-    record lacks one of the channels, the model has no reference condition, or it carries
-    the airspeed as a state."""
+    record lacks one of the channels, the model has no reference condition, it carries
+    the airspeed as a state, or its aerodynamic terms already follow the measured qbar
+    (``measured_inputs.with_dynamic_pressure``)."""
     c = model.condition
-    if c is None or "V" in model.states or any(ch not in record for ch in CHANNELS):
+    if (c is None or "V" in model.states or is_scheduled(model)
+            or any(ch not in record for ch in CHANNELS)):
         return None
     t = np.asarray(record.time, dtype=float)
 
