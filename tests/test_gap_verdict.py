@@ -30,6 +30,7 @@ from flightid.identification.gap.verdict import (
     NO_GAP,
     calibrated_p,
     channel_test,
+    other_outputs,
     surrogate_shifts,
     worst,
 )
@@ -165,6 +166,19 @@ def test_other_outputs_as_nuisance_keep_the_null_and_see_through_turbulence():
     assert channel_test(v, x, float(np.sum(v**2)), "c").p_value > ALPHA
     seen = channel_test(v, x, float(np.sum(v**2)), "c", other[:, None])
     assert seen.p_value < 1e-20 and MATERIAL <= seen.share <= 0.05
+
+
+def test_other_outputs_leave_out_a_channel_non_finite_on_some_window():
+    """A channel that is non-finite on one window only (a dropout) is left out of the
+    nuisance regressors of every window: each column holds one channel throughout, and the
+    windows stack (they raised ValueError in np.vstack when the column counts differed)."""
+    rng = np.random.default_rng(2)
+    windows = [400, 500]
+    hp = {c: [rng.standard_normal(n) for n in windows] for c in ("p", "r", "ay")}
+    hp["ay"][1][10] = np.nan
+    z = other_outputs(hp, "p", [0.02, 0.02])
+    assert z is not None and z.shape == (sum(windows), 3)  # r and its 2 Laguerre filters
+    np.testing.assert_allclose(z[:400, 0], hp["r"][0] - hp["r"][0].mean())
 
 
 def test_worst_verdict_and_shrink_text():

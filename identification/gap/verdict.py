@@ -396,12 +396,16 @@ def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
     ``PARTIAL_LAGUERRE`` is negative (no nuisance)."""
     if PARTIAL_LAGUERRE < 0:
         return None
+    # a channel non-finite on any window is left out of every window, so that each column
+    # holds the same channel throughout
+    others = [c for c, vs in high_passed.items()
+              if c != channel and all(np.all(np.isfinite(v)) for v in vs)]
     blocks = []
     for j, dt in enumerate(dts):
         cols: list[np.ndarray] = []
-        for other, vs in high_passed.items():
-            if other != channel and np.all(np.isfinite(vs[j])):
-                cols += [vs[j], *laguerre(vs[j], dt, PARTIAL_LAGUERRE)]
+        for other in others:
+            v = high_passed[other][j]
+            cols += [v, *laguerre(v, dt, PARTIAL_LAGUERRE)]
         if not cols:
             return None
         z = np.column_stack(cols)
