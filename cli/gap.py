@@ -27,7 +27,7 @@ from flightid.identification.gap.jsbsim.refly import refly
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.report import write_report
 from flightid.identification.gap.shrink import shrink_text
-from flightid.identification.gap.verdict import p_text
+from flightid.identification.gap.verdict import ChannelTest, p_text
 
 
 def gap_command(
@@ -197,6 +197,18 @@ VERDICT_TEXT = {
 }
 
 
+PARAMETERS_WIDTH = 16  # the effects table's parameters column, characters
+
+
+def _channel_text(channel: str, test: ChannelTest) -> str:
+    """One channel's null-level test in a few words: p and share of the main test, of the
+    test without the other outputs' residuals, and whether the channel is a gap."""
+    text = f"{channel} -" if test.slow else f"{channel} {p_text(test.p_value)} {test.share:+.4f}"
+    if test.plain is not None:
+        text += f" (alone {p_text(test.plain.p_value)} {test.plain.share:+.4f})"
+    return text + (" GAP" if test.gap else "")
+
+
 def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     """One axis: its verdict, gap map, ranked effects and how far the gap shrinks."""
     console.rule(f"{axis} axis")
@@ -205,9 +217,10 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
         console.print(f"model note: {term.text()}; removed from a written aircraft")
     if g.null_before is not None:
         tests = g.null_before.channels
-        console.print("null-level test of the model as is (p-value, held-out input-"
-                      "explained share): " + ", ".join(
-                          f"{c} {p_text(t.p_value)} {t.share:+.4f}" for c, t in tests.items()))
+        console.print("null-level test of the model as is (p-value, input-explained share;"
+                      " 'alone': without the other outputs' residuals; '-': an attitude or"
+                      " airspeed, high band only; GAP: above the null level): " + ", ".join(
+                          _channel_text(c, t) for c, t in tests.items()))
     if g.structure is not None and (g.structure.gap or g.structure.sensor):
         console.print(f"structure outside the catalogue: {g.structure.text()}")
     t = Table(title="gap map (residual / measured energy, mean over windows)")
@@ -227,13 +240,19 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
     if g.verdict == "no_gap" or not g.null_before or not g.null_before.gap:
         return
     named = {r.candidate.label: k for k, r in enumerate(g.named, start=1)}
-    e = Table(title=f"effects ({g.evidence}; named first, then by delta BIC)")
-    e.add_column("effect", overflow="fold")
-    e.add_column("parameters (catalogue units)", overflow="fold")
-    e.add_column("dBIC", justify="right")
-    e.add_column("held-out shrink", justify="right")
-    e.add_column("named", justify="right")
+    e = Table(title=f"effects ({g.evidence}; named first, then by delta BIC; parameters "
+                    "in the catalogue's units; shrink: of the held-out gap)")
     rows = [*g.named, *(r for r in (g.pairs + g.effects) if r.candidate.label not in named)]
+    # an effect's name on one line where the console's width allows it (the parameters
+    # wrap instead): what the other columns, their padding and the borders leave
+    longest = max((len(r.candidate.label) for r in rows[:8]), default=6)
+    dbic = max((len(f"{r.delta_bic:.0f}") for r in rows[:8]), default=4)
+    room = console.width - 6 - (PARAMETERS_WIDTH + 2) - (max(dbic, 4) + 2) - 8 - 8 - 2
+    e.add_column("effect", overflow="fold", min_width=max(min(longest, room), 6))
+    e.add_column("parameters", overflow="fold", max_width=PARAMETERS_WIDTH)
+    e.add_column("dBIC", justify="right")
+    e.add_column("shrink", justify="right")
+    e.add_column("named", justify="right")
     notes: list[str] = []
     for r in rows[:8]:
         params = "; ".join(f"{_short(k)} {v['value']:.4g} ± {v['std']:.2g}"

@@ -198,7 +198,10 @@ def test_table_readable_at_80_columns(tmp_path):
     assert "…" not in out.output
     assert max(len(line) for line in out.output.splitlines()) <= 80
     assert "verdict: explained" in out.output
-    assert "derivative_delta(Cl_beta,body)" in out.output.replace("\n", "")
+    # the null-level test names the channels above the null level, beside each p and share
+    assert " GAP" in out.output and "(alone " in out.output
+    # the effect's name on one line: the parameters column wraps instead
+    assert "derivative_delta(Cl_beta,body)" in out.output
     assert "injected (the record's card says): derivative_delta(" in out.output
 
 
