@@ -149,19 +149,24 @@ def test_global_model_predicts_held_out_c172p_maneuvers(c172p_training):
     assert "Cm_de*Tc" in est.names
 
 
+def _collinear_case() -> tuple[np.ndarray, np.ndarray]:
+    """y = 5 (d - q) + noise with q = a + n1 and d = q + n2 (n1, n2 of std 0.3, the noise
+    0.01); returns y and the columns (a, q, d)."""
+    rng = np.random.default_rng(11)
+    n = 3000
+    a = rng.uniform(-1.0, 1.0, n)
+    q = a + rng.normal(0.0, 0.3, n)
+    d = q + rng.normal(0.0, 0.3, n)
+    return 5.0 * (d - q) + rng.normal(0.0, 0.01, n), np.column_stack([a, q, d])
+
+
 def test_the_chosen_functions_expand_into_the_chosen_terms():
     # y = 5 (d - q) with q = a + n1 and d = q + n2: in the simple-first order (a, q, d) the
     # function of d is d made orthogonal to a and q, i.e. n2, and alone explains y; but the
     # term d alone does not (Twin Otter Cm: the elevator's function carried alpha and q,
     # fit R^2 0.63 for a claimed 0.999). Generated again with d first, the search takes q
     # too, and the path's R^2 is the least-squares fit's of the chosen terms.
-    rng = np.random.default_rng(11)
-    n = 3000
-    a = rng.uniform(-1.0, 1.0, n)
-    q = a + rng.normal(0.0, 0.3, n)
-    d = q + rng.normal(0.0, 0.3, n)
-    y = 5.0 * (d - q) + rng.normal(0.0, 0.01, n)
-    x = np.column_stack([a, q, d])
+    y, x = _collinear_case()
     z, c = y - y.mean(), x - x.mean(axis=0)
     one_search = mof._search(z, c, x, [0, 1, 2], 3)
     assert one_search == [2]
@@ -180,13 +185,7 @@ def test_backward_elimination_drops_the_term_left_near_zero():
     # left near zero once q and d are in. Removing it raises the residual by less than
     # the PSE's price of a term (sigma_max^2 / N), so the backward step drops it and only
     # it (Morelli & Klein 2016 ch. 5, stepwise regression)
-    rng = np.random.default_rng(11)
-    n = 3000
-    a = rng.uniform(-1.0, 1.0, n)
-    q = a + rng.normal(0.0, 0.3, n)
-    d = q + rng.normal(0.0, 0.3, n)
-    y = 5.0 * (d - q) + rng.normal(0.0, 0.01, n)
-    x = np.column_stack([a, q, d])
+    y, x = _collinear_case()
     forward, _ = select(y, x, ["a", "q", "d"])
     assert 0 in forward
     chosen, steps = select(y, x, ["a", "q", "d"], backward=True)
