@@ -388,29 +388,38 @@ def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str])
     return x - x.mean(axis=0)
 
 
+def nuisance_blocks(high_passed: Mapping[str, Sequence[np.ndarray]],
+                    dts: Sequence[float]) -> dict[str, list[np.ndarray]]:
+    """{channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}: each output's
+    high-passed residual (``high_passed``: {channel: one array per window}) and its
+    Laguerre filters, the nuisance columns it gives the other outputs' tests; a channel
+    non-finite on any window is left out (each column then holds one channel throughout)."""
+    return {c: [np.column_stack([v, *laguerre(v, dt, PARTIAL_LAGUERRE)])
+                for v, dt in zip(vs, dts, strict=True)]
+            for c, vs in high_passed.items() if all(np.all(np.isfinite(v)) for v in vs)}
+
+
 def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
-                  dts: Sequence[float]) -> np.ndarray | None:
+                  dts: Sequence[float],
+                  blocks: Mapping[str, Sequence[np.ndarray]] | None = None
+                  ) -> np.ndarray | None:
     """(N, m) the main test's nuisance regressors of ``channel``: every other output's
     high-passed residual (``high_passed``: {channel: one array per window}) and
-    ``PARTIAL_LAGUERRE`` Laguerre filters of it, window by window; None when
-    ``PARTIAL_LAGUERRE`` is negative (no nuisance)."""
+    ``PARTIAL_LAGUERRE`` Laguerre filters of it, window by window (``blocks``: those of
+    ``nuisance_blocks``, computed once for every channel, or None to compute them); None
+    when ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite."""
     if PARTIAL_LAGUERRE < 0:
         return None
-    # a channel non-finite on any window is left out of every window, so that each column
-    # holds the same channel throughout
-    others = [c for c, vs in high_passed.items()
-              if c != channel and all(np.all(np.isfinite(v)) for v in vs)]
-    blocks = []
-    for j, dt in enumerate(dts):
-        cols: list[np.ndarray] = []
-        for other in others:
-            v = high_passed[other][j]
-            cols += [v, *laguerre(v, dt, PARTIAL_LAGUERRE)]
-        if not cols:
-            return None
-        z = np.column_stack(cols)
-        blocks.append(z - z.mean(axis=0))
-    return np.vstack(blocks)
+    if blocks is None:
+        blocks = nuisance_blocks(high_passed, dts)
+    others = [c for c in blocks if c != channel]
+    if not others:
+        return None
+    out = []
+    for j in range(len(dts)):
+        z = np.column_stack([blocks[c][j] for c in others])
+        out.append(z - z.mean(axis=0))
+    return np.vstack(out)
 
 
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
@@ -429,6 +438,8 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
             for ch in fits[labels[0]].residual}
     high_passed = {ch: [highpass(v, dts[k]) for k, v in zip(labels, raw, strict=True)]
                    for ch, raw in raws.items()}
+    x, dt_list = np.vstack(xs), [dts[k] for k in labels]
+    nuisance = nuisance_blocks(high_passed, dt_list) if PARTIAL_LAGUERRE >= 0 else {}
     # (test, residual, regressor blocks, energy, its alpha, nuisance) of each chi-square gap
     flagged: list[tuple[ChannelTest, np.ndarray, list[np.ndarray], float, float,
                         np.ndarray | None]] = []
@@ -441,14 +452,14 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
         if ch in SLOW_CHANNELS:
             test = ChannelTest(ch, 0.0, 0, 1.0, 0.0, slow=True, level=math.nan)
             if ch not in UNLEVELLED:
-                test.level = channel_test(v, np.vstack(xs), spread, ch).share
+                test.level = channel_test(v, x, spread, ch).share
         else:
-            z = other_outputs(high_passed, ch, [dts[k] for k in labels])
-            test = channel_test(v, np.vstack(xs), spread, ch, z)
+            z = other_outputs(high_passed, ch, dt_list, nuisance)
+            test = channel_test(v, x, spread, ch, z)
             if test.p_value < ALPHA and test.share >= MATERIAL:  # a gap by chi-square
                 flagged.append((test, v, xs, spread, ALPHA, z))
             if z is not None:
-                test.plain = channel_test(v, np.vstack(xs), spread, ch)
+                test.plain = channel_test(v, x, spread, ch)
                 test.level = test.plain.share
                 if test.plain.p_value < PLAIN_ALPHA and test.plain.share >= PLAIN_MATERIAL:
                     flagged.append((test.plain, v, xs, spread, PLAIN_ALPHA, None))

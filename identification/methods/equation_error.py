@@ -68,7 +68,8 @@ REFERENCES = ("mean", "initial", "none")
 # any test input; the same limit as identification/engine/identifiability.py MIN_INPUT_RANGE.
 MIN_CONTROL_RANGE = {"de": 1e-3, "da": 1e-3, "dr": 1e-3, "df": 1e-3, "throttle": 1e-3}
 CONTROL_CHANNELS = tuple(MIN_CONTROL_RANGE)
-_TERM = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*|\([A-Za-z_]\w*[-+]\d+(?:\.\d+)?deg\)\+)(\^[1-9])?$")
+# a term: a channel or a spline factor (``HINGE``, its anchors stripped), to a power
+_TERM = re.compile(rf"^([A-Za-z_][A-Za-z0-9_]*|{HINGE.pattern[1:-1]})(\^[1-9])?$")
 
 
 @dataclass(frozen=True)

@@ -130,9 +130,10 @@ def _waves(campaign: Campaign, folder: Path) -> Iterator[tuple[list[int], Callab
     if campaign.start != "neighbour":
         yield todo, run_point, len(done)
         return
-    first = [i for i in todo if i in set(neighbour.anchors(campaign))]
+    anchors = set(neighbour.anchors(campaign))
+    first = [i for i in todo if i in anchors]
     yield first, run_point, len(done)
-    rest = [i for i in todo if i not in first]
+    rest = [i for i in todo if i not in anchors]
     if rest:
         starts = neighbour.neighbour_starts(campaign, store.load(folder), rest)
         yield rest, partial(run_point_from, starts), len(done) + len(first)
