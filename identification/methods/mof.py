@@ -149,7 +149,7 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     for _ in range(REGENERATIONS):
         chosen = _search(z, q, x, order, limit)
         # the PSE of the least-squares fit of the chosen terms themselves
-        pse = _sse(z, q[:, chosen]) / n + (sst / n) * len(chosen) / n
+        pse = _pse(_sse(z, q[:, chosen]), sst, n, len(chosen))
         if kept is None or pse < kept[0]:
             kept = (pse, chosen)
         if set(chosen) == set(order[:len(chosen)]) or frozenset(chosen) in seen:
@@ -160,8 +160,9 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     best = kept[1]
     steps = []
     for k in range(1, len(best) + 1):
-        r2 = 100.0 * (1.0 - _sse(z, q[:, best[:k]]) / sst) if sst > 0 else 100.0
-        pse = (1.0 - r2 / 100.0) * sst / n + (sst / n) * k / n
+        sse = _sse(z, q[:, best[:k]])
+        r2 = 100.0 * (1.0 - sse / sst) if sst > 0 else 100.0
+        pse = _pse(sse, sst, n, k)
         steps.append({"action": "enter", "term": names[best[k - 1]], "R2": r2, "PSE": pse,
                       "why": f"largest error reduction of the orthogonal functions left; "
                              f"R^2 {r2:.3f} %, PSE {pse:.4g}"})
@@ -182,17 +183,22 @@ def _eliminate(z: np.ndarray, q: np.ndarray, chosen: Sequence[int], pse: float
     n, sst = len(z), float(z @ z)
     left, removals = list(chosen), []
     while left:
-        trials = [(_sse(z, q[:, [i for i in left if i != j]]) / n
-                   + (sst / n) * (len(left) - 1) / n, j) for j in left]
-        trial, j = min(trials)
+        sses = {j: _sse(z, q[:, [i for i in left if i != j]]) for j in left}
+        trial, j = min((_pse(sse, sst, n, len(left) - 1), j) for j, sse in sses.items())
         if trial >= pse:
             break
         left.remove(j)
         pse = trial
-        r2 = 100.0 * (1.0 - (pse - (sst / n) * len(left) / n) * n / sst) if sst > 0 else 100.0
+        r2 = 100.0 * (1.0 - sses[j] / sst) if sst > 0 else 100.0
         removals.append({"action": "remove", "term": j, "R2": r2, "PSE": pse,
                          "why": f"its removal lowers the PSE most, to {pse:.4g}"})
     return left, pse, removals
+
+
+def _pse(sse: float, sst: float, n: int, k: int) -> float:
+    """The predicted square error of a k-term model (Morelli & Klein 2016 ch. 5):
+    sse / N + sigma_max^2 k / N with sigma_max^2 = sst / N."""
+    return sse / n + (sst / n) * k / n
 
 
 def _sse(z: np.ndarray, x: np.ndarray) -> float:
@@ -223,7 +229,7 @@ def _search(z: np.ndarray, q: np.ndarray, x: np.ndarray, order: Sequence[int], l
     gains = np.array([(f @ z) ** 2 / (f @ f) for f in functions])
     chosen: list[int] = []
     sse = sst
-    path = [(sse / n, 0)]
+    path = [(_pse(sse, sst, n, 0), 0)]
     for k in np.argsort(-gains, kind="stable"):
         if len(chosen) >= limit:
             break
@@ -232,7 +238,7 @@ def _search(z: np.ndarray, q: np.ndarray, x: np.ndarray, order: Sequence[int], l
             continue
         chosen.append(j)
         sse -= float(gains[k])
-        path.append((sse / n + (sst / n) * len(chosen) / n, len(chosen)))
+        path.append((_pse(sse, sst, n, len(chosen)), len(chosen)))
     _, size = min(path, key=lambda item: item[0])
     return chosen[:size]
 
