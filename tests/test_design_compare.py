@@ -21,6 +21,7 @@ from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo import store
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design import report as design_report
+from flightid.scenarios.montecarlo.intervals import interval_text
 from flightid.scenarios.montecarlo.summary import summarize
 from flightid.units import DEG
 
@@ -139,7 +140,7 @@ def test_tables_keep_every_digit_at_80_columns(small):
             assert f"{r['mean_bound']:.4g}" in cells, r
     verdict = doc["3211_beats_doublet"]
     for name, r in verdict["ratios"].items():
-        assert f"{r['low']:.3g} - {r['high']:.3g}" in cells, name
+        assert interval_text(r["low"], r["high"]) in cells, name
     wins = len(verdict["3211_smaller_scatter"])
     assert (f"3211 smaller scatter than the doublet for {wins} of {verdict['derivatives']} "
             "derivatives estimated by both") in " ".join(out.split())

@@ -8,6 +8,8 @@ table reads back as the same input; bad options exit 2. The Monte Carlo confirma
 from __future__ import annotations
 
 import json
+import math
+import re
 
 import numpy as np
 import pytest
@@ -86,9 +88,10 @@ def test_the_paired_bootstrap_interval_narrows_with_common_seeds_and_covers():
 
 
 def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_path):
-    out = tmp_path / "opt.toml"
+    out, study = tmp_path / "opt.toml", tmp_path / "mc"
     result = RUNNER.invoke(app, ["design-optimize", "--card", "navion-demo", "-o", str(out),
-                                 "--format", "json"])
+                                 "--format", "json", "-n", "2", "--against", "doublet",
+                                 "--study", str(study), "--workers", "1", "--quiet"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     rows = {r["design"]: r for r in data["rows"]}
@@ -105,6 +108,32 @@ def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_pat
     assert experiment.input_energy(read, 50.0) == pytest.approx(rows["optimized"]["energy"],
                                                             rel=1e-9)
     assert {p.kind for p in parts} == {"harmonics"}
+    # the Monte Carlo flies the optimised design against the reference and each --against
+    # built-in on the same seeds; 2 realizations are too few for a paired interval, so no
+    # design is called smaller
+    mc = data["monte_carlo"]
+    assert set(mc) == {"3211", "doublet"}
+    assert {"3211-da-dr", "doublet-da-dr", "optimized"} <= {p.name for p in study.iterdir()}
+    assert not (study / "sweep-da-dr").exists()
+    for kind, m in mc.items():
+        for key in ("mean_relative_bound", "mean_relative_scatter"):
+            assert m[key]["realizations"] == 2 and m[key]["winner"] == "", (kind, key)
+            assert math.isnan(m[key]["low"]) and m[key]["ratio"] > 0
+    # the same at 80 columns through a pipe: the study continues, nothing is cut
+    table = RUNNER.invoke(app, ["design-optimize", "-o", str(out), "-n", "2", "--against",
+                                "doublet", "--study", str(study), "--workers", "1",
+                                "--quiet"], env={"COLUMNS": "80"})
+    assert table.exit_code == 0, table.output
+    text = table.stdout
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    cells = [c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)]
+    for r in data["rows"]:
+        assert f"{r['mean_relative_bound']:.4f}" in cells and r["design"] in cells
+    for k, b in data["predicted"]["optimized"].items():
+        assert f"{b:.3g}" in cells, k
+    assert {"derivative", "optimized", "multisine", "b/|truth|", "E (rad²s)"} <= set(cells)
+    m = mc["doublet"]["mean_relative_scatter"]
+    assert f"{m['ratio']:.3f}" in cells and "not clear" in cells
 
 
 @pytest.mark.parametrize("args, message", [
