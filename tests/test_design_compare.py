@@ -4,17 +4,21 @@ which the 3211 beats the doublet of equal amplitude where that is clear with n =
 
 from __future__ import annotations
 
+import io
 import json
 import math
+import re
 import tomllib
 
 import numpy as np
 import pandas as pd
 import pytest
+from rich.console import Console
 from scipy import stats
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
+from flightid.cli.tables import split_tables
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
 from flightid.scenarios.inputs import Maneuvers
@@ -300,3 +304,26 @@ def test_own_design_runs_end_to_end_at_its_own_energy_with_a_set_multisine_band(
     assert own_rows["Cn_dr"]["estimated"] == 2 and "Cn_dr" not in ms_rows or \
         ms_rows["Cn_dr"]["estimated"] == 0
     assert (folder / "design-compare.png").exists()
+
+
+def test_a_comparison_of_many_designs_splits_into_tables_that_fit_80_columns():
+    """Six designs with 9-digit cells (five built-ins and a user's) do not fit one
+    80-column table: they are split by design, each part repeating the derivative
+    column, no cell folded onto a second line and no header broken."""
+    kinds = ["doublet", "211", "3211", "sweep", "multisine", "ail-rud-own"]
+    rows = [[name, *(f"{0.0009408 * (i + 1) * (j + 1):.4g}" for j in range(len(kinds)))]
+            for i, name in enumerate(("CY_beta", "Cl_da", "Cn_beta"))]
+    tables = split_tables("scatter by design", ["derivative", *kinds], rows, 80)
+    assert len(tables) == 2
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=80)
+    for t in tables:
+        console.print(t)
+    text = buffer.getvalue()
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    cells = [c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)]
+    assert cells.count("derivative") == 2 and cells.count("Cl_da") == 2
+    assert {c for r in rows for c in r} <= set(cells)
+    assert set(kinds) <= set(cells)
+    # narrow enough, one table
+    assert len(split_tables("t", ["derivative", *kinds[:3]], [r[:4] for r in rows], 80)) == 1
