@@ -4,15 +4,18 @@ flight within the logging's quantization; the commands are marked as commands.""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
-from pymavlink import DFReader
+from pymavlink import DFReader, mavutil
 from typer.testing import CliRunner
 
 from flightid.api import fly
 from flightid.cli.app import app
 from flightid.identification.data.windows import window
-from flightid.importers.dataflash import read_dataflash
+from flightid.importers.dataflash import read_dataflash, servos_from_params
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.record import read
 from flightid.sim.bridge.air.dataflash import BOOT_S, RATES, SysIdRun, write_dataflash
@@ -41,10 +44,15 @@ QUANTIZATION = {
 
 
 @pytest.fixture(scope="module")
-def flight():
+def flown():
+    return fly("telemaster-id", seed=1)
+
+
+@pytest.fixture(scope="module")
+def flight(flown):
     # the Telemaster (an RC airplane) through elevator, rudder and aileron inputs; the
     # exact flight at 100 Hz, so every message rate samples it without interpolation
-    return fly("telemaster-id", seed=1).truth_record
+    return flown.truth_record
 
 
 @pytest.fixture(scope="module")
@@ -206,3 +214,55 @@ def test_without_a_mapping_the_logs_servo_parameters_give_outputs_and_trims(flig
         np.testing.assert_allclose(back[name], given[name], rtol=0, atol=1e-12)
     assert back.meta.extra["dataflash"]["servos"]["de"]["channel"] == 6
     assert any("30 deg assumed" in n for n in back.meta.extra["dataflash"]["notes"])
+
+
+def test_mavexplorers_loader_reads_the_log(log):
+    """MAVExplorer's ``loadfile`` (MAVProxy's tools/MAVExplorer.py) opens a log with
+    ``mavutil.mavlink_connection(path, notimestamps=False, zero_time_base=False,
+    progress_callback=...)`` and then uses the reader's messages, count, parameters and
+    flight modes; the same calls, headless. pymavlink's mavlogdump reads it too."""
+    progress = []
+    mlog = mavutil.mavlink_connection(str(log), notimestamps=False, zero_time_base=False,
+                                      progress_callback=progress.append)
+    assert isinstance(mlog, DFReader.DFReader_binary)
+    assert {"IMU", "ATT", "ARSP", "CTUN", "RCOU", "BARO", "GPS"} <= set(mlog.messages)
+    counts: dict[str, int] = {}
+    whole = DFReader.DFReader_binary(str(log))
+    while (m := whole.recv_msg()) is not None:
+        counts[m.get_type()] = counts.get(m.get_type(), 0) + 1
+    assert mlog._count == sum(counts.values()) and progress and progress[-1] >= 98
+    assert mlog.params["SERVO2_FUNCTION"] == 19 and mlog.params["SERVO2_TRIM"] == 1480
+    assert mlog.flightmode_list() is not None
+    dump = subprocess.run([sys.executable, "-m", "pymavlink.tools.mavlogdump", "--types",
+                           "ATT", "--format", "csv", str(log)], capture_output=True,
+                          text=True, check=True)
+    rows = dump.stdout.strip().splitlines()
+    assert rows[0].startswith("timestamp,TimeUS,DesRoll,Roll")
+    assert len(rows) - 1 == counts["ATT"]
+
+
+def test_without_arsp_the_airspeed_comes_from_ctun(log, flight, tmp_path):
+    path = write_dataflash(flight, tmp_path / "ctun.bin", servos=SERVOS, rates={"ARSP": 0})
+    back, whole = read_dataflash(path, SERVOS), read_dataflash(log, SERVOS)
+    assert "qbar" not in back and any("airspeed from CTUN" in n for n in
+                                      back.meta.extra["dataflash"]["notes"])
+    # CTUN logs the same float32 equivalent airspeed at ARSP's 10 Hz
+    np.testing.assert_allclose(back["V"], whole["V"], rtol=0, atol=4 * F32 * np.max(flight["V"]))
+
+
+def test_ardupilot_outputs_above_trim_ask_for_positive_moments(flown):
+    """ArduPilot's aileron, elevator and rudder outputs are roll, pitch and yaw demands:
+    above trim on an output not reversed (below it on a reversed one) a right roll, nose
+    up, nose right. Read as flightid's deflections and put through the Telemaster's own
+    control derivatives (flightid's signs: Cl_da, Cm_de, Cn_dr < 0), each gives that
+    positive moment; 100 us of 500 at the assumed 30 deg throw is 6 deg."""
+    truth = flown.truth
+    params = {"SERVO1_FUNCTION": 4, "SERVO2_FUNCTION": 19, "SERVO4_FUNCTION": 21,
+              "SERVO4_REVERSED": 1, "SERVO3_FUNCTION": 70}
+    for servos in (servos_from_params(params), ServoMapping()):
+        da = servos.surfaces["da"].deflection(1600.0)
+        de = servos.surfaces["de"].deflection(1600.0)
+        assert da == pytest.approx(-6 * DEG) and de == pytest.approx(-6 * DEG)
+        assert truth["Cl_da"] * da > 0 and truth["Cm_de"] * de > 0
+    dr = servos_from_params(params).surfaces["dr"].deflection(1400.0)
+    assert dr == pytest.approx(-6 * DEG) and truth["Cn_dr"] * dr > 0

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from flightid.api import fly
 from flightid.cli.app import app
 from flightid.importers.servos import Servo, ServoMapping, Throttle
-from flightid.importers.ulog import read_ulog
+from flightid.importers.ulog import read_ulog, servos_from_params
 from flightid.record import read
 from flightid.sim.bridge.air.dataflash import BOOT_S
 from flightid.sim.bridge.air.ulog import RATES, write_ulog
@@ -40,8 +40,13 @@ QUANTIZATION = {
 
 
 @pytest.fixture(scope="module")
-def flight():
-    return fly("telemaster-id", seed=1).truth_record
+def flown():
+    return fly("telemaster-id", seed=1)
+
+
+@pytest.fixture(scope="module")
+def flight(flown):
+    return flown.truth_record
 
 
 @pytest.fixture(scope="module")
@@ -113,10 +118,66 @@ def test_without_a_mapping_the_logs_px4_parameters_give_outputs_and_trims(flight
     path = write_ulog(flight, tmp_path / "params.ulg", servos=servos)
     params = ULog(str(path)).initial_parameters  # pyulog reads what PX4 would log
     assert params["PWM_MAIN_FUNC6"] == 202 and params["CA_SV_CS1_TYPE"] == 3  # elevator
-    assert params["PWM_MAIN_FUNC8"] == 101 and params["PWM_MAIN_REV"] == 1 << 5
+    # PX4's positive values give positive moments, flightid's deflections negative ones:
+    # the elevator's -30 deg throw is an output as PX4 drives it, the rudder's +30 deg a
+    # reversed one, the left aileron's +30 deg (its roll torque is negative) not reversed
+    assert params["CA_SV_CS1_TRQ_P"] == 1.0 and params["CA_SV_CS0_TRQ_R"] == -0.5
+    assert params["PWM_MAIN_FUNC8"] == 101 and params["PWM_MAIN_REV"] == 1 << 6
     back, given = read_ulog(path), read_ulog(path, servos)
     # the trims go through float32 CA_SV_CS{i}_TRIM: under 1e-6 us, 1e-9 rad
     for name in ("da", "de", "dr", "throttle"):
         np.testing.assert_allclose(back[name], given[name], rtol=0, atol=1e-8)
     assert back.meta.extra["ulog"]["servos"]["de"]["channel"] == 6
     assert any("30 deg assumed" in n for n in back.meta.extra["ulog"]["notes"])
+
+
+@pytest.mark.parametrize("kind, roll", [(1, -1.0), (2, 1.0)])
+def test_an_aileron_value_rolls_as_its_px4_torque_says(flown, kind, roll):
+    """PX4's left aileron has a roll torque of -0.5, its right aileron +0.5 (a positive
+    value rolls right). A value of +0.2 on an output not reversed (1600 us) read as da
+    and put through the Telemaster's Cl_da (flightid's sign, < 0) rolls the same way; at
+    the assumed 30 deg throw it is 6 deg. A logged torque parameter overrides the type's."""
+    notes: list[str] = []
+    servos = servos_from_params({"PWM_MAIN_FUNC1": 201, "CA_SV_CS0_TYPE": kind}, notes)
+    da = servos.surfaces["da"].deflection(1600.0)
+    assert da == pytest.approx(-roll * 6 * DEG)
+    assert np.sign(flown.truth["Cl_da"] * da) == roll
+    turned = servos_from_params({"PWM_MAIN_FUNC1": 201, "CA_SV_CS0_TYPE": kind,
+                                 "CA_SV_CS0_TRQ_R": 0.5 * roll * -1}, [])
+    assert turned.surfaces["da"].deflection(1600.0) == pytest.approx(roll * 6 * DEG)
+    assert (kind == 2) == any("right aileron" in n for n in notes)
+
+
+def test_a_right_aileron_logged_through_actuator_servos_reads_as_the_flight(flight, tmp_path):
+    """No PWM logged: actuator_servos' values (trims included, before the output's
+    reversal) of a right aileron, a reversed elevator and a rudder on outputs 5-7, read
+    with the log's parameters, give the surfaces read from the PWM of the same flight with
+    the mapping given, within the PWM's half microsecond (throw / 1000)."""
+    servos = ServoMapping({"da": Servo(5, 1490, -30 * DEG), "de": Servo(6, 1520, 30 * DEG),
+                           "dr": Servo(7, 1505, -30 * DEG)}, Throttle(8, 1100, 1900))
+    rates = {"actuator_outputs": 0, "actuator_servos": RATES["actuator_outputs"]}
+    path = write_ulog(flight, tmp_path / "servos.ulg", servos=servos, right_aileron=True,
+                      rates=rates)
+    params = ULog(str(path)).initial_parameters
+    assert params["CA_SV_CS0_TYPE"] == 2 and params["CA_SV_CS0_TRQ_R"] == 0.5
+    assert params["PWM_MAIN_REV"] == 1 << 5  # only the elevator turned over
+    back = read_ulog(path)
+    pwm = read_ulog(write_ulog(flight, tmp_path / "pwm.ulg", servos=servos), servos)
+    assert back.meta.extra["ulog"]["commands_from"] == "actuator_servos"
+    notes = back.meta.extra["ulog"]["notes"]
+    assert any("right aileron" in n for n in notes) and any("throttle not read" in n
+                                                             for n in notes)
+    for name in ("da", "de", "dr"):
+        worst = np.max(np.abs(back[name] - pwm[name]))
+        assert worst <= 30 * DEG / 1000 + 1e-6, (name, worst)
+    assert np.ptp(back["da"]) > 0.9 * np.ptp(flight["da"])  # the aileron moved: 2 deg
+
+
+def test_without_vehicle_angular_velocity_the_rates_come_from_sensor_combined(log, flight,
+                                                                              tmp_path):
+    path = write_ulog(flight, tmp_path / "gyro.ulg", servos=SERVOS,
+                      rates={"vehicle_angular_velocity": 0})
+    back, whole = read_ulog(path, SERVOS), read_ulog(log, SERVOS)
+    assert back.dt == pytest.approx(1 / RATES["sensor_combined"])
+    for name in ("p", "q", "r"):  # the same float32 rates at the same 100 Hz
+        np.testing.assert_array_equal(back[name], whole[name])

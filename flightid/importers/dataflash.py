@@ -41,7 +41,11 @@ from pymavlink import DFReader
 from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
 from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
-from flightid.importers.dataflash_formats import SERVO_FUNCTIONS, SYSID_AXES
+from flightid.importers.dataflash_formats import (
+    SERVO_DEFLECTION_SIGN,
+    SERVO_FUNCTIONS,
+    SYSID_AXES,
+)
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.units import DEG
 
@@ -124,7 +128,19 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
 
 def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
     """The servo mapping the log's ArduPilot parameters give (module docstring), with
-    :data:`DEFAULT_THROW`; None when no SERVOn_FUNCTION names a control."""
+    :data:`DEFAULT_THROW`; None when no SERVOn_FUNCTION names a control.
+
+    Parameters
+    ----------
+    params : the log's PARM values, name -> value.
+
+    Returns
+    -------
+    ServoMapping, or None. A surface's throw has the sign of flightid's deflection for an
+    output above trim (``dataflash_formats.SERVO_DEFLECTION_SIGN``: an aileron, elevator or
+    rudder output above trim asks for a positive moment, a negative deflection), turned
+    over on a reversed output.
+    """
     functions = {int(v): k for k, v in SERVO_FUNCTIONS.items()}
     surfaces: dict[str, Servo] = {}
     throttle = None
@@ -138,7 +154,7 @@ def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
             throttle = Throttle(n, high, low) if sign < 0 else Throttle(n, low, high)
         elif name not in surfaces:
             surfaces[name] = Servo(n, params.get(f"SERVO{n}_TRIM", 1500.0),
-                                   sign * DEFAULT_THROW)
+                                   sign * SERVO_DEFLECTION_SIGN[name] * DEFAULT_THROW)
     if not surfaces and throttle is None:
         return None
     return ServoMapping(surfaces, throttle)

@@ -12,7 +12,9 @@ its trim and its throws, as an RC aircraft's set-up sheet gives them. A TOML fil
     high = 2000
 
 The default is ArduPlane's output order (1 aileron, 2 elevator, 3 throttle, 4 rudder)
-with 1500 us trims and 30 deg throws. The values are commands: what the autopilot sent
+with 1500 us trims and 30 deg throws, the outputs not reversed: an aileron, elevator or
+rudder output above trim asks for a right roll, nose up or nose right, which is a negative
+da, de or dr (throw -30 deg). The values are commands: what the autopilot sent
 to the servos, not where the surfaces went.
 """
 
@@ -26,6 +28,7 @@ import numpy as np
 
 from flightid.files import read_toml
 from flightid.importers.constants import quantity
+from flightid.importers.dataflash_formats import SERVO_DEFLECTION_SIGN
 from flightid.units import DEG
 
 SURFACES = ("de", "da", "dr", "df")
@@ -49,13 +52,14 @@ class Servo:
         low = self.throw if self.throw_low is None else self.throw_low
         return (pwm - self.trim) / HALF_RANGE_US * np.where(pwm >= self.trim, self.throw, low)
 
-    def pwm(self, deflection: np.ndarray) -> np.ndarray:
-        """PWM (us, whole) commanding ``deflection`` (rad): the inverse of
-        :meth:`deflection`, rounded to the microsecond as a servo output is."""
+    def pwm(self, deflection: np.ndarray, whole: bool = True) -> np.ndarray:
+        """PWM (us) commanding ``deflection`` (rad): the inverse of :meth:`deflection`,
+        rounded to the microsecond as a servo output is unless ``whole`` is False."""
         d = np.asarray(deflection, dtype=float)
         low = self.throw if self.throw_low is None else self.throw_low
         above = d / self.throw >= 0
-        return np.round(self.trim + HALF_RANGE_US * d / np.where(above, self.throw, low))
+        pwm = self.trim + HALF_RANGE_US * d / np.where(above, self.throw, low)
+        return np.round(pwm) if whole else pwm
 
 
 @dataclass(frozen=True)
@@ -76,7 +80,10 @@ class Throttle:
 
 
 def _default_surfaces() -> dict[str, Servo]:
-    return {"da": Servo(1), "de": Servo(2), "dr": Servo(4)}
+    """ArduPlane's default outputs, not reversed: an output above trim is a negative
+    deflection (``dataflash_formats.SERVO_DEFLECTION_SIGN``)."""
+    return {name: Servo(n, throw=SERVO_DEFLECTION_SIGN[name] * 30 * DEG)
+            for name, n in (("da", 1), ("de", 2), ("dr", 4))}
 
 
 @dataclass(frozen=True)
