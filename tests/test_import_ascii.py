@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import jsbsim
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -18,7 +19,7 @@ from flightid.importers.constants import read_constants
 from flightid.importers.mapping import ColumnMap
 from flightid.record import FlightRecord, read
 from flightid.sim.jsbsim.model import load
-from flightid.units import DEG, FT, G0, KT, LBM, SLUG_FT2
+from flightid.units import DEG, FT, G0, KT, LBF, LBM, PSF, SLUG_FT2
 
 # DLR-style columns: (name, unit in the file, flightid channel, factor SI -> file unit)
 COLUMNS = (
@@ -154,6 +155,48 @@ alpha_vane = ["15 ft", 0, "-1 ft"]
     for key in ("area", "span", "chord"):
         assert getattr(got.reference, key) == pytest.approx(getattr(ref, key), rel=1e-12)
     assert got.sensors["alpha_vane"] == pytest.approx((15 * FT, 0.0, -FT))
+
+
+def test_imperial_units_from_a_units_row_are_converted_to_si(tmp_path):
+    """A units row in the issue's imperial units: psf, lb as a force (thrust) and as a mass,
+    slug*ft^2, kt, ft, deg/s and g, each converted by its exact factor."""
+    path = tmp_path / "imperial.asc"
+    path.write_text("T QBAR THRUST M IXX VT H Q AZ\n"
+                    "S PSF LB LB SLUG*FT^2 KT FT DEG/S G\n"
+                    "0.0 50 200 1880 1524 100 5000 2.0 -1.0\n"
+                    "0.1 51 210 1880 1524 101 5010 -1.0 -1.1\n")
+    rec = read_delimited(path, ColumnMap({"T": "time", "QBAR": "qbar", "THRUST": "thrust",
+                                          "M": "mass", "IXX": "Ixx", "VT": "V", "H": "h",
+                                          "Q": "q", "AZ": "az"}))
+    expected = {"qbar": np.array([50, 51]) * PSF, "thrust": np.array([200, 210]) * LBF,
+                "mass": np.array([1880, 1880]) * LBM, "Ixx": np.array([1524, 1524]) * SLUG_FT2,
+                "V": np.array([100, 101]) * KT, "h": np.array([5000, 5010]) * FT,
+                "q": np.array([2.0, -1.0]) * DEG, "az": np.array([-1.0, -1.1]) * G0}
+    for name, values in expected.items():
+        np.testing.assert_allclose(rec[name], values, rtol=1e-15, err_msg=name)
+
+
+def test_constants_of_a_stock_jsbsim_aircraft_by_name(tmp_path):
+    """``--aircraft c172p``, JSBSim's own Cessna 172P (not one of the project's): the
+    constants are those JSBSim itself holds once initialised (fuel and payload in)."""
+    path, out = tmp_path / "c172.csv", tmp_path / "c172.parquet"
+    path.write_text("time,V (kt),alpha [deg],q [deg/s]\n0.0,100,2.0,0.5\n0.1,101,2.5,1.0\n"
+                    "0.2,102,3.0,-0.5\n")
+    result = CliRunner().invoke(app, ["import", str(path), "-o", str(out), "--aircraft",
+                                      "c172p"])
+    assert result.exit_code == 0, result.output
+    rec = read(out)
+    fdm = jsbsim.FGFDMExec(None)
+    fdm.set_debug_level(0)
+    fdm.load_model("c172p")
+    fdm.run_ic()
+    assert rec["mass"][0] == pytest.approx(fdm["inertia/weight-lbs"] * LBM, rel=1e-6)
+    assert rec["Ixx"][0] == pytest.approx(fdm["inertia/ixx-slugs_ft2"] * SLUG_FT2, rel=1e-6)
+    assert rec["Iyy"][0] == pytest.approx(fdm["inertia/iyy-slugs_ft2"] * SLUG_FT2, rel=1e-6)
+    ref = rec.meta.reference
+    assert ref.area == pytest.approx(fdm["metrics/Sw-sqft"] * FT**2, rel=1e-9)
+    assert ref.span == pytest.approx(fdm["metrics/bw-ft"] * FT, rel=1e-9)
+    assert ref.chord == pytest.approx(fdm["metrics/cbarw-ft"] * FT, rel=1e-9)
 
 
 def test_a_cut_last_row_is_dropped_and_said(flight, tmp_path):
