@@ -108,6 +108,11 @@ def test_a_log_without_the_needed_topics_is_refused_naming_them(flight, tmp_path
     with pytest.raises(ValueError, match=r"lacks the topic\(s\) vehicle_attitude, "
                                          r"actuator_outputs or actuator_servos"):
         read_ulog(path, SERVOS)
+    out = tmp_path / "x.parquet"
+    result = CliRunner().invoke(app, ["import", str(path), "-o", str(out)])
+    assert result.exit_code == 2 and "vehicle_attitude, actuator_outputs or " \
+        "actuator_servos" in result.output
+    assert "Traceback" not in result.output and not out.exists()
 
 
 def test_without_a_mapping_the_logs_px4_parameters_give_outputs_and_trims(flight, tmp_path):

@@ -52,7 +52,8 @@ class AircraftConstants:
     def apply(self, record: FlightRecord) -> FlightRecord:
         """``record`` with the mass properties as constant channels (a channel the record
         already has is kept), the reference geometry, the aircraft name and the sensor
-        positions (``meta.extra['sensor_positions']``, m) in its metadata."""
+        positions (``meta.extra['sensor_positions']``, m) in its metadata; a reference
+        condition without a mass gets the mass."""
         n = len(record)
         added = {k: np.full(n, v) for k, v in self.mass_properties.items()
                  if k not in record}
@@ -61,8 +62,12 @@ class AircraftConstants:
             extra["sensor_positions"] = {k: list(v) for k, v in self.sensors.items()}
         if self.source:
             extra["constants"] = self.source
+        condition = dict(record.meta.condition or {})
+        if condition and "mass" not in condition and "mass" in added:
+            condition["mass"] = float(added["mass"][0])  # the reference condition's mass
         meta = replace(record.meta, aircraft=record.meta.aircraft or self.name,
-                       reference=self.reference or record.meta.reference, extra=extra)
+                       reference=self.reference or record.meta.reference, extra=extra,
+                       condition=condition or record.meta.condition)
         return FlightRecord(record.time, {**record.channels, **added}, meta)
 
 
