@@ -16,7 +16,7 @@ from flightid.api import fly, identify, score
 from flightid.cli.app import app
 from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import read_constants
-from flightid.importers.mapping import ColumnMap
+from flightid.importers.mapping import ColumnMap, read_map
 from flightid.record import FlightRecord, read
 from flightid.sim.jsbsim.model import load
 from flightid.units import DEG, FT, G0, KT, LBF, LBM, PSF, SLUG_FT2
@@ -180,6 +180,27 @@ def test_imperial_units_from_a_units_row_are_converted_to_si(tmp_path):
                 "q": np.array([2.0, -1.0]) * DEG, "az": np.array([-1.0, -1.1]) * G0}
     for name, values in expected.items():
         np.testing.assert_allclose(rec[name], values, rtol=1e-15, err_msg=name)
+
+
+def test_units_from_the_mapping_file_and_the_command_line(tmp_path):
+    """A file without a units row: the mapping file's [units] give them; ``--map`` and
+    ``--unit`` on the command line win over the file's entries."""
+    data, mapping, out = tmp_path / "f.csv", tmp_path / "map.toml", tmp_path / "f.parquet"
+    data.write_text("T,AOA,VIAS,HP\n0.0,2.0,100,5000\n0.1,2.5,101,5010\n0.2,3.0,102,5020\n")
+    mapping.write_text('[columns]\nT = "time"\nAOA = "alpha"\nVIAS = "V"\nHP = "h"\n'
+                       '[units]\nAOA = "deg"\nVIAS = "kt"\nHP = "ft"\n')
+    rec = read_delimited(data, read_map(mapping))
+    np.testing.assert_allclose(rec["alpha"], np.array([2.0, 2.5, 3.0]) * DEG, rtol=1e-15)
+    np.testing.assert_allclose(rec["V"], np.array([100, 101, 102]) * KT, rtol=1e-15)
+    np.testing.assert_allclose(rec["h"], np.array([5000, 5010, 5020]) * FT, rtol=1e-15)
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--unit", "VIAS=m/s", "--map", "HP=alt"])
+    assert result.exit_code == 2  # the command line's map wins: 'alt' is no channel
+    assert "'alt' is not a flightid channel; valid channels: time" in result.output
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--unit", "VIAS=m/s"])
+    assert result.exit_code == 0, result.output
+    np.testing.assert_allclose(read(out)["V"], [100.0, 101.0, 102.0], rtol=1e-15)
 
 
 def test_constants_of_a_stock_jsbsim_aircraft_by_name(tmp_path):
