@@ -14,7 +14,9 @@ Messages used (ArduPlane names, ``dataflash_formats``):
   positions, and the record says so (``meta.extra['surfaces'] = 'command'``). Without a
   mapping, the log's own parameters give the outputs (SERVOn_FUNCTION), the trims
   (SERVOn_TRIM), the reversals (SERVOn_REVERSED) and the throttle's range (SERVOn_MIN,
-  SERVOn_MAX); the throws, which no parameter holds, are then 30 deg, and a note says so;
+  SERVOn_MAX); the throws, which no parameter holds, are then 30 deg, and a note says so.
+  An aileron, elevator or rudder output above trim, not reversed, is ArduPilot's demand
+  for a positive moment: a negative deflection (``dataflash_formats.SERVO_DEFLECTION_SIGN``);
 * AOA (alpha, beta in deg), BARO (static pressure, pressure altitude h), GPS (latitude,
   longitude) when the log has them;
 * SIDS and SIDD (ArduPilot's system-identification mode): each chirp becomes a maneuver
