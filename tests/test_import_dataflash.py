@@ -266,3 +266,16 @@ def test_ardupilot_outputs_above_trim_ask_for_positive_moments(flown):
         assert truth["Cl_da"] * da > 0 and truth["Cm_de"] * de > 0
     dr = servos_from_params(params).surfaces["dr"].deflection(1400.0)
     assert dr == pytest.approx(-6 * DEG) and truth["Cn_dr"] * dr > 0
+
+
+def test_an_off_centre_trim_scales_the_demand_as_ardupilot_does():
+    """ArduPilot puts a demand d (-1..1) out as trim + d (max - trim) above trim and
+    trim + d (trim - min) below it (SRV_Channel::pwm_from_angle). With SERVOn_MIN 1100,
+    _MAX 1900 and a 1600 us trim, a full demand either way (1900 or 1100 us) is the same
+    deflection: 30 deg per 500 us above trim, 300 us of it."""
+    servos = servos_from_params({"SERVO1_FUNCTION": 4, "SERVO1_TRIM": 1600,
+                                 "SERVO1_MIN": 1100, "SERVO1_MAX": 1900})
+    aileron = servos.surfaces["da"]
+    assert aileron.deflection(1900.0) == pytest.approx(-18 * DEG)
+    assert aileron.deflection(1100.0) == pytest.approx(18 * DEG)
+    assert aileron.deflection(1350.0) == pytest.approx(9 * DEG)  # half a demand

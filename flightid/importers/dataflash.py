@@ -155,8 +155,14 @@ def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
             low, high = params.get(f"SERVO{n}_MIN", 1000.0), params.get(f"SERVO{n}_MAX", 2000.0)
             throttle = Throttle(n, high, low) if sign < 0 else Throttle(n, low, high)
         elif name not in surfaces:
-            surfaces[name] = Servo(n, params.get(f"SERVO{n}_TRIM", 1500.0),
-                                   sign * SERVO_DEFLECTION_SIGN[name] * DEFAULT_THROW)
+            trim = params.get(f"SERVO{n}_TRIM", 1500.0)
+            throw = sign * SERVO_DEFLECTION_SIGN[name] * DEFAULT_THROW
+            low, high = params.get(f"SERVO{n}_MIN"), params.get(f"SERVO{n}_MAX")
+            # ArduPilot scales a demand onto trim..max above trim and min..trim below it
+            # (SRV_Channel::pwm_from_angle): the same demand, the same deflection
+            below = throw * (high - trim) / (trim - low) if low is not None and \
+                high is not None and low < trim < high else None
+            surfaces[name] = Servo(n, trim, throw, below)
     if not surfaces and throttle is None:
         return None
     return ServoMapping(surfaces, throttle)
