@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 
 from flightid.api import fly, identify, score
 from flightid.cli.app import app
+from flightid.identification.data.reduction import reduce_record
 from flightid.importers.ascii import read_delimited
 from flightid.importers.constants import read_constants
 from flightid.importers.mapping import ColumnMap, read_map
@@ -224,6 +225,35 @@ def test_constants_of_a_stock_jsbsim_aircraft_by_name(tmp_path):
     assert ref.area == pytest.approx(fdm["metrics/Sw-sqft"] * FT**2, rel=1e-9)
     assert ref.span == pytest.approx(fdm["metrics/bw-ft"] * FT, rel=1e-9)
     assert ref.chord == pytest.approx(fdm["metrics/cbarw-ft"] * FT, rel=1e-9)
+
+
+def test_sensor_positions_reach_the_data_reduction(flight, tmp_path):
+    """The constants file's sensor positions go with the record to ``identify``'s standard
+    data reduction, which moves the accelerometers and the vanes to the CG; a sensor it
+    does not correct is refused, naming the ones it does."""
+    data, mapping, out = tmp_path / "f.asc", tmp_path / "map.toml", tmp_path / "f.parquet"
+    write_dlr(flight, data)
+    write_mapping(mapping)
+    mp, ref = load("twinotter").mass_properties(), load("twinotter").reference
+    constants = tmp_path / "aircraft.toml"
+    body = "\n".join(f"{k} = {v!r}" for k, v in mp.items())
+    constants.write_text(f"[mass_properties]\n{body}\n[reference]\narea = {ref.area!r}\n"
+                         f"span = {ref.span!r}\nchord = {ref.chord!r}\n[sensors]\n"
+                         'accelerometers = ["3 ft", 0, 0]\nalpha_vane = [4.0, 0.0, 0.0]\n')
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--aircraft", str(constants)])
+    assert result.exit_code == 0, result.output
+    rec = read(out)
+    assert rec.meta.extra["sensor_positions"]["accelerometers"] == pytest.approx([3 * FT, 0, 0])
+    applied = " | ".join(reduce_record(rec).applied)
+    assert "accelerometers moved to the CG from (0.9144, 0, 0) m" in applied
+    assert "flow angles: alpha" in applied and "position effect removed" in applied
+    constants.write_text('[sensors]\naccelerometer = [1.0, 0.0, 0.0]\n')
+    result = CliRunner().invoke(app, ["import", str(data), "-o", str(out), "--mapping",
+                                      str(mapping), "--aircraft", str(constants)])
+    assert result.exit_code == 2
+    assert "accelerometer: not a sensor the data reduction corrects; valid: " \
+        "accelerometers, alpha_vane, beta_vane" in result.output
 
 
 def test_a_cut_last_row_is_dropped_and_said(flight, tmp_path):
