@@ -194,3 +194,25 @@ def test_without_vehicle_angular_velocity_the_rates_come_from_sensor_combined(lo
     assert back.dt == pytest.approx(1 / RATES["sensor_combined"])
     for name in ("p", "q", "r"):  # the same float32 rates at the same 100 Hz
         np.testing.assert_array_equal(back[name], whole[name])
+
+
+def test_a_left_and_a_right_aileron_give_the_mean_of_their_deflections(flight, tmp_path):
+    """Two aileron servos, left on output 5 and right on output 9, each as PX4 drives it
+    (not reversed: the right one's throw is negative in flightid's sign), the right one
+    with an offset trim. Read with the log's parameters, da is the mean of the two
+    deflections: the flight's within the PWM's half microsecond (throw / 1000)."""
+    servos = ServoMapping({"da": Servo(5, 1490), "de": Servo(6, 1520, -30 * DEG),
+                           "dr": Servo(7, 1505, -30 * DEG)}, Throttle(8, 1100, 1900),
+                          partners={"da": Servo(9, 1530, -30 * DEG)})
+    path = write_ulog(flight, tmp_path / "two.ulg", servos=servos)
+    params = ULog(str(path)).initial_parameters
+    types = {params[f"CA_SV_CS{i}_TYPE"] for i in range(int(params["CA_SV_CS_COUNT"]))}
+    assert types == {1, 2, 3, 4} and params["PWM_MAIN_REV"] == 0
+    back = read_ulog(path)
+    assert any("mean of the left and the right aileron" in n
+               for n in back.meta.extra["ulog"]["notes"])
+    t = back.time - BOOT_S + flight.time[0]
+    times = flight.time[0] + np.arange(0, t[-1] - flight.time[0] + 1e-9,
+                                       1 / RATES["actuator_outputs"])
+    expected = np.interp(t, times, np.interp(times, flight.time, flight["da"]))
+    assert np.max(np.abs(back["da"] - expected)) <= 30 * DEG / 1000 * (1 + 1e-9)

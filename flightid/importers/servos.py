@@ -92,6 +92,9 @@ class ServoMapping:
 
     surfaces: dict[str, Servo] = field(default_factory=_default_surfaces)
     throttle: Throttle | None = field(default_factory=Throttle)
+    # a second servo of a surface (a PX4 right aileron beside the left one): the surface's
+    # command is the mean of the two deflections
+    partners: dict[str, Servo] = field(default_factory=dict)
 
     def outputs(self) -> dict[str, int]:
         """Channel -> servo output number (1-based)."""
@@ -104,6 +107,9 @@ class ServoMapping:
         """Plain data (for a record's metadata)."""
         out: dict = {name: {"channel": s.channel, "trim_us": s.trim, "throw_rad": s.throw,
                             "throw_low_rad": s.throw_low} for name, s in self.surfaces.items()}
+        for name, s in self.partners.items():
+            out[f"{name} (second servo)"] = {"channel": s.channel, "trim_us": s.trim,
+                                             "throw_rad": s.throw, "throw_low_rad": s.throw_low}
         if self.throttle is not None:
             out["throttle"] = {"channel": self.throttle.channel, "low_us": self.throttle.low,
                                "high_us": self.throttle.high}

@@ -107,19 +107,22 @@ def servos_from_params(params: dict[str, float], notes: list[str]) -> ServoMappi
             right_aileron = right_aileron or servo
         elif name not in surfaces:
             surfaces[name] = servo
+    partners = {}
     if "da" not in surfaces and right_aileron is not None:
         surfaces["da"] = right_aileron
         notes.append("da is the right aileron's output (no left aileron is set), its sign "
                      "turned to flightid's (a right aileron's positive value rolls right)")
     elif right_aileron is not None:
-        notes.append("da is the left aileron's output; the right aileron's is not read")
+        partners["da"] = right_aileron
+        notes.append("da is the mean of the left and the right aileron's deflections (the "
+                     "right one's sign turned to flightid's)")
     if not surfaces and throttle is None:
         return None
     notes.append("servo outputs, trims, reversals and throttle range from the log's PX4 "
                  f"parameters (PWM_MAIN_*, CA_SV_CS*); throws are in no parameter: "
                  f"{DEFAULT_THROW / np.pi * 180:g} deg assumed (give a servo mapping for the "
                  "real ones)")
-    return ServoMapping(surfaces, throttle)
+    return ServoMapping(surfaces, throttle, partners)
 
 
 def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str],
@@ -293,6 +296,16 @@ def _commands(path: Path, topic: dict[str, np.ndarray], name: str, grid: np.ndar
             raise ValueError(f"{path}: {name} output {output} (mapped to {channel}) is never "
                              "set: the output is not in use; fix the servo mapping")
         out[channel] = np.interp(grid, t, servos.surfaces[channel].deflection(values))
+    for channel, servo in servos.partners.items():
+        if name == "actuator_outputs":
+            if servo.channel > width:
+                raise ValueError(f"{path}: {name} has {width} outputs; {channel}'s second "
+                                 f"servo is mapped to output {servo.channel}")
+            values = topic[f"output[{servo.channel - 1}]"]
+        else:
+            values = servo_pwm(topic[f"control[{servo_index(params, servo.channel)}]"],
+                               servo.channel, params)
+        out[channel] = 0.5 * (out[channel] + np.interp(grid, t, servo.deflection(values)))
     return out
 
 

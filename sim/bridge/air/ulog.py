@@ -93,9 +93,13 @@ def px4_params(servos: ServoMapping, *, right_aileron: bool = False) -> dict[str
     types = {"da": PX4_RIGHT_AILERON if right_aileron else 1, "de": 3, "dr": 4}
     params: dict[str, int | float] = {}
     reversed_mask = 0
-    surfaces = sorted(servos.surfaces.items(), key=lambda item: item[1].channel)
-    for index, (name, servo) in enumerate(surfaces):
-        n, kind = servo.channel, types.get(name, 0)
+    # a surface's second servo (ServoMapping.partners): the right aileron
+    surfaces = sorted([*((name, servo, types.get(name, 0)) for name, servo in
+                         servos.surfaces.items()),
+                       *((name, servo, PX4_RIGHT_AILERON) for name, servo in
+                         servos.partners.items())], key=lambda item: item[1].channel)
+    for index, (name, servo, kind) in enumerate(surfaces):
+        n = servo.channel
         params[f"CA_SV_CS{index}_TYPE"] = kind
         params[f"CA_SV_CS{index}_TRIM"] = (servo.trim - 1500.0) / HALF_RANGE_US
         params[f"PWM_MAIN_FUNC{n}"] = PX4_SERVO_FUNCTION + index
@@ -192,7 +196,7 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
             return [(0, lat[k], lon[k], h[k]) for k in range(n)]
         if topic == "actuator_servos":  # PX4's values behind the PWM (servo_pwm's inverse)
             control = np.zeros((n, 8))
-            for name, servo in servos.surfaces.items():
+            for name, servo in [*servos.surfaces.items(), *servos.partners.items()]:
                 c = servo.channel
                 sign = -1.0 if int(params["PWM_MAIN_REV"]) >> (c - 1) & 1 else 1.0
                 control[:, servo_index(params, c)] = sign * (
@@ -200,7 +204,7 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
             return [(0, *control[k]) for k in range(n)]
         # actuator_outputs: whole-microsecond PWM
         pwm = np.zeros((n, 16))
-        for name, servo in servos.surfaces.items():
+        for name, servo in [*servos.surfaces.items(), *servos.partners.items()]:
             pwm[:, servo.channel - 1] = servo.pwm(sampled(record, t, name))
         if servos.throttle is not None:
             pwm[:, servos.throttle.channel - 1] = servos.throttle.pwm(
