@@ -4,8 +4,8 @@ its trim and its throws, as an RC aircraft's set-up sheet gives them. A TOML fil
     [da]                 # surface: a flightid control channel (de, da, dr, df)
     channel = 1          # servo output (RCOU C1..C14 of ArduPilot, 1-based)
     trim = 1500          # PWM at zero deflection (us)
-    throw = "25 deg"     # deflection at trim + 500 us, canonical sign (negative: reversed)
-    throw_low = "20 deg" # optional: deflection magnitude per 500 us below trim (default: throw)
+    throw = "25 deg"     # deflection at trim + 500 us, in flightid's sign (channels.py)
+    throw_low = "20 deg" # optional: deflection per 500 us below trim, its size (default: throw)
     [throttle]
     channel = 3
     low = 1000           # PWM at throttle 0 and 1 (us)
@@ -161,10 +161,10 @@ def read_servo_map(path: str | Path) -> ServoMapping:
                              "channel, trim, throw, throw_low")
         throw = quantity(table.get("throw", 30 * DEG), "rad", f"{where} throw")
         low = table.get("throw_low")
+        if low is not None:  # a magnitude: the sign is the throw's
+            low = math.copysign(quantity(low, "rad", f"{where} throw_low"), throw)
         servo = Servo(_output(table["channel"], where), _pwm(table.get("trim", 1500),
-                                                             f"{where} trim"),
-                      throw, None if low is None else quantity(low, "rad",
-                                                               f"{where} throw_low"))
+                                                             f"{where} trim"), throw, low)
         if servo.throw == 0 or servo.throw_low == 0:
             raise ValueError(f"{where}: a throw of 0 maps every PWM to no deflection")
         surfaces[name] = servo

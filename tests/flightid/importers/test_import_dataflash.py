@@ -16,7 +16,7 @@ from flightid.api import fly
 from flightid.cli.app import app
 from flightid.identification.data.windows import window
 from flightid.importers.dataflash import read_dataflash, servos_from_params
-from flightid.importers.servos import Servo, ServoMapping, Throttle
+from flightid.importers.servos import Servo, ServoMapping, Throttle, read_servo_map
 from flightid.record import read
 from flightid.sim.bridge.air.dataflash import BOOT_S, RATES, SysIdRun, write_dataflash
 from flightid.units import DEG
@@ -279,3 +279,15 @@ def test_an_off_centre_trim_scales_the_demand_as_ardupilot_does():
     assert aileron.deflection(1900.0) == pytest.approx(-18 * DEG)
     assert aileron.deflection(1100.0) == pytest.approx(18 * DEG)
     assert aileron.deflection(1350.0) == pytest.approx(9 * DEG)  # half a demand
+
+
+def test_a_throw_below_trim_is_a_size_with_the_throws_sign(tmp_path):
+    """throw_low given as a size ("15 deg") or with the throw's sign ("-15 deg") is the
+    same servo: 500 us below trim moves a reversed elevator 15 deg the other way."""
+    for low in ("15 deg", "-15 deg"):
+        path = tmp_path / "servos.toml"
+        path.write_text(f'[de]\nchannel = 2\ntrim = 1480\nthrow = "-20 deg"\n'
+                        f'throw_low = "{low}"\n')
+        elevator = read_servo_map(path).surfaces["de"]
+        assert elevator.deflection(980.0) == pytest.approx(15 * DEG)
+        assert elevator.deflection(1980.0) == pytest.approx(-20 * DEG)
