@@ -91,6 +91,11 @@ def test_3211_beats_a_doublet_of_equal_amplitude(small):
     assert "data:image/png;base64," in (folder / "design-compare.html").read_text()
     table = pd.read_csv(folder / "design-compare.csv")
     assert set(table["design"]) == {"doublet", "3211"}
+    # the same rows as Markdown and LaTeX for a paper, beside the HTML
+    markdown = (folder / "design-compare.md").read_text()
+    latex = (folder / "design-compare.tex").read_text()
+    assert markdown.count("\n| ") >= len(table) and "\\begin{tabular}" in latex
+    assert f"{table['scatter'].dropna().iloc[0]:.4g}" in markdown and "Cm\\_alpha" in latex
     assert doc["equal"] == "amplitude" and doc["model"] == "lon"
     by = {d["kind"]: d for d in doc["designs"]}
     for d in by.values():
