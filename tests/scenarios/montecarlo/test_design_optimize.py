@@ -22,7 +22,7 @@ from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.inputs import Maneuvers, scale_amplitude
 from flightid.scenarios.montecarlo.design import experiment
-from flightid.scenarios.montecarlo.design.optimize import sequenced
+from flightid.scenarios.montecarlo.design.optimize import sequenced, stretched
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
 from flightid.units import DEG
 
@@ -177,3 +177,21 @@ def test_design_optimize_past_a_limit_exits_3_and_writes_nothing(tmp_path):
     assert result.exit_code == 3, result.output
     assert "exceeds --max-amplitude-deg 3 deg" in result.output
     assert not out.exists()
+
+
+def test_equal_duration_stretches_every_built_in_to_the_reference_input_time():
+    """--equal-duration: each built-in on the aileron then the rudder, its time parameter
+    scaled so that it flies as long as the 3211 (2 x 2.8 s inputs and the 4 s gap)."""
+    s = experiment.DesignSettings(amplitude=4 * DEG)
+    ref = sequenced("3211", ("da", "dr"), s)
+    span = ref.end - ref.start
+    assert span == pytest.approx(2 * 7 * 0.4 + experiment.GAP_S)
+    for kind in experiment.DESIGNS:
+        d = stretched(kind, ("da", "dr"), s, span)
+        assert d.end - d.start == pytest.approx(span, abs=1e-9), kind
+        assert d.parts[1].start == pytest.approx(d.parts[0].end + experiment.GAP_S)
+        assert d.parts[0].end - d.parts[0].start == pytest.approx(2.8, abs=1e-9), kind
+    assert stretched("3211", ("da", "dr"), s, span) == ref
+    assert stretched("doublet", ("da", "dr"), s, span).parts[0].base == pytest.approx(1.4)
+    with pytest.raises(ValueError, match="leaves no time"):
+        stretched("3211", ("da", "dr"), s, 3.0)
