@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.identification import nuisance
 from flightid.identification.data import time_base, windows
 from flightid.identification.data.axes import excited_axes
@@ -26,10 +27,10 @@ from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
-CONTROLS = ("de", "da", "dr")
+CONTROLS = (*LONGITUDINAL_INPUTS, *LATERAL_INPUTS)
 # the surfaces whose maneuvers a model is fitted to
-_MODEL_INPUTS = {"lateral": ("da", "dr"), "short_period": ("de",),
-                 "longitudinal": ("de", "throttle")}
+_MODEL_INPUTS = {"lateral": LATERAL_INPUTS, "short_period": LONGITUDINAL_INPUTS,
+                 "longitudinal": (*LONGITUDINAL_INPUTS, "throttle")}
 
 
 def model_inputs(model: str) -> tuple[str, ...]:

@@ -35,7 +35,7 @@ from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link
 from flightid.sim.bridge.messages import message_time
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 from flightid.sim.effects.catalogue import (
     ARRIVAL_TIMES,
     CATALOGUE,
@@ -222,12 +222,12 @@ def check_declaration(entry: Entry) -> None:
 
 def check_implementation(entry: Entry) -> None:
     """The entry resolves to a dataclass whose fields are the declared parameters (or,
-    through a Reference, map onto them), taking the default and the zero magnitude."""
+    through an ExternalImplementation, map onto them), taking the default and the zero magnitude."""
     impl = entry.resolve()
     assert dataclasses.is_dataclass(impl), impl
     declared = {p.name for p in entry.parameters}
     fields = {f.name: f for f in dataclasses.fields(impl) if f.init}
-    if isinstance(entry.implementation, Reference):
+    if isinstance(entry.implementation, ExternalImplementation):
         mapping = entry.implementation.mapping()
         assert set(mapping) == declared, f"{entry.name}: maps {sorted(mapping)}"
         assert set(mapping.values()) <= set(fields), f"{impl} lacks {set(mapping.values())}"

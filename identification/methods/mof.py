@@ -38,6 +38,7 @@ from math import ceil, floor
 import numpy as np
 
 from flightid.identification.data.coefficients import HINGE, differentiated, hinge_name
+from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
@@ -161,7 +162,7 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     steps = []
     for k in range(1, len(best) + 1):
         sse = _sse(z, q[:, best[:k]])
-        r2 = 100.0 * (1.0 - sse / sst) if sst > 0 else 100.0
+        r2 = 100.0 * determination(sse, sst) if sst > 0 else 100.0
         pse = _pse(sse, sst, n, k)
         steps.append({"action": "enter", "term": names[best[k - 1]], "R2": r2, "PSE": pse,
                       "why": f"largest error reduction of the orthogonal functions left; "
@@ -189,7 +190,7 @@ def _eliminate(z: np.ndarray, q: np.ndarray, chosen: Sequence[int], pse: float
             break
         left.remove(j)
         pse = trial
-        r2 = 100.0 * (1.0 - sses[j] / sst) if sst > 0 else 100.0
+        r2 = 100.0 * determination(sses[j], sst) if sst > 0 else 100.0
         removals.append({"action": "remove", "term": j, "R2": r2, "PSE": pse,
                          "why": f"its removal lowers the PSE most, to {pse:.4g}"})
     return left, pse, removals

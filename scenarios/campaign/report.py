@@ -7,7 +7,6 @@ DIR/derivative-<name>.png and embedded in it as base64 PNG (the HTML stands alon
 
 from __future__ import annotations
 
-import base64
 import html
 import io
 import math
@@ -20,6 +19,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
+from flightid.identification.evaluation.embed import png_img
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign
 
@@ -142,9 +142,7 @@ def write_report(folder: str | Path, campaign: Campaign, df: pd.DataFrame,
         buf = io.BytesIO()
         fig.savefig(buf, format="png")
         (folder / figure_name(name)).write_bytes(buf.getvalue())
-        data = base64.b64encode(buf.getvalue()).decode()
-        figures.append(f'<figure><img alt="{html.escape(name)}" '
-                       f'src="data:image/png;base64,{data}"></figure>')
+        figures.append(f"<figure>{png_img(buf.getvalue(), name)}</figure>")
     note_html = "".join(f"<p>{html.escape(n)}</p>" for n in notes or [])
     text = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>campaign {html.escape(campaign.name)}</title>

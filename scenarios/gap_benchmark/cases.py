@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.sim.effects.catalogue import CATALOGUE
 
 LATERAL, LONGITUDINAL, BOTH = "lateral", "longitudinal", "both"
@@ -90,7 +91,7 @@ STABLE_SIGN = {"Cn_beta": 1.0, "Cl_beta": -1.0, "Cn_r": -1.0, "Cl_p": -1.0, "CY_
 # the channels a sensor effect is drawn on, per axis
 CHANNELS = {LATERAL: ("beta", "p", "r", "ay"), LONGITUDINAL: ("alpha", "q", "az")}
 FLOW_ANGLE = {LATERAL: ("beta",), LONGITUDINAL: ("alpha",)}  # biases the trim fixes
-SURFACES = {LATERAL: ("da", "dr"), LONGITUDINAL: ("de",)}
+SURFACES = {LATERAL: LATERAL_INPUTS, LONGITUDINAL: LONGITUDINAL_INPUTS}
 INERTIA = {LATERAL: ("ixx", "izz"), LONGITUDINAL: ("iyy",)}
 K_RANGE = (0.5, 1.5)  # the drawn multiple of an entry's default magnitude
 
@@ -189,7 +190,7 @@ def _kinds() -> tuple[Kind, ...]:
 KINDS: tuple[Kind, ...] = _kinds()
 KIND_BY_NAME = {k.name: k for k in KINDS}
 
-# effects outside the catalogue (``outside.py``): name -> axis it shows on
+# effects outside the catalogue (``outside_catalogue.py``): name -> axis it shows on
 OUTSIDE = {"structural_mode": (LATERAL, LONGITUDINAL), "vane_nonlinearity": (LATERAL,),
            "vane_hysteresis": (LATERAL, LONGITUDINAL), "cm_alpha_break": (LONGITUDINAL,)}
 

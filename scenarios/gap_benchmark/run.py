@@ -33,7 +33,7 @@ from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import GapResult, diagnose
 from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, mean_gap, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.trim_level import TrimOffset
 from flightid.record import FlightRecord
@@ -49,7 +49,7 @@ from flightid.scenarios.gap_benchmark.cases import (
     Case,
     Effect,
 )
-from flightid.scenarios.gap_benchmark.outside import RECORD, cm_alpha_break
+from flightid.scenarios.gap_benchmark.outside_catalogue import RECORD, cm_alpha_break
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.sim.jsbsim.model import load
@@ -246,7 +246,7 @@ def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
         inputs = AXIS_INPUTS[axis]
         ranker = Ranker(linearise(case.aircraft, [plain], axis),
                         Folds.make(segments([plain], None, inputs), None))
-        out[axis] = overall(pooled_fractions(list(ranker.base_held.values())))
+        out[axis] = mean_gap(pooled_fractions(list(ranker.base_held.values())))
     return out
 
 
@@ -375,8 +375,8 @@ def score(case: Case, result: GapResult) -> CaseResult:
             g = per_axis.get(a)
             if g is not None and g.named and g.named[0].heldout_before \
                     and g.named[-1].heldout_after:
-                out.before[a] = overall(g.named[0].heldout_before)
-                out.after[a] = overall(g.named[-1].heldout_after)
+                out.before[a] = mean_gap(g.named[0].heldout_before)
+                out.after[a] = mean_gap(g.named[-1].heldout_after)
     return out
 
 

@@ -69,7 +69,7 @@ def positive(value: float, field: str, name: str, strict: bool = True) -> None:
 
 
 @dataclass(frozen=True)
-class Reference:
+class ExternalImplementation:
     """An implementation outside the effects package, named instead of imported.
 
     ``target`` is ``"module:attribute"``; ``fields`` maps each catalogue parameter to the

@@ -2,8 +2,8 @@
 
 An entry says what an effect is called, where it acts, what it does in one line, its
 parameters and options, what it changes in the data, and the implementation that
-injects it: a class of this package, or a ``Reference`` (module, attribute and parameter
-mapping) for the bridge's link faults and recorder clocks. The schema (``Entry``,
+injects it: a class of this package, or an ``ExternalImplementation`` (module, attribute
+and parameter mapping) for the bridge's link faults and recorder clocks. The schema (``Entry``,
 ``Parameter``, ``ActsOn``, ...) is ``schema``'s, re-exported here.
 
 Where an effect acts decides how it is injected (docs/effects.md, "Where effects act"):

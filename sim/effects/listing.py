@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.schema import ActsOn, number_text
 
@@ -31,7 +31,7 @@ def listing(where: ActsOn | str | None = None) -> list[dict[str, Any]]:
         "sized_for_channel": e.channel,
         "implementation": e.implementation_name(),
         "parameter_mapping": (e.implementation.mapping()
-                              if isinstance(e.implementation, Reference) else {}),
+                              if isinstance(e.implementation, ExternalImplementation) else {}),
         "inject": e.how(),
     } for e in entries]
 

@@ -35,12 +35,13 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, publish
 from flightid.sim.effects.airframe import DerivativeDelta
 
-STRUCTURE = {"lateral": (("da", "dr"), {"p": 1.0, "r": 0.3, "ay": 2.0}),
-             "longitudinal": (("de",), {"q": 1.0, "az": 2.0})}
+STRUCTURE = {"lateral": (LATERAL_INPUTS, {"p": 1.0, "r": 0.3, "ay": 2.0}),
+             "longitudinal": (LONGITUDINAL_INPUTS, {"q": 1.0, "az": 2.0})}
 
 
 def structural_mode(record: FlightRecord, frequency_hz: float, damping: float, gain: float,
