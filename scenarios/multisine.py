@@ -80,7 +80,19 @@ def relative_peak_factor(u: np.ndarray) -> float:
     return float((u.max() - u.min()) / (2 * np.sqrt(2) * rms))
 
 
-def _grid(freqs: np.ndarray, period: float, per_cycle: int = 16) -> np.ndarray:
+def period_grid(freqs: np.ndarray, period: float, per_cycle: int = 16) -> np.ndarray:
+    """Equally spaced times (s) over one ``period`` (s): ``per_cycle`` per cycle of the
+    highest of ``freqs`` (Hz), at least 1024.
+
+    Parameters
+    ----------
+    freqs : numpy.ndarray
+        The multisine's frequencies (Hz).
+    period : float
+        Its period (s).
+    per_cycle : int
+        Samples per cycle of the highest frequency.
+    """
     n = max(1024, int(per_cycle * freqs.max() * period))
     return np.arange(n) * (period / n)
 
@@ -92,7 +104,7 @@ def optimize_phases(comp: Components, period: float) -> Components:
     gradients for p = 4, 8, ..., 256 (the L_p route to the min-max problem, Guillaume et
     al. 1991), keeping the phases with the lowest true RPF.
     """
-    t = _grid(comp.freqs, period)
+    t = period_grid(comp.freqs, period)
     theta = 2 * np.pi * np.outer(comp.freqs, t)
     a = comp.amps[:, None]
 
@@ -131,7 +143,7 @@ def start_at_zero(comp: Components, period: float) -> Components:
     Of the upward zero crossings, the one with the smallest slope is taken, so the
     input starts gently; the shift changes neither the spectrum nor the peak factor.
     """
-    t = _grid(comp.freqs, period, 64)
+    t = period_grid(comp.freqs, period, 64)
     u = comp(t)
     up = np.nonzero((u[:-1] <= 0) & (u[1:] > 0))[0]
     if up.size == 0:
@@ -150,7 +162,7 @@ def design_components(k: np.ndarray, period: float, peak: float, optimized: bool
     if optimized and freqs.size > 1:
         comp = optimize_phases(comp, period)
     comp = start_at_zero(comp, period)
-    u = comp(_grid(freqs, period, 64))
+    u = comp(period_grid(freqs, period, 64))
     return Components(freqs, amps * peak / np.abs(u).max(), comp.phases)
 
 

@@ -120,12 +120,15 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
              settings: DesignSettings | None = None,
              derivatives: Sequence[str] | None = None,
-             problem: Problem | None = None, equal_duration: bool = False) -> Optimized:
+             problem: Problem | None = None, equal_duration: bool = False,
+             max_amplitude: float | None = None) -> Optimized:
     """Optimise a multisine on ``surfaces`` for ``criterion`` at the energy and input time
     of the built-in ``reference`` flown on each surface in turn at the settings'
     amplitude (default 4 deg, as the library cards' lateral inputs); predict every
     built-in's bounds at that energy too, each at its own input time or, with
-    ``equal_duration``, at the reference's (``stretched``)."""
+    ``equal_duration``, at the reference's (``stretched``). With ``max_amplitude`` (rad)
+    the multisine's peak on every surface is held at or below it (``optimize_multisine``;
+    raises ``PeakLimitError`` if no design found at that energy fits)."""
     settings = settings or DesignSettings(amplitude=np.deg2rad(4.0))
     if reference not in DESIGNS:
         raise ValueError(f"unknown reference design {reference!r}; designs: "
@@ -141,7 +144,7 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              else sequenced(kind, surfaces, settings))
         designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
-                            start=START_S, settle=SETTLE_S)
+                            start=START_S, settle=SETTLE_S, max_amplitude=max_amplitude)
     designs["optimized"] = ms.design()
     out = Optimized(pb, ms, designs)
     for name, d in designs.items():
