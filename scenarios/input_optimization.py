@@ -52,13 +52,6 @@ from flightid.scenarios.multisine import (
     schroeder_phases,
     start_at_zero,
 )
-from flightid.scenarios.peak_limit import (
-    PeakLimitError,
-    limited_amplitudes,
-    peak_grid,
-    peak_rows,
-    smallest_peak,
-)
 
 CRITERIA = ("A", "D", "mean")
 BIAS_PREFIX = "bias_"
@@ -378,9 +371,13 @@ def _unit_parts(comps: list[tuple[str, float, float]], period: float,
                       period=period, start=start) for s, f, ph in comps]
 
 
-def _round_forms(problem: Problem, comps: list[tuple[str, float, float]], period: float,
-                 start: float, duration: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(info, middle, gram) of unit components (surface, Hz, phase) flown from ``start``."""
+def component_forms(problem: Problem, comps: list[tuple[str, float, float]], period: float,
+                    start: float, duration: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The quadratic forms (info, middle: ``_forms``, the constant bias input first) and
+    the Gram matrix (rad^2 s per unit amplitude^2) of unit multisine components
+    (surface, Hz, phase in rad) of ``period`` (s) flown once from ``start`` (s) in a
+    flight of ``duration`` (s)."""
     t = np.arange(int(round(duration * problem.rate)) + 1) / problem.rate
     parts = _unit_parts(comps, period, start)
     u = np.stack([np.zeros((t.size, len(problem.model.inputs) + 1))]
@@ -396,7 +393,7 @@ def _amplitude_round(problem: Problem, comps: list[tuple[str, float, float]],
                      period: float, start: float, duration: float, energy: float,
                      criterion: str, guess: np.ndarray | None) -> np.ndarray:
     """Optimal amplitudes of unit components (surface, Hz, phase) flown from ``start``."""
-    info, middle, gram = _round_forms(problem, comps, period, start, duration)
+    info, middle, gram = component_forms(problem, comps, period, start, duration)
     return optimal_amplitudes(problem, info, middle, gram, energy, criterion,
                               np.ones(len(comps)) if guess is None else guess)
 
@@ -404,8 +401,7 @@ def _amplitude_round(problem: Problem, comps: list[tuple[str, float, float]],
 def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[float, float],
                        period: float, energy: float, criterion: str = "A",
                        start: float = 2.0, settle: float = 8.0,
-                       min_share: float = 0.02, max_amplitude: float | None = None
-                       ) -> OptimizedMultisine:
+                       min_share: float = 0.02) -> OptimizedMultisine:
     """A multisine on ``surfaces`` of harmonics of 1/``period`` (s) in ``band`` (Hz), flown
     once from ``start`` (s) and followed by ``settle`` s of free response, with input energy
     ``energy`` (rad^2 s), its amplitudes optimised for ``criterion`` on the predicted
@@ -417,11 +413,9 @@ def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[fl
        strongest), amplitudes optimised again;
     3. each surface's phases optimised for the smallest relative peak factor and shifted to
        start at zero (``multisine.optimize_phases``, ``start_at_zero``), amplitudes
-       optimised once more with those phases (and the start shifted to a zero again);
-    4. with ``max_amplitude`` (rad) and a peak above it, the amplitudes optimised again
-       with every surface's peak over the period at or below it (``_limit_peak``).
-    The criterion's value is that of the final design. Raises ``PeakLimitError`` if no
-    design found at ``energy`` keeps within ``max_amplitude``."""
+       optimised once more with those phases (and the start shifted to a zero again).
+    The criterion's value is that of the final design; ``peak_limit.limit_peak`` holds
+    its peak under a limit."""
     if criterion not in CRITERIA:
         raise ValueError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     k = harmonic_indices(band[0], band[1], period)
@@ -467,59 +461,5 @@ def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[fl
                                 {s: relative_peak_factor(c(grid)) for s, c in final.items()})
     result.value = criterion_value(problem, covariance(problem, result.design(), duration),
                                    criterion)
-    if max_amplitude is None:
-        return result
-    return _limit_peak(problem, result, energy, max_amplitude, duration)
+    return result
 
-
-def _signed(comps: list[tuple[str, float, float]], amps: np.ndarray
-            ) -> dict[str, Components]:
-    """Per surface the components of signed amplitudes ``amps`` (a sign as a phase)."""
-    out = {}
-    for s in dict.fromkeys(c[0] for c in comps):
-        mine = [i for i, c in enumerate(comps) if c[0] == s]
-        out[s] = Components(np.array([comps[i][1] for i in mine]), np.abs(amps[mine]),
-                            np.mod(np.array([comps[i][2] for i in mine])
-                                   + np.where(amps[mine] < 0, np.pi, 0.0), 2 * np.pi))
-    return out
-
-
-def _limit_peak(problem: Problem, result: OptimizedMultisine, energy: float, limit: float,
-                duration: float) -> OptimizedMultisine:
-    """``result`` if no surface's peak over the period exceeds ``limit`` (rad); else its
-    amplitudes optimised with the peak limited at the same energy (``peak_limit``), with
-    its phases, then with each surface's phases optimised for the new amplitudes
-    (``optimize_phases``): the better design of the two. Raises ``PeakLimitError``."""
-    freqs = np.concatenate([c.freqs for c in result.components.values()])
-    grid, factor = peak_grid(freqs, result.period)
-    bound = limit * factor
-    if max(np.abs(c(grid)).max() for c in result.components.values()) <= bound:
-        return result
-    shaped, best, smallest = result.components, None, math.inf
-    for _ in range(2):
-        comps = [(s, float(f), float(p)) for s, c in shaped.items()
-                 for f, p in zip(c.freqs, c.phases, strict=True)]
-        own = np.concatenate([c.amps for c in shaped.values()])
-        info, middle, gram = _round_forms(problem, comps, result.period, result.start,
-                                          duration)
-        rows = peak_rows(comps, grid)
-        low, low_peak = smallest_peak(rows, gram, energy, own)
-        smallest = min(smallest, low_peak)
-        amps = (limited_amplitudes(amplitude_cost(problem, info, middle, result.criterion),
-                                   rows, gram, energy, bound, [own, low])
-                if low_peak <= bound else None)
-        shaped = _signed(comps, low if amps is None else amps)
-        if amps is not None:
-            d = OptimizedMultisine(shaped, result.period, result.start, result.criterion,
-                                   math.nan, {s: relative_peak_factor(c(grid))
-                                              for s, c in shaped.items()})
-            d.value = criterion_value(problem, covariance(problem, d.design(), duration),
-                                      result.criterion)
-            best = d if best is None or d.value < best.value else best
-        shaped = {s: start_at_zero(optimize_phases(c, result.period)
-                                   if c.freqs.size > 1 else c, result.period)
-                  for s, c in shaped.items()}
-    if best is None:
-        raise PeakLimitError(limit, smallest / factor, energy,
-                             energy * (bound / smallest) ** 2)
-    return best

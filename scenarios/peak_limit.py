@@ -1,15 +1,17 @@
-"""Multisine amplitudes under a peak-deflection limit at a fixed input energy.
+"""Multisine amplitudes under a peak-deflection limit at a fixed input energy
+(``limit_peak`` on an ``input_optimization.optimize_multisine`` design).
 
 With its frequencies and phases fixed, a multisine is linear in its signed amplitudes c:
 on times t_j over one period, surface s moves u_s(t_j) = (B c)_j with
 B_jk = cos(2 pi f_k t_j + phi_k) for the components k on s (0 for the others). The limit
 |u_s(t)| <= L on every surface is then the linear inequalities -L' <= B c <= L' on the
 grid, and the energy the equality c^T G c = E (G the components' Gram matrix, rad^2 s
-per unit amplitude^2); both are solved by sequential quadratic programming (SLSQP,
-Kraft 1988). Between the grid points the signal may rise above its largest grid value,
-but by Bernstein's inequality for a trigonometric polynomial of highest frequency f_max,
-max|u''| <= (2 pi f_max)^2 max|u| (Zygmund 1959, Trigonometric Series), and u' = 0 at
-the maximum, so the nearest grid point (at most dt/2 away) is within
+per unit amplitude^2); both are solved by sequential quadratic programming (SLSQP;
+Kraft 1988, "A software package for sequential quadratic programming", DFVLR-FB 88-28).
+Between the grid points the signal may rise above its largest grid value, but by
+Bernstein's inequality for a trigonometric polynomial of highest frequency f_max,
+max|u''| <= (2 pi f_max)^2 max|u| (Zygmund 1959, Trigonometric Series, Cambridge), and
+u' = 0 at the maximum, so the nearest grid point (at most dt/2 away) is within
 max|u| (pi f_max dt)^2 / 2 of it: the grid limit L' = L (1 - (pi f_max dt)^2 / 2)
 keeps the continuous peak at or below L.
 """
@@ -22,7 +24,21 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
-from flightid.scenarios.multisine import period_grid
+from flightid.scenarios.input_optimization import (
+    OptimizedMultisine,
+    Problem,
+    amplitude_cost,
+    component_forms,
+    covariance,
+    criterion_value,
+)
+from flightid.scenarios.multisine import (
+    Components,
+    optimize_phases,
+    period_grid,
+    relative_peak_factor,
+    start_at_zero,
+)
 
 Cost = Callable[[np.ndarray], tuple[float, np.ndarray]]
 
@@ -117,4 +133,60 @@ def limited_amplitudes(cost: Cost, rows: np.ndarray, gram: np.ndarray, energy: f
         value = cost(c)[0]
         if np.abs(b @ c).max() <= limit and value < best_value:
             best, best_value = c, value
+    return best
+
+
+def _signed(comps: list[tuple[str, float, float]], amps: np.ndarray
+            ) -> dict[str, Components]:
+    """Per surface the components of signed amplitudes ``amps`` (a sign as a phase)."""
+    out = {}
+    for s in dict.fromkeys(c[0] for c in comps):
+        mine = [i for i, c in enumerate(comps) if c[0] == s]
+        out[s] = Components(np.array([comps[i][1] for i in mine]), np.abs(amps[mine]),
+                            np.mod(np.array([comps[i][2] for i in mine])
+                                   + np.where(amps[mine] < 0, np.pi, 0.0), 2 * np.pi))
+    return out
+
+
+def limit_peak(problem: Problem, result: OptimizedMultisine, energy: float, limit: float,
+               duration: float) -> OptimizedMultisine:
+    """``result`` (``optimize_multisine`` at input energy ``energy``, rad^2 s, flown in a
+    flight of ``duration`` s) if no surface's peak over the period exceeds ``limit``
+    (rad): unchanged, bit for bit. Else its amplitudes optimised for its criterion at the
+    same energy with every surface's peak at or below the limit and a start at zero
+    (``limited_amplitudes``), first with its phases, then with each surface's phases
+    optimised for the new amplitudes (``optimize_phases``): the better design of the
+    two. Raises ``PeakLimitError`` if neither round finds a design within the limit."""
+    freqs = np.concatenate([c.freqs for c in result.components.values()])
+    grid, factor = peak_grid(freqs, result.period)
+    bound = limit * factor
+    if max(np.abs(c(grid)).max() for c in result.components.values()) <= bound:
+        return result
+    shaped, best, smallest = result.components, None, math.inf
+    for _ in range(2):
+        comps = [(s, float(f), float(p)) for s, c in shaped.items()
+                 for f, p in zip(c.freqs, c.phases, strict=True)]
+        own = np.concatenate([c.amps for c in shaped.values()])
+        info, middle, gram = component_forms(problem, comps, result.period, result.start,
+                                          duration)
+        rows = peak_rows(comps, grid)
+        low, low_peak = smallest_peak(rows, gram, energy, own)
+        smallest = min(smallest, low_peak)
+        amps = (limited_amplitudes(amplitude_cost(problem, info, middle, result.criterion),
+                                   rows, gram, energy, bound, [own, low])
+                if low_peak <= bound else None)
+        shaped = _signed(comps, low if amps is None else amps)
+        if amps is not None:
+            d = OptimizedMultisine(shaped, result.period, result.start, result.criterion,
+                                   math.nan, {s: relative_peak_factor(c(grid))
+                                              for s, c in shaped.items()})
+            d.value = criterion_value(problem, covariance(problem, d.design(), duration),
+                                      result.criterion)
+            best = d if best is None or d.value < best.value else best
+        shaped = {s: start_at_zero(optimize_phases(c, result.period)
+                                   if c.freqs.size > 1 else c, result.period)
+                  for s, c in shaped.items()}
+    if best is None:
+        raise PeakLimitError(limit, smallest / factor, energy,
+                             energy * (bound / smallest) ** 2)
     return best

@@ -47,6 +47,7 @@ from flightid.scenarios.montecarlo.design.experiment import (
     peak,
     time_grid,
 )
+from flightid.scenarios.peak_limit import limit_peak
 
 QUIET_S = 60.0  # s of the flight without inputs that measures the residual spectrum
 
@@ -127,8 +128,8 @@ def optimize(card: str = "navion-demo", model: str = "lat",
     amplitude (default 4 deg, as the library cards' lateral inputs); predict every
     built-in's bounds at that energy too, each at its own input time or, with
     ``equal_duration``, at the reference's (``stretched``). With ``max_amplitude`` (rad)
-    the multisine's peak on every surface is held at or below it (``optimize_multisine``;
-    raises ``PeakLimitError`` if no design found at that energy fits)."""
+    the multisine's peak on every surface is held at or below it (``limit_peak``; raises
+    ``PeakLimitError`` if no design found at that energy fits)."""
     settings = settings or DesignSettings(amplitude=np.deg2rad(4.0))
     if reference not in DESIGNS:
         raise ValueError(f"unknown reference design {reference!r}; designs: "
@@ -144,7 +145,9 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              else sequenced(kind, surfaces, settings))
         designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
-                            start=START_S, settle=SETTLE_S, max_amplitude=max_amplitude)
+                            start=START_S, settle=SETTLE_S)
+    if max_amplitude is not None:
+        ms = limit_peak(pb, ms, energy, max_amplitude, START_S + span + SETTLE_S)
     designs["optimized"] = ms.design()
     out = Optimized(pb, ms, designs)
     for name, d in designs.items():

@@ -24,7 +24,7 @@ from flightid.scenarios.inputs import Maneuvers, scale_amplitude
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design.optimize import sequenced, stretched
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
-from flightid.scenarios.peak_limit import PeakLimitError
+from flightid.scenarios.peak_limit import PeakLimitError, limit_peak
 from flightid.units import DEG
 
 RUNNER = CliRunner()
@@ -200,9 +200,11 @@ def test_design_optimize_under_a_peak_limit_writes_a_design_within_it(tmp_path):
 
 
 def _limited(pb: io.Problem, energy: float, limit: float | None) -> io.OptimizedMultisine:
-    return io.optimize_multisine(pb, ("da", "dr"), (0.1, 2.0), PERIOD, energy, "A",
-                                 start=experiment.START_S, settle=experiment.SETTLE_S,
-                                 max_amplitude=limit)
+    ms = io.optimize_multisine(pb, ("da", "dr"), (0.1, 2.0), PERIOD, energy, "A",
+                               start=experiment.START_S, settle=experiment.SETTLE_S)
+    if limit is None:
+        return ms
+    return limit_peak(pb, ms, energy, limit, experiment.START_S + PERIOD + experiment.SETTLE_S)
 
 
 PERIOD = 9.6  # s: the 3211 on the aileron, 4 s, the 3211 on the rudder
