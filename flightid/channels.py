@@ -100,6 +100,8 @@ CONTROLS: tuple[str, ...] = ("de", "da", "dr", "throttle")
 # the surfaces of each axis: elevator; aileron and rudder
 LONGITUDINAL_INPUTS: tuple[str, ...] = ("de",)
 LATERAL_INPUTS: tuple[str, ...] = ("da", "dr")
+# the control surfaces: elevator, aileron, rudder
+CONTROL_SURFACES: tuple[str, ...] = (*LONGITUDINAL_INPUTS, *LATERAL_INPUTS)
 
 
 def unit_of(name: str) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.identification.models import rigid_body as rb
 from flightid.record import Reference
 
@@ -20,7 +21,7 @@ MOMENTS = ("Cl", "Cm", "Cn")
 VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr", "alphadot")
 VARIABLE_CHANNEL = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
                     "de": "de", "da": "da", "dr": "dr", "alphadot": "alphadot_hat"}
-CONTROLS = ("de", "da", "dr")
+CONTROLS = CONTROL_SURFACES
 LONGITUDINAL = ("alpha", "q", "de")
 LATERAL = ("beta", "p", "r", "da", "dr")
 PROPULSIVE_MOMENTS = ("L_prop", "M_prop", "N_prop")

@@ -48,6 +48,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.augment.aero import (
     control_effectiveness,
     derivative_delta,
@@ -150,7 +151,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
     for e in effects:
         if not e.neutral():
             _APPLY[type(e)](doc, e)
-    for surface in ("de", "da", "dr"):
+    for surface in CONTROL_SURFACES:
         dyn = [e for e in effects if isinstance(e, DYNAMIC) and e.surface == surface
                and not e.neutral()]
         link = [e for e in effects if isinstance(e, LINKAGE) and e.surface == surface

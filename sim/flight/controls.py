@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.jsbsim.model import (
     COMMANDS,
     SURFACES,
@@ -34,7 +35,7 @@ def command_maps(model: Model, trim: Trim) -> dict[str, tuple[np.ndarray, np.nda
     if key not in COMMAND_MAPS:
         if len(COMMAND_MAPS) > 64:
             COMMAND_MAPS.clear()
-        COMMAND_MAPS[key] = {c: m for c in ("de", "da", "dr")
+        COMMAND_MAPS[key] = {c: m for c in CONTROL_SURFACES
                       if (m := command_map(model, c)) is not None}
     return COMMAND_MAPS[key]
 
