@@ -105,13 +105,16 @@ def paired_ratio_interval(errors_a: np.ndarray, errors_b: np.ndarray, level: flo
 
 def paired_mean_relative_interval(errors_a: np.ndarray, errors_b: np.ndarray,
                                   truth: np.ndarray, level: float = LEVEL,
-                                  draws: int = BOOTSTRAP_DRAWS, seed: int = 0
+                                  draws: int = BOOTSTRAP_DRAWS, seed: int = 0,
+                                  statistic: str = "scatter"
                                   ) -> tuple[float, float, float]:
     """Design a against b on several derivatives at once: the ratio of the mean over the
     derivatives of scatter / |truth| (``errors_*``: realizations x derivatives, the same
     seeds row by row; ``truth`` non-zero, one per derivative) and its ``level``
     percentile-bootstrap interval, resampling whole realizations as pairs:
-    (ratio, low, high); NaN bounds for fewer than PAIRED_MIN realizations."""
+    (ratio, low, high); NaN bounds for fewer than PAIRED_MIN realizations.
+    ``statistic="mean"``: the mean of each column instead of its scatter (``errors_*``
+    then the reported standard errors: the ratio of the mean bound / |truth|)."""
     alpha = _alpha(level)
     a = np.asarray(errors_a, float)
     b = np.asarray(errors_b, float)
@@ -120,9 +123,16 @@ def paired_mean_relative_interval(errors_a: np.ndarray, errors_b: np.ndarray,
         raise ValueError(f"paired errors need equal shapes (realizations x {scale.size}), "
                          f"got {a.shape} and {b.shape}")
 
+    if statistic not in ("scatter", "mean"):
+        raise ValueError(f"statistic must be 'scatter' or 'mean', got {statistic!r}")
+
+    def column(x: np.ndarray) -> np.ndarray:
+        return (np.std(x, axis=-2, ddof=1) if statistic == "scatter"
+                else np.mean(x, axis=-2))
+
     def stat(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return (np.mean(np.std(x, axis=-2, ddof=1) * scale, axis=-1)
-                / np.mean(np.std(y, axis=-2, ddof=1) * scale, axis=-1))
+        return (np.mean(column(x) * scale, axis=-1)
+                / np.mean(column(y) * scale, axis=-1))
 
     ratio = float(stat(a, b))
     if a.shape[0] < PAIRED_MIN:
@@ -131,3 +141,20 @@ def paired_mean_relative_interval(errors_a: np.ndarray, errors_b: np.ndarray,
     ratios = stat(a[idx], b[idx])
     low, high = np.quantile(ratios, [alpha / 2, 1 - alpha / 2])
     return ratio, float(low), float(high)
+
+
+def interval_text(low: float, high: float, digits: int = 3) -> str:
+    """``low - high`` with ``digits`` significant digits, trailing zeros kept, and more
+    digits (up to 6) for an end that would otherwise read as exactly 1 (parity) while it
+    is not, so that the text shows on which side of parity an interval lies; ``-`` for an
+    interval that is not defined (NaN)."""
+    def end(x: float) -> str:
+        for d in range(digits, 7):
+            text = f"{x:#.{d}g}".rstrip(".")
+            if float(text) != 1.0 or x == 1.0:
+                break
+        return text
+
+    if not (np.isfinite(low) and np.isfinite(high)):
+        return "-"
+    return f"{end(low)} - {end(high)}"

@@ -64,9 +64,11 @@ def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
     if path.exists():
         stored = _read_json(path)
         old = stored["identity"]
-        diffs = [f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}"
-                 for k in sorted(set(old) | set(identity))
-                 if k not in INFORMATION_ONLY and old.get(k) != identity.get(k)]
+        keys = [k for k in sorted(set(old) | set(identity))
+                if k not in INFORMATION_ONLY and old.get(k) != identity.get(k)]
+        diffs = [f"{k}: not stored, asked {identity[k]!r} (a study of an earlier flightid, "
+                 "whose rows were identified without it)" if k not in old else
+                 f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}" for k in keys]
         if diffs:
             raise StudyMismatch(f"{root} holds another study ({'; '.join(diffs)}); "
                                 "use another folder or the stored description")

@@ -238,18 +238,20 @@ class Comparison:
     reference: str
     settings: DesignSettings
     results: list[DesignResult] = field(default_factory=list)
-    _errors: dict[str, pd.DataFrame] = field(default_factory=dict, repr=False, compare=False)
+    _errors: dict[tuple[str, str], pd.DataFrame] = field(default_factory=dict, repr=False,
+                                                         compare=False)
 
-    def errors(self, kind: str) -> pd.DataFrame:
-        """Design ``kind``'s estimated errors (estimate - truth), realization index (rows)
-        by derivative (columns), from its study's stored rows."""
-        if kind not in self._errors:
+    def errors(self, kind: str, column: str = "error") -> pd.DataFrame:
+        """Design ``kind``'s estimated errors (estimate - truth; ``column="std"``: the
+        reported standard errors), realization index (rows) by derivative (columns), from
+        its study's stored rows."""
+        if (kind, column) not in self._errors:
             study = next(r.study_dir for r in self.results if r.kind == kind)
-            rows = load(study, ["index", "name", "error", "status"])
+            rows = load(study, ["index", "name", column, "status"])
             rows = rows[rows["status"] == "estimated"]
-            self._errors[kind] = rows.pivot_table(index="index", columns="name",
-                                                  values="error", observed=True)
-        return self._errors[kind]
+            self._errors[kind, column] = rows.pivot_table(index="index", columns="name",
+                                                          values=column, observed=True)
+        return self._errors[kind, column]
 
     def paired_interval(self, a: str, b: str, name: str, level: float = LEVEL
                         ) -> tuple[float, float, int]:
@@ -285,24 +287,32 @@ class Comparison:
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
 
-    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL
-                              ) -> dict[str, Any]:
+    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL,
+                              column: str = "error") -> dict[str, Any]:
         """Design ``a`` against ``b`` over every derivative with a non-zero truth that both
         estimated in every shared realization: the ratio of their mean scatter / |truth|
         and its paired-bootstrap ``level`` interval (``intervals.
         paired_mean_relative_interval``), the derivatives and realizations used, and the
-        winner ("" when the interval contains 1)."""
+        winner ("" when the interval contains 1). ``column="std"``: the same for the
+        mean reported bound / |truth| (``mean_relative_bound``)."""
         truth = self.frame().drop_duplicates("derivative").set_index("derivative")["truth"]
-        ea, eb = self.errors(a), self.errors(b)
+        ea, eb = self.errors(a, column), self.errors(b, column)
         names = [n for n in ea.columns if n in eb.columns and truth.get(n, 0.0) != 0.0]
         both = pd.concat([ea[names], eb[names]], axis=1, keys=["a", "b"],
                          join="inner").dropna()
         xa, xb = both["a"].to_numpy(), both["b"].to_numpy()
         ratio, low, high = paired_mean_relative_interval(
-            xa, xb, truth[names].to_numpy(float), level)
+            xa, xb, truth[names].to_numpy(float), level,
+            statistic="mean" if column == "std" else "scatter")
         return {"ratio": ratio, "low": low, "high": high, "level": level,
                 "derivatives": names, "realizations": len(both),
                 "winner": a if high < 1 else b if low > 1 else ""}
+
+    def mean_relative_bound(self, a: str, b: str, level: float = LEVEL) -> dict[str, Any]:
+        """``mean_relative_scatter`` of the reported bounds: the ratio of design ``a``'s
+        mean over the derivatives of mean bound / |truth| to ``b``'s, with its
+        paired-bootstrap interval over the realizations."""
+        return self.mean_relative_scatter(a, b, level, column="std")
 
     def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
         """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the

@@ -7,7 +7,10 @@ condition, sensors and turbulence, seed of the card) gives the trim condition, t
 truth and the residual spectrum. Every built-in design is applied to each surface in
 turn (the next ``design.GAP_S`` s after the previous input ends), all scaled to the energy of
 the ``reference`` built-in; the multisine gets that energy and the reference's input
-time, so it flies as long as the reference does.
+time, so it flies as long as the reference does. With ``equal_duration`` every built-in
+is also stretched or compressed in time (its base, sweep duration or multisine period) to
+the reference's input time, so that all designs carry the same energy over the same
+duration.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from flightid.scenarios.input_optimization import (
     predicted_bounds,
     problem_from_flight,
 )
-from flightid.scenarios.inputs import scale_to_energy
+from flightid.scenarios.inputs import Maneuvers, scale_to_energy
 from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     SETTLE_S,
@@ -53,6 +56,24 @@ def sequenced(kind: str, surfaces: Sequence[str], settings: DesignSettings) -> I
     with ``then``)."""
     return make_design(kind, dataclasses.replace(settings, surface=surfaces[0],
                                                  then=tuple(surfaces[1:])))
+
+
+def stretched(kind: str, surfaces: Sequence[str], settings: DesignSettings, span: float
+              ) -> InputDesign:
+    """Built-in design ``kind`` on each of ``surfaces`` in turn (``sequenced``) with its
+    time parameter (multi-step base, sweep duration or multisine period, s) scaled so that
+    its input time, the first input's start to the last one's end, is ``span`` (s)."""
+    own = sequenced(kind, surfaces, settings)
+    first = own.parts[0] if isinstance(own, Maneuvers) else own
+    length = first.end - first.start
+    each = (span - (own.end - own.start - len(surfaces) * length)) / len(surfaces)
+    if not each > 0:
+        raise ValueError(f"an input time of {span:g} s leaves no time for {kind!r} on "
+                         f"{len(surfaces)} surfaces")
+    c = each / length
+    return sequenced(kind, surfaces, dataclasses.replace(
+        settings, base=settings.base * c, sweep_duration=settings.sweep_duration * c,
+        multisine_period=settings.multisine_period * c))
 
 
 def card_problem(card: str, model: str = "lat", derivatives: Sequence[str] | None = None
@@ -99,11 +120,12 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
              settings: DesignSettings | None = None,
              derivatives: Sequence[str] | None = None,
-             problem: Problem | None = None) -> Optimized:
+             problem: Problem | None = None, equal_duration: bool = False) -> Optimized:
     """Optimise a multisine on ``surfaces`` for ``criterion`` at the energy and input time
     of the built-in ``reference`` flown on each surface in turn at the settings'
     amplitude (default 4 deg, as the library cards' lateral inputs); predict every
-    built-in's bounds at that energy too."""
+    built-in's bounds at that energy too, each at its own input time or, with
+    ``equal_duration``, at the reference's (``stretched``)."""
     settings = settings or DesignSettings(amplitude=np.deg2rad(4.0))
     if reference not in DESIGNS:
         raise ValueError(f"unknown reference design {reference!r}; designs: "
@@ -113,10 +135,11 @@ def optimize(card: str = "navion-demo", model: str = "lat",
     ref = sequenced(reference, surfaces, settings)
     energy = input_energy(ref, rate)
     designs: dict[str, InputDesign] = {}
-    for kind in DESIGNS:
-        d = sequenced(kind, surfaces, settings)
-        designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     span = ref.end - ref.start
+    for kind in DESIGNS:
+        d = (stretched(kind, surfaces, settings, span) if equal_duration
+             else sequenced(kind, surfaces, settings))
+        designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
                             start=START_S, settle=SETTLE_S)
     designs["optimized"] = ms.design()

@@ -15,7 +15,7 @@ from flightid.derivatives import unit
 from flightid.identification.evaluation.embed import png_img
 from flightid.scenarios.montecarlo.design.experiment import Comparison, compare
 from flightid.scenarios.montecarlo.exports import write_tables
-from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
+from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text, scatter_interval
 
 PNG = "design-compare.png"
 HTML = "design-compare.html"
@@ -115,7 +115,7 @@ def ratio_rows(comparison: Comparison) -> list[list[str]]:
     contains 1); [] without both designs."""
     if comparison.verdict("3211", "doublet") is None:
         return []
-    return [[str(name), f"{r['ratio']:.3g}", f"{r['low']:.3g} - {r['high']:.3g}",
+    return [[str(name), f"{r['ratio']:.3g}", interval_text(r['low'], r['high']),
              str(r["n_a"]), str(r["n_b"]), r["winner"] or "not clear"]
             for name, r in comparison.scatter_ratios("3211", "doublet").iterrows()]
 
