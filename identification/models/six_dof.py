@@ -128,6 +128,20 @@ class SixDofModel:
 
 
 def check_structure(structure: Mapping[str, Sequence[str]], force_axes: str) -> None:
+    """Check a coefficient structure against the force axes.
+
+    Parameters
+    ----------
+    structure : Mapping of str to sequence of str
+        {coefficient: the variables of its terms}.
+    force_axes : str
+        ``body`` or ``stability``.
+
+    Raises
+    ------
+    ValueError
+        Naming the force axes, coefficient or variable that is not allowed.
+    """
     if force_axes not in FORCE_AXES:
         raise ValueError(f"force_axes must be one of {', '.join(FORCE_AXES)}, got {force_axes!r}")
     allowed = SLOTS[force_axes]

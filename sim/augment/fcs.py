@@ -90,6 +90,18 @@ def _positions(doc: Document, surface: str) -> list[tuple[str, float]]:
 
 
 def dynamic(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
+    """Actuator dynamics in series with a surface: a lag and a rate limit in the flight
+    control system, so that the surface position shows them.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    surface : str
+        The surface (``de``, ``da``, ``dr``).
+    effects : list of AugmentEffect
+        The surface's ``actuator_lag`` (time constant in s) and ``rate_limit`` (rad/s).
+    """
     children = []
     for e in effects:
         if isinstance(e, ActuatorLag):
@@ -105,6 +117,18 @@ def dynamic(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
 
 
 def linkage(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
+    """A linkage between a surface's position and the aerodynamics: a deadband, backlash
+    (hysteresis) and a bias, which the aerodynamic terms read and the position does not show.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    surface : str
+        The surface (``de``, ``da``, ``dr``).
+    effects : list of AugmentEffect
+        The surface's ``deadband`` and ``backlash`` (widths in rad) and ``actuator_bias`` (rad).
+    """
     what = "; ".join(e.label() for e in effects)
     aero = doc.aero()
     for prop, sign in POSITIONS[surface]:

@@ -223,6 +223,29 @@ def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
 
 def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
               sensitivities: bool) -> FilterEvaluation:
+    """The filter's negative log-likelihood and innovations at ``theta`` (and their
+    sensitivities if asked).
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem.
+    theta : ndarray
+        The model parameters (SI units).
+    R : ndarray
+        The measurement noise covariance (output units squared).
+    x0 : ndarray
+        The initial state.
+    sensitivities : bool
+        Whether to compute the innovations' sensitivities too.
+
+    Returns
+    -------
+    FilterEvaluation
+        The cost (infinite when the filter cannot be built or the innovations are not
+        finite), the states, the innovations and the filter; with ``sensitivities``, the
+        innovations' sensitivities and what follows from them.
+    """
     d = prob.data
     try:
         flt = prob.filter(theta, R)

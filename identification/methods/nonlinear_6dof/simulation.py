@@ -104,6 +104,23 @@ def model_from_record(
 
 
 def density(record: FlightRecord) -> np.ndarray:
+    """The air density along a record.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record with ``rho`` (kg/m^3), or ``qbar`` (Pa) and ``V`` (m/s).
+
+    Returns
+    -------
+    ndarray
+        The density (kg/m^3): ``rho``, else 2 qbar / V^2.
+
+    Raises
+    ------
+    ValueError
+        When the record has neither.
+    """
     if "rho" in record:
         return record["rho"]
     if "qbar" in record and "V" in record:
