@@ -302,7 +302,7 @@ def encode(
     name : str
         Message name, one of ``TELEMETRY``.
     s : Mapping of str to float
-        The sample: canonical channels, SI; a missing channel is sent as NaN.
+        The sample: canonical channels by name, SI.
     t_true : float
         Sim time, s.
     t_local : float
