@@ -302,7 +302,8 @@ def short_period(
 ) -> LinearModel:
     """Short-period model: states alpha (rad), q (rad/s); input de; outputs alpha, q, az.
 
-    Morelli & Klein (2016) ch. 3 (the short-period approximation) / SIDPAC ``lon``, lift in stability axes:
+    Morelli & Klein (2016) ch. 3 (short-period approximation) / SIDPAC ``lon``; lift in
+    stability axes:
       alphadot = -qbar S/(m V) CL + q + bias_alphadot
       qdot     = qbar S cbar/Iyy Cm + bias_qdot
       az       = -qbar S/m CL + bias_az          (m/s^2, specific force, z down)
