@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
+from flightid.channels import CONTROL_SURFACES, LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.identification import nuisance
 from flightid.identification.data import time_base, windows
 from flightid.identification.data.axes import excited_axes
@@ -27,7 +27,7 @@ from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
-CONTROLS = (*LONGITUDINAL_INPUTS, *LATERAL_INPUTS)
+CONTROLS = CONTROL_SURFACES
 # the surfaces whose maneuvers a model is fitted to
 _MODEL_INPUTS = {"lateral": LATERAL_INPUTS, "short_period": LONGITUDINAL_INPUTS,
                  "longitudinal": (*LONGITUDINAL_INPUTS, "throttle")}

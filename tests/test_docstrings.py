@@ -1,11 +1,15 @@
 """The public API's functions document every parameter and what they return in numpydoc
 sections (as python-control's docstring test checks its own): ``flightid.__all__`` and
-``flightid.testing.__all__``. Each public class has a docstring."""
+``flightid.testing.__all__``. Each public class has a docstring, and so has every public
+module-level function of the package."""
 
 from __future__ import annotations
 
+import ast
 import inspect
 import re
+import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -95,3 +99,26 @@ def test_the_section_parser_reads_numpydoc():
     found = sections(doc)
     assert set(found) == {"Parameters", "Returns"}
     assert documented_names(found["Parameters"]) == {"a", "b", "options"}
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def undocumented_functions() -> list[str]:
+    """``path:line name`` of each public module-level function without a docstring, in the
+    folders pyproject's package-dir installs."""
+    folders = sorted(set(tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))[
+        "tool"]["setuptools"]["package-dir"].values()))
+    out = []
+    for folder in folders:
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            out += [f"{path.relative_to(ROOT).as_posix()}:{node.lineno} {node.name}"
+                    for node in tree.body
+                    if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+                    and not node.name.startswith("_") and ast.get_docstring(node) is None]
+    return out
+
+
+def test_every_public_function_has_a_docstring():
+    assert undocumented_functions() == []

@@ -248,6 +248,20 @@ def _delayed(t: np.ndarray, y: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def batch(values: Mapping[str, float], k: int) -> dict[str, np.ndarray]:
+    """Every kinematic parameter repeated for ``k`` simultaneous simulations.
+
+    Parameters
+    ----------
+    values : Mapping of str to float
+        Parameter values (SI units); a parameter not given takes its default.
+    k : int
+        The number of simulations.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Each parameter of ``PARAMETERS`` as an array of ``k`` equal values.
+    """
     return {name: np.full(k, float(values.get(name, p.default)))
             for name, p in PARAMETERS.items()}
 

@@ -128,6 +128,19 @@ def default_free(record: FlightRecord, outputs: Sequence[str] | None = None) -> 
 
 
 def default_outputs(record: FlightRecord) -> list[str]:
+    """The outputs flight path reconstruction fits by default: those of ``DEFAULT_OUTPUTS``
+    the record has, without the channels held for ``MAX_HELD`` of their samples or more.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight record.
+
+    Returns
+    -------
+    list of str
+        The output channels.
+    """
     return [c for c in DEFAULT_OUTPUTS if c in record and held_fraction(record[c]) < MAX_HELD]
 
 

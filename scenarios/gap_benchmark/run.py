@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import GapResult, diagnose
@@ -158,7 +159,7 @@ def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | 
     of a Twin Otter null flight above it)."""
     if plain is None:
         return measured
-    surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
+    surfaces = [s for s in CONTROL_SURFACES if s in measured and s in truth and s in plain]
     commanded = truth.with_channels(**{
         s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
         for s in surfaces})

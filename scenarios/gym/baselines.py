@@ -55,10 +55,42 @@ def _pattern(t: np.ndarray, start: float, unit: float, levels: Sequence[float]) 
 
 
 def zero(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """No input: every action zero.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     return np.zeros((env.n_decisions, 3))
 
 
 def doublet(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    """An aileron doublet at 1 s, then a rudder doublet at 6 s, each 1 s a side.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+    amplitude : float
+        The action's amplitude (fraction of full deflection).
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     t, a = _grid(env), np.zeros((env.n_decisions, 3))
     a[:, 1] = _pattern(t, 1.0, 1.0, (amplitude, -amplitude))
     a[:, 2] = _pattern(t, 6.0, 1.0, (amplitude, -amplitude))
@@ -66,6 +98,23 @@ def doublet(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.n
 
 
 def three211(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    """An aileron 3-2-1-1 at 1 s, then a rudder 3-2-1-1 at 8 s, on 0.5 s steps.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+    amplitude : float
+        The action's amplitude (fraction of full deflection).
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     t, a = _grid(env), np.zeros((env.n_decisions, 3))
     levels = (amplitude, amplitude, amplitude, -amplitude, -amplitude, amplitude, -amplitude)
     a[:, 1] = _pattern(t, 1.0, 0.5, levels)
@@ -94,6 +143,21 @@ def full_rudder(env: ExcitationEnv, seed: int) -> np.ndarray:
 
 
 def random_policy(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """Uniformly random actions from the action space.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Seeds the action space.
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     env.action_space.seed(seed)
     return np.array([env.action_space.sample() for _ in range(env.n_decisions)])
 
@@ -282,6 +346,23 @@ def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
 
 def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
          search: bool = True) -> str:
+    """Every baseline policy on the held-out seeds: the reward table as text.
+
+    Parameters
+    ----------
+    seeds : sequence of int
+        The episodes' seeds.
+    out : Path or None
+        Where the table is written (None: not written).
+    search : bool
+        Whether to tune the multisine by the cross-entropy method on the training seeds
+        and add it to the table.
+
+    Returns
+    -------
+    str
+        The table.
+    """
     env = ExcitationEnv()
     others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
     results = [evaluate(env, n, p, seeds, others) for n, p in POLICIES.items()]

@@ -8,12 +8,13 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.units import G0
 
 OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",
                 "de", "da", "dr", "h")
-CONTROLS = ("de", "da", "dr")
+CONTROLS = CONTROL_SURFACES
 # |value| bounds of the observation space (far outside the envelope, which ends episodes)
 OBS_BOUNDS = {"V": 400.0, "alpha": math.pi, "beta": math.pi, "p": 20.0, "q": 20.0, "r": 20.0,
               "phi": math.pi, "theta": math.pi, "ax": 200.0, "ay": 200.0, "az": 200.0,

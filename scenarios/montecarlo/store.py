@@ -49,6 +49,20 @@ def versions() -> dict[str, str]:
 
 
 def result_path(study_dir: str | Path, index: int) -> Path:
+    """Where a study keeps one realization's result.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study's folder.
+    index : int
+        The realization's index.
+
+    Returns
+    -------
+    Path
+        The result's file below the study's results folder.
+    """
     return Path(study_dir) / RESULTS / f"{_PREFIX}{int(index):06d}{_SUFFIX}"
 
 
