@@ -114,7 +114,7 @@ def fly_with_progress(card: Card, seed: int | None = None, show: bool = True,
     """``fly_card`` reporting its progress: ``progress(flown_s, total_s)`` (simulated
     seconds) is called about once per simulated second. The library draws nothing; the
     command line passes a callback that draws a bar (``flightid.cli.progress``).
-    ``show=False`` turns the callback off (kept for the callers that passed ``show``).
+    ``show=False`` turns the callback off.
 
     Parameters
     ----------
