@@ -267,10 +267,32 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
 
 def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: str,
                  nuisance: np.ndarray | None = None) -> ChannelTest:
-    """The Wald test of ``residual`` (N,) on the regressors ``x`` (N, k), p from chi-square
-    with k degrees of freedom; ``spread``: the channel's measured energy (means removed).
-    ``nuisance`` (N, m): regressors fitted beside ``x`` and not tested (the other outputs'
-    residuals, ``PARTIAL_LAGUERRE``): only the coefficients of ``x`` enter W and the share."""
+    """The Wald test of ``residual`` on the regressors ``x``, p from chi-square with k degrees
+    of freedom.
+
+    Regressors that add nothing (a constant input, collinear model outputs) are dropped; the
+    covariance is corrected for the colored residual (``engine.bounds``).
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        The channel's residual, its SI unit; shape (N,).
+    x : numpy.ndarray
+        The tested regressors; shape (N, k).
+    spread : float
+        The channel's measured energy (means removed), unit squared.
+    channel : str
+        The channel's name.
+    nuisance : numpy.ndarray, optional
+        Regressors fitted beside ``x`` and not tested (the other outputs' residuals,
+        ``PARTIAL_LAGUERRE``); only the coefficients of ``x`` enter W and the share;
+        shape (N, m).
+
+    Returns
+    -------
+    ChannelTest
+        W, its degrees of freedom, p, and the explained shares of ``spread``.
+    """
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
     x = _independent(_unit(x))
@@ -425,8 +447,23 @@ def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
 
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
               inputs: Sequence[str]) -> NullTest:
-    """Each output's input-correlation test over the windows ``fits`` ({label: fit of the
-    model on that window}; ``records``: the windows' records, for the inputs)."""
+    """Each output's input-correlation test over the windows ``fits``.
+
+    Parameters
+    ----------
+    fits : mapping of str to WindowFit
+        {label: fit of the model on that window}.
+    records : mapping of str to FlightRecord
+        The windows' records by label, for the inputs.
+    inputs : sequence of str
+        The axis's inputs.
+
+    Returns
+    -------
+    NullTest
+        Every output's test; the chi-square gaps calibrated on surrogates, the strongest
+        first, until one stands.
+    """
     labels = [k for k in fits if k in records]
     out = NullTest()
     if not labels:
@@ -481,8 +518,22 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
 
 
 def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
-    """The verdict of one axis: ``before`` the model as is, ``after`` with the named
-    effects (None when nothing is named)."""
+    """The verdict of one axis.
+
+    Parameters
+    ----------
+    before : NullTest
+        The test of the model as is.
+    named : bool
+        Whether effects were named.
+    after : NullTest or None
+        The test with the named effects (None when nothing is named).
+
+    Returns
+    -------
+    str
+        One of ``VERDICTS``.
+    """
     if not before.gap:
         return NO_GAP
     if not named:
@@ -491,10 +542,32 @@ def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
 
 
 def worst(verdicts: Sequence[str]) -> str:
-    """The most severe of several axes' verdicts (``VERDICTS`` order)."""
+    """The most severe of several axes' verdicts (``VERDICTS`` order).
+
+    Parameters
+    ----------
+    verdicts : sequence of str
+        Verdicts of ``VERDICTS``.
+
+    Returns
+    -------
+    str
+        The most severe; ``NO_GAP`` when there is none.
+    """
     return max(verdicts, key=VERDICTS.index) if verdicts else NO_GAP
 
 
 def p_text(p: float) -> str:
-    """A p-value for a table: 3 digits, or '<1e-12'."""
+    """A p-value for a table: 2 significant digits, or '<1e-12'.
+
+    Parameters
+    ----------
+    p : float
+        The p-value.
+
+    Returns
+    -------
+    str
+        The text; '-' for a p that is not finite.
+    """
     return "<1e-12" if p < 1e-12 else (f"{p:.2g}" if math.isfinite(p) else "-")
