@@ -362,11 +362,29 @@ class Ranker:
 
 def rank(ranker: Ranker, candidates: list[Candidate],
          keep: int | None = SCREEN_KEEP) -> list[Ranked]:
-    """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
-    the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
-    check, the physical range; all of them when ``keep`` is None), the nonlinear actuator
-    candidates (``candidates.linkage``) scored in full beside them (``Ranker.evaluate_linkage``);
-    sorted by ``rank_key`` after the held-out Occam rule of ``prefer_fewer_parameters``."""
+    """The candidates screened, the best evaluated in full, and sorted.
+
+    Screening (``Ranker.screen``: every one, a few Gauss-Newton steps) keeps the ``keep`` best
+    by delta BIC for the full evaluation (converged fits, the held-out check, the physical
+    range); the nonlinear actuator candidates (``candidates.linkage``) are scored in full
+    beside them (``Ranker.evaluate_linkage``). Sorted by ``rank_key`` after the held-out Occam
+    rule of ``prefer_fewer_parameters``.
+
+    Parameters
+    ----------
+    ranker : Ranker
+        The ranker of the record's windows.
+    candidates : list of Candidate
+        The candidates.
+    keep : int or None, optional
+        How many screened candidates are evaluated in full; all of them when None. Default
+        ``SCREEN_KEEP``.
+
+    Returns
+    -------
+    list of Ranked
+        The evaluated candidates in ranking order.
+    """
     linkage = [c for c in candidates if is_linkage(c)]
     candidates = [c for c in candidates if not is_linkage(c)]
     if keep is not None and len(candidates) > keep:
