@@ -105,7 +105,23 @@ CONTROL_SURFACES: tuple[str, ...] = (*LONGITUDINAL_INPUTS, *LATERAL_INPUTS)
 
 
 def unit_of(name: str) -> str:
-    """SI unit of a canonical channel; raises KeyError naming the channel if unknown."""
+    """SI unit of a canonical channel.
+
+    Parameters
+    ----------
+    name : str
+        Canonical channel name.
+
+    Returns
+    -------
+    str
+        The channel's SI unit.
+
+    Raises
+    ------
+    KeyError
+        Naming the channel if it is not canonical.
+    """
     try:
         return CHANNELS[name].unit
     except KeyError:

@@ -47,7 +47,22 @@ def default_structure(force_axes: str = "body", alphadot: bool = False
                       ) -> dict[str, tuple[str, ...]]:
     """{coefficient: variables}: longitudinal ones on alpha, q, de, lateral on beta, p, r, da, dr.
 
-    ``alphadot`` adds Cm_alphadot.
+    Parameters
+    ----------
+    force_axes : str, optional
+        'body' (CX, CY, CZ; default) or 'stability' (CD, CY, CL) force coefficients.
+    alphadot : bool, optional
+        If True, the pitching moment also depends on alphadot (Cm_alphadot). Default False.
+
+    Returns
+    -------
+    dict of str to tuple of str
+        {coefficient: its variables} for the six force and moment coefficients.
+
+    Raises
+    ------
+    ValueError
+        ``force_axes`` is not in ``FORCE_AXES``.
     """
     if force_axes not in FORCE_AXES:
         raise ValueError(f"force_axes must be one of {', '.join(FORCE_AXES)}, got {force_axes!r}")
@@ -57,7 +72,20 @@ def default_structure(force_axes: str = "body", alphadot: bool = False
 
 
 def parameter_name(coefficient: str, variable: str) -> str:
-    """Canonical name of a term: parameter_name('Cm', 'q') == 'Cm_q', ('CL', '0') == 'CL_0'."""
+    """Canonical name of a term: parameter_name('Cm', 'q') == 'Cm_q', ('CL', '0') == 'CL_0'.
+
+    Parameters
+    ----------
+    coefficient : str
+        Coefficient name, e.g. 'Cm'.
+    variable : str
+        Variable name, or '0' for the constant term.
+
+    Returns
+    -------
+    str
+        '<coefficient>_<variable>'.
+    """
     return f"{coefficient}_{variable}"
 
 

@@ -158,7 +158,18 @@ def linkage(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
 
 
 def surface_drive_switches(doc: Document) -> None:
-    """A switch behind each surface position: the FCS's value, or the drive when on."""
+    """A switch behind each surface position: the FCS's value, or the drive when on.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft being augmented; changed in place.
+
+    Raises
+    ------
+    AugmentError
+        When a surface position is written outside <flight_control> and <system>.
+    """
     declared = False
     for surface, drive in DRIVE.items():
         for prop, sign in _positions(doc, surface):

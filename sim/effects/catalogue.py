@@ -359,7 +359,19 @@ EFFECTS: dict[str, type] = CATALOGUE.classes(ActsOn.SENSOR)
 def effect_from_dict(d: dict[str, Any], context: str = "", unit: str | None = None):
     """Build a channel effect from ``{"effect": name, ...parameters}``; errors name the field.
 
-    ``unit`` is the unit of the channel it acts on (for ``_deg``/``_g`` parameters).
+    Parameters
+    ----------
+    d : dict
+        The effect table: ``effect`` (its name) and its parameters.
+    context : str, optional
+        Where the table is, prefixed to field names in messages.
+    unit : str, optional
+        The unit of the channel it acts on (for ``_deg``/``_g`` parameters).
+
+    Returns
+    -------
+    NamedEffect
+        The effect.
     """
     return CATALOGUE.from_dict(d, "channel", context, unit)
 

@@ -17,5 +17,18 @@ HOW = "BridgeConfig(faults=LinkFaults(...)); command line: flightid bridge serve
 
 
 def link_fault(field: str, parameter: str) -> ExternalImplementation:
-    """The bridge's ``LinkFaults.<field>`` as the implementation of one catalogue parameter."""
+    """The bridge's ``LinkFaults.<field>`` as the implementation of one catalogue parameter.
+
+    Parameters
+    ----------
+    field : str
+        The ``LinkFaults`` field.
+    parameter : str
+        The catalogue parameter it implements.
+
+    Returns
+    -------
+    ExternalImplementation
+        The mapping of ``parameter`` onto ``field``.
+    """
     return ExternalImplementation(LINK_FAULTS, ((parameter, field),), HOW)

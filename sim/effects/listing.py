@@ -13,7 +13,18 @@ from flightid.sim.effects.schema import ActsOn, number_text
 
 
 def listing(where: ActsOn | str | None = None) -> list[dict[str, Any]]:
-    """The catalogue as plain, JSON-safe data (non-finite numbers as "inf"/"-inf")."""
+    """The catalogue as plain, JSON-safe data (non-finite numbers as "inf"/"-inf").
+
+    Parameters
+    ----------
+    where : ActsOn or str, optional
+        Only the entries acting there; default all.
+
+    Returns
+    -------
+    list of dict
+        One dict per entry: name, acts_on, description, parameters, options, changes, etc.
+    """
     entries = CATALOGUE.acting_on(ActsOn(where)) if where else list(CATALOGUE.values())
     return [{
         "name": e.name,
@@ -37,7 +48,13 @@ def listing(where: ActsOn | str | None = None) -> list[dict[str, Any]]:
 
 
 def markdown_table() -> str:
-    """The catalogue as a Markdown table (docs/effects.md holds it; a test keeps it current)."""
+    """The catalogue as a Markdown table (docs/effects.md holds it; a test keeps it current).
+
+    Returns
+    -------
+    str
+        The table, newline-terminated.
+    """
     rows = ["| name | acts on | parameters: default (blind tests), allowed range | "
             "description | injected by |",
             "|---|---|---|---|---|"]

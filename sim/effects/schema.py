@@ -285,7 +285,18 @@ class Entry:
 
 
 def number_text(x: float) -> str:
-    """A number as the catalogue prints it (inf as inf)."""
+    """A number as the catalogue prints it (inf as inf).
+
+    Parameters
+    ----------
+    x : float
+        The number.
+
+    Returns
+    -------
+    str
+        ``format(x, 'g')``, or "inf"/"-inf".
+    """
     return ("-inf" if x < 0 else "inf") if math.isinf(x) else f"{x:g}"
 
 
