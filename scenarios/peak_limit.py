@@ -59,7 +59,20 @@ class PeakLimitError(ValueError):
 def peak_grid(freqs: np.ndarray, period: float) -> tuple[np.ndarray, float]:
     """Times (s) over one ``period`` (s) at 64 per cycle of the highest of ``freqs`` (Hz)
     (``multisine.period_grid``) and the factor 1 - (pi f_max dt)^2 / 2 that a limit on
-    the grid needs to bound the continuous peak (Bernstein's inequality)."""
+    the grid needs to bound the continuous peak (Bernstein's inequality).
+
+    Parameters
+    ----------
+    freqs : numpy.ndarray
+        The multisine's frequencies, Hz.
+    period : float
+        Its period, s.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, float]
+        The times (s) and the factor.
+    """
     t = period_grid(np.asarray(freqs, float), period, 64)
     dt = t[1] - t[0]
     return t, 1.0 - 0.5 * (math.pi * float(np.max(freqs)) * dt) ** 2
@@ -67,7 +80,20 @@ def peak_grid(freqs: np.ndarray, period: float) -> tuple[np.ndarray, float]:
 
 def peak_rows(comps: Sequence[tuple[str, float, float]], t: np.ndarray) -> np.ndarray:
     """B (surfaces, len(t), components): the unit components (surface, Hz, phase in rad)
-    on times ``t`` (s), surfaces in the order they first appear."""
+    on times ``t`` (s), surfaces in the order they first appear.
+
+    Parameters
+    ----------
+    comps : Sequence[tuple[str, float, float]]
+        Unit components (surface, Hz, phase in rad).
+    t : numpy.ndarray
+        Times, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        B, shape (surfaces, len(t), len(comps)).
+    """
     surfaces = list(dict.fromkeys(s for s, _, _ in comps))
     rows = np.zeros((len(surfaces), t.size, len(comps)))
     for k, (s, f, ph) in enumerate(comps):
@@ -95,7 +121,24 @@ def smallest_peak(rows: np.ndarray, gram: np.ndarray, energy: float, start: np.n
                   ) -> tuple[np.ndarray, float]:
     """The signed amplitudes (rad) at input energy ``energy`` (rad^2 s), every surface
     starting at 0, that minimise the largest |u| on the grid of ``rows`` (``peak_rows``)
-    from ``start``, and that peak (rad; SLSQP on (c, peak))."""
+    from ``start``, and that peak (rad; SLSQP on (c, peak)).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        B (``peak_rows``) on a grid from t = 0.
+    gram : numpy.ndarray
+        Energy Gram matrix of the components, s.
+    energy : float
+        Input energy, rad^2 s.
+    start : numpy.ndarray
+        Starting amplitudes, rad.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, float]
+        The amplitudes (rad) and the largest |u| on the grid (rad).
+    """
     b = rows.reshape(-1, rows.shape[2])
     n = start.size
     c0 = start * math.sqrt(energy / float(start @ gram @ start))
@@ -116,7 +159,28 @@ def limited_amplitudes(cost: Cost, rows: np.ndarray, gram: np.ndarray, energy: f
     """Signed amplitudes (rad) minimising ``cost`` (value and gradient of c) at input
     energy ``energy`` (rad^2 s), every surface starting at 0, with |u| <= ``limit`` (rad)
     on the grid of ``rows`` (``peak_rows``): the best of SLSQP from each of ``starts``;
-    None if none converges to a point within the limit."""
+    None if none converges to a point within the limit.
+
+    Parameters
+    ----------
+    cost : Callable
+        c -> (criterion value, gradient), e.g. ``amplitude_cost``.
+    rows : numpy.ndarray
+        B (``peak_rows``) on a grid from t = 0.
+    gram : numpy.ndarray
+        Energy Gram matrix of the components, s.
+    energy : float
+        Input energy, rad^2 s.
+    limit : float
+        Limit of |u| on the grid, rad.
+    starts : Sequence[numpy.ndarray]
+        Starting amplitudes, rad.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The amplitudes, rad.
+    """
     b = rows.reshape(-1, rows.shape[2])
     inner = limit * (1 - 1e-6)  # room for SLSQP's tolerance and the energy's rescaling
     cons = [*_equalities(rows, gram, energy),
@@ -156,7 +220,26 @@ def limit_peak(problem: Problem, result: OptimizedMultisine, energy: float, limi
     same energy with every surface's peak at or below the limit and a start at zero
     (``limited_amplitudes``), first with its phases, then with each surface's phases
     optimised for the new amplitudes (``optimize_phases``): the better design of the
-    two. Raises ``PeakLimitError`` if neither round finds a design within the limit."""
+    two. Raises ``PeakLimitError`` if neither round finds a design within the limit.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    result : OptimizedMultisine
+        The unconstrained design.
+    energy : float
+        Its input energy, rad^2 s.
+    limit : float
+        Peak limit on every surface, rad.
+    duration : float
+        Flight time, s.
+
+    Returns
+    -------
+    OptimizedMultisine
+        ``result`` or the peak-limited design.
+    """
     freqs = np.concatenate([c.freqs for c in result.components.values()])
     grid, factor = peak_grid(freqs, result.period)
     bound = limit * factor

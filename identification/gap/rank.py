@@ -67,7 +67,18 @@ TIE_Z = 2.0
 
 
 def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
-    """Per channel: residual energy / measured energy (mean removed per window), pooled."""
+    """Per channel: residual energy / measured energy (mean removed per window), pooled.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits, all with the same channels.
+
+    Returns
+    -------
+    dict of str to float
+        {channel: fraction}, 1; nan where the measured energy is zero.
+    """
     out = {}
     for ch in fits[0].residual:
         res = sum(float(np.sum(f.residual[ch] ** 2)) for f in fits)
@@ -78,8 +89,20 @@ def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
 
 
 def pooled_noise(fits: list[WindowFit]) -> dict[str, float]:
-    """Per channel: the white-noise energy of the residual (``fit.noise_energy``) / measured
-    energy, pooled over windows: the floor no effect can take a gap below."""
+    """Per channel: the white-noise energy of the residual / measured energy, pooled over windows.
+
+    The white-noise energy is ``fit.noise_energy``'s: the floor no effect can take a gap below.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits, all with the same channels.
+
+    Returns
+    -------
+    dict of str to float
+        {channel: fraction}, 1; nan where the measured energy is zero.
+    """
     out = {}
     for ch in fits[0].residual:
         noise = sum(noise_energy(f.residual[ch]) for f in fits)
@@ -90,7 +113,18 @@ def pooled_noise(fits: list[WindowFit]) -> dict[str, float]:
 
 
 def mean_gap(fractions: dict[str, float]) -> float:
-    """The gap of a set of channels: the mean of their fractions (nan: none known)."""
+    """The gap of a set of channels: the mean of their fractions.
+
+    Parameters
+    ----------
+    fractions : dict of str to float
+        {channel: fraction}, 1.
+
+    Returns
+    -------
+    float
+        The mean of the finite fractions; nan when none is known.
+    """
     known = [v for v in fractions.values() if math.isfinite(v)]
     return float(np.mean(known)) if known else float("nan")
 
@@ -139,7 +173,21 @@ class Ranked:
 
 def combine(fits: list[WindowFit], names: tuple[str, ...]
             ) -> tuple[dict[str, float], dict[str, float]] | None:
-    """Inverse-variance mean of the windows' estimates; None when no window identifies."""
+    """Inverse-variance mean of the windows' estimates.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits.
+    names : tuple of str
+        The parameters combined.
+
+    Returns
+    -------
+    tuple of (dict of str to float, dict of str to float) or None
+        ({name: value}, {name: standard error}) in the parameters' units; None when no window
+        identifies some parameter.
+    """
     values, std = {}, {}
     for n in names:
         pts = [(f.values[n], f.std[n]) for f in fits
@@ -314,11 +362,29 @@ class Ranker:
 
 def rank(ranker: Ranker, candidates: list[Candidate],
          keep: int | None = SCREEN_KEEP) -> list[Ranked]:
-    """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
-    the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
-    check, the physical range; all of them when ``keep`` is None), the nonlinear actuator
-    candidates (``candidates.linkage``) scored in full beside them (``Ranker.evaluate_linkage``);
-    sorted by ``rank_key`` after the held-out Occam rule of ``prefer_fewer_parameters``."""
+    """The candidates screened, the best evaluated in full, and sorted.
+
+    Screening (``Ranker.screen``: every one, a few Gauss-Newton steps) keeps the ``keep`` best
+    by delta BIC for the full evaluation (converged fits, the held-out check, the physical
+    range); the nonlinear actuator candidates (``candidates.linkage``) are scored in full
+    beside them (``Ranker.evaluate_linkage``). Sorted by ``rank_key`` after the held-out Occam
+    rule of ``prefer_fewer_parameters``.
+
+    Parameters
+    ----------
+    ranker : Ranker
+        The ranker of the record's windows.
+    candidates : list of Candidate
+        The candidates.
+    keep : int or None, optional
+        How many screened candidates are evaluated in full; all of them when None. Default
+        ``SCREEN_KEEP``.
+
+    Returns
+    -------
+    list of Ranked
+        The evaluated candidates in ranking order.
+    """
     linkage = [c for c in candidates if is_linkage(c)]
     candidates = [c for c in candidates if not is_linkage(c)]
     if keep is not None and len(candidates) > keep:
@@ -395,10 +461,23 @@ def simplest(ranked: list[Ranked]) -> list[Ranked]:
 
 
 def rank_key(r: Ranked) -> tuple[bool, float]:
-    """The ranking's sort key: confirmed effects first, by their held-out cost change
-    (the cross-validated evidence: Stone 1974; an effect that fits the fitted windows a
-    little better by fitting their turbulence does no better on held-out ones), the others
-    by delta BIC."""
+    """The ranking's sort key: confirmed effects first, by their held-out cost change, the
+    others by delta BIC.
+
+    The held-out cost change is the cross-validated evidence (Stone 1974): an effect that fits
+    the fitted windows a little better by fitting their turbulence does no better on held-out
+    ones.
+
+    Parameters
+    ----------
+    r : Ranked
+        A ranked candidate.
+
+    Returns
+    -------
+    tuple of (bool, float)
+        (not confirmed, held-out cost change or delta BIC).
+    """
     return (not r.confirmed, r.heldout_cost_change if r.confirmed else r.delta_bic)
 
 
@@ -426,11 +505,26 @@ def prefer_fewer_parameters(ranked: list[Ranked]) -> None:
 
 
 def ranked_pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
-    """The top effect paired with the next ``PAIR_TOP`` ones, when it alone leaves a held-out
-    gap above ``PAIR_LEVEL`` (with the null level known, ``Ranker.above``: when it closes
-    less than ``PAIR_SHARE`` of the gap above that level); a pair
-    is confirmed when it improves the top effect's BIC and shrinks its held-out gap by
-    ``MIN_SHRINK`` more (of that gap; with the null level known, of the gap above it)."""
+    """The top effect paired with the next ``PAIR_TOP`` ones.
+
+    Tried when the top effect alone leaves a held-out gap above ``PAIR_LEVEL`` (with the null
+    level known, ``Ranker.above``: when it closes less than ``PAIR_SHARE`` of the gap above
+    that level); a pair is confirmed when it improves the top effect's BIC and shrinks its
+    held-out gap by ``MIN_SHRINK`` more (of that gap; with the null level known, of the gap
+    above it).
+
+    Parameters
+    ----------
+    ranker : Ranker
+        The ranker that scored ``ranked``.
+    ranked : list of Ranked
+        The single effects, in ranking order.
+
+    Returns
+    -------
+    list of Ranked
+        The pairs, sorted by ``rank_key``; [] when no pair is tried.
+    """
     if not ranked or not ranked[0].confirmed:
         return []
     if ranker.above is None and mean_gap(ranked[0].heldout_after) < PAIR_LEVEL:

@@ -261,7 +261,13 @@ class Case:
 
 def fingerprint() -> str:
     """A hash of everything the draw draws from (kinds, outside kinds, pattern, ranges,
-    the aircraft's flights): a stored study continues only under the same draw."""
+    the aircraft's flights): a stored study continues only under the same draw.
+
+    Returns
+    -------
+    str
+        16 hex digits of a SHA-256.
+    """
     text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
                        DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
                        THRUST_ARM_M, SIZED_BASE, {a: asdict(f) for a, f in AIRCRAFT.items()}],
@@ -276,6 +282,24 @@ def draw(n: int, seed: int, truths: dict[str, dict[str, float]], nulls: int = 0,
     ``truths``: each aircraft's derivatives at its condition (lateral in body axes,
     longitudinal in stability axes; ``run.truths``); ``aircraft``: the ones drawn from.
     Case k of a seed is the same whatever n (its block's pattern and its own stream).
+
+    Parameters
+    ----------
+    n : int
+        Number of drawn cases.
+    seed : int
+        Study seed.
+    truths : dict[str, dict[str, float]]
+        Aircraft -> derivative values.
+    nulls : int, optional
+        Number of null cases. Default 0.
+    aircraft : tuple[str, ...], optional
+        Aircraft drawn from. Default all of ``AIRCRAFT``.
+
+    Returns
+    -------
+    list[Case]
+        The drawn cases, then the null cases.
     """
     out = [_case(k, seed, truths, aircraft) for k in range(n)]
     out += [_null(k, seed, aircraft) for k in range(nulls)]
