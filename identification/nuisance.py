@@ -34,8 +34,8 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from flightid.identification.estimate import Estimate
-from flightid.identification.models import linear as lm
 from flightid.identification.models.a_priori import preset_derivatives
+from flightid.identification.models.presets import MODELS, model_for_record
 from flightid.record import FlightRecord
 from flightid.units import DEG, G0
 
@@ -165,10 +165,10 @@ def bias_budget(est: Estimate, record: FlightRecord, preset: str) -> list[BiasTe
     """
     fitted = {n: (float(v), float(s)) for n, v, s in zip(est.names, est.values, est.std,
                                                            strict=True)}
-    if preset not in lm.MODELS or not any(n.startswith(BIAS_PREFIX) for n in fitted):
+    if preset not in MODELS or not any(n.startswith(BIAS_PREFIX) for n in fitted):
         return []
     derivatives = [n for n in preset_derivatives(preset) if n in fitted] or None
-    model = lm.model_for_record(preset, record, **({"derivatives": derivatives}
+    model = model_for_record(preset, record, **({"derivatives": derivatives}
                                                    if derivatives else {}))
     values = {n: v for n, (v, _) in fitted.items() if n in model.parameters}
     a, b, c, d = model.matrices(values)

@@ -24,13 +24,14 @@ from flightid.identification.evaluation.report import write_html
 from flightid.identification.evaluation.scoring import Score, record_truth, score
 from flightid.identification.identify import identify
 from flightid.identification.models import linear as lm
+from flightid.identification.models.longitudinal import SHORT_PERIOD_DERIVATIVES
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import load_card
 from flightid.scenarios.simulate import fly_with_progress, plot_record
 
 DEFAULT_CARD = "navion-demo"
 # (model, derivatives) of the two output-error fits
-FITS = (("short_period", lm.SHORT_PERIOD_DERIVATIVES), ("lateral", lm.LATERAL_DERIVATIVES))
+FITS = (("short_period", SHORT_PERIOD_DERIVATIVES), ("lateral", lm.LATERAL_DERIVATIVES))
 
 
 @dataclass

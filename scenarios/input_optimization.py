@@ -34,11 +34,8 @@ from scipy.optimize import minimize
 from scipy.signal import welch
 
 from flightid.identification.evaluation.scoring import record_truth
-from flightid.identification.models.linear import (
-    LinearModel,
-    matrix_sensitivities,
-    model_for_record,
-)
+from flightid.identification.models.linear import LinearModel, matrix_sensitivities
+from flightid.identification.models.presets import model_for_record
 from flightid.identification.models.structure import linear
 from flightid.record import FlightRecord
 from flightid.scenarios.input_design import InputDesign

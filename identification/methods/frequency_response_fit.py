@@ -18,8 +18,8 @@ from flightid.identification.frequency.grids import default_windows
 from flightid.identification.frequency.response import frequency_response_arrays
 from flightid.identification.frequency.transfer_function import COHERENCE_MIN
 from flightid.identification.methods.protocol import LinearModelOptions, Method, option
-from flightid.identification.models import linear as lm
 from flightid.identification.models import structure as model_structure
+from flightid.identification.models.presets import MODELS
 from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord
 
@@ -152,7 +152,7 @@ def fit(records: Sequence[FlightRecord], model: str = "lateral",
     model = model_structure.linear(model)
     derivs = opts.derivatives
     cond = reference_condition(records, float(opts.trim_seconds))
-    lin = lm.MODELS[model](cond, **({"derivatives": tuple(derivs)} if derivs else {}))
+    lin = MODELS[model](cond, **({"derivatives": tuple(derivs)} if derivs else {}))
     lin = lin.with_start(**{p: 0.0 for p in lin.parameters if p.startswith("bias_")})
     windows = opts.windows
     coh_min = float(opts.coherence_min)

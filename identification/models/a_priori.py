@@ -16,6 +16,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from flightid.identification.models import linear as lm
+from flightid.identification.models.longitudinal import (
+    LONGITUDINAL_DEFAULT,
+    LONGITUDINAL_DERIVATIVES,
+    SHORT_PERIOD_DEFAULT,
+    SHORT_PERIOD_DERIVATIVES,
+)
+from flightid.identification.models.presets import RATE_DERIVATIVES, preset_for_record
 from flightid.record import FlightRecord
 
 META_KEY = "a_priori"
@@ -75,7 +82,7 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
         The flight, SI channels; gives the reference condition.
     derivatives : sequence of str or None
         Derivatives to estimate; None takes the preset's default set with its rate
-        derivatives (``models.linear.RATE_DERIVATIVES``).
+        derivatives (``models.presets.RATE_DERIVATIVES``).
     a_priori : mapping of str to float or None
         {parameter: value} to hold; None takes the record's table (``from_record``).
     method : str
@@ -106,10 +113,10 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
     held = {n: float(v) for n, v in held_all.items() if n in full}
     if derivatives is None:  # the preset's, with its rate derivatives (RATE_DERIVATIVES)
         derivatives = _default_derivatives(preset)
-    base = lm.preset_for_record(preset, record, derivatives, method)
+    base = preset_for_record(preset, record, derivatives, method)
     names = [p for p in base.parameters if p not in lm_biases(base)]
     names += [n for n in held if n not in names]
-    model = lm.preset_for_record(preset, record, [n for n in full if n in names], method)
+    model = preset_for_record(preset, record, [n for n in full if n in names], method)
     model = model.with_start(**held) if held else model
     free = [p for p in model.parameters if p not in held]
     return model, free, held
@@ -133,13 +140,13 @@ def lm_biases(model: lm.LinearModel) -> list[str]:
 
 def _default_derivatives(preset: str) -> tuple[str, ...] | None:
     """The derivatives a method estimates by default: the preset's default set and the
-    rate derivatives it leaves out (``models.linear.RATE_DERIVATIVES``), in the preset's
+    rate derivatives it leaves out (``models.presets.RATE_DERIVATIVES``), in the preset's
     order; None for a name that is not a preset (the error comes from the builder)."""
-    defaults = {"lateral": lm.LATERAL_EXAMPLE_6_1, "short_period": lm.SHORT_PERIOD_DEFAULT,
-                "longitudinal": lm.LONGITUDINAL_DEFAULT}.get(preset)
+    defaults = {"lateral": lm.LATERAL_EXAMPLE_6_1, "short_period": SHORT_PERIOD_DEFAULT,
+                "longitudinal": LONGITUDINAL_DEFAULT}.get(preset)
     if defaults is None:
         return None
-    wanted = {*defaults, *lm.RATE_DERIVATIVES.get(preset, ())}
+    wanted = {*defaults, *RATE_DERIVATIVES.get(preset, ())}
     return tuple(n for n in preset_derivatives(preset) if n in wanted)
 
 
@@ -156,8 +163,8 @@ def preset_derivatives(preset: str) -> tuple[str, ...]:
     tuple of str
         The preset's derivative names; () for another model.
     """
-    return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
-            "longitudinal": lm.LONGITUDINAL_DERIVATIVES}.get(preset, ())
+    return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": SHORT_PERIOD_DERIVATIVES,
+            "longitudinal": LONGITUDINAL_DERIVATIVES}.get(preset, ())
 
 
 def describe(record: FlightRecord, held: Mapping[str, float]) -> dict[str, Any]:

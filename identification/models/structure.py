@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from flightid.channels import LATERAL_INPUTS
-from flightid.identification.models import linear as lm
+from flightid.identification.models.presets import MODELS
 from flightid.identification.models.reference_condition import (
     CONDITION_CHANNELS,
 )
@@ -41,7 +41,7 @@ REGRESSION: dict[str, dict[str, tuple[str, ...]]] = {
 }
 REGRESSION["all"] = {**REGRESSION["longitudinal"], **REGRESSION["lateral"]}
 REGRESSION["global"] = {c: GLOBAL_VARIABLES for c in REGRESSION["all"]}
-LINEAR = tuple(lm.MODELS)
+LINEAR = tuple(MODELS)
 
 # channels a regression variable is computed from
 _VARIABLE_CHANNELS = {"phat": ("p", "V"), "qhat": ("q", "V"), "rhat": ("r", "V"),
@@ -153,9 +153,9 @@ def linear(model: str) -> str:
         ``model`` is not a linear-model preset; the message names the presets.
     """
     text = canonical(model)
-    if text not in lm.MODELS:
+    if text not in MODELS:
         raise ValueError(f"model {model!r} is not a linear-model preset; use one of "
-                         f"{', '.join(lm.MODELS)} (or lat, lon)")
+                         f"{', '.join(MODELS)} (or lat, lon)")
     return text
 
 

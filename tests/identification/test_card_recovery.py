@@ -55,6 +55,7 @@ from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.identification.methods import output_error
 from flightid.identification.models import linear as lm
 from flightid.identification.models import six_dof
+from flightid.identification.models.longitudinal import longitudinal
 from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card
@@ -145,7 +146,7 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     t0, t1 = windows.window(record, ("de",))
     t1 = min(t1, max(m.end for m in card.maneuvers if "de" in m.surfaces()) + settle)
     lon = record.slice(t0, t1)
-    model = lm.longitudinal(condition_from_record(lon, **override), derivatives=LONGITUDINAL,
+    model = longitudinal(condition_from_record(lon, **override), derivatives=LONGITUDINAL,
                             start={n: truth[n] for n in A_PRIORI},
                             thrust_input="thrust" in lon)
     if "theta" not in lon:

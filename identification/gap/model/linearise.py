@@ -41,11 +41,13 @@ from flightid.identification.gap.model.surfaces import surfaces_of
 from flightid.identification.models.linear import (
     LATERAL_BIASES,
     LATERAL_DERIVATIVES,
-    LONGITUDINAL_BIASES,
-    LONGITUDINAL_DERIVATIVES,
     LinearModel,
     ReferenceCondition,
     lateral,
+)
+from flightid.identification.models.longitudinal import (
+    LONGITUDINAL_BIASES,
+    LONGITUDINAL_DERIVATIVES,
     longitudinal,
 )
 from flightid.record import FlightRecord

@@ -13,7 +13,8 @@ from flightid.identification.frequency.state_space_fit import (
     output_error,
     verify_time_domain,
 )
-from flightid.identification.models.linear import lateral, model_for_record
+from flightid.identification.models.linear import lateral
+from flightid.identification.models.presets import model_for_record
 from flightid.identification.models.reference_condition import ReferenceCondition
 from flightid.record import FlightRecord, read
 from tests.conftest import TWIN_OTTER

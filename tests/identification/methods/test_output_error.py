@@ -17,6 +17,13 @@ from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
 from flightid.identification.models.discrete import simulate
+from flightid.identification.models.longitudinal import (
+    LONGITUDINAL_DEFAULT,
+    SHORT_PERIOD_DEFAULT,
+    SHORT_PERIOD_DERIVATIVES,
+    longitudinal,
+    short_period,
+)
 from flightid.identification.models.reference_condition import (
     ReferenceCondition,
     condition_from_record,
@@ -240,7 +247,7 @@ def test_monte_carlo_scatter_matches_the_bounds():
 
 
 def test_noisy_longitudinal_recovery():
-    model = lm.longitudinal(NAVION, derivatives=lm.LONGITUDINAL_DEFAULT + ("Cm_alphadot",))
+    model = longitudinal(NAVION, derivatives=LONGITUDINAL_DEFAULT + ("Cm_alphadot",))
     truth = LONGITUDINAL_TRUTH["navion"]
     t = np.arange(0.0, 30.0, 0.02)
     de = -0.02 + multistep(t, 1.0, [3.0, 2.0, 1.0, 1.0], [1, -1, 1, -1], 0.03)
@@ -255,7 +262,7 @@ def test_noisy_longitudinal_recovery():
 
 
 def _short_period_flight(derivatives):
-    model = lm.short_period(NAVION, derivatives=derivatives)
+    model = short_period(NAVION, derivatives=derivatives)
     truth = {**{k: v for k, v in LONGITUDINAL_TRUTH["navion"].items() if k in
                 model.parameters}, "CL_q": 3.8, "bias_alphadot": 0.001, "bias_qdot": -0.02,
              "bias_az": 0.3}
@@ -266,7 +273,7 @@ def _short_period_flight(derivatives):
 
 
 def test_short_period_noise_free_recovery():
-    model, truth, rec = _short_period_flight(lm.SHORT_PERIOD_DEFAULT + ("CL_q",))
+    model, truth, rec = _short_period_flight(SHORT_PERIOD_DEFAULT + ("CL_q",))
     est = oe.estimate(rec, model, start=_perturbed_start(model, truth, 0.2),
                       initial_state="zero")
     assert est.unidentifiable == {}
@@ -277,7 +284,7 @@ def test_short_period_noise_free_recovery():
 def test_short_period_cannot_separate_cm_q_from_cm_alphadot():
     # alphadot is a combination of alpha, q and de in the short period, so Cm_alphadot
     # only adds to the Cm_alpha, Cm_q, Cm_de entries of the model: a singular direction
-    model, truth, rec = _short_period_flight(lm.SHORT_PERIOD_DERIVATIVES)
+    model, truth, rec = _short_period_flight(SHORT_PERIOD_DERIVATIVES)
     est = oe.estimate(rec, model, start=_perturbed_start(model, truth, 0.2),
                       initial_state="zero")
     assert len(est.unidentifiable) == 1

@@ -8,6 +8,7 @@ import pytest
 
 from flightid.identification.methods import output_error as oe
 from flightid.identification.models import linear as lm
+from flightid.identification.models.longitudinal import LONGITUDINAL_DERIVATIVES, longitudinal
 from flightid.identification.models.reference_condition import condition_from_record
 from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim.flight import simulation as flight
@@ -87,7 +88,7 @@ def test_longitudinal_model_with_thrust_and_body_az(aircraft):
     # CL_q, Cm_alphadot a priori (as in the demo); CL_0 at the weight balance (with the
     # biases it is not separable); CD_de not excited apart from the other drag terms
     fixed = {n: true[n] for n in ("CL_q", "Cm_alphadot", "CD_de")}
-    model = lm.longitudinal(condition, derivatives=lm.LONGITUDINAL_DERIVATIVES, start=fixed)
+    model = longitudinal(condition, derivatives=LONGITUDINAL_DERIVATIVES, start=fixed)
     free = [p for p in model.parameters if p not in (*fixed, "CL_0")]
     est = oe.estimate(record, model, free=free)
     assert est.fit["converged"], est.fit["reason"]

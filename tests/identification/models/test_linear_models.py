@@ -7,6 +7,13 @@ import pytest
 
 from flightid.identification.models import linear as lm
 from flightid.identification.models.discrete import simulate
+from flightid.identification.models.longitudinal import (
+    LONGITUDINAL_DEFAULT,
+    LONGITUDINAL_DERIVATIVES,
+    SHORT_PERIOD_DERIVATIVES,
+    longitudinal,
+    short_period,
+)
 from flightid.identification.models.reference_condition import (
     ReferenceCondition,
     condition_from_record,
@@ -71,14 +78,14 @@ def test_control_signs_follow_the_project_convention():
     assert y[-1, 1] < 0  # da > 0 (right aileron TE down) rolls left: p < 0
     y = simulate(model, model.start, t, np.column_stack([0 * t, np.full(t.size, 0.05)]))
     assert y[5, 2] < 0  # dr > 0 (TE left) yaws nose left: r < 0
-    sp = lm.short_period(COND, start={"Cm_de": -1.2, "CL_de": 0.4, "Cm_alpha": -1.0,
+    sp = short_period(COND, start={"Cm_de": -1.2, "CL_de": 0.4, "Cm_alpha": -1.0,
                                       "Cm_q": -20.0, "CL_alpha": 5.5})
     y = simulate(sp, sp.start, t, np.full((t.size, 1), 0.05))
     assert y[5, 1] < 0  # de > 0 (TE down) pitches nose down: q < 0
 
 
 def test_complex_step_sensitivities_equal_finite_differences_with_alphadot():
-    model = lm.short_period(COND, derivatives=lm.SHORT_PERIOD_DERIVATIVES,
+    model = short_period(COND, derivatives=SHORT_PERIOD_DERIVATIVES,
                             start={"Cm_alphadot": -6.0, "CL_q": 4.0, "bias_alphadot": 0.01})
     values = model.values()
     names = list(model.parameters)
@@ -97,7 +104,7 @@ def test_full_longitudinal_has_a_phugoid_and_a_short_period():
     c = ReferenceCondition(V=53.6, qbar=1760.0, alpha=0.0, theta=0.0, mass=1247.0,
                            Ixx=1420.0, Iyy=4067.0, Izz=4786.0, Ixz=0.0, area=17.1,
                            span=10.2, chord=1.74)
-    model = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DEFAULT + ("Cm_alphadot",),
+    model = longitudinal(c, derivatives=LONGITUDINAL_DEFAULT + ("Cm_alphadot",),
                             start={"CD_0": 0.05, "CD_alpha": 0.33, "CL_alpha": 4.44,
                                    "CL_de": 0.355, "Cm_alpha": -0.683, "Cm_q": -9.96,
                                    "Cm_de": -0.923, "Cm_alphadot": -4.36})
@@ -135,7 +142,7 @@ def test_longitudinal_trim_balance_and_thrust_input():
                            Ixx=1.0, Iyy=1.2, Izz=2.0, Ixz=0.0, area=0.83, span=2.26,
                            chord=0.35, thrust=14.8)
     weight, qs, gamma = c.mass * c.g, c.qbar * c.area, c.theta - c.alpha
-    plain = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DERIVATIVES)
+    plain = longitudinal(c, derivatives=LONGITUDINAL_DERIVATIVES)
     # lift and drag balance weight and thrust in stability axes (thrust along body x)
     assert plain.start["CL_0"] == pytest.approx(
         (weight * np.cos(gamma) - c.thrust * np.sin(c.alpha)) / qs)
@@ -143,7 +150,7 @@ def test_longitudinal_trim_balance_and_thrust_input():
         (c.thrust * np.cos(c.alpha) - weight * np.sin(gamma)) / qs)
     values = {**plain.start, "Cm_alphadot": -4.0, "CL_de": 0.36, "Cm_de": -0.94,
               "bias_qdot": 0.01}
-    powered = lm.longitudinal(c, derivatives=lm.LONGITUDINAL_DERIVATIVES, thrust_input=True)
+    powered = longitudinal(c, derivatives=LONGITUDINAL_DERIVATIVES, thrust_input=True)
     assert powered.inputs == ("de", "thrust")
     A0, B0, C0, D0 = plain.build(values)
     A, B, C, D = powered.build(values)
@@ -172,12 +179,12 @@ def test_reference_condition_is_the_trim_before_the_first_maneuver():
     maneuvers = [{"kind": "doublet", "surfaces": ["de"], "start": 2.0, "end": 3.0}]
     listed = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0),
                                                 extra={"maneuvers": maneuvers}))
-    cond = lm.condition_from_record(listed)
+    cond = condition_from_record(listed)
     assert cond.V == pytest.approx(50.0) and cond.qbar == pytest.approx(1500.0)
     unlisted = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0)))
-    assert lm.condition_from_record(unlisted).V == pytest.approx(np.mean(speed))
+    assert condition_from_record(unlisted).V == pytest.approx(np.mean(speed))
     # less than MIN_TRIM_S of trim before the maneuver: the mean again
     late = [{**maneuvers[0], "start": 0.3}]
     short = FlightRecord(t, chans, RecordMeta(reference=Reference(10.0, 5.0, 1.0),
                                                extra={"maneuvers": late}))
-    assert lm.condition_from_record(short).V == pytest.approx(np.mean(speed))
+    assert condition_from_record(short).V == pytest.approx(np.mean(speed))
