@@ -1,5 +1,5 @@
 """The lateral model for stability-axis aerodynamics (``moment_axes="stability"``,
-``measured_inputs.with_stability_axes``): the Navion's JSBSim model writes its rolling and
+``stability_axes.with_stability_axes``): the Navion's JSBSim model writes its rolling and
 yawing moments about the stability axes of the instantaneous alpha, with stability-axis
 rates, so its body-axis derivatives move with alpha along the flight. On navion-demo's
 exact truth record (calm air, alpha within 0.25 deg of trim) the body-axis linear model
@@ -18,6 +18,10 @@ from flightid.identification.identify import identify
 from flightid.identification.models import linear as lm
 from flightid.identification.models import measured_inputs as mi
 from flightid.identification.models.reference_condition import condition_from_record
+from flightid.identification.models.stability_axes import (
+    with_stability_axes,
+    with_stability_axes_channels,
+)
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.scenarios.cards.overrides import overridden_card
@@ -45,11 +49,11 @@ def test_stability_axis_terms_close_the_moments(truth_record):
     t = record_truth(truth_record)
     c = condition_from_record(truth_record)
     base = lm.lateral(c, start={n: t[n] for n in lm.LATERAL_EXAMPLE_6_1 if n in t})
-    model = mi.with_stability_axes(base)
+    model = with_stability_axes(base)
     scale = c.V / truth_record["V"]
     channels = {**truth_record.channels, "p": truth_record["p"] * scale,
                 "r": truth_record["r"] * scale}
-    record = mi.with_stability_axes_channels(
+    record = with_stability_axes_channels(
         FlightRecord(truth_record.time, channels, truth_record.meta), base)
     A, B, _, _ = model.matrices()
     rows = [model.states.index("p"), model.states.index("r")]
