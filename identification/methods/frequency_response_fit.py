@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.identification.estimate import Estimate
+from flightid.identification.frequency import cifer_fit
 from flightid.identification.frequency import state_space_fit as frequency_domain
 from flightid.identification.frequency.grids import default_windows
 from flightid.identification.frequency.response import frequency_response_arrays
@@ -192,14 +193,14 @@ def fit(records: Sequence[FlightRecord], model: str = "lateral",
         # frequency-domain output error of the same maneuvers
         first = frequency_domain.output_error(records, lin, estimate=names)
         start = dict(zip(first.names, first.values, strict=True))
-    est = frequency_domain.fit_state_space(responses, lin, estimate=names,
-                                           coherence_min=coh_min, start=start)
+    est = cifer_fit.fit_state_space(responses, lin, estimate=names,
+                                    coherence_min=coh_min, start=start)
     costs = est.fit["cost_per_pair"]
     dropped = [] if max_cost is None else [k for k, c in costs.items() if c > max_cost]
     if dropped and len(dropped) < len(costs):
         kept = [r for r in responses if f"{r.output}/{r.input}" not in dropped]
-        est = frequency_domain.fit_state_space(kept, lin, estimate=names,
-                                               coherence_min=coh_min, start=start)
+        est = cifer_fit.fit_state_space(kept, lin, estimate=names,
+                                        coherence_min=coh_min, start=start)
     est.method = ID
     est.fit.update(pairs=list(est.fit["cost_per_pair"]), dropped_pairs=dropped,
                    windows=wins, responses=len(responses), whole_record=whole,

@@ -5,14 +5,10 @@ import numpy as np
 import pytest
 from scipy import signal
 
+from flightid.identification.frequency.cifer_fit import fit_state_space, verify_time_domain
 from flightid.identification.frequency.grids import fourier_frequencies
 from flightid.identification.frequency.response import frequency_response_arrays
-from flightid.identification.frequency.state_space_fit import (
-    equation_error,
-    fit_state_space,
-    output_error,
-    verify_time_domain,
-)
+from flightid.identification.frequency.state_space_fit import equation_error, output_error
 from flightid.identification.models.linear import lateral
 from flightid.identification.models.presets import model_for_record
 from flightid.identification.models.reference_condition import ReferenceCondition

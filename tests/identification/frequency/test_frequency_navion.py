@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
-from flightid.identification.frequency import state_space_fit as fd
+from flightid.identification.frequency import cifer_fit
 from flightid.identification.frequency.plots import bode_overlay_figure
 from flightid.identification.frequency.response import frequency_response_arrays
 from flightid.identification.methods import frequency_response_fit as frf
@@ -73,7 +73,7 @@ def test_navion_sweeps_cifer_fit_against_truth(seed, tmp_path):
             measured.append(frequency_response_arrays(
                 {inp: rec[inp]}, rec[out], rec.dt, output_name=out, windows=est.fit["windows"],
                 frequencies=np.geomspace(0.1, 2.0, 60), whole_record=True)[inp])
-    curves = [fd.model_response(model, values, r.output, r.input, r.frequency)
+    curves = [cifer_fit.model_response(model, values, r.output, r.input, r.frequency)
               for r in measured]
     fig = bode_overlay_figure(measured, curves, title="Navion sweeps: CIFER fit")
     png = tmp_path / "navion_bode.png"
