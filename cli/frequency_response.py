@@ -1,6 +1,6 @@
 """``flightid frequency-response``: a frequency response with coherence and random error
 printed as a table, optionally a Bode/coherence PNG (printing only; the work is
-``flightid.identification.frequency.response``)."""
+``flightid.identification.frequency.record_response``)."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from flightid.cli.checks import (
 from flightid.files import atomic_path
 from flightid.identification.frequency.grids import default_windows
 from flightid.identification.frequency.plots import bode_figure
-from flightid.identification.frequency.response import frequency_response
+from flightid.identification.frequency.record_response import frequency_response
 
 
 def frequency_response_command(

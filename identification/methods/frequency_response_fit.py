@@ -16,7 +16,7 @@ from flightid.identification.estimate import Estimate
 from flightid.identification.frequency import cifer_fit
 from flightid.identification.frequency import state_space_fit as frequency_domain
 from flightid.identification.frequency.grids import default_windows
-from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.record_response import frequency_response_arrays
 from flightid.identification.frequency.transfer_function import COHERENCE_MIN
 from flightid.identification.methods.protocol import LinearModelOptions, Method, option
 from flightid.identification.models import structure as model_structure

@@ -7,7 +7,7 @@ from scipy import signal
 
 from flightid.identification.frequency.cifer_fit import fit_state_space, verify_time_domain
 from flightid.identification.frequency.grids import fourier_frequencies
-from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.record_response import frequency_response_arrays
 from flightid.identification.frequency.state_space_fit import equation_error, output_error
 from flightid.identification.models.linear import lateral
 from flightid.identification.models.presets import model_for_record

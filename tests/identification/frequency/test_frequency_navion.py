@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from flightid.cli.app import app
 from flightid.identification.frequency import cifer_fit
 from flightid.identification.frequency.plots import bode_overlay_figure
-from flightid.identification.frequency.response import frequency_response_arrays
+from flightid.identification.frequency.record_response import frequency_response_arrays
 from flightid.identification.methods import frequency_response_fit as frf
 from flightid.identification.models import linear as lm
 from flightid.scenarios.cards import find_card, fly_card, load_card, sub_seed

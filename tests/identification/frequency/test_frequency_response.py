@@ -5,12 +5,14 @@ import pytest
 from scipy import signal
 
 from flightid.identification.frequency.fourier import finite_fourier_transform
+from flightid.identification.frequency.record_response import (
+    frequency_response,
+    frequency_response_arrays,
+)
 from flightid.identification.frequency.response import (
     FrequencyResponse,
     composite,
     estimate_response,
-    frequency_response,
-    frequency_response_arrays,
 )
 from flightid.identification.frequency.spectra import cross_spectra
 from flightid.record import FlightRecord

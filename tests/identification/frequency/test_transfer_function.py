@@ -4,10 +4,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from flightid.identification.frequency.response import (
-    FrequencyResponse,
-    frequency_response_arrays,
-)
+from flightid.identification.frequency.record_response import frequency_response_arrays
+from flightid.identification.frequency.response import FrequencyResponse
 from flightid.identification.frequency.transfer_function import (
     cifer_cost,
     coherence_weight,
