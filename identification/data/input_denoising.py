@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.optimize
 
-from flightid.identification.compatibility.reconstruction import white_noise_std
+from flightid.identification.compatibility.uncertainty import white_noise_std
 from flightid.record import FlightRecord
 
 # lambda in units of the white-noise standard deviation of the measurement: on the

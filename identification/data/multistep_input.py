@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightid.identification.compatibility.reconstruction import white_noise_std
+from flightid.identification.compatibility.uncertainty import white_noise_std
 from flightid.identification.data.input_denoising import DEFAULT_WEIGHT, STEP_SIGNIFICANCE, runs
 
 HOLD_OFFSET = {"foh": 0.5, "zoh": 1.0}

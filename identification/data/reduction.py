@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.compatibility import reconstruction as compatibility
-from flightid.identification.compatibility.reconstruction import white_noise_std
+from flightid.identification.compatibility.uncertainty import white_noise_std
 from flightid.identification.estimate import Estimate
 from flightid.record import FlightRecord
 

@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 
 from flightid.cli.app import app
 from flightid.identification.compatibility import reconstruction as compat
+from flightid.identification.compatibility.uncertainty import white_noise_std
 from flightid.record import FlightRecord, read
 from flightid.scenarios.inputs import Multistep, total_signals
 from flightid.sim.effects import Bias, Quantization, WhiteNoise
@@ -175,7 +176,7 @@ def test_white_noise_level_estimate():
     rng = np.random.default_rng(5)
     t = np.arange(0, 40, 0.02)
     x = 0.3 * np.sin(0.5 * t) + np.where(t > 20, 0.1, 0.0) + 0.01 * rng.standard_normal(t.size)
-    assert compat.white_noise_std(x) == pytest.approx(0.01, rel=0.1)
+    assert white_noise_std(x) == pytest.approx(0.01, rel=0.1)
 
 
 def test_bad_input_errors(truth_flight):
