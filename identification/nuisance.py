@@ -169,7 +169,7 @@ def bias_budget(est: Estimate, record: FlightRecord, preset: str) -> list[BiasTe
         return []
     derivatives = [n for n in preset_derivatives(preset) if n in fitted] or None
     model = model_for_record(preset, record, **({"derivatives": derivatives}
-                                                   if derivatives else {}))
+                                                if derivatives else {}))
     values = {n: v for n, (v, _) in fitted.items() if n in model.parameters}
     a, b, c, d = model.matrices(values)
     missing = [ch for ch in (*model.inputs, *model.state_channels.values(), *model.outputs)

@@ -147,8 +147,8 @@ def identify(card, record: FlightRecord, truth: dict[str, float], settle: float)
     t1 = min(t1, max(m.end for m in card.maneuvers if "de" in m.surfaces()) + settle)
     lon = record.slice(t0, t1)
     model = longitudinal(condition_from_record(lon, **override), derivatives=LONGITUDINAL,
-                            start={n: truth[n] for n in A_PRIORI},
-                            thrust_input="thrust" in lon)
+                         start={n: truth[n] for n in A_PRIORI},
+                         thrust_input="thrust" in lon)
     if "theta" not in lon:
         model = lm.without_outputs(model, ("theta",))
     free = [p for p in model.parameters if p not in (*A_PRIORI, *TRIM_BALANCE)]

@@ -79,14 +79,14 @@ def test_control_signs_follow_the_project_convention():
     y = simulate(model, model.start, t, np.column_stack([0 * t, np.full(t.size, 0.05)]))
     assert y[5, 2] < 0  # dr > 0 (TE left) yaws nose left: r < 0
     sp = short_period(COND, start={"Cm_de": -1.2, "CL_de": 0.4, "Cm_alpha": -1.0,
-                                      "Cm_q": -20.0, "CL_alpha": 5.5})
+                                   "Cm_q": -20.0, "CL_alpha": 5.5})
     y = simulate(sp, sp.start, t, np.full((t.size, 1), 0.05))
     assert y[5, 1] < 0  # de > 0 (TE down) pitches nose down: q < 0
 
 
 def test_complex_step_sensitivities_equal_finite_differences_with_alphadot():
     model = short_period(COND, derivatives=SHORT_PERIOD_DERIVATIVES,
-                            start={"Cm_alphadot": -6.0, "CL_q": 4.0, "bias_alphadot": 0.01})
+                         start={"Cm_alphadot": -6.0, "CL_q": 4.0, "bias_alphadot": 0.01})
     values = model.values()
     names = list(model.parameters)
     _, grads = lm.matrix_sensitivities(model, values, names)
@@ -105,9 +105,9 @@ def test_full_longitudinal_has_a_phugoid_and_a_short_period():
                            Ixx=1420.0, Iyy=4067.0, Izz=4786.0, Ixz=0.0, area=17.1,
                            span=10.2, chord=1.74)
     model = longitudinal(c, derivatives=LONGITUDINAL_DEFAULT + ("Cm_alphadot",),
-                            start={"CD_0": 0.05, "CD_alpha": 0.33, "CL_alpha": 4.44,
-                                   "CL_de": 0.355, "Cm_alpha": -0.683, "Cm_q": -9.96,
-                                   "Cm_de": -0.923, "Cm_alphadot": -4.36})
+                         start={"CD_0": 0.05, "CD_alpha": 0.33, "CL_alpha": 4.44,
+                                "CL_de": 0.355, "Cm_alpha": -0.683, "Cm_q": -9.96,
+                                "Cm_de": -0.923, "Cm_alphadot": -4.36})
     eig = np.linalg.eigvals(model.matrices()[0])
     wn = np.sort(np.abs(eig))
     # Navion (Nelson 1998, example 4.2): phugoid about 0.2 rad/s, short period about 3.6
