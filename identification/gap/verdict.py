@@ -114,7 +114,8 @@ MATERIAL = 0.02
 # the test without the other outputs (the seed-6 rules' main test) is kept beside it at a
 # stricter level: in calm air the other outputs' residuals carry no turbulence to take out
 # and take part of a moment error instead (a Twin Otter Cn_beta 17 % off at 50 and 75
-# m/s, calm: `no_gap` with the partial test alone; tests/test_gap_envelope.py). On the 568
+# m/s, calm: `no_gap` with the partial test alone;
+# tests/identification/gap/test_gap_envelope.py). On the 568
 # null flights it adds 2 false alarms (16 in all with the high band's 8)
 PLAIN_ALPHA, PLAIN_MATERIAL = 1e-6, 0.005
 # the high band (a structural mode, a fast sensor or actuator effect): fast Laguerre

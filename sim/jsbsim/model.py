@@ -251,7 +251,8 @@ def _alpha_limits(root: ET.Element) -> tuple[float, float] | None:
 # to an exact 6-DOF model (Navion Cm_alphadot -1.24 % -> -0.05 %, CL_q -3.9 % -> +0.65 %);
 # the attitude lag puts the Euler angles 1.25 ms behind the integral of the rates, which
 # biased the Twin Otter's Cl derivatives by -0.6 % on research-grade data. Adams-Bashforth 2
-# (JSBSim code 3) for both (tests/test_truth_recovery.py). FGPropagate::InitModel restores
+# (JSBSim code 3) for both (tests/identification/test_truth_recovery.py).
+# FGPropagate::InitModel restores
 # JSBSim's defaults, so every reset applies these again.
 INTEGRATORS = {"simulation/integrator/rate/rotational": 3,
                "simulation/integrator/position/rotational": 3}

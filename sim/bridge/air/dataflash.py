@@ -36,6 +36,7 @@ from flightid.importers.dataflash_formats import (
     FORMATS,
     MULTS,
     RCOU_OUTPUTS,
+    SERVO_DEFLECTION_SIGN,
     SERVO_FUNCTIONS,
     UNITS,
     LogFormat,
@@ -106,7 +107,8 @@ def _header(servos: ServoMapping) -> list[bytes]:
     for name, servo in servos.surfaces.items():
         params += [(f"SERVO{servo.channel}_FUNCTION", SERVO_FUNCTIONS[name]),
                    (f"SERVO{servo.channel}_TRIM", servo.trim),
-                   (f"SERVO{servo.channel}_REVERSED", 1.0 if servo.throw < 0 else 0.0)]
+                   (f"SERVO{servo.channel}_REVERSED",
+                    1.0 if servo.throw * SERVO_DEFLECTION_SIGN[name] < 0 else 0.0)]
     if servos.throttle is not None:
         c = servos.throttle.channel
         params += [(f"SERVO{c}_FUNCTION", SERVO_FUNCTIONS["throttle"]),
@@ -218,8 +220,9 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
         throttle = np.round(100 * sampled(record, t, "throttle", 0.0)).astype(int)
         rudder = np.zeros(t.size, dtype=int)
         if "dr" in servos.surfaces:
-            rudder = np.round(4500 * sampled(record, t, "dr", 0.0) /
-                              servos.surfaces["dr"].throw).astype(int)
+            # ArduPilot's scaled rudder (+-4500) is a yaw demand, nose right positive
+            rudder = np.round(-4500 * sampled(record, t, "dr", 0.0) /
+                              abs(servos.surfaces["dr"].throw)).astype(int)
         speed = eas(t)
         return [_pack(BY_NAME["CTUN"], us[k], roll[k], roll[k], pitch[k], pitch[k],
                       throttle[k], rudder[k], throttle[k], speed[k]) for k in range(t.size)]
