@@ -73,6 +73,11 @@ SLOW_MODULES: dict[str, float] = {
     "scenarios/gym/test_gym.py": 31,
     "scenarios/montecarlo/test_montecarlo_intervals.py": 27,
     "identification/models/test_lateral_kinematics.py": 25,
+    # then from ``--durations=0`` of the quick run (209 s wall at load average 8-9)
+    "identification/methods/test_filter_error_noise.py": 24,
+    "identification/test_effect_fit.py": 23,
+    "identification/test_default_structure.py": 23,
+    "scenarios/montecarlo/test_design_optimize.py": 20,
 }
 
 

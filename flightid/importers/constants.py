@@ -75,7 +75,27 @@ class AircraftConstants:
 
 
 def quantity(value: Any, si_unit: str, where: str) -> float:
-    """A number (already SI) or 'VALUE UNIT' text converted to ``si_unit``."""
+    """A number (already SI) or 'VALUE UNIT' text converted to ``si_unit``.
+
+    Parameters
+    ----------
+    value : int, float or str
+        The number, or text such as '12.5 ft'.
+    si_unit : str
+        SI unit of the quantity, e.g. "kg", "m".
+    where : str
+        Names the entry in error messages.
+
+    Returns
+    -------
+    float
+        The value in ``si_unit``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``where`` for a value that is not a finite number or has a wrong unit.
+    """
     if isinstance(value, bool):
         raise ValueError(f"{where}: {value!r} is not a number")
     if isinstance(value, int | float):
@@ -99,7 +119,23 @@ def quantity(value: Any, si_unit: str, where: str) -> float:
 
 
 def read_constants(path: str | Path) -> AircraftConstants:
-    """Aircraft constants from a TOML file (module docstring); values in SI after it."""
+    """Aircraft constants from a TOML file (format in the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The constants file.
+
+    Returns
+    -------
+    AircraftConstants
+        Name, mass properties, reference geometry and sensor positions, SI.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and entry for an unknown entry or an invalid value.
+    """
     path = Path(path)
     data = read_toml(path, "aircraft constants file", "TOML file")
     unknown = sorted(set(data) - {"name", "mass_properties", "reference", "sensors"})

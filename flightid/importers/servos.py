@@ -130,9 +130,21 @@ def _pwm(value: object, where: str) -> float:
 
 
 def read_servo_map(path: str | Path) -> ServoMapping:
-    """A ServoMapping from a TOML file (module docstring); a surface that is not a
-    flightid control channel, or an output outside 1..14, is refused naming the valid
-    ones."""
+    """A ServoMapping from a TOML file (format in the module docstring).
+
+    A surface that is not a flightid control channel, or an output outside 1..14, is refused
+    naming the valid ones.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The servo mapping file.
+
+    Returns
+    -------
+    ServoMapping
+        Surfaces (output, trim PWM, throw in rad) and the throttle, if given.
+    """
     path = Path(path)
     data = read_toml(path, "servo mapping file", "TOML file")
     surfaces: dict[str, Servo] = {}

@@ -51,8 +51,20 @@ CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "rho", "mass")
 
 
 def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """phi, theta, psi (rad; ZYX Euler angles) of unit quaternions q = (w, x, y, z), N x 4,
-    rotating body axes to NED (Stevens, Lewis & Johnson 2016, sec. 1.8)."""
+    """phi, theta, psi (ZYX Euler angles) of unit quaternions rotating body axes to NED.
+
+    Stevens, Lewis & Johnson 2016, sec. 1.8.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        Unit quaternions (w, x, y, z); shape (n, 4).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (phi, theta, psi), rad; each shape (n,).
+    """
     w, x, y, z = (q[:, i] for i in range(4))
     phi = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     theta = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
@@ -157,8 +169,20 @@ MESSAGE_HEADER = 3  # uint16 size, uint8 type
 
 
 def cut_bytes(path: Path) -> int:
-    """Bytes at the end of a ULog file that do not make a whole message (0 for a whole
-    file): the messages' own sizes walked from the file header on."""
+    """Bytes at the end of a ULog file that do not make a whole message.
+
+    The messages' own sizes are walked from the file header on.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The .ulg file.
+
+    Returns
+    -------
+    int
+        Number of trailing bytes; 0 for a whole file.
+    """
     data = path.read_bytes()
     offset = HEADER_BYTES
     while offset + MESSAGE_HEADER <= len(data):

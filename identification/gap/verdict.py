@@ -6,64 +6,35 @@ sec. 16.6): a right model leaves a residual uncorrelated with the inputs, whatev
 colour of the disturbance (turbulence, sensor noise, filters), while a model error leaves
 a residual that the inputs explain. For each output, the residual v (the model as is,
 only its nuisance biases and initial state fitted on each window) is regressed on
-input-driven regressors (``window.regressors``: the inputs, Laguerre filters of them, the
-model's simulated outputs), all functions of the measured inputs only, so under the null
-(open-loop inputs) uncorrelated with the turbulence response and the noise. Beside them,
-and not tested, the **other outputs' residuals** of the axis and ``PARTIAL_LAGUERRE``
-Laguerre filters of each (``other_outputs``): one gust drives every output of an axis, so
-the other residuals explain most of this one's turbulence response, and under the null
-they too are independent of the inputs, so the input regressors' coefficients stay
-zero-mean (a partial regression, the instrument of Granger-type tests; the innovations of
-a Kalman predictor whiten the same turbulence with a model of it, Ljung 1999 sec. 16.6).
-The least-squares coefficients of the input regressors, theta (of the joint fit), are
-tested with the Wald statistic W = theta^T C^-1 theta, chi-square with k degrees of
-freedom, where C is their covariance corrected for the colored residual (Morelli & Klein
-2016 eq. 6.54 with the leverage correction of ``engine.bounds``): turbulence makes the
-residual colored, and a test that assumed it white would call every gusty day a model
-error.
+input-driven regressors (``window.regressors``: each input, Laguerre orthonormal
+filters of it, Wahlberg 1991, and every output of the model as simulated from the measured
+inputs), all functions of the measured inputs only, so under the null (open-loop inputs)
+uncorrelated with the turbulence response and the noise. Beside them, and not tested, go
+the other outputs' residuals of the axis and Laguerre filters of each
+(``window.regressors.other_outputs``): one gust drives every output of an axis, so they
+take most of this one's turbulence response out, and the input regressors' coefficients
+stay zero-mean (a partial regression). Those coefficients are tested with the Wald statistic
+W = theta^T C^-1 theta, chi-square with k degrees of freedom, C corrected for the colored
+residual (Morelli & Klein 2016 eq. 6.54 with the leverage correction of ``engine.bounds``).
+Where the chi-square p says a channel is a gap, p is calibrated on the record
+(``calibrated_p``: circularly shifted surrogates, ``window.surrogates``, Theiler et al.
+1992, and a scaled chi-square, Satterthwaite 1946).
 
-The chi-square null is itself only approximate: C is estimated from the same few 10 s
-windows as the residual, and on the blind check's null flights in light turbulence the
-statistic's spread came out up to ten times the chi-square's (longitudinal axis, two
-windows). Where the chi-square p says a channel is a gap, that p is therefore
-**calibrated on the record** (``calibrated_p``): W is recomputed on ``SURROGATES``
-surrogates, each window's regressors circularly shifted against its residual by at least
-``SURROGATE_SHIFT_S`` (surrogate data, Theiler et al. 1992: the shift keeps the residual's
-and the regressors' autocorrelations and destroys any relation between them), and p is
-read from the scaled chi-square c chi2(nu) with the surrogates' mean and variance
-(Satterthwaite 1946), so that a p of ``ALPHA`` is resolved by 100 surrogates; never below
-the chi-square p. The high band's test is calibrated the same way.
-
-Significance alone is not a gap: the linearised model of the exact JSBSim aircraft leaves a
-small, input-correlated misfit that a long calm record makes significant (p ~ 1e-10 at an
-energy share of 1e-4 on the telemaster), and that the turbulence taken out by the other
-outputs makes significant in turbulence too (p down to 1e-50 at shares of 0.002-0.013 on
-the blind check's null flights). A gap is therefore significant (p below ``ALPHA`` on a
-channel) *and* material: the input-explained energy, less what the regression explains by
-chance (trace(M C)), is at least ``MATERIAL`` of the channel's measured energy. The test
-without the other outputs (``ChannelTest.plain``, the seed-6 rules' main test) is kept
-beside it at ``PLAIN_ALPHA`` and ``PLAIN_MATERIAL``: in calm air the other outputs take
-part of a moment error instead of turbulence. Its share (``ChannelTest.level``) is the
-gap above the null level that confirmation is judged against (``NullTest.above``), as
-before. The null level thus counts the
-linearisation misfit of the exact model. (Taking the misfit off instead, as what the
-linearised model leaves on the exact aircraft re-flown with the record's surfaces, moved
-the light-turbulence null flights' shares by less than 0.01, and made two of six calm
-null flights false alarms in the high band: the re-fly has no sensor filters;
-docs/gap_benchmark.md.) Development figures (seeds 11-13, the blind
-check's lateral card, three aircraft, calm, light and moderate turbulence, nothing
-injected): 27 of 27 no_gap (docs/gap.md).
-
-A second, separate test per output looks at the high band, where a structural mode or a
-fast sensor or actuator effect shows and the slow regressors above do not reach:
-``FAST_LAGUERRE`` Laguerre filters of the inputs with a 0.08 s time constant, significant
-at the stricter ``HIGH_ALPHA`` and material when they explain ``HIGH_MATERIAL`` of the
-channel's measured energy above ``HIGH_HZ`` (a 4 Hz structural mode: 0.13-0.23 of the
-roll rate's energy above 1 Hz in light turbulence; no null flight reached p < 1e-3).
+A gap is significant (p below ``ALPHA`` on a channel) *and* material: the input-explained
+energy, less what the regression explains by chance (trace(M C)), is at least ``MATERIAL``
+of the channel's measured energy; the linearised model of the exact JSBSim aircraft
+leaves a small input-correlated misfit that a long record makes significant. The test
+without the other outputs (``ChannelTest.plain``) is kept beside it at ``PLAIN_ALPHA`` and
+``PLAIN_MATERIAL``; its share (``ChannelTest.level``) is the gap above the null level
+(``NullTest.above``). A second test per output looks at the high band (a structural mode,
+a fast sensor or actuator effect): fast Laguerre filters of the inputs,
+significant at ``HIGH_ALPHA`` and material at ``HIGH_MATERIAL`` of the channel's measured
+energy above ``HIGH_HZ``.
 
 Verdicts (``VERDICTS``): ``no_gap`` (the model as is passes), ``explained`` (something is
 named and the model with it passes), ``partly_unexplained`` (named, still a gap),
-``unexplained`` (a gap, nothing named).
+``unexplained`` (a gap, nothing named). The reasoning, what was tried and dropped, and the
+development figures: docs/gap.md ("Method") and docs/gap_benchmark.md.
 """
 
 from __future__ import annotations
@@ -217,10 +188,32 @@ class NullTest:
 
 def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: str,
                  nuisance: np.ndarray | None = None) -> ChannelTest:
-    """The Wald test of ``residual`` (N,) on the regressors ``x`` (N, k), p from chi-square
-    with k degrees of freedom; ``spread``: the channel's measured energy (means removed).
-    ``nuisance`` (N, m): regressors fitted beside ``x`` and not tested (the other outputs'
-    residuals, ``PARTIAL_LAGUERRE``): only the coefficients of ``x`` enter W and the share."""
+    """The Wald test of ``residual`` on the regressors ``x``, p from chi-square with k degrees
+    of freedom.
+
+    Regressors that add nothing (a constant input, collinear model outputs) are dropped; the
+    covariance is corrected for the colored residual (``engine.bounds``).
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        The channel's residual, its SI unit; shape (N,).
+    x : numpy.ndarray
+        The tested regressors; shape (N, k).
+    spread : float
+        The channel's measured energy (means removed), unit squared.
+    channel : str
+        The channel's name.
+    nuisance : numpy.ndarray, optional
+        Regressors fitted beside ``x`` and not tested (the other outputs' residuals,
+        ``PARTIAL_LAGUERRE``); only the coefficients of ``x`` enter W and the share;
+        shape (N, m).
+
+    Returns
+    -------
+    ChannelTest
+        W, its degrees of freedom, p, and the explained shares of ``spread``.
+    """
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
     x = independent_columns(unit_columns(x))
@@ -247,14 +240,34 @@ def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: st
 
 def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.ndarray],
                  shifts: np.ndarray, spread: float, nuisance: np.ndarray | None = None) -> float:
-    """The p-value of ``test`` (the Wald test of ``residual`` on the stacked ``blocks``,
-    one per window) against its surrogates: ``W`` recomputed with each window's
-    regressors circularly shifted by ``shifts`` (Theiler et al. 1992; a shift keeps the
-    residual's and the regressors' autocorrelations and destroys any relation between
-    them), and judged against c chi2(nu) with the surrogates' mean and variance
-    (Satterthwaite 1946: c = var / (2 mean), nu = 2 mean^2 / var), so that a p of
-    ``ALPHA`` is resolved by a hundred surrogates. Never below the chi-square p.
-    ``nuisance``: as in ``channel_test``, kept aligned with the residual (not shifted)."""
+    """The p-value of ``test`` against its surrogates.
+
+    ``W`` is recomputed with each window's regressors circularly shifted by ``shifts``
+    (Theiler et al. 1992; a shift keeps the residual's and the regressors' autocorrelations
+    and destroys any relation between them), and judged against c chi2(nu) with the
+    surrogates' mean and variance (Satterthwaite 1946: c = var / (2 mean),
+    nu = 2 mean^2 / var), so that a p of ``ALPHA`` is resolved by a hundred surrogates.
+
+    Parameters
+    ----------
+    test : ChannelTest
+        The Wald test of ``residual`` on the stacked ``blocks``.
+    residual : numpy.ndarray
+        The stacked residual; shape (N,).
+    blocks : sequence of numpy.ndarray
+        The regressors, one block per window; shapes (n_j, k).
+    shifts : numpy.ndarray
+        Circular shifts, samples; shape (surrogates, windows).
+    spread : float
+        The channel's measured energy, unit squared.
+    nuisance : numpy.ndarray, optional
+        As in ``channel_test``, kept aligned with the residual (not shifted).
+
+    Returns
+    -------
+    float
+        The calibrated p, never below the chi-square p.
+    """
     ws = [channel_test(residual, rolled(blocks, row), spread, test.channel,
                        nuisance).statistic for row in shifts]
     return scaled_chi2_p(test.statistic, ws, test.p_value)
@@ -262,8 +275,23 @@ def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.nd
 
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
               inputs: Sequence[str]) -> NullTest:
-    """Each output's input-correlation test over the windows ``fits`` ({label: fit of the
-    model on that window}; ``records``: the windows' records, for the inputs)."""
+    """Each output's input-correlation test over the windows ``fits``.
+
+    Parameters
+    ----------
+    fits : mapping of str to WindowFit
+        {label: fit of the model on that window}.
+    records : mapping of str to FlightRecord
+        The windows' records by label, for the inputs.
+    inputs : sequence of str
+        The axis's inputs.
+
+    Returns
+    -------
+    NullTest
+        Every output's test; the chi-square gaps calibrated on surrogates, the strongest
+        first, until one stands.
+    """
     labels = [k for k in fits if k in records]
     out = NullTest()
     if not labels:
@@ -318,8 +346,22 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
 
 
 def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
-    """The verdict of one axis: ``before`` the model as is, ``after`` with the named
-    effects (None when nothing is named)."""
+    """The verdict of one axis.
+
+    Parameters
+    ----------
+    before : NullTest
+        The test of the model as is.
+    named : bool
+        Whether effects were named.
+    after : NullTest or None
+        The test with the named effects (None when nothing is named).
+
+    Returns
+    -------
+    str
+        One of ``VERDICTS``.
+    """
     if not before.gap:
         return NO_GAP
     if not named:
@@ -328,10 +370,32 @@ def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
 
 
 def worst(verdicts: Sequence[str]) -> str:
-    """The most severe of several axes' verdicts (``VERDICTS`` order)."""
+    """The most severe of several axes' verdicts (``VERDICTS`` order).
+
+    Parameters
+    ----------
+    verdicts : sequence of str
+        Verdicts of ``VERDICTS``.
+
+    Returns
+    -------
+    str
+        The most severe; ``NO_GAP`` when there is none.
+    """
     return max(verdicts, key=VERDICTS.index) if verdicts else NO_GAP
 
 
 def p_text(p: float) -> str:
-    """A p-value for a table: 3 digits, or '<1e-12'."""
+    """A p-value for a table: 2 significant digits, or '<1e-12'.
+
+    Parameters
+    ----------
+    p : float
+        The p-value.
+
+    Returns
+    -------
+    str
+        The text; '-' for a p that is not finite.
+    """
     return "<1e-12" if p < 1e-12 else (f"{p:.2g}" if math.isfinite(p) else "-")

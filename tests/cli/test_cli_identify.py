@@ -1,6 +1,8 @@
 """The command-line chain a flight-test engineer uses: simulate, truth, identify, report."""
 
 import json
+import os
+import re
 import subprocess
 import sys
 
@@ -60,3 +62,25 @@ def test_identify_with_multistep_inputs_and_a_missing_one(tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode != 0
     assert "multistep input(s) dz not" in bad.stderr
+
+
+def test_identify_tables_keep_every_digit_at_80_columns_through_a_pipe(tmp_path):
+    """identify's estimate and score tables in an 80-column terminal, piped: no line wider,
+    no cell cut with an ellipsis, every value, std and truth of the JSON output whole."""
+    flight, truth = tmp_path / "flight.parquet", tmp_path / "truth.json"
+    _run("simulate", "navion-demo", "-o", str(flight), "--seed", "3")
+    truth.write_text(_run("truth", "navion", "--altitude", "0", "--speed", "53.64",
+                          "--axes", "body", "--format", "json").stdout)
+    args = ["identify", str(flight), "--method", "ee", "--model", "lat", "--truth", str(truth)]
+    doc = json.loads(_run(*args, "--format", "json").stdout)
+    out = subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "COLUMNS": "80"})
+    assert out.returncode == 0, out.stderr
+    text = out.stdout
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    cells = {c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)}
+    for name, e in doc["estimates"].items():
+        assert f"{e['value']:.5g}" in cells and f"{e['std']:.3g}" in cells, name
+    for r in doc["score"]["rows"]:
+        if r["status"] == "estimated":
+            assert {f"{r['truth']:.5g}", f"{r['error']:+.3g}", f"{r['sigmas']:+.2f}"} <= cells

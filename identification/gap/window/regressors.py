@@ -50,8 +50,27 @@ HIGHPASS_RAD_S = 0.6
 
 def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
              tau: float = LAGUERRE_TAU_S) -> list[np.ndarray]:
-    """``u`` through the first ``n`` discrete Laguerre filters with pole exp(-dt/tau):
-    L_1 = sqrt(1 - a^2) / (1 - a q^-1), L_(k+1) = L_k (q^-1 - a) / (1 - a q^-1)."""
+    """``u`` through the first ``n`` discrete Laguerre filters with pole exp(-dt/tau).
+
+    L_1 = sqrt(1 - a^2) / (1 - a q^-1), L_(k+1) = L_k (q^-1 - a) / (1 - a q^-1)
+    (Wahlberg 1991).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The signal, any unit; shape (N,).
+    dt : float
+        Sample interval, s.
+    n : int, optional
+        Number of filters. Default ``LAGUERRE``.
+    tau : float, optional
+        The filters' time constant, s. Default ``LAGUERRE_TAU_S``.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        The n filtered signals, unit of ``u``; shape (N,) each.
+    """
     a = math.exp(-dt / tau)
     x = signal.lfilter([math.sqrt(1.0 - a * a)], [1.0, -a], u)
     out = [x]
@@ -61,11 +80,29 @@ def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
     return out
 
 
-
 def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
                n: int = LAGUERRE) -> np.ndarray:
-    """(N, k) input-driven regressors of one window (module docstring), ``n`` Laguerre
-    filters per input."""
+    """The input-driven regressors of one window (module docstring).
+
+    Each input's change from the window's first sample and ``n`` Laguerre filters of it, then
+    every output of the model as simulated.
+
+    Parameters
+    ----------
+    fit : WindowFit
+        The model's fit on the window.
+    record : FlightRecord
+        The window's record, for the inputs (interpolated to the fit's times).
+    inputs : sequence of str
+        The axis's inputs (those the record lacks are skipped).
+    n : int, optional
+        Laguerre filters per input. Default ``LAGUERRE``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The regressors, means removed, SI units; shape (N, k).
+    """
     t = fit.time
     dt = float(np.median(np.diff(t)))
     cols: list[np.ndarray] = []
@@ -81,18 +118,40 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
     return x - x.mean(axis=0)
 
 
-
 def unit_columns(x: np.ndarray) -> np.ndarray:
-    """The columns of ``x`` scaled to unit norm, those that are (numerically) zero dropped."""
+    """The columns of ``x`` scaled to unit norm, those that are (numerically) zero dropped.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (N, k) columns.
+
+    Returns
+    -------
+    numpy.ndarray
+        (N, k') the non-zero columns, each of unit norm.
+    """
     scale = np.sqrt(np.sum(x * x, axis=0))
     keep = scale > 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)
     return x[:, keep] / scale[keep]
 
 
-
 def independent_columns(x: np.ndarray, first: int = 0) -> np.ndarray:
-    """The columns of ``x`` that are linearly independent (rank-revealing QR), in their
-    order; the ``first`` columns (independent themselves) always kept."""
+    """The columns of ``x`` that are linearly independent (rank-revealing QR), in order.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (N, k) columns.
+    first : int, optional
+        The first columns, independent themselves, always kept (those of the tested
+        regressors ahead of nuisance columns). Default 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        (N, k') the independent columns, the ``first`` ones first.
+    """
     if first:
         q, _ = np.linalg.qr(x[:, :first])
         tail = x[:, first:]
@@ -104,26 +163,63 @@ def independent_columns(x: np.ndarray, first: int = 0) -> np.ndarray:
     return x[:, independent_index(x)]
 
 
-
 def independent_index(x: np.ndarray) -> np.ndarray:
-    """Indices of the linearly independent columns of ``x`` (rank-revealing QR), sorted."""
+    """Indices of the linearly independent columns of ``x`` (rank-revealing QR).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (N, k) columns.
+
+    Returns
+    -------
+    numpy.ndarray
+        The indices of a largest independent set, sorted.
+    """
     _, r, piv = linalg.qr(x, mode="economic", pivoting=True)
     d = np.abs(np.diag(r))
     rank = int(np.sum(d > 1e-8 * d[0])) if d.size else 0
     return np.sort(piv[:rank])
 
 
-
 def highpass(x: np.ndarray, dt: float, corner: float = HIGHPASS_RAD_S) -> np.ndarray:
-    """``x`` ((N,) or (N, k), means removed) through a causal 2nd-order Butterworth
-    high-pass with corner ``corner`` rad/s, sample time ``dt`` s (along the first axis)."""
+    """``x``, means removed, through a causal 2nd-order Butterworth high-pass.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal(s), time along the first axis; shape (N,) or (N, k).
+    dt : float
+        Sample interval, s.
+    corner : float, optional
+        The corner, rad/s. Default ``HIGHPASS_RAD_S``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered signal(s), unit of ``x``; shape of ``x``.
+    """
     b, a = signal.butter(2, corner * dt / math.pi, "high")
     return signal.lfilter(b, a, x - np.mean(x, axis=0), axis=0)
 
 
-
 def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
-    """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval."""
+    """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit; shape (N,).
+    dt : float
+        Sample interval, s.
+    low_hz : float
+        The band's lower edge, Hz.
+
+    Returns
+    -------
+    float
+        The energy, unit of ``x`` squared (summed over samples).
+    """
     f = np.fft.rfftfreq(x.size, dt)
     e = np.abs(np.fft.rfft(x - np.mean(x))) ** 2
     w = np.full(f.size, 2.0)
@@ -133,10 +229,26 @@ def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
     return float(np.sum((w * e)[f >= low_hz]) / x.size)
 
 
-
 def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> np.ndarray:
-    """(N, k) the high band's regressors of one window: ``FAST_LAGUERRE`` Laguerre filters
-    of each input with time constant ``FAST_TAU_S`` (a few tenths of a second of memory)."""
+    """The high band's regressors of one window.
+
+    ``FAST_LAGUERRE`` Laguerre filters of each input with time constant ``FAST_TAU_S`` (a few
+    tenths of a second of memory).
+
+    Parameters
+    ----------
+    fit : WindowFit
+        The model's fit on the window (its times).
+    record : FlightRecord
+        The window's record, for the inputs.
+    inputs : sequence of str
+        The axis's inputs (those the record lacks are skipped).
+
+    Returns
+    -------
+    numpy.ndarray
+        The regressors, means removed, SI units; shape (N, k).
+    """
     t = fit.time
     dt = float(np.median(np.diff(t)))
     cols: list[np.ndarray] = []
@@ -148,28 +260,57 @@ def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str])
     return x - x.mean(axis=0)
 
 
-
 def nuisance_blocks(high_passed: Mapping[str, Sequence[np.ndarray]],
                     dts: Sequence[float]) -> dict[str, list[np.ndarray]]:
-    """{channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}: each output's
-    high-passed residual (``high_passed``: {channel: one array per window}) and its
-    Laguerre filters, the nuisance columns it gives the other outputs' tests; a channel
-    non-finite on any window is left out (each column then holds one channel throughout)."""
+    """Each output's nuisance columns for the other outputs' tests, window by window.
+
+    Each output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it; a
+    channel non-finite on any window is left out (each column then holds one channel
+    throughout).
+
+    Parameters
+    ----------
+    high_passed : mapping of str to sequence of numpy.ndarray
+        {channel: one high-passed residual per window}, SI units.
+    dts : sequence of float
+        The windows' sample intervals, s.
+
+    Returns
+    -------
+    dict of str to list of numpy.ndarray
+        {channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}.
+    """
     return {c: [np.column_stack([v, *laguerre(v, dt, PARTIAL_LAGUERRE)])
                 for v, dt in zip(vs, dts, strict=True)]
             for c, vs in high_passed.items() if all(np.all(np.isfinite(v)) for v in vs)}
-
 
 
 def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
                   dts: Sequence[float],
                   blocks: Mapping[str, Sequence[np.ndarray]] | None = None
                   ) -> np.ndarray | None:
-    """(N, m) the main test's nuisance regressors of ``channel``: every other output's
-    high-passed residual (``high_passed``: {channel: one array per window}) and
-    ``PARTIAL_LAGUERRE`` Laguerre filters of it, window by window (``blocks``: those of
-    ``nuisance_blocks``, computed once for every channel, or None to compute them); None
-    when ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite."""
+    """The main test's nuisance regressors of ``channel``.
+
+    Every other output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it,
+    window by window, stacked.
+
+    Parameters
+    ----------
+    high_passed : mapping of str to sequence of numpy.ndarray
+        {channel: one high-passed residual per window}, SI units.
+    channel : str
+        The channel tested (left out).
+    dts : sequence of float
+        The windows' sample intervals, s.
+    blocks : mapping of str to sequence of numpy.ndarray, optional
+        Those of ``nuisance_blocks``, computed once for every channel. Default: computed here.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The regressors, means removed per window; shape (N, m). None when
+        ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite.
+    """
     if PARTIAL_LAGUERRE < 0:
         return None
     if blocks is None:

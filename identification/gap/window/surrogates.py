@@ -27,9 +27,27 @@ SURROGATE_SEED = 0
 
 def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURROGATES,
                      least_s: float = SURROGATE_SHIFT_S) -> np.ndarray:
-    """(b, windows) circular shifts, in samples, of each window's regressors against its
-    residual: drawn uniformly at least ``least_s`` seconds from either end of the window
-    (a fixed stream: the same shifts for every record)."""
+    """Circular shifts of each window's regressors against its residual.
+
+    Drawn uniformly at least ``least_s`` seconds from either end of the window (a fixed
+    stream: the same shifts for every record); half the window when it is too short.
+
+    Parameters
+    ----------
+    lengths : sequence of int
+        The windows' sample counts.
+    dts : sequence of float
+        The windows' sample intervals, s.
+    b : int, optional
+        Number of surrogates. Default ``SURROGATES``.
+    least_s : float, optional
+        The smallest shift, s. Default ``SURROGATE_SHIFT_S``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shifts, samples; shape (b, windows).
+    """
     rng = np.random.default_rng(SURROGATE_SEED)
     out = np.empty((b, len(lengths)), dtype=int)
     for j, (n, dt) in enumerate(zip(lengths, dts, strict=True)):
@@ -39,16 +57,43 @@ def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURR
 
 
 def rolled(blocks: Sequence[np.ndarray], shifts: Sequence[int]) -> np.ndarray:
-    """The windows' regressor ``blocks`` (one (n_j, k) array per window), each circularly
-    shifted by its entry of ``shifts`` (samples) along time, stacked."""
+    """The windows' regressor blocks, each circularly shifted along time, stacked.
+
+    Parameters
+    ----------
+    blocks : sequence of numpy.ndarray
+        One (n_j, k) array per window.
+    shifts : sequence of int
+        Each window's shift, samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        (sum n_j, k) the shifted blocks, stacked in order.
+    """
     return np.vstack([np.roll(x, int(s), axis=0) for x, s in zip(blocks, shifts, strict=True)])
 
 
 def scaled_chi2_p(statistic: float, surrogates: Sequence[float], floor: float) -> float:
-    """The p-value of ``statistic`` against c chi2(nu) with the mean and variance of the
-    ``surrogates``' statistics (Satterthwaite 1946: c = var / (2 mean), nu = 2 mean^2 /
-    var), so that a p of 1e-4 is resolved by a hundred surrogates; never below ``floor``
-    (the chi-square p), and ``floor`` itself where the surrogates have no spread."""
+    """The p-value of a statistic against the scaled chi-square matched to its surrogates.
+
+    c chi2(nu) with the surrogates' mean and variance (Satterthwaite 1946: c = var / (2
+    mean), nu = 2 mean^2 / var), so that a p of 1e-4 is resolved by a hundred surrogates.
+
+    Parameters
+    ----------
+    statistic : float
+        The observed statistic.
+    surrogates : sequence of float
+        The statistic on the surrogates.
+    floor : float
+        The chi-square p: the result is never below it.
+
+    Returns
+    -------
+    float
+        The calibrated p; ``floor`` where the surrogates have no spread.
+    """
     ws = np.asarray(surrogates, dtype=float)
     mean, var = float(np.mean(ws)), float(np.var(ws, ddof=1))
     if not (mean > 0 and var > 0):

@@ -119,15 +119,44 @@ def _header(servos: ServoMapping) -> list[bytes]:
 
 
 def message_times(record: FlightRecord, rate: float) -> np.ndarray:
-    """Times (s) of a message sent at ``rate`` (Hz) over the record, from its start."""
+    """Times of a message sent at ``rate`` over the record, from its start.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; its first and last time bound the messages.
+    rate : float
+        Message rate, Hz.
+
+    Returns
+    -------
+    numpy.ndarray
+        Send times, s.
+    """
     t0, t1 = float(record.time[0]), float(record.time[-1])
     return t0 + np.arange(int(math.floor((t1 - t0) * rate + 1e-6)) + 1) / rate
 
 
 def sampled(record: FlightRecord, t: np.ndarray, name: str, default: float = math.nan
             ) -> np.ndarray:
-    """Channel ``name`` at times ``t`` (s; linear interpolation), or ``default`` when the
-    record lacks it."""
+    """Channel ``name`` at times ``t`` (linear interpolation), or ``default`` when absent.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+    t : numpy.ndarray
+        Times, s.
+    name : str
+        Channel name.
+    default : float, optional
+        Value when the record lacks the channel. Default NaN.
+
+    Returns
+    -------
+    numpy.ndarray
+        Channel values in its SI unit; same shape as ``t``.
+    """
     if name not in record:
         return np.full(t.size, default)
     return np.interp(t, record.time, record[name])

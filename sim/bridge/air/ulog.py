@@ -64,8 +64,20 @@ def _layout(topic: str) -> struct.Struct:
 
 
 def quaternion_from_euler(phi: np.ndarray, theta: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    """Unit quaternions (w, x, y, z), N x 4, of ZYX Euler angles (rad), rotating body axes
-    to NED (Stevens, Lewis & Johnson 2016, sec. 1.8)."""
+    """Unit quaternions of ZYX Euler angles, rotating body axes to NED.
+
+    Stevens, Lewis & Johnson 2016, sec. 1.8.
+
+    Parameters
+    ----------
+    phi, theta, psi : numpy.ndarray
+        Roll, pitch and yaw angles, rad; each shape (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Quaternions (w, x, y, z); shape (n, 4).
+    """
     cr, sr = np.cos(phi / 2), np.sin(phi / 2)
     cp, sp = np.cos(theta / 2), np.sin(theta / 2)
     cy, sy = np.cos(psi / 2), np.sin(psi / 2)

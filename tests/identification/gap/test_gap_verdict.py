@@ -19,10 +19,10 @@ from flightid.identification.gap.rank import (
     MIN_EXCESS_SHRINK,
     MIN_SHRINK,
     Ranked,
-    overall,
+    mean_gap,
     rank_key,
 )
-from flightid.identification.gap.shrink import shrink_text
+from flightid.identification.gap.sequence import shrink_text
 from flightid.identification.gap.verdict import (
     ALPHA,
     MATERIAL,
@@ -256,8 +256,8 @@ def test_effect_in_turbulence_confirmed_against_the_gap_above_the_null_level():
     assert result.null_before.gap and result.named, result.null_before.to_json()
     top = result.named[0]
     assert same(effect, top), top.candidate.label
-    gain = overall(top.heldout_before) - overall(top.heldout_after)
-    assert gain >= MIN_EXCESS_SHRINK * overall(result.null_before.above())
+    gain = mean_gap(top.heldout_before) - mean_gap(top.heldout_after)
+    assert gain >= MIN_EXCESS_SHRINK * mean_gap(result.null_before.above())
     assert top.shrink < MIN_SHRINK  # the whole-gap rule would not have confirmed it
     value = top.parameters["factor"]
     assert abs(value["value"] - factor) < 2 * value["std"]

@@ -4,23 +4,28 @@ which the 3211 beats the doublet of equal amplitude where that is clear with n =
 
 from __future__ import annotations
 
+import io
 import json
 import math
+import re
 import tomllib
 
 import numpy as np
 import pandas as pd
 import pytest
+from rich.console import Console
 from scipy import stats
 from typer.testing import CliRunner
 
 from flightid.cli.app import app
+from flightid.cli.tables import split_tables
 from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
 from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo import store
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design import report as design_report
+from flightid.scenarios.montecarlo.intervals import interval_text
 from flightid.scenarios.montecarlo.summary import summarize
 from flightid.units import DEG
 
@@ -86,6 +91,11 @@ def test_3211_beats_a_doublet_of_equal_amplitude(small):
     assert "data:image/png;base64," in (folder / "design-compare.html").read_text()
     table = pd.read_csv(folder / "design-compare.csv")
     assert set(table["design"]) == {"doublet", "3211"}
+    # the same rows as Markdown and LaTeX for a paper, beside the HTML
+    markdown = (folder / "design-compare.md").read_text()
+    latex = (folder / "design-compare.tex").read_text()
+    assert markdown.count("\n| ") >= len(table) and "\\begin{tabular}" in latex
+    assert f"{table['scatter'].dropna().iloc[0]:.4g}" in markdown and "Cm\\_alpha" in latex
     assert doc["equal"] == "amplitude" and doc["model"] == "lon"
     by = {d["kind"]: d for d in doc["designs"]}
     for d in by.values():
@@ -139,7 +149,7 @@ def test_tables_keep_every_digit_at_80_columns(small):
             assert f"{r['mean_bound']:.4g}" in cells, r
     verdict = doc["3211_beats_doublet"]
     for name, r in verdict["ratios"].items():
-        assert f"{r['low']:.3g} - {r['high']:.3g}" in cells, name
+        assert interval_text(r["low"], r["high"]) in cells, name
     wins = len(verdict["3211_smaller_scatter"])
     assert (f"3211 smaller scatter than the doublet for {wins} of {verdict['derivatives']} "
             "derivatives estimated by both") in " ".join(out.split())
@@ -299,3 +309,26 @@ def test_own_design_runs_end_to_end_at_its_own_energy_with_a_set_multisine_band(
     assert own_rows["Cn_dr"]["estimated"] == 2 and "Cn_dr" not in ms_rows or \
         ms_rows["Cn_dr"]["estimated"] == 0
     assert (folder / "design-compare.png").exists()
+
+
+def test_a_comparison_of_many_designs_splits_into_tables_that_fit_80_columns():
+    """Six designs with 9-digit cells (five built-ins and a user's) do not fit one
+    80-column table: they are split by design, each part repeating the derivative
+    column, no cell folded onto a second line and no header broken."""
+    kinds = ["doublet", "211", "3211", "sweep", "multisine", "ail-rud-own"]
+    rows = [[name, *(f"{0.0009408 * (i + 1) * (j + 1):.4g}" for j in range(len(kinds)))]
+            for i, name in enumerate(("CY_beta", "Cl_da", "Cn_beta"))]
+    tables = split_tables("scatter by design", ["derivative", *kinds], rows, 80)
+    assert len(tables) == 2
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=80)
+    for t in tables:
+        console.print(t)
+    text = buffer.getvalue()
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    cells = [c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)]
+    assert cells.count("derivative") == 2 and cells.count("Cl_da") == 2
+    assert {c for r in rows for c in r} <= set(cells)
+    assert set(kinds) <= set(cells)
+    # narrow enough, one table
+    assert len(split_tables("t", ["derivative", *kinds[:3]], [r[:4] for r in rows], 80)) == 1

@@ -8,6 +8,8 @@ table reads back as the same input; bad options exit 2. The Monte Carlo confirma
 from __future__ import annotations
 
 import json
+import math
+import re
 
 import numpy as np
 import pytest
@@ -20,7 +22,7 @@ from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.inputs import Maneuvers, scale_amplitude
 from flightid.scenarios.montecarlo.design import experiment
-from flightid.scenarios.montecarlo.design.optimize import sequenced
+from flightid.scenarios.montecarlo.design.optimize import sequenced, stretched
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
 from flightid.units import DEG
 
@@ -86,9 +88,10 @@ def test_the_paired_bootstrap_interval_narrows_with_common_seeds_and_covers():
 
 
 def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_path):
-    out = tmp_path / "opt.toml"
+    out, study = tmp_path / "opt.toml", tmp_path / "mc"
     result = RUNNER.invoke(app, ["design-optimize", "--card", "navion-demo", "-o", str(out),
-                                 "--format", "json"])
+                                 "--format", "json", "-n", "2", "--against", "doublet",
+                                 "--study", str(study), "--workers", "1", "--quiet"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     rows = {r["design"]: r for r in data["rows"]}
@@ -105,6 +108,32 @@ def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_pat
     assert experiment.input_energy(read, 50.0) == pytest.approx(rows["optimized"]["energy"],
                                                             rel=1e-9)
     assert {p.kind for p in parts} == {"harmonics"}
+    # the Monte Carlo flies the optimised design against the reference and each --against
+    # built-in on the same seeds; 2 realizations are too few for a paired interval, so no
+    # design is called smaller
+    mc = data["monte_carlo"]
+    assert set(mc) == {"3211", "doublet"}
+    assert {"3211-da-dr", "doublet-da-dr", "optimized"} <= {p.name for p in study.iterdir()}
+    assert not (study / "sweep-da-dr").exists()
+    for kind, m in mc.items():
+        for key in ("mean_relative_bound", "mean_relative_scatter"):
+            assert m[key]["realizations"] == 2 and m[key]["winner"] == "", (kind, key)
+            assert math.isnan(m[key]["low"]) and m[key]["ratio"] > 0
+    # the same at 80 columns through a pipe: the study continues, nothing is cut
+    table = RUNNER.invoke(app, ["design-optimize", "-o", str(out), "-n", "2", "--against",
+                                "doublet", "--study", str(study), "--workers", "1",
+                                "--quiet"], env={"COLUMNS": "80"})
+    assert table.exit_code == 0, table.output
+    text = table.stdout
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    cells = [c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)]
+    for r in data["rows"]:
+        assert f"{r['mean_relative_bound']:.4f}" in cells and r["design"] in cells
+    for k, b in data["predicted"]["optimized"].items():
+        assert f"{b:.3g}" in cells, k
+    assert {"derivative", "optimized", "multisine", "b/|truth|", "E (rad²s)"} <= set(cells)
+    m = mc["doublet"]["mean_relative_scatter"]
+    assert f"{m['ratio']:.3f}" in cells and "not clear" in cells
 
 
 @pytest.mark.parametrize("args, message", [
@@ -148,3 +177,21 @@ def test_design_optimize_past_a_limit_exits_3_and_writes_nothing(tmp_path):
     assert result.exit_code == 3, result.output
     assert "exceeds --max-amplitude-deg 3 deg" in result.output
     assert not out.exists()
+
+
+def test_equal_duration_stretches_every_built_in_to_the_reference_input_time():
+    """--equal-duration: each built-in on the aileron then the rudder, its time parameter
+    scaled so that it flies as long as the 3211 (2 x 2.8 s inputs and the 4 s gap)."""
+    s = experiment.DesignSettings(amplitude=4 * DEG)
+    ref = sequenced("3211", ("da", "dr"), s)
+    span = ref.end - ref.start
+    assert span == pytest.approx(2 * 7 * 0.4 + experiment.GAP_S)
+    for kind in experiment.DESIGNS:
+        d = stretched(kind, ("da", "dr"), s, span)
+        assert d.end - d.start == pytest.approx(span, abs=1e-9), kind
+        assert d.parts[1].start == pytest.approx(d.parts[0].end + experiment.GAP_S)
+        assert d.parts[0].end - d.parts[0].start == pytest.approx(2.8, abs=1e-9), kind
+    assert stretched("3211", ("da", "dr"), s, span) == ref
+    assert stretched("doublet", ("da", "dr"), s, span).parts[0].base == pytest.approx(1.4)
+    with pytest.raises(ValueError, match="leaves no time"):
+        stretched("3211", ("da", "dr"), s, 3.0)

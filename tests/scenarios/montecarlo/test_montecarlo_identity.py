@@ -4,6 +4,8 @@ whose content differs is refused naming card_sha256."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from flightid.scenarios import montecarlo
@@ -33,3 +35,20 @@ def test_the_same_card_by_another_path_continues_one_study(tmp_path, monkeypatch
     with pytest.raises(montecarlo.StudyMismatch, match="card_sha256") as info:
         store.open_study("study", Study("card.toml", 1, "oe", "lat"))
     assert "card: stored" not in str(info.value)
+
+
+def test_a_study_of_an_earlier_flightid_is_refused_saying_so(tmp_path):
+    """A study.json written before the data reduction entered the identity (its rows were
+    identified without it) is another study; the message says why, not 'stored None'."""
+    (tmp_path / "card.toml").write_text(card_text(load_card("navion-demo").to_dict()))
+    study = Study(str(tmp_path / "card.toml"), 1, "oe", "lat")
+    folder = tmp_path / "study"
+    store.open_study(folder, study)
+    path = folder / "study.json"
+    stored = json.loads(path.read_text())
+    del stored["identity"]["data_reduction"]
+    path.write_text(json.dumps(stored))
+    with pytest.raises(montecarlo.StudyMismatch,
+                       match="data_reduction: not stored, asked 'standard' "
+                             r"\(a study of an earlier flightid"):
+        store.open_study(folder, study)

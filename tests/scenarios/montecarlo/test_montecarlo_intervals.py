@@ -16,6 +16,7 @@ from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.montecarlo.intervals import (
     binomial_band,
     binomial_interval,
+    interval_text,
     scatter_interval,
     scatter_ratio_interval,
 )
@@ -119,3 +120,12 @@ def test_optimistic_bounds_are_warned_about_right_ones_are_not():
     assert summary.warnings() == [f"Cn_r: {warned.coverage_warning}"]
     assert "Warning</b>: Cn_r: coverage" in render(df, summary, "t", pngs={})
     assert summary.as_dict()["rows"][1]["coverage_warning"] == warned.coverage_warning
+
+
+def test_interval_text_shows_on_which_side_of_parity_an_interval_lies():
+    # a lower end of 1.0021 called "larger" must not read as "1 - 1.39"
+    assert interval_text(1.0021, 1.39) == "1.002 - 1.39"
+    assert interval_text(0.9996, 1.5) == "0.9996 - 1.50"
+    assert interval_text(0.421, 0.558) == "0.421 - 0.558"
+    assert interval_text(1.0, 2.0) == "1.00 - 2.00"
+    assert interval_text(float("nan"), 1.2) == "-"

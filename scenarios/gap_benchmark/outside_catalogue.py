@@ -35,18 +35,38 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.record import FlightRecord
 from flightid.sim.augment import augment, publish
 from flightid.sim.effects.airframe import DerivativeDelta
 
-STRUCTURE = {"lateral": (("da", "dr"), {"p": 1.0, "r": 0.3, "ay": 2.0}),
-             "longitudinal": (("de",), {"q": 1.0, "az": 2.0})}
+STRUCTURE = {"lateral": (LATERAL_INPUTS, {"p": 1.0, "r": 0.3, "ay": 2.0}),
+             "longitudinal": (LONGITUDINAL_INPUTS, {"q": 1.0, "az": 2.0})}
 
 
 def structural_mode(record: FlightRecord, frequency_hz: float, damping: float, gain: float,
                     axis: str = "lateral") -> FlightRecord:
     """``record`` with the mode's response added to the gyros and accelerometers of
-    ``axis`` (module note)."""
+    ``axis`` (module note).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The measured record.
+    frequency_hz : float
+        The mode's natural frequency, Hz.
+    damping : float
+        Its damping ratio, 1.
+    gain : float
+        Gain from the surface increments (rad) to the mode's response.
+    axis : str, optional
+        ``"lateral"`` or ``"longitudinal"``: which surfaces drive it and which sensors see it.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the changed channels.
+    """
     surfaces, seen = STRUCTURE[axis]
     w = 2 * math.pi * frequency_hz
     u = np.zeros(len(record.time))
@@ -58,13 +78,43 @@ def structural_mode(record: FlightRecord, frequency_hz: float, damping: float, g
 
 
 def vane_nonlinearity(record: FlightRecord, k: float, channel: str = "beta") -> FlightRecord:
-    """``record`` with ``channel`` (rad) read through beta + k beta |beta|."""
+    """``record`` with ``channel`` (rad) read through beta + k beta |beta|.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The measured record.
+    k : float
+        Coefficient of the quadratic term, 1/rad.
+    channel : str, optional
+        Vane channel. Default ``"beta"``.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the changed channel.
+    """
     b = record[channel]
     return record.with_channels(**{channel: b + k * b * np.abs(b)})
 
 
 def vane_hysteresis(record: FlightRecord, width: float, channel: str = "alpha") -> FlightRecord:
-    """``record`` with ``channel`` (rad) read through a play of full ``width`` (rad)."""
+    """``record`` with ``channel`` (rad) read through a play of full ``width`` (rad).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The measured record.
+    width : float
+        Full width of the play, rad.
+    channel : str, optional
+        Vane channel. Default ``"alpha"``.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the changed channel.
+    """
     x = np.asarray(record[channel], float)
     half = 0.5 * width
     y = np.empty_like(x)
@@ -81,7 +131,26 @@ RECORD = {"structural_mode": structural_mode, "vane_nonlinearity": vane_nonlinea
 def cm_alpha_break(aircraft: str, trim_alpha: float, above: float, delta: float,
                    cache: Path) -> str:
     """The XML path of ``aircraft`` with a pitch break (module note) at ``trim_alpha`` +
-    ``above`` (rad), ``delta`` per rad beyond it; written once under ``cache``."""
+    ``above`` (rad), ``delta`` per rad beyond it; written once under ``cache``.
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft name.
+    trim_alpha : float
+        Trim angle of attack, rad.
+    above : float
+        Break point above the trim, rad.
+    delta : float
+        Change of Cm_alpha beyond the break, 1/rad.
+    cache : Path
+        Cache folder.
+
+    Returns
+    -------
+    str
+        Path of the aircraft XML.
+    """
     key = json.dumps([aircraft, round(trim_alpha, 9), round(above, 9), round(delta, 9)])
     folder = cache / f"cm-break-{hashlib.sha256(key.encode()).hexdigest()[:16]}"
     name = f"{aircraft}-cm-break"

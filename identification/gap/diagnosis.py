@@ -38,10 +38,18 @@ from flightid.identification.gap.nonlinearity import (
     named_sensor,
     nonlinear_test,
 )
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pairs, rank, rank_key
+from flightid.identification.gap.rank import (
+    Folds,
+    Ranked,
+    Ranker,
+    mean_gap,
+    rank,
+    rank_key,
+    ranked_pairs,
+)
+from flightid.identification.gap.residual_map import GapMap, gap_map, heat_map
 from flightid.identification.gap.segments import Segment, segments, split
-from flightid.identification.gap.sequence import STEPS, fixed, following
-from flightid.identification.gap.shrink import shrinkage
+from flightid.identification.gap.sequence import STEPS, fixed, following, shrinkage
 from flightid.identification.gap.trim_level import TrimOffset, trim_offsets
 from flightid.identification.gap.verdict import (
     EXPLAINED,
@@ -53,7 +61,6 @@ from flightid.identification.gap.verdict import (
     null_test,
     worst,
 )
-from flightid.identification.gap.where import GapMap, gap_map, heat_map
 from flightid.record import FlightRecord, read
 
 TOP = 10  # effects listed in the json form
@@ -176,7 +183,7 @@ class GapResult:
             "named": [r.to_json() for r in self.named],
             "shrinkage": self.shrinkage(),
             "unexplained": ({"remaining": self.remaining(),
-                             "overall": overall(self.remaining())} if self.unexplained else None),
+                             "overall": mean_gap(self.remaining())} if self.unexplained else None),
             "noise_floor": self.floor,
             "partly_unexplained": ({"share": self.unexplained_share(),
                                     "remaining_above_floor": self.remaining_above_floor()}
@@ -367,7 +374,7 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                          structure=structure)
     ranker.above = before.above()
     ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
-    both = pairs(ranker, ranked) if try_pairs else []
+    both = ranked_pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
     if both and both[0].confirmed:
         named = [both[0]]
