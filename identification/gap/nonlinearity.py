@@ -138,7 +138,7 @@ def named_sensor(test: NonlinearTest, named: Sequence[Any]) -> list[Structure]:
     test : NonlinearTest
         The nonlinear-structure test of the model as is.
     named : sequence of Ranked
-        The named effects (``rank.Ranked``).
+        The named effects (``ranked.Ranked``).
 
     Returns
     -------

@@ -18,10 +18,9 @@ from flightid.identification.gap.model.edits import Candidate
 from flightid.identification.gap.rank import (
     MIN_EXCESS_SHRINK,
     MIN_SHRINK,
-    Ranked,
-    mean_gap,
     rank_key,
 )
+from flightid.identification.gap.ranked import Ranked, mean_gap
 from flightid.identification.gap.sequence import shrink_text
 from flightid.identification.gap.verdict import (
     ALPHA,
