@@ -1,4 +1,4 @@
-"""A .tlog as a FlightRecord: canonical channels in SI (``messages.decode``), separately
+"""A .tlog as a FlightRecord: canonical channels in SI (``decoding.decode``), separately
 clocked recorders aligned to the reference recorder's clock (``align``), and every channel
 resampled onto one uniform time base by linear interpolation (the method and its details
 are stated in the metadata). Reading a tlog imports nothing of the air side.
@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta
+from flightid.sim.bridge.decoding import CHANNEL_SOURCES, decode, message_time
 from flightid.sim.bridge.frames import read_tlog
 from flightid.sim.bridge.ground.align import ClockMap, timesync_map, xcorr_map
 from flightid.sim.bridge.ground.gaps import (
@@ -30,7 +31,7 @@ from flightid.sim.bridge.ground.sources import (
     sequence_losses,
     source_name,
 )
-from flightid.sim.bridge.messages import CHANNEL_SOURCES, ServoMap, decode, message_time
+from flightid.sim.bridge.messages import ServoMap
 from flightid.sim.jsbsim.model import load
 
 
