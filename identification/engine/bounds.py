@@ -15,7 +15,11 @@ import numpy as np
 
 from flightid.identification.estimate import StdKind
 
-MAX_LEVERAGE = 0.95  # cap of a frequency bin's removed share (no bin of the studies reached it)
+MAX_LEVERAGE = 0.95  # cap of a frequency bin's removed share
+HC3_POWER = 2.0  # (1 - H_f)^2: the jackknife form (MacKinnon & White 1985)
+# output error's power of (1 - H_f), between HC2 (1) and HC3 (2): measured on development
+# flights of two cards (docs/validation.md, "Choosing the leverage correction")
+OUTPUT_ERROR_LEVERAGE_POWER = 1.5
 
 
 def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
@@ -25,7 +29,7 @@ def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
 
 def colored_residual_covariance(
     sens: np.ndarray, residuals: np.ndarray, weight: np.ndarray, information: np.ndarray,
-    leverage: bool = True,
+    leverage: bool = True, power: float = HC3_POWER,
 ) -> np.ndarray:
     """Parameter covariance corrected for colored residuals (M&K eq. 6.54, SIDPAC m_colores),
     with each frequency's residual power restored for what the fit took out of it.
@@ -42,12 +46,16 @@ def colored_residual_covariance(
     colored residual share the same low band (a flight in turbulence) the sample spectrum
     is depleted exactly where the bound needs it: the plain eq. 6.54 bounds of output error
     on the Navion demo card in light turbulence are 1.3-2.1 times too small (coverage of the
-    95 % intervals 57-87 %). Each bin's whitened residual is therefore divided by
-    (I - H_f), H_f capped at ``MAX_LEVERAGE``: the frequency-domain form of the HC3
-    sandwich correction (MacKinnon & White 1985; recommended for small samples by Long &
-    Ervin 2000), which brings those bounds to 0.73-1.14 of the scatter (docs/montecarlo.md).
+    95 % intervals 57-87 %). Each bin's whitened residual power is therefore divided by
+    (I - H_f)^``power``, H_f capped at ``MAX_LEVERAGE``: the frequency-domain form of the
+    sandwich corrections of MacKinnon & White (1985), HC2 for ``power`` 1 (unbiased when
+    the residual is white across the bins a parameter mixes) and HC3 for 2 (the jackknife
+    form, recommended for small samples by Long & Ervin 2000, conservative for white
+    errors). The default is HC3; output error's bounds use ``OUTPUT_ERROR_LEVERAGE_POWER``
+    (docs/validation.md, "Choosing the leverage correction").
     ``sens`` (N, ny, np), ``residuals`` (N, ny), ``weight`` W = R^-1, ``information`` M;
-    the result is in parameter units squared.
+    ``power`` >= 0 (dimensionless; unused without ``leverage``); the result is in
+    parameter units squared.
     """
     n = residuals.shape[0]
     size = int(2 ** np.ceil(np.log2(2 * n)))
@@ -58,7 +66,7 @@ def colored_residual_covariance(
     if leverage:
         h = (fa @ inv) @ np.conj(np.swapaxes(fa, 1, 2)) / n  # (F, ny, ny), Hermitian
         vals, vecs = np.linalg.eigh(h)
-        keep = 1.0 / (1.0 - np.clip(vals, 0.0, MAX_LEVERAGE))
+        keep = (1.0 - np.clip(vals, 0.0, MAX_LEVERAGE)) ** (-0.5 * power)
         fe = vecs @ (keep[:, :, None] * (np.conj(np.swapaxes(vecs, 1, 2)) @ fe))
     w = (np.conj(np.swapaxes(fe, 1, 2)) @ fa)[:, 0, :]  # (F, p): e_f^H A_f
     # rfft keeps f = 0 .. L/2: every other bin stands for itself and its mirror image
@@ -83,7 +91,8 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
         return np.zeros((0, 0)), StdKind.NONE
     if colored:
         weight = np.linalg.inv(noise)
-        return (colored_residual_covariance(sens, residuals, weight, information),
+        return (colored_residual_covariance(sens, residuals, weight, information,
+                                            power=OUTPUT_ERROR_LEVERAGE_POWER),
                 StdKind.CRAMER_RAO_COLORED)
     return cramer_rao_covariance(information), StdKind.CRAMER_RAO
 
