@@ -17,9 +17,11 @@ from flightid.identification.estimate import StdKind
 
 MAX_LEVERAGE = 0.95  # cap of a frequency bin's removed share
 HC3_POWER = 2.0  # (1 - H_f)^2: the jackknife form (MacKinnon & White 1985)
-# output error's power of (1 - H_f), between HC2 (1) and HC3 (2): measured on development
-# flights of two cards (docs/validation.md, "Choosing the leverage correction")
-OUTPUT_ERROR_LEVERAGE_POWER = 1.5
+# the power of (1 - H_f) for output error's lateral model, between HC2 (1) and HC3 (2):
+# measured on development flights of two cards, one in calm air and one in turbulence
+# (docs/validation.md, "Choosing the leverage correction"); the longitudinal models keep
+# HC3, which the same measurement found not too large for them
+LATERAL_LEVERAGE_POWER = 1.5
 
 
 def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
@@ -51,8 +53,8 @@ def colored_residual_covariance(
     sandwich corrections of MacKinnon & White (1985), HC2 for ``power`` 1 (unbiased when
     the residual is white across the bins a parameter mixes) and HC3 for 2 (the jackknife
     form, recommended for small samples by Long & Ervin 2000, conservative for white
-    errors). The default is HC3; output error's bounds use ``OUTPUT_ERROR_LEVERAGE_POWER``
-    (docs/validation.md, "Choosing the leverage correction").
+    errors). The default is HC3; output error's lateral model uses ``LATERAL_LEVERAGE_POWER``
+    (``leverage_power``; docs/validation.md, "Choosing the leverage correction").
     ``sens`` (N, ny, np), ``residuals`` (N, ny), ``weight`` W = R^-1, ``information`` M;
     ``power`` >= 0 (dimensionless; unused without ``leverage``); the result is in
     parameter units squared.
@@ -79,11 +81,20 @@ def colored_residual_covariance(
     return 0.5 * (cov + cov.T)
 
 
+def leverage_power(model: str) -> float:
+    """The power of (1 - H_f) in ``colored_residual_covariance`` for an output-error fit of
+    the model named ``model``: ``LATERAL_LEVERAGE_POWER`` for the linear lateral model
+    (where it was measured), HC3's 2 for every other."""
+    return LATERAL_LEVERAGE_POWER if model == "lateral" else HC3_POWER
+
+
 def output_error_covariance(information: np.ndarray, sens: np.ndarray,
                             residuals: np.ndarray, noise: np.ndarray,
-                            colored: bool) -> tuple[np.ndarray, StdKind]:
+                            colored: bool, power: float = HC3_POWER,
+                            ) -> tuple[np.ndarray, StdKind]:
     """(covariance, std_kind) of an output-error fit: M^-1, or the colored-residual
-    correction (M&K eq. 6.54) when ``colored``; an empty matrix when nothing was estimated.
+    correction (M&K eq. 6.54) when ``colored``, with the leverage correction's ``power``
+    (``colored_residual_covariance``); an empty matrix when nothing was estimated.
 
     ``sens`` (N, ny, np), ``residuals`` (N, ny) and ``noise`` R (ny, ny) of the fit.
     """
@@ -92,7 +103,7 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
     if colored:
         weight = np.linalg.inv(noise)
         return (colored_residual_covariance(sens, residuals, weight, information,
-                                            power=OUTPUT_ERROR_LEVERAGE_POWER),
+                                            power=power),
                 StdKind.CRAMER_RAO_COLORED)
     return cramer_rao_covariance(information), StdKind.CRAMER_RAO
 

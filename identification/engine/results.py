@@ -14,7 +14,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from flightid.identification.engine import identifiability as ident
-from flightid.identification.engine.bounds import output_error_covariance, standard_errors
+from flightid.identification.engine.bounds import (
+    HC3_POWER,
+    output_error_covariance,
+    standard_errors,
+)
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.estimate import Estimate
@@ -24,17 +28,19 @@ def estimate_from_fit(
     fit: MaximumLikelihoodFit, *, method: str, model: str, time: np.ndarray,
     measured: np.ndarray, output_names: Sequence[str], fixed: Mapping[str, float],
     unidentifiable: Mapping[str, str], colored: bool, full_noise_covariance: bool,
+    leverage_power: float = HC3_POWER,
 ) -> Estimate:
     """The estimate of a finished fit.
 
     method: the method id; model: the model's name; time (N,) in s; measured (N, ny) the
     outputs z in SI units, named ``output_names``; fixed: the parameters held at their
     values; unidentifiable: {name: reason}; colored: correct the bounds for colored
-    residuals; full_noise_covariance: whether R had off-diagonal terms (reported).
+    residuals; full_noise_covariance: whether R had off-diagonal terms (reported);
+    leverage_power: the colored-residual bounds' power of (1 - H_f) (``bounds``).
     """
     names = fit.names
     cov, std_kind = output_error_covariance(fit.information, fit.sens, fit.residuals,
-                                            fit.noise, colored)
+                                            fit.noise, colored, leverage_power)
     std = standard_errors(cov)
     outputs = {
         name: {"measured": measured[:, j], "model": fit.y[:, j],
