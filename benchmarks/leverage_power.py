@@ -15,8 +15,9 @@ take a large share of the bin).
 
     python benchmarks/leverage_power.py --card twinotter-lateral-0alpha --seed 9100 --n 100
     python benchmarks/leverage_power.py --card navion-demo --seed 9200 --n 100
+    python benchmarks/leverage_power.py --card navion-demo --seed 9200 --n 40 --model lon
 
-Writes benchmarks/results/leverage_power-CARD-SEED.txt. Development seeds only
+Writes benchmarks/results/leverage_power-CARD-SEED[-lon].txt. Development seeds only
 (docs/validation.md, "Choosing the leverage correction").
 """
 
@@ -92,7 +93,7 @@ def realization(study: Study, index: int, powers: list[float]) -> tuple:
     record = standard_reduction(measured, False).record
     fit_results.output_error_covariance = keeping
     try:
-        est = identify(record, "oe", "lat")
+        est = identify(record, "oe", study.model)
     finally:
         fit_results.output_error_covariance = plain
     rows = {r.name: r for r in score(est, record_truth(truth_record)).rows
@@ -109,10 +110,11 @@ def main() -> None:
     parser.add_argument("--card", default="twinotter-lateral-0alpha")
     parser.add_argument("--seed", type=int, default=9100)
     parser.add_argument("--n", type=int, default=100)
+    parser.add_argument("--model", default="lat", help="lat or lon, as for identify")
     parser.add_argument("--powers", default="1,1.25,1.5,1.75,2")
     args = parser.parse_args()
     powers = [float(p) for p in args.powers.split(",")]
-    study = Study(args.card, args.n, seed=args.seed)
+    study = Study(args.card, args.n, model=args.model, seed=args.seed)
     errors, bounds, rhos = [], {p: [] for p in powers}, []
     with threadpool_limits(1):
         for i in range(args.n):
@@ -124,7 +126,7 @@ def main() -> None:
     err = np.array(errors)
     rms_error = np.sqrt(np.mean(err ** 2, axis=0))
     lines = [f"python benchmarks/leverage_power.py --card {args.card} --seed {args.seed} "
-             f"--n {args.n}: output error, lateral model, {len(err)} realizations",
+             f"--n {args.n} --model {args.model}: output error, {len(err)} realizations",
              "rms bound / rms error (share within 1.96 bounds), per power p of (I - H_f)",
              " " * 8 + "".join(f"{f'p = {p:g}':>16}" for p in powers)]
     for j, name in enumerate(names):
@@ -142,7 +144,9 @@ def main() -> None:
     text = "\n".join(lines) + "\n"
     print(text, end="")
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / f"leverage_power-{args.card}-{args.seed}.txt").write_text(text, encoding="utf-8")
+    suffix = "" if args.model == "lat" else f"-{args.model}"
+    (RESULTS / f"leverage_power-{args.card}-{args.seed}{suffix}.txt").write_text(
+        text, encoding="utf-8")
 
 
 if __name__ == "__main__":
