@@ -20,12 +20,34 @@ FOLDER = Path(__file__).resolve().parent
 
 
 def names() -> list[str]:
-    """Names of the aircraft in this folder (those with ``<name>/<name>.xml``)."""
+    """Names of the aircraft in this folder (those with ``<name>/<name>.xml``).
+
+    Returns
+    -------
+    list of str
+        Aircraft names, sorted.
+    """
     return sorted(p.name for p in FOLDER.iterdir() if (p / f"{p.name}.xml").is_file())
 
 
 def path(name: str) -> Path:
-    """Path of ``aircraft/<name>/<name>.xml``; FileNotFoundError listing the names if absent."""
+    """Path of ``aircraft/<name>/<name>.xml``.
+
+    Parameters
+    ----------
+    name : str
+        Aircraft name, e.g. "navion".
+
+    Returns
+    -------
+    pathlib.Path
+        The JSBSim model file.
+
+    Raises
+    ------
+    FileNotFoundError
+        Listing the available names if the file is absent.
+    """
     xml = FOLDER / name / f"{name}.xml"
     if not xml.is_file():
         known = ", ".join(names()) or "none yet"
@@ -34,6 +56,17 @@ def path(name: str) -> Path:
 
 
 def truth_path(name: str) -> Path | None:
-    """Path of ``aircraft/<name>/truth.toml`` if that aircraft has a truth file, else None."""
+    """Path of ``aircraft/<name>/truth.toml`` if that aircraft has a truth file, else None.
+
+    Parameters
+    ----------
+    name : str
+        Aircraft name.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The truth file, or None.
+    """
     toml = FOLDER / name / "truth.toml"
     return toml if toml.is_file() else None

@@ -90,8 +90,8 @@ def calm_reference(trim) -> dict[str, float]:
 
     What the linear lateral model can reach on this JSBSim aircraft at all: it holds V,
     alpha and theta at their means, so it differs from the slopes at trim by 1-2 % on
-    the large derivatives (tests/test_output_error_jsbsim.py). Biases are also given
-    against this reference, which separates turbulence-induced bias from model error.
+    the large derivatives (tests/identification/methods/test_output_error_jsbsim.py). Biases
+    are also given against this reference, which separates turbulence-induced bias from model error.
     """
     return run_one("calm", 0, trim)["oe"]["values"]
 

@@ -28,7 +28,7 @@ from flightid.cli.checks import (
 )
 from flightid.cli.identify import parse_options
 from flightid.cli.progress import count_progress
-from flightid.cli.tables import add_columns
+from flightid.cli.tables import add_columns, split_tables
 from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import Maneuvers
@@ -46,18 +46,20 @@ from flightid.scenarios.montecarlo.intervals import LEVEL
 from flightid.units import DEG
 
 # COST_HEAD shortened to fit 80 columns
-COST_SHORT = ("design", "flight (s)", "input (s)", "energy (rad²s)", "peak (deg)", "n",
+COST_SHORT = ("design", "flight (s)", "input (s)", "E (rad²s)", "peak (deg)", "n",
               "failed")
 SURFACES = tuple(c for c in CONTROLS if c != "throttle")  # the designs move a surface (rad)
 
 
-def _tables(comparison: Comparison) -> list[Table]:
+def _tables(comparison: Comparison, width: int = 80) -> list[Table]:
     """The designs' costs, the scatter and the mean bound by derivative and design (two
-    tables: one of 5 designs fits 80 columns), and the 3211 / doublet scatter ratios with
-    their intervals."""
+    tables, each split by designs where it is wider than ``width`` characters: no cell
+    folded), and the 3211 / doublet scatter ratios with their intervals."""
     costs = add_columns(Table(title=f"designs (equal {comparison.equal}"
                               + (f": the energy of the {comparison.reference})"
-                                 if comparison.equal == "energy" else ")")), COST_SHORT,
+                                 if comparison.equal == "energy" else ")"),
+                              caption="E: input energy (rad² s); n: realizations"),
+                        COST_SHORT,
                         rows=[[f"{v:.4g}" if isinstance(v, float) else str(v) for v in row]
                               for row in costs_rows(comparison)])
     level = f"{100 * LEVEL:.0f} %"
@@ -69,11 +71,11 @@ def _tables(comparison: Comparison) -> list[Table]:
                         f"design's ({level} interval of the ratio below 1)"),
             ("mean_bound", "mean reported bound by design")):
         wide = comparison.table(column)
-        out.append(add_columns(Table(title=title), ["derivative", *kinds], rows=[
+        out += split_tables(title, ["derivative", *kinds], [
             [str(name), *("-" if not math.isfinite(float(wide.loc[name, k])) else
                           f"{float(wide.loc[name, k]):.4g}"
                           + ("*" if column == "scatter" and best.get(str(name)) == k else "")
-                          for k in kinds)] for name in wide.index]))
+                          for k in kinds)] for name in wide.index], width)
     if ratio_rows(comparison):
         out.append(add_columns(
             Table(title=f"scatter 3211 / doublet, {level} interval (paired bootstrap where "
@@ -191,7 +193,7 @@ def design_compare_command(
         print(json.dumps(comparison.as_dict(), indent=2, default=str))
         return
     console = Console()
-    for table in _tables(comparison):
+    for table in _tables(comparison, console.width):
         console.print(table)
     verdict = comparison.as_dict()["3211_beats_doublet"]
     if verdict is not None:

@@ -30,15 +30,16 @@ from flightid.scenarios.montecarlo.design.optimize import (
     envelope_violations,
     optimize,
 )
+from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text
 from flightid.units import DEG
 
 
 def _rows_table(result) -> Table:
-    heads = ("design", "mean bound/|truth|", "energy (rad²s)", "input (s)", "flight (s)",
-             "peak (deg)")
-    return add_columns(Table(title=f"predicted output-error bounds (criterion "
-                                   f"{result.multisine.criterion}; mean over derivatives "
-                                   "with non-zero truth)"), heads, rows=[
+    heads = ("design", "b/|truth|", "E (rad²s)", "input (s)", "flight (s)", "peak (deg)")
+    return add_columns(Table(
+        title=f"predicted output-error bounds (criterion {result.multisine.criterion})",
+        caption="b/|truth|: mean of bound/|truth| over the derivatives with non-zero truth; "
+                "E: input energy; peak: largest deflection"), heads, rows=[
         [r["design"], f"{r['mean_relative_bound']:.4f}", f"{r['energy']:.5f}",
          f"{r['input_time']:.1f}", f"{r['flight_time']:.1f}",
          f"{np.rad2deg(r['peak']):.2f}"] for r in result.rows])
@@ -48,7 +49,28 @@ def _bounds_table(result) -> Table:
     kinds = list(result.predicted)
     return add_columns(Table(title="predicted bound by derivative and design"),
                        ["derivative", *kinds], rows=[
-        [n, *(f"{result.predicted[k][n]:.4g}" for k in kinds)] for n in result.problem.names])
+        [n, *(f"{result.predicted[k][n]:.3g}" for k in kinds)] for n in result.problem.names])
+
+
+def _monte_carlo_table(comparison, names: dict[str, str]) -> Table:
+    """Optimised against each built-in flown (``names``: study name -> built-in): the
+    ratio of the mean bound / |truth| and of the mean scatter / |truth| with their
+    paired-bootstrap intervals, and which design the interval calls smaller."""
+    level = f"{100 * LEVEL:.0f} %"
+    rows = []
+    for study, kind in names.items():
+        b = comparison.mean_relative_bound("optimized", study)
+        s = comparison.mean_relative_scatter("optimized", study)
+        rows.append([kind, f"{b['ratio']:.3f}", interval_text(b["low"], b["high"]),
+                     f"{s['ratio']:.3f}", interval_text(s["low"], s["high"]),
+                     {"optimized": "optimised", study: kind}.get(s["winner"], "not clear"),
+                     str(s["realizations"])])
+    return add_columns(Table(
+        title=f"Monte Carlo: optimised / built-in, {level} paired intervals",
+        caption="b, s: mean over the derivatives with non-zero truth of mean bound/|truth|, "
+                "of scatter/|truth|; n: realizations both estimated"),
+        ["built-in", "b ratio", "interval", "s ratio", "interval", "smaller s", "n"],
+        rows=rows)
 
 
 def design_optimize_command(
@@ -64,6 +86,12 @@ def design_optimize_command(
         help="harmonics in F_MIN F_MAX (Hz)")] = (0.1, 2.0),
     reference: Annotated[str, typer.Option(
         help="built-in design whose energy and input time the multisine gets")] = "3211",
+    equal_duration: Annotated[bool, typer.Option(
+        "--equal-duration", help="every built-in stretched or compressed to the "
+                                 "reference's input time too")] = False,
+    against: Annotated[list[str] | None, typer.Option(
+        help="built-in designs flown in the Monte Carlo (repeatable; default every one; "
+             "the reference always)")] = None,
     amplitude_deg: Annotated[float, typer.Option(
         help="peak amplitude (deg) of the reference on each surface")] = 4.0,
     max_amplitude_deg: Annotated[float, typer.Option(
@@ -93,6 +121,9 @@ def design_optimize_command(
     check_choice("--format", format, ("table", "json"))
     check_choice("--criterion", criterion, CRITERIA)
     check_choice("--reference", reference, DESIGNS)
+    for kind in against or ():
+        check_choice("--against", kind, DESIGNS)
+    check_unique("--against", tuple(against or ()))
     check_number("--amplitude-deg", amplitude_deg, low=0.0, low_open=True, high=30.0,
                  unit="deg")
     check_number("--band F_MIN", band[0], low=0.0, low_open=True, unit="Hz")
@@ -109,7 +140,8 @@ def design_optimize_command(
         outputs.append(Output("--study", study, folder=True))
     check_paths({"--card": card}, outputs)
     settings = DesignSettings(amplitude=amplitude_deg * DEG)
-    result = optimize(card, model, surfaces, criterion, tuple(band), reference, settings)
+    result = optimize(card, model, surfaces, criterion, tuple(band), reference, settings,
+                      equal_duration=equal_duration)
     excursions = envelope_excursions(card, result.designs["optimized"])
     violations = envelope_violations(excursions, Envelope(
         max_bank_deg * DEG, max_alpha_deg * DEG, max_speed_change))
@@ -125,21 +157,29 @@ def design_optimize_command(
     with open(output, "w", encoding="utf-8") as fh:
         fh.write(result.maneuver_table())
     comparison = None
+    flown = {f"{k}-{'-'.join(surfaces)}": k for k in DESIGNS
+             if k == reference or k in (against or DESIGNS)}
     if n:
         with count_progress("design-optimize", show=not quiet) as update:
             progress = ((lambda kind, done, total: update(done, total, f"monte carlo {kind}"))
                         if update else None)
+            own = {name: result.designs[k] for name, k in flown.items()}
             comparison, _, _ = design_compare(
                 study, card=card, n=n, method="oe", model=model, designs=(),
-                equal="energy", reference=reference + "-ref", settings=settings,
-                workers=workers, seed=seed,
-                own={reference + "-ref": result.designs[reference],
-                     "optimized": result.designs["optimized"]}, progress=progress)
+                equal="energy", reference=f"{reference}-{'-'.join(surfaces)}",
+                settings=settings, workers=workers, seed=seed,
+                own={**own, "optimized": result.designs["optimized"]}, progress=progress)
     if format == "json":
         print(json.dumps({"rows": result.rows, "predicted": result.predicted,
                           "gain": result.gain(), "best_builtin": result.best_builtin(),
                           "envelope": excursions, "output": output,
-                          "comparison": comparison.as_dict() if comparison else None},
+                          "comparison": comparison.as_dict() if comparison else None,
+                          "monte_carlo": {k: {
+                              "mean_relative_bound": comparison.mean_relative_bound(
+                                  "optimized", name),
+                              "mean_relative_scatter": comparison.mean_relative_scatter(
+                                  "optimized", name)} for name, k in flown.items()}
+                          if comparison else None},
                          indent=2, default=str))
         return
     console = Console()
@@ -151,13 +191,6 @@ def design_optimize_command(
                   f"{np.rad2deg(excursions['alpha']):.1f} deg, airspeed "
                   f"{100 * excursions['speed']:.1f} %")
     if comparison is not None:
-        r = comparison.scatter_ratios("optimized", reference + "-ref")
-        m = comparison.mean_relative_scatter("optimized", reference + "-ref")
-        console.print(f"Monte Carlo: optimised scatter smaller than the {reference} for "
-                      f"{int((r['winner'] == 'optimized').sum())} of {len(r)} derivatives "
-                      f"estimated by both, larger for "
-                      f"{int((r['winner'] == reference + '-ref').sum())} (90 % interval of "
-                      f"the ratio); mean scatter/|truth| optimised / {reference} "
-                      f"{m['ratio']:.3f} (90 % interval {m['low']:.3f}-{m['high']:.3f}, "
-                      f"{m['realizations']} realizations); study in {study}")
+        console.print(_monte_carlo_table(comparison, flown))
+        console.print(f"study in {study}")
     typer.echo(f"wrote {output}")

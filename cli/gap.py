@@ -17,7 +17,7 @@ from flightid.cli import study_options as opts
 from flightid.cli.checks import Output, check_choice, check_paths, read_record
 from flightid.files import json_safe
 from flightid.identification.gap import write_aircraft
-from flightid.identification.gap.diagnose import GapResult, injected
+from flightid.identification.gap.diagnosis import GapResult, injected
 from flightid.identification.gap.envelope import (
     conditions,
     envelope,
@@ -26,7 +26,7 @@ from flightid.identification.gap.envelope import (
 from flightid.identification.gap.jsbsim.refly import refly
 from flightid.identification.gap.jsbsim.symmetry import even_terms
 from flightid.identification.gap.report import write_report
-from flightid.identification.gap.shrink import shrink_text
+from flightid.identification.gap.sequence import shrink_text
 from flightid.identification.gap.verdict import ChannelTest, p_text
 
 

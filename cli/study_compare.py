@@ -15,7 +15,7 @@ from rich.table import Table
 from flightid.cli import study_options as opts
 from flightid.cli.checks import check_choice
 from flightid.cli.tables import add_columns
-from flightid.scenarios.montecarlo.intervals import LEVEL
+from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text
 from flightid.scenarios.montecarlo.study_compare import against_first, compare_studies
 
 
@@ -57,7 +57,7 @@ def study_compare_command(
         console.print(add_columns(
             Table(title=f"scatter {short[i]} / A ({k} / {kinds[0]}), {level} interval"),
             ["derivative", "ratio", "interval", "kind", "smaller"], rows=[
-                [str(n), f"{row['ratio']:.3g}", f"{row['low']:.3g} - {row['high']:.3g}",
+                [str(n), f"{row['ratio']:.3g}", interval_text(row['low'], row['high']),
                  row["interval"], {k: short[i], kinds[0]: "A"}.get(row["winner"],
                                                                     "not clear")]
                 for n, row in r.iterrows()]))

@@ -66,3 +66,34 @@ def print_score(scored: Score, console: Console | None = None) -> None:
     """The score table, then its one-line verdict."""
     console = console or Console()
     console.print(score_table(scored))
+
+
+def split_tables(title: str, heads: Sequence[str], rows: Sequence[Sequence[str]],
+                 width: int, keep: int = 1) -> list[Table]:
+    """``rows`` under ``heads`` as one table, or, when it is wider than ``width``
+    (characters), as the fewest tables that fit, each repeating the first ``keep``
+    columns and taking an even share of the others, so that no cell is folded and no
+    header broken (a comparison of many designs at 80 columns). The later tables are
+    titled ``(continued)``."""
+    def need(i: int) -> int:  # a column's width: its widest cell, padding and a border
+        return max(len(str(c)) for c in [heads[i], *(r[i] for r in rows)]) + 3
+
+    base = 1 + sum(need(i) for i in range(keep))
+    rest = list(range(keep, len(heads)))
+
+    def fits(chunk: list[int]) -> bool:
+        return base + sum(need(i) for i in chunk) <= width
+
+    chunks = [rest]
+    for parts in range(2, len(rest) + 1):
+        if all(fits(c) for c in chunks):
+            break
+        size = -(-len(rest) // parts)
+        chunks = [rest[k:k + size] for k in range(0, len(rest), size)]
+    out = []
+    for k, chunk in enumerate(chunks):
+        cols = [*range(keep), *chunk]
+        out.append(add_columns(Table(title=title if k == 0 else "(continued)"),
+                               [heads[i] for i in cols], left=keep,
+                               rows=[[r[i] for i in cols] for r in rows]))
+    return out

@@ -28,7 +28,7 @@ from flightid.scenarios.gym.registration import register_envs
 __version__ = "0.1.0"
 
 # the public API, listed once: the same names in flightid.api's docstring and __all__ and
-# in docs/architecture.md (tests/test_public_api.py checks all three)
+# in docs/architecture.md (tests/flightid/test_public_api.py checks all three)
 __all__ = ["EXCITATION_ENV", "Estimate", "Flight", "FlightRecord", "Score", "__version__",
            "design_compare", "fly", "gap", "gap_benchmark", "identify", "methods",
            "montecarlo", "read", "score", "truth"]

@@ -100,10 +100,28 @@ CONTROLS: tuple[str, ...] = ("de", "da", "dr", "throttle")
 # the surfaces of each axis: elevator; aileron and rudder
 LONGITUDINAL_INPUTS: tuple[str, ...] = ("de",)
 LATERAL_INPUTS: tuple[str, ...] = ("da", "dr")
+# the control surfaces: elevator, aileron, rudder
+CONTROL_SURFACES: tuple[str, ...] = (*LONGITUDINAL_INPUTS, *LATERAL_INPUTS)
 
 
 def unit_of(name: str) -> str:
-    """SI unit of a canonical channel; raises KeyError naming the channel if unknown."""
+    """SI unit of a canonical channel.
+
+    Parameters
+    ----------
+    name : str
+        Canonical channel name.
+
+    Returns
+    -------
+    str
+        The channel's SI unit.
+
+    Raises
+    ------
+    KeyError
+        Naming the channel if it is not canonical.
+    """
     try:
         return CHANNELS[name].unit
     except KeyError:

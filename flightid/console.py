@@ -13,8 +13,15 @@ from collections.abc import Iterator
 
 @contextlib.contextmanager
 def captured_output() -> Iterator[list[str]]:
-    """Capture everything written to file descriptors 1 and 2 (Python's and compiled
-    code's) inside the block; the list yielded holds the captured lines after it."""
+    """Capture everything written to file descriptors 1 and 2 inside the block.
+
+    Captures both Python's and compiled code's output.
+
+    Yields
+    ------
+    list of str
+        Empty inside the block; after it, the captured non-blank lines, stripped.
+    """
     lines: list[str] = []
     sys.stdout.flush()
     sys.stderr.flush()

@@ -27,7 +27,25 @@ _NAME = re.compile(r"^C([XYZLDlmn])_(0|alpha|beta|p|q|r|alphadot|de|da|dr|dt)$")
 
 
 def name(coef: str, var: str) -> str:
-    """Canonical name of d(C<coef>)/d(var), e.g. name('m', 'alpha') == 'Cm_alpha'."""
+    """Canonical name of d(C<coef>)/d(var), e.g. name('m', 'alpha') == 'Cm_alpha'.
+
+    Parameters
+    ----------
+    coef : str
+        Coefficient letter, one of ``COEFFICIENTS``.
+    var : str
+        Variable, one of ``VARIABLES``.
+
+    Returns
+    -------
+    str
+        The derivative name ``C<coef>_<var>``.
+
+    Raises
+    ------
+    ValueError
+        If ``coef`` or ``var`` is unknown.
+    """
     if coef not in COEFFICIENTS:
         raise ValueError(f"unknown coefficient {coef!r}; expected one of {COEFFICIENTS}")
     if var not in VARIABLES:
@@ -36,7 +54,23 @@ def name(coef: str, var: str) -> str:
 
 
 def split(derivative: str) -> tuple[str, str]:
-    """(coef, var) of a canonical derivative name; ValueError naming it if malformed."""
+    """(coef, var) of a canonical derivative name.
+
+    Parameters
+    ----------
+    derivative : str
+        A canonical derivative name, ``C<coef>_<var>``.
+
+    Returns
+    -------
+    tuple of str
+        (coefficient letter, variable).
+
+    Raises
+    ------
+    ValueError
+        Naming ``derivative`` if it is malformed.
+    """
     m = _NAME.match(derivative)
     if not m:
         raise ValueError(
@@ -47,7 +81,18 @@ def split(derivative: str) -> tuple[str, str]:
 
 
 def is_derivative(text: str) -> bool:
-    """True when ``text`` is a canonical derivative name."""
+    """True when ``text`` is a canonical derivative name.
+
+    Parameters
+    ----------
+    text : str
+        Candidate name.
+
+    Returns
+    -------
+    bool
+        Whether ``text`` matches ``C<coef>_<var>``.
+    """
     return bool(_NAME.match(text))
 
 
@@ -58,7 +103,18 @@ _UNITS = {"alpha": "1/rad", "beta": "1/rad", "de": "1/rad", "da": "1/rad", "dr":
 
 
 def unit(derivative: str) -> str:
-    """The unit of a canonical derivative ("1/rad" or "1", dimensionless); "" for a name
-    that is not canonical (a method's own parameter)."""
+    """The unit of a canonical derivative.
+
+    Parameters
+    ----------
+    derivative : str
+        Derivative name.
+
+    Returns
+    -------
+    str
+        "1/rad" or "1" (dimensionless); "" for a name that is not canonical (a method's own
+        parameter).
+    """
     m = _NAME.match(derivative)
     return _UNITS[m.group(2)] if m else ""

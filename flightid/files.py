@@ -62,9 +62,27 @@ def _create_temporary(path: Path) -> Path:
 
 @contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; write the file there. On a normal exit the
-    temporary file replaces ``path`` (keeping the mode of a file already there); on an
-    exception it is removed and ``path`` is left as it was."""
+    """Yield a temporary path beside ``path``; write the file there.
+
+    On a normal exit the temporary file replaces ``path`` (keeping the mode of a file already
+    there); on an exception it is removed and ``path`` is left as it was. A symbolic link is
+    written through, not replaced.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write to.
+
+    Raises
+    ------
+    OSError
+        ``cannot write <path>: <reason>`` when the file cannot be created or replaced.
+    """
     path = Path(path)
     if path.is_symlink():  # write through the link, do not replace the link by a file
         path = Path(os.path.realpath(path))
@@ -93,22 +111,61 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
 
 
 def atomic_write(path: str | Path, write: Callable[[Path], Any]) -> Path:
-    """Call ``write(temporary_path)`` and move the result onto ``path`` atomically;
-    returns ``path``."""
+    """Call ``write(temporary_path)`` and move the result onto ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    write : callable
+        Writes the file at the temporary path it is given.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_path(path) as tmp:
         write(tmp)
     return Path(path)
 
 
 def write_text(path: str | Path, text: str, encoding: str = "utf-8") -> Path:
-    """``Path.write_text``, atomically."""
+    """``Path.write_text``, atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    text : str
+        Its content.
+    encoding : str, optional
+        Text encoding. Default "utf-8".
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     return atomic_write(path, lambda tmp: tmp.write_text(text, encoding=encoding))
 
 
 def check_writable(path: str | Path) -> None:
-    """Raise the OSError :func:`atomic_path` would raise for ``path`` (``cannot write
-    <path>: <reason>``), without writing it: a temporary file is created beside it and
-    removed. Lets a command refuse an unwritable output before its work starts."""
+    """Raise the OSError :func:`atomic_path` would raise for ``path``, without writing it.
+
+    A temporary file is created beside it and removed. Lets a command refuse an unwritable
+    output before its work starts.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The output file to check.
+
+    Raises
+    ------
+    OSError
+        ``cannot write <path>: <reason>``.
+    """
     path = Path(path)
     if path.is_symlink():
         path = Path(os.path.realpath(path))
@@ -133,7 +190,18 @@ _MAVLINK_V1, _MAVLINK_V2 = 0xFE, 0xFD
 
 
 def suffix_kind(path: str | os.PathLike[str]) -> str | None:
-    """The kind of file a path's suffix stands for (``SUFFIX_KINDS``), or None."""
+    """The kind of file a path's suffix stands for (``SUFFIX_KINDS``), or None.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file's path; the suffix is compared in lower case.
+
+    Returns
+    -------
+    str or None
+        The kind, or None for an unknown suffix.
+    """
     return SUFFIX_KINDS.get(Path(path).suffix.lower())
 
 
@@ -151,11 +219,21 @@ def _tlog_frame_length(data: bytes, at: int) -> int | None:
 
 
 def content_kind(path: str | os.PathLike[str]) -> str | None:
-    """What a file holds, judged by its first bytes: ``parquet``, ``png``, ``pdf``,
-    ``mat`` (MATLAB), ``tlog`` (8-byte time stamps, each followed by a MAVLink frame),
-    ``html``, ``svg``, ``xml``, ``json``, ``csv`` (a flightid CSV record or a text table
-    with a comma in its first line), ``empty``; None when it cannot be told (or the path is
-    not a readable file)."""
+    """What a file holds, judged by its first bytes (at most 4096).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to inspect.
+
+    Returns
+    -------
+    str or None
+        ``parquet``, ``png``, ``pdf``, ``mat`` (MATLAB), ``tlog`` (8-byte time stamps, each
+        followed by a MAVLink frame), ``html``, ``svg``, ``xml``, ``json``, ``csv`` (a flightid
+        CSV record or a text table with a comma in its first line), ``empty``; None when it
+        cannot be told (or the path is not a readable file).
+    """
     try:
         with open(path, "rb") as fh:
             data = fh.read(4096)
@@ -193,9 +271,29 @@ def content_kind(path: str | os.PathLike[str]) -> str | None:
 
 
 def read_toml(path: str | Path, what: str, kind: str = "TOML file") -> dict[str, Any]:
-    """The tables of the TOML file ``path``; FileNotFoundError "no such ``what``" when it
-    is missing, ValueError naming the file when it is not readable TOML (the message says
-    ``kind``)."""
+    """The tables of the TOML file ``path``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML file.
+    what : str
+        What the file is, for the missing-file message ("no such ``what``").
+    kind : str, optional
+        What the file should be, for the unreadable-file message. Default "TOML file".
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    ValueError
+        Naming the file when it is not readable TOML.
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such {what}")

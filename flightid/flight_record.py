@@ -195,13 +195,37 @@ class FlightRecord:
 
 
 def block_crcs(values: np.ndarray, block: int = CRC_BLOCK) -> list[int]:
-    """CRC-32 of the float64 bytes of each block of ``block`` samples."""
+    """CRC-32 of the float64 bytes of each block of ``block`` samples.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Samples of one column; written as little-endian float64.
+    block : int, optional
+        Samples per block. Default ``CRC_BLOCK``.
+
+    Returns
+    -------
+    list of int
+        One CRC-32 per block (one for an empty column).
+    """
     data = np.ascontiguousarray(values, dtype="<f8")
     return [zlib.crc32(data[i:i + block].tobytes()) for i in range(0, max(data.size, 1), block)]
 
 
 def rows_text(bad: np.ndarray) -> str:
-    """'rows 12-15' (first run of True in ``bad``, 0-based data rows) and how many more."""
+    """Text naming the first run of True in ``bad`` and how many more rows follow.
+
+    Parameters
+    ----------
+    bad : numpy.ndarray
+        Boolean mask over the data rows (0-based); at least one True.
+
+    Returns
+    -------
+    str
+        E.g. 'rows 12-15 (and 3 more row(s))'.
+    """
     idx = np.flatnonzero(bad)
     first = int(idx[0])
     last = first
@@ -213,8 +237,25 @@ def rows_text(bad: np.ndarray) -> str:
 
 
 def check_samples(source: str, time: np.ndarray, channels: dict[str, np.ndarray]) -> None:
-    """Refuse a damaged record: a time or channel value that is not finite, or time that
-    does not increase, named by the column and its row range (``source`` names the file)."""
+    """Refuse a damaged record.
+
+    A time or channel value that is not finite, or time that does not increase, is named by
+    the column and its row range.
+
+    Parameters
+    ----------
+    source : str
+        Names the file in the message.
+    time : numpy.ndarray
+        Sample times, s; shape (n,).
+    channels : dict of str to numpy.ndarray
+        Channel values by name, each shape (n,).
+
+    Raises
+    ------
+    ValueError
+        Naming the file, column and rows.
+    """
     for name, values in (("time", time), *channels.items()):
         bad = ~np.isfinite(values)
         if bad.any():
@@ -254,11 +295,32 @@ def _check_crc(path: Path, raw: bytes | None, frame: pd.DataFrame) -> None:
 
 
 def read_parquet(path: str | Path) -> FlightRecord:
-    """Read a record written as .parquet (metadata from the schema's ``flightid`` key; a
-    Parquet file from elsewhere gets only its path as provenance). A file that is not
-    Parquet, is truncated or damaged raises ValueError naming it (and, where the damage
-    decodes, the column and rows: the block checksums written by
-    :meth:`FlightRecord.write`)."""
+    """Read a record written as .parquet.
+
+    Metadata comes from the schema's ``flightid`` key; a Parquet file from elsewhere gets only
+    its path as provenance.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .parquet file.
+
+    Returns
+    -------
+    FlightRecord
+        The record.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    IsADirectoryError
+        When the path is a folder.
+    ValueError
+        Naming the file when it is not Parquet, is truncated or damaged (and, where the damage
+        decodes, the column and rows: the block checksums written by
+        :meth:`FlightRecord.write`).
+    """
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
@@ -308,8 +370,30 @@ def _meta(path: Path, text: str) -> RecordMeta:
 
 
 def read_csv(path: str | Path) -> FlightRecord:
-    """Read a record written as .csv (metadata on the first, marked line; a CSV file from
-    elsewhere gets only its path as provenance)."""
+    """Read a record written as .csv.
+
+    Metadata is read from the first, marked line; a CSV file from elsewhere gets only its path
+    as provenance.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .csv file.
+
+    Returns
+    -------
+    FlightRecord
+        The record.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    IsADirectoryError
+        When the path is a folder.
+    ValueError
+        Naming the file when it is not UTF-8 text or not a readable CSV record.
+    """
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")

@@ -123,7 +123,25 @@ AIRCRAFT_NAMES = {"twin otter": "NASA Twin Otter (DHC-6)"}
 
 
 def read_mat(path: str | Path) -> FlightRecord:
-    """Read a SIDPAC .mat flight-data file into a FlightRecord in SI units (m, s, rad, N, kg)."""
+    """Read a SIDPAC .mat flight-data file into a FlightRecord in SI units (m, s, rad, N, kg).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .mat file with ``fdata`` and ``t`` (and optionally ``fds``).
+
+    Returns
+    -------
+    FlightRecord
+        The flight, SI channels.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    ValueError
+        Naming the file when it is not a readable SIDPAC flight-data file.
+    """
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")

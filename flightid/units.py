@@ -48,8 +48,21 @@ UNIT_NAMES: dict[str, tuple[tuple[str, float], ...]] = {
 
 
 def unit_key(text: str) -> str:
-    """A unit name as :data:`UNIT_NAMES` spells it: lower case, without spaces, brackets
-    or a dot for a product ('[M/S2]' -> 'm/s^2', 'slug ft2' -> 'slug*ft^2')."""
+    """A unit name as :data:`UNIT_NAMES` spells it.
+
+    Lower case, without spaces, brackets or a dot for a product ('[M/S2]' -> 'm/s^2',
+    'slug ft2' -> 'slug*ft^2').
+
+    Parameters
+    ----------
+    text : str
+        Unit name as written.
+
+    Returns
+    -------
+    str
+        The normalized key.
+    """
     key = text.strip().strip("[]()").strip().lower().replace("²", "^2").replace("³", "^3")
     key = key.replace("**", "^").replace("·", "*").replace(".", "*")
     key = "*".join(key.split())
@@ -61,10 +74,28 @@ def unit_key(text: str) -> str:
 
 
 def to_si(text: str, si_unit: str | None = None) -> tuple[str, float]:
-    """(SI unit, factor) of a unit name ('DEG' -> ('rad', pi/180)); ``si_unit``, the unit
-    of the quantity it is given for, decides between force and mass ('lb') and is
-    checked: a unit of another quantity raises ValueError naming both. An unknown unit
-    raises KeyError naming the known ones."""
+    """(SI unit, factor) of a unit name ('DEG' -> ('rad', pi/180)).
+
+    Parameters
+    ----------
+    text : str
+        Unit name as written.
+    si_unit : str, optional
+        The unit of the quantity it is given for; decides between force and mass ('lb') and
+        is checked.
+
+    Returns
+    -------
+    tuple of (str, float)
+        SI unit and the factor that converts a value to it.
+
+    Raises
+    ------
+    ValueError
+        Naming both units when ``text`` is a unit of another quantity than ``si_unit``.
+    KeyError
+        Naming the known units when ``text`` is unknown.
+    """
     key = unit_key(text)
     if key not in UNIT_NAMES:
         raise KeyError(f"unknown unit {text!r}; known units: "

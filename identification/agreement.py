@@ -106,8 +106,22 @@ def _derivatives(est: Estimate) -> dict[str, tuple[float, float]]:
 
 
 def compare(estimates: Sequence[Estimate]) -> Agreement:
-    """Compare every pair of ``estimates`` (one per method, the same record and window) on
-    the derivatives both estimate; the reasons for any disagreement (module note)."""
+    """Compare every pair of ``estimates`` on the derivatives both estimate.
+
+    The estimates are one per method, for the same record and window; the reasons for any
+    disagreement follow the module note.
+
+    Parameters
+    ----------
+    estimates : sequence of Estimate
+        One estimate per method.
+
+    Returns
+    -------
+    Agreement
+        Each pair's comparison per shared derivative (difference in combined standard errors)
+        and, when any disagree, the reasons.
+    """
     result = Agreement()
     for a, b in combinations(estimates, 2):
         da, db = _derivatives(a), _derivatives(b)

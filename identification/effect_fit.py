@@ -97,14 +97,36 @@ class EffectFit:
 
 
 def default_outputs(effect: AugmentEffect) -> tuple[str, ...]:
-    """The outputs compared: lateral for an aileron or rudder effect, else longitudinal."""
+    """The outputs compared: lateral for an aileron or rudder effect, else longitudinal.
+
+    Parameters
+    ----------
+    effect : AugmentEffect
+        The catalogue effect; its ``surface`` option (default "de") decides the axis.
+
+    Returns
+    -------
+    tuple of str
+        The record channels compared (``LATERAL`` or ``LONGITUDINAL``).
+    """
     surface = effect.options().get("surface", "de")
     return LATERAL if surface in LATERAL_INPUTS else LONGITUDINAL
 
 
 def parameter_scale(p: Parameter) -> float:
     """The size of a parameter's effect: |default - neutral|, or |default| for an
-    infinite neutral value (a rate limit) or a shape parameter."""
+    infinite neutral value (a rate limit) or a shape parameter.
+
+    Parameters
+    ----------
+    p : Parameter
+        A catalogue parameter.
+
+    Returns
+    -------
+    float
+        The scale, in the parameter's unit; 1.0 when that size is zero.
+    """
     if p.neutral is None or math.isinf(p.neutral):
         return abs(p.default) or 1.0
     return abs(p.default - p.neutral) or 1.0
@@ -212,9 +234,20 @@ def _offset_parameter(control: str) -> Parameter:
 
 
 def commanded_from_record(record: FlightRecord) -> dict[str, np.ndarray]:
-    """The measured surfaces' and throttle's increments on their first sample (rad, fraction).
+    """The measured surfaces' and throttle's increments on their first sample.
 
     A stand-in for the commanded inputs when they are not known (see the module note).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Per control the record holds, its increment per sample (rad; throttle as a fraction);
+        shape (n,).
     """
     return {c: record[c] - record[c][0] for c in CONTROLS if c in record}
 
@@ -231,26 +264,66 @@ def fit_effect(record: FlightRecord, aircraft: str, effect: AugmentEffect,
                base: Sequence[AugmentEffect] = ()) -> EffectFit:
     """Fit ``effect``'s ``free`` parameters (default: all that size it) to ``record``.
 
-    ``aircraft``: the model the effect is added to (a name or an XML path); ``effect``: the
-    catalogue effect, its options (surface, derivative) fixed and its other parameters
-    held at their values; ``start``: the first values (default: the effect's own);
-    ``controls``: commanded increments at the record's times (default
-    ``commanded_from_record``); ``outputs``: the record channels compared (default
-    ``default_outputs``); ``colored``: bounds corrected for colored residuals (M&K eq. 6.54).
-    ``surfaces``: "commanded" (``controls`` pass the aircraft's actuator) or "driven" (they
-    are surface positions written past it: right for a record's measured surfaces, which
-    have passed the real actuator). ``flight_rate_hz``: fly at the smallest whole multiple
-    of the record rate at least this fast, the inputs interpolated linearly between the
-    record's samples (a held 20 Hz surface lags its record by half a sample).
-    ``offsets``: controls whose constant offset from the model's trim is fitted with the
-    effect (nuisance parameters ``offset_<control>`` in ``values`` and ``std``): a
-    record's trim surface is known only to its noise and quantization, and a constant
-    surface error of 0.005 deg drifts the speed of a 30 s record enough to bias the fit.
-    ``condition``: (altitude m, airspeed m/s) to trim at, instead of the record metadata's.
-    ``initial``: the flight's start state from the trim (e.g. a window's measured sideslip,
-    bank and rates, ``gap.jsbsim.refly.start_state``; default: the trim itself). ``base``: effects
-    written into the aircraft with ``effect`` and held as they are (other named
-    corrections, an even term removed).
+    The effect is written into the aircraft and flown in JSBSim; the parameters are fitted by
+    output-error maximum likelihood.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    aircraft : str
+        The model the effect is added to (a name or an XML path).
+    effect : AugmentEffect
+        The catalogue effect, its options (surface, derivative) fixed and its other
+        parameters held at their values.
+    free : sequence of str, optional
+        The parameters fitted. Default: all that size the effect.
+    controls : mapping of str to numpy.ndarray, optional
+        Commanded increments at the record's times (rad; throttle a fraction), shape (n,).
+        Default ``commanded_from_record``.
+    outputs : sequence of str, optional
+        The record channels compared. Default ``default_outputs``.
+    start : mapping of str to float, optional
+        The first values. Default: the effect's own.
+    max_iterations : int, optional
+        Iterations of the maximum-likelihood fit. Default 12.
+    colored : bool, optional
+        Bounds corrected for colored residuals (M&K eq. 6.54). Default False.
+    cache : str or Path, optional
+        Folder for the written aircraft. Default the module's cache folder.
+    surfaces : str, optional
+        "commanded" (``controls`` pass the aircraft's actuator) or "driven" (they are surface
+        positions written past it: right for a record's measured surfaces, which have passed
+        the real actuator). Default "commanded".
+    flight_rate_hz : float, optional
+        Fly at the smallest whole multiple of the record rate at least this fast, Hz, the
+        inputs interpolated linearly between the record's samples (a held 20 Hz surface lags
+        its record by half a sample). Default 0 (the record rate).
+    offsets : sequence of str, optional
+        Controls whose constant offset from the model's trim is fitted with the effect
+        (nuisance parameters ``offset_<control>`` in ``values`` and ``std``): a record's trim
+        surface is known only to its noise and quantization, and a constant surface error of
+        0.005 deg drifts the speed of a 30 s record enough to bias the fit.
+    condition : tuple of float, optional
+        (altitude m, airspeed m/s) to trim at, instead of the record metadata's.
+    initial : callable, optional
+        Maps the trim to the flight's start state (e.g. a window's measured sideslip, bank and
+        rates, ``gap.jsbsim.refly.start_state``). Default: the trim itself.
+    base : sequence of AugmentEffect, optional
+        Effects written into the aircraft with ``effect`` and held as they are (other named
+        corrections, an even term removed).
+
+    Returns
+    -------
+    EffectFit
+        The fitted values and standard errors (catalogue units, SI), the costs with and
+        without the effect, the flights taken and the parameters at a range limit.
+
+    Raises
+    ------
+    ValueError
+        When ``effect`` is not a catalogue augment effect, a free parameter, output channel or
+        offset control is unknown, or a control's shape differs from the record's.
     """
     if not isinstance(effect, AugmentEffect):
         raise ValueError(f"{METHOD}: {type(effect).__name__} is not an airframe or actuator "

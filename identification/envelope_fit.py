@@ -81,11 +81,26 @@ def fit_correction(name: str, x: np.ndarray, estimate: np.ndarray, std: np.ndarr
 
     Parameters
     ----------
-    x : the points' condition (the campaign's x: m/s, rad, ...).
-    estimate, std : the flight estimates and their standard errors (the derivative's unit).
-    model : the model's values at the same conditions.
-    trend : allow the ``shift+slope`` form (False where x cannot carry a table).
-    level : the chi^2 quantile for rejecting the model and accepting a form.
+    name : str
+        The derivative.
+    x : numpy.ndarray
+        The points' condition (the campaign's x: m/s, rad, ...); shape (n,).
+    estimate : numpy.ndarray
+        The flight estimates, the derivative's unit; shape (n,).
+    std : numpy.ndarray
+        Their standard errors, same unit; shape (n,).
+    model : numpy.ndarray
+        The model's values at the same conditions; shape (n,).
+    trend : bool, optional
+        Allow the ``shift+slope`` form (False where x cannot carry a table). Default True.
+    level : float, optional
+        The chi^2 quantile for rejecting the model and accepting a form. Default ``LEVEL``.
+
+    Returns
+    -------
+    Correction
+        The accepted form with the least AIC, or form "none" with the reason the model is
+        kept.
     """
     x, y, s, m = (np.asarray(a, dtype=float) for a in (x, estimate, std, model))
     ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(s) & (s > 0) & np.isfinite(m)
@@ -124,6 +139,17 @@ def fit_correction(name: str, x: np.ndarray, estimate: np.ndarray, std: np.ndarr
 
 
 def aic(correction: Correction) -> float:
-    """chi^2 + 2k of a correction (k its parameters; 0 for the model kept)."""
+    """chi^2 + 2k of a correction (k its parameters; 0 for the model kept).
+
+    Parameters
+    ----------
+    correction : Correction
+        A fitted correction.
+
+    Returns
+    -------
+    float
+        Akaike's criterion, 1; inf when its chi^2 is not finite.
+    """
     k = {"none": 0, "shift": 1, "scale": 1, "shift+slope": 2}[correction.form]
     return correction.chi2 + 2 * k if math.isfinite(correction.chi2) else math.inf

@@ -122,8 +122,28 @@ def _jsonable(value: Any) -> Any:
 
 def merge(method: str, parts: Sequence[Estimate]) -> Estimate:
     """One Estimate from independent per-coefficient fits (equation error, stepwise,
-    frequency-domain equation error): names concatenated, covariance block diagonal,
-    each part's fit statistics under ``fit['coefficients'][<coefficient>]``."""
+    frequency-domain equation error).
+
+    Names are concatenated, the covariance is block diagonal, and each part's fit statistics
+    go under ``fit['coefficients'][<coefficient>]``.
+
+    Parameters
+    ----------
+    method : str
+        The method name of the merged estimate.
+    parts : sequence of Estimate
+        The per-coefficient estimates; their parameter names must not overlap.
+
+    Returns
+    -------
+    Estimate
+        The merged estimate.
+
+    Raises
+    ------
+    ValueError
+        When ``parts`` is empty or two parts share a parameter.
+    """
     if not parts:
         raise ValueError("no estimate to merge")
     names = [n for p in parts for n in p.names]

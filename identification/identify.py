@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from flightid.channels import CONTROL_SURFACES, LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.identification import nuisance
 from flightid.identification.data import time_base, windows
 from flightid.identification.data.axes import excited_axes
@@ -26,15 +27,26 @@ from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 WINDOWS = ("auto", "none")
-CONTROLS = ("de", "da", "dr")
+CONTROLS = CONTROL_SURFACES
 # the surfaces whose maneuvers a model is fitted to
-_MODEL_INPUTS = {"lateral": ("da", "dr"), "short_period": ("de",),
-                 "longitudinal": ("de", "throttle")}
+_MODEL_INPUTS = {"lateral": LATERAL_INPUTS, "short_period": LONGITUDINAL_INPUTS,
+                 "longitudinal": (*LONGITUDINAL_INPUTS, "throttle")}
 
 
 def model_inputs(model: str) -> tuple[str, ...]:
-    """The control inputs of a model preset, or of a structure's variables; () for models
-    of all axes (6dof, all)."""
+    """The control inputs of a model preset, or of a structure's variables.
+
+    Parameters
+    ----------
+    model : str
+        A model preset name or a structure (``"CZ = alpha + de"``).
+
+    Returns
+    -------
+    tuple of str
+        The controls (de, da, dr, throttle) the model takes; () for models of all axes
+        (6dof, all).
+    """
     name = model_structure.canonical(model)
     if name in _MODEL_INPUTS:
         return _MODEL_INPUTS[name]
@@ -45,11 +57,25 @@ def model_inputs(model: str) -> tuple[str, ...]:
 
 
 def excited_model(record: FlightRecord, method: str = "oe") -> str:
-    """The model preset for the axis ``record`` excites: ``short_period`` when the record
-    excites the longitudinal axis only (``data.axes.excited_axes``; an unlisted record's
-    elevator must also pass ``identifiability.input_excitation``) and the method takes
-    that preset; otherwise the method's default model (lateral for the linear methods,
-    6dof for the nonlinear one)."""
+    """The model preset for the axis ``record`` excites.
+
+    ``short_period`` when the record excites the longitudinal axis only
+    (``data.axes.excited_axes``; an unlisted record's elevator must also pass
+    ``identifiability.input_excitation``) and the method takes that preset; otherwise the
+    method's default model (lateral for the linear methods, 6dof for the nonlinear one).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    method : str, optional
+        The registered method name. Default "oe".
+
+    Returns
+    -------
+    str
+        The model preset name.
+    """
     spec = registry.get(method)
     elevator_only = excited_axes([record]) == ["longitudinal"] and (
         bool(windows.maneuvers(record)) or not ident.input_excitation(record, ["de"]))

@@ -81,7 +81,18 @@ class BiasTerm:
 
 
 def from_fit(est: Estimate) -> list[BiasTerm]:
-    """The bias terms ``identify`` stored in ``est.fit['biases']`` ([] when none)."""
+    """The bias terms ``identify`` stored in ``est.fit['biases']``.
+
+    Parameters
+    ----------
+    est : Estimate
+        An estimate from ``identify``.
+
+    Returns
+    -------
+    list of BiasTerm
+        The stored terms; [] when none.
+    """
     keys = {f.name for f in fields(BiasTerm)}
     return [BiasTerm(**{k: v for k, v in t.items() if k in keys})
             for t in est.fit.get("biases", [])]
@@ -98,9 +109,27 @@ def _channel(record: FlightRecord, name: str) -> np.ndarray:
 
 
 def specific_force(record: FlightRecord, output: str) -> float:
-    """The mean specific force (m/s^2) an unbiased accelerometer at the CG reads on
-    ``output`` ("ay" or "az") over ``record``, from its airspeed, angles and rates
-    (module note)."""
+    """The mean specific force an unbiased accelerometer at the CG reads on ``output``.
+
+    Computed over ``record`` from its airspeed, angles and rates (module note).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    output : str
+        "ay" or "az".
+
+    Returns
+    -------
+    float
+        The mean specific force, m/s^2.
+
+    Raises
+    ------
+    ValueError
+        When ``output`` is neither "ay" nor "az".
+    """
     t, v = record.time, record["V"]
     alpha, beta = _channel(record, "alpha"), _channel(record, "beta")
     p, q, r = (_channel(record, c) for c in RATES)
@@ -115,9 +144,25 @@ def specific_force(record: FlightRecord, output: str) -> float:
 
 
 def bias_budget(est: Estimate, record: FlightRecord, preset: str) -> list[BiasTerm]:
-    """The nuisance biases of ``est`` (a fit of the linear model ``preset`` on ``record``,
-    the window it was fitted on), each split into its trim part and its excess (module
-    note). [] when the fit has no bias or ``preset`` is not a linear model."""
+    """The nuisance biases of ``est``, each split into its trim part and its excess.
+
+    See the module note for the split.
+
+    Parameters
+    ----------
+    est : Estimate
+        A fit of the linear model ``preset`` on ``record``.
+    record : FlightRecord
+        The window the fit was made on, SI channels.
+    preset : str
+        The linear model preset name.
+
+    Returns
+    -------
+    list of BiasTerm
+        One term per fitted state-derivative or accelerometer bias; [] when the fit has no
+        bias, ``preset`` is not a linear model or the record lacks a model channel.
+    """
     fitted = {n: (float(v), float(s)) for n, v, s in zip(est.names, est.values, est.std,
                                                            strict=True)}
     if preset not in lm.MODELS or not any(n.startswith(BIAS_PREFIX) for n in fitted):
@@ -168,8 +213,20 @@ def _term(name: str, unit: str, fitted: tuple[float, float], excess: float, limi
 
 
 def describe(terms: Sequence[BiasTerm]) -> list[str]:
-    """One line per bias: value, trim part, excess and its limit; an implausible excess
-    says what it means."""
+    """One line per bias: value, trim part, excess and its limit.
+
+    An implausible excess says what it means.
+
+    Parameters
+    ----------
+    terms : sequence of BiasTerm
+        The bias terms.
+
+    Returns
+    -------
+    list of str
+        One line per term.
+    """
     lines = []
     for t in terms:
         line = (f"{t.name} = {t.value:.4g} {t.unit}: trim {t.trim:.4g}, excess "
@@ -183,7 +240,15 @@ def describe(terms: Sequence[BiasTerm]) -> list[str]:
 
 
 def warn_implausible(terms: Sequence[BiasTerm], what: str) -> None:
-    """An ImplausibleBiasWarning naming each bias whose excess is beyond an instrument."""
+    """An ImplausibleBiasWarning naming each bias whose excess is beyond an instrument.
+
+    Parameters
+    ----------
+    terms : sequence of BiasTerm
+        The bias terms.
+    what : str
+        What the biases belong to, the warning's first words.
+    """
     bad = [t for t in terms if t.implausible]
     if bad:
         warnings.warn(f"{what}: nuisance bias(es) beyond what an instrument can have: "

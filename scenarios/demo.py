@@ -46,7 +46,18 @@ class DemoResult:
 
 
 def identify_flight(measured: FlightRecord) -> list[Estimate]:
-    """Output error on the record's longitudinal and lateral maneuver windows."""
+    """Output error on the record's longitudinal and lateral maneuver windows.
+
+    Parameters
+    ----------
+    measured : FlightRecord
+        The measured flight with its maneuver windows.
+
+    Returns
+    -------
+    list[Estimate]
+        One estimate per fit: short-period, then lateral-directional.
+    """
     return [identify(measured, "oe", model, derivatives=list(names)) for model, names in FITS]
 
 
@@ -54,7 +65,24 @@ def run(card: str = DEFAULT_CARD, seed: int | None = None,
         report: str | Path | None = "flightid-demo.html",
         progress: Callable[[float, float], None] | None = None) -> DemoResult:
     """Fly ``card``, identify by output error, score against the record's truth, write the
-    report; ``progress(flown_s, total_s)`` follows the flight."""
+    report; ``progress(flown_s, total_s)`` follows the flight.
+
+    Parameters
+    ----------
+    card : str, optional
+        Library card name or path. Default ``"navion-demo"``.
+    seed : int or None, optional
+        Noise and turbulence seed; None uses the card's seed.
+    report : str or Path or None, optional
+        HTML report path (a PNG of the flight goes next to it); None writes no report.
+    progress : callable or None, optional
+        ``progress(flown_s, total_s)``, simulated seconds, called while flying.
+
+    Returns
+    -------
+    DemoResult
+        Measured and truth records, truth derivatives, estimates, scores and the report path.
+    """
     c = load_card(card)
     used_seed = c.seed if seed is None else int(seed)
     measured, truth_record = fly_with_progress(c, used_seed, progress=progress)

@@ -16,7 +16,18 @@ from flightid.sim.jsbsim.truth import derivatives
 
 
 def maneuver_list(designs: Sequence[InputDesign]) -> list[dict[str, Any]]:
-    """[{"kind", "surfaces", "start", "end"}] (s) of the flown input designs."""
+    """[{"kind", "surfaces", "start", "end"}] (s) of the flown input designs.
+
+    Parameters
+    ----------
+    designs : Sequence[InputDesign]
+        The flown input designs.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        One dict per design: "kind", "surfaces" (list of str), "start" and "end" (s).
+    """
     return [{"kind": d.kind, "surfaces": list(d.surfaces()), "start": float(d.start),
              "end": float(d.end)} for d in designs]
 
@@ -24,7 +35,21 @@ def maneuver_list(designs: Sequence[InputDesign]) -> list[dict[str, Any]]:
 def truth_table(model: Model, trimmed: Trim) -> dict[str, Any]:
     """The exact derivatives at the trim, {"trim", "body": {...}, "stability": {...},
     "kinks", "source"}: aerodynamic derivatives of the JSBSim model (per rad, rates
-    nondimensional)."""
+    nondimensional).
+
+    Parameters
+    ----------
+    model : Model
+        The JSBSim aircraft model.
+    trimmed : Trim
+        The trim at which the derivatives are taken.
+
+    Returns
+    -------
+    dict[str, Any]
+        "trim" (the trim condition), "body" and "stability" (derivative name -> value),
+        "kinks" (sorted names flagged by the differencing) and "source" (str).
+    """
     body = derivatives(model, trimmed, axes="body")
     stability = derivatives(model, trimmed, axes="stability")
     return {

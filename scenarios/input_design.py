@@ -31,6 +31,20 @@ def rate_limit(t: np.ndarray, u: np.ndarray, rate: float) -> np.ndarray:
     The output moves towards the command by at most ``rate * dt`` per sample, so
     ``|diff(y)| / diff(t) <= rate`` holds at every sample (Morelli & Klein 2016, 9.2).
     ``rate <= 0`` means no limit.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s; shape (n,).
+    u : numpy.ndarray
+        Commanded signal; shape (n,).
+    rate : float
+        Rate limit, unit/s; <= 0 for none.
+
+    Returns
+    -------
+    numpy.ndarray
+        Rate-limited signal; shape (n,).
     """
     u = np.asarray(u, dtype=float)
     if rate <= 0 or u.size < 2:
@@ -48,7 +62,18 @@ def rate_limit(t: np.ndarray, u: np.ndarray, rate: float) -> np.ndarray:
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
-    """Validate a time vector (s): one-dimensional, finite, non-decreasing."""
+    """Validate a time vector (s): one-dimensional, finite, non-decreasing.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time vector, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``t`` as a float array.
+    """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1:
         raise ValueError(f"time must be one-dimensional, got shape {t.shape}")
@@ -117,7 +142,15 @@ class SingleInput(InputDesign):
 
 
 def check_surface(name: str, field_name: str) -> None:
-    """Raise naming ``field_name`` if ``name`` is not a control channel."""
+    """Raise naming ``field_name`` if ``name`` is not a control channel.
+
+    Parameters
+    ----------
+    name : str
+        Surface name to check.
+    field_name : str
+        Card field named in the error.
+    """
     if name not in CONTROLS:
         raise ValueError(
             f"field {field_name!r}: unknown surface {name!r}; controls are {', '.join(CONTROLS)}"
@@ -125,7 +158,17 @@ def check_surface(name: str, field_name: str) -> None:
 
 
 def require(condition: bool, field_name: str, message: str) -> None:
-    """Raise ValueError naming the field if ``condition`` is false."""
+    """Raise ValueError naming the field if ``condition`` is false.
+
+    Parameters
+    ----------
+    condition : bool
+        The condition that must hold.
+    field_name : str
+        Card field named in the error.
+    message : str
+        What is wrong, for the error.
+    """
     if not condition:
         raise ValueError(f"field {field_name!r}: {message}")
 
@@ -176,6 +219,20 @@ def design_from_dict(cls: type, d: dict[str, Any], context: str = "") -> Any:
     """Build dataclass ``cls`` from ``d``; ``<field>_deg`` gives an angle field in degrees.
 
     Every error names the offending field (prefixed by ``context``).
+
+    Parameters
+    ----------
+    cls : type
+        The input-design dataclass.
+    d : dict[str, Any]
+        The card's table; ``kind`` and ``effect`` keys are ignored.
+    context : str, optional
+        Prefix for field names in error messages.
+
+    Returns
+    -------
+    Any
+        An instance of ``cls``.
     """
     pre = f"{context}." if context else ""
     fields = {f.metadata.get("alias", f.name): f for f in dataclasses.fields(cls) if f.init}

@@ -95,7 +95,23 @@ def residual_spectrum(record: FlightRecord, channels: Sequence[str], segment_s: 
     (Hz), density per sample (SI^2), columns in ``channels`` order). Welch's method with
     linearly detrended segments of ``segment_s`` s (Welch 1967; Ljung 1999, 6.4); the
     density per sample is rate x the one-sided density / 2, so white noise of variance
-    sigma^2 has density sigma^2 at every frequency."""
+    sigma^2 has density sigma^2 at every frequency.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        Measured flight without inputs, at least ``2 * segment_s`` long.
+    channels : Sequence[str]
+        Output channels.
+    segment_s : float, optional
+        Welch segment length, s. Default 10.24.
+
+    Returns
+    -------
+    tuple[dict[str, float], numpy.ndarray, numpy.ndarray]
+        (channel -> variance, SI^2; frequencies, Hz, shape (F,); density per sample, SI^2,
+        shape (F, len(channels))).
+    """
     rate = float(1.0 / np.median(np.diff(record.time)))
     nper = int(round(segment_s * rate))
     if record.time.size < 2 * nper:
@@ -119,7 +135,24 @@ def problem_from_flight(measured: FlightRecord, truth: FlightRecord, model: str 
     """The design problem of a flight without inputs (trim, turbulence, sensors): ``model``
     (a linear preset, 'lat' or 'lon' ...) at the measured record's condition, the truth
     the truth record carries, and the residual spectrum of the measured outputs.
-    ``derivatives`` defaults to the model's."""
+    ``derivatives`` defaults to the model's.
+
+    Parameters
+    ----------
+    measured : FlightRecord
+        Measured flight without inputs.
+    truth : FlightRecord
+        Its truth record (the true derivatives).
+    model : str, optional
+        Linear model preset. Default ``"lat"``.
+    derivatives : Sequence[str] or None, optional
+        Derivatives whose bounds count; None uses the model's.
+
+    Returns
+    -------
+    Problem
+        The design problem.
+    """
     kwargs = {"derivatives": tuple(derivatives)} if derivatives else {}
     lin = model_for_record(linear(model), measured, **kwargs)
     table = record_truth(truth)
@@ -184,7 +217,22 @@ def _propagate(problem: Problem, u: np.ndarray) -> np.ndarray:
 def sensitivities(problem: Problem, design: InputDesign, duration: float) -> np.ndarray:
     """Output sensitivities (N, outputs, P; SI per parameter unit, P the model's
     parameters, biases included) of a flight of ``duration`` s with ``design`` from zero
-    initial perturbation, sampled at the problem's rate."""
+    initial perturbation, sampled at the problem's rate.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    design : InputDesign
+        The input design.
+    duration : float
+        Flight duration, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Output sensitivities; shape (N, outputs, P).
+    """
     t = np.arange(int(round(duration * problem.rate)) + 1) / problem.rate
     return _propagate(problem, _inputs(problem, design, t)[None])[0]
 
@@ -223,14 +271,42 @@ def covariance(problem: Problem, design: InputDesign, duration: float) -> np.nda
     M = sum_i S_i^T R^-1 S_i (Morelli & Klein 2016, eq. 6.20) and the coloured residual's
     sandwich M^-1 (sum_f S_f^H R^-1 Phi_f R^-1 S_f / N) M^-1 over the DFT bins f of the
     sensitivities (the frequency-domain form of Morelli & Klein 2016, eq. 6.54), Phi the
-    residual density; the white-noise Cramer-Rao bound M^-1 when Phi = R."""
+    residual density; the white-noise Cramer-Rao bound M^-1 when Phi = R.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    design : InputDesign
+        The input design.
+    duration : float
+        Flight duration, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Predicted covariance of all model parameters, their units squared; shape (P, P).
+    """
     info, middle = _forms(problem, sensitivities(problem, design, duration)[None])
     return _sandwich(info[0, 0], middle[0, 0])
 
 
 def bounds(problem: Problem, cov: np.ndarray) -> dict[str, float]:
     """Standard deviations (the parameters' units) of the problem's derivatives from a
-    covariance over all model parameters."""
+    covariance over all model parameters.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    cov : numpy.ndarray
+        Covariance of all model parameters; shape (P, P).
+
+    Returns
+    -------
+    dict[str, float]
+        Derivative name -> standard deviation.
+    """
     params = problem.model.parameters
     diag = np.diag(cov)
     return {n: float(np.sqrt(max(diag[params.index(n)], 0.0))) for n in problem.names}
@@ -239,18 +315,59 @@ def bounds(problem: Problem, cov: np.ndarray) -> dict[str, float]:
 def predicted_bounds(problem: Problem, design: InputDesign, duration: float
                      ) -> dict[str, float]:
     """The predicted output-error bounds of the problem's derivatives for ``design`` flown
-    for ``duration`` s (``covariance``)."""
+    for ``duration`` s (``covariance``).
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    design : InputDesign
+        The input design.
+    duration : float
+        Flight duration, s.
+
+    Returns
+    -------
+    dict[str, float]
+        Derivative name -> predicted standard deviation.
+    """
     return bounds(problem, covariance(problem, design, duration))
 
 
 def relative_bounds(problem: Problem, bound: Mapping[str, float]) -> dict[str, float]:
-    """bound / |truth| per derivative with a non-zero truth (a fraction)."""
+    """bound / |truth| per derivative with a non-zero truth (a fraction).
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem (its true values).
+    bound : Mapping[str, float]
+        Derivative name -> standard deviation.
+
+    Returns
+    -------
+    dict[str, float]
+        Derivative name -> bound / |truth|, 1.
+    """
     return {n: bound[n] / abs(problem.values[n]) for n in problem.names
             if problem.values[n] != 0}
 
 
 def mean_relative_bound(problem: Problem, bound: Mapping[str, float]) -> float:
-    """The mean of bound / |truth| over the derivatives with a non-zero truth."""
+    """The mean of bound / |truth| over the derivatives with a non-zero truth.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem (its true values).
+    bound : Mapping[str, float]
+        Derivative name -> standard deviation.
+
+    Returns
+    -------
+    float
+        Mean bound / |truth|, 1.
+    """
     rel = relative_bounds(problem, bound)
     return float(np.mean(list(rel.values())))
 
@@ -261,7 +378,22 @@ def mean_relative_bound(problem: Problem, bound: Mapping[str, float]) -> float:
 def criterion_value(problem: Problem, cov: np.ndarray, criterion: str = "A") -> float:
     """'A': sum over the problem's derivatives of variance / truth^2 (relative A-optimal;
     those with truth 0 do not count); 'D': log det of their covariance (D-optimal);
-    'mean': the mean of bound / |truth| (``mean_relative_bound``)."""
+    'mean': the mean of bound / |truth| (``mean_relative_bound``).
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    cov : numpy.ndarray
+        Covariance of all model parameters; shape (P, P).
+    criterion : str, optional
+        ``"A"`` (default), ``"D"`` or ``"mean"``.
+
+    Returns
+    -------
+    float
+        The criterion's value (inf for 'D' with a singular covariance).
+    """
     idx = [problem.model.parameters.index(n) for n in problem.names]
     sub = cov[np.ix_(idx, idx)]
     if criterion == "D":
@@ -298,7 +430,30 @@ def optimal_amplitudes(problem: Problem, info: np.ndarray, middle: np.ndarray,
     1) that minimise the criterion of the predicted covariance M^-1 V M^-1,
     M = sum c_a c_b info[a, b], V = sum c_a c_b middle[a, b], at input energy
     c^T gram c = ``energy`` (rad^2 s; gram over components 1..K-1): c = x sqrt(energy /
-    x^T gram x), quasi-Newton (L-BFGS-B) on x with the analytic gradient from ``start``."""
+    x^T gram x), quasi-Newton (L-BFGS-B) on x with the analytic gradient from ``start``.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    info : numpy.ndarray
+        Information of each component pair; shape (K, K, P, P).
+    middle : numpy.ndarray
+        The sandwich's middle term of each component pair; shape (K, K, P, P).
+    gram : numpy.ndarray
+        Energy Gram matrix of components 1..K-1, s; shape (K - 1, K - 1).
+    energy : float
+        Input energy, rad^2 s.
+    criterion : str
+        ``"A"``, ``"D"`` or ``"mean"``.
+    start : numpy.ndarray
+        Starting x; shape (K - 1,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Amplitudes of components 1..K-1, rad; shape (K - 1,).
+    """
 
     def cost(x: np.ndarray) -> tuple[float, np.ndarray]:
         q = float(x @ gram @ x)
@@ -389,7 +544,34 @@ def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[fl
     3. each surface's phases optimised for the smallest relative peak factor and shifted to
        start at zero (``multisine.optimize_phases``, ``start_at_zero``), amplitudes
        optimised once more with those phases (and the start shifted to a zero again).
-    The criterion's value is that of the final design."""
+    The criterion's value is that of the final design.
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    surfaces : Sequence[str]
+        Surfaces the multisine moves.
+    band : tuple[float, float]
+        Frequency band (low, high), Hz.
+    period : float
+        Multisine period, s.
+    energy : float
+        Input energy, rad^2 s.
+    criterion : str, optional
+        ``"A"`` (default), ``"D"`` or ``"mean"``.
+    start : float, optional
+        Start of the input, s. Default 2.
+    settle : float, optional
+        Free response after the input, s. Default 8.
+    min_share : float, optional
+        Smallest amplitude kept, as a share of the largest. Default 0.02.
+
+    Returns
+    -------
+    OptimizedMultisine
+        Components per surface, criterion value, period, start and peak factors.
+    """
     if criterion not in CRITERIA:
         raise ValueError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     k = harmonic_indices(band[0], band[1], period)

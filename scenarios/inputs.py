@@ -307,6 +307,18 @@ def input_from_dict(d: dict[str, Any], context: str = "") -> InputDesign:
 
     ``kind`` selects the design (``INPUT_KINDS``); other keys are its parameters in SI,
     or in degrees with a ``_deg`` suffix (``amplitude_deg``, ``rate_limit_deg`` in deg/s).
+
+    Parameters
+    ----------
+    d : dict[str, Any]
+        The card's input table, with a ``kind`` key.
+    context : str, optional
+        Prefix for field names in error messages, e.g. ``"inputs[0]"``.
+
+    Returns
+    -------
+    InputDesign
+        The input design.
     """
     if not isinstance(d, dict):
         raise ValueError(f"{context or 'input'}: expected a table, got {type(d).__name__}")
@@ -325,12 +337,36 @@ def input_from_dict(d: dict[str, Any], context: str = "") -> InputDesign:
 
 
 def inputs_from_list(items: list[dict[str, Any]]) -> list[InputDesign]:
-    """Build several designs (a card's ``[[inputs]]`` array); errors say which entry."""
+    """Build several designs (a card's ``[[inputs]]`` array); errors say which entry.
+
+    Parameters
+    ----------
+    items : list[dict[str, Any]]
+        The card's input tables.
+
+    Returns
+    -------
+    list[InputDesign]
+        One design per table, in order.
+    """
     return [input_from_dict(d, f"inputs[{i}]") for i, d in enumerate(items)]
 
 
 def total_signals(designs: list[InputDesign], t: np.ndarray) -> dict[str, np.ndarray]:
-    """Sum of the increments of several designs per surface on times ``t`` (s)."""
+    """Sum of the increments of several designs per surface on times ``t`` (s).
+
+    Parameters
+    ----------
+    designs : list[InputDesign]
+        The input designs.
+    t : numpy.ndarray
+        Sample times, s; shape (n,).
+
+    Returns
+    -------
+    dict[str, numpy.ndarray]
+        Surface name -> summed increment (rad, or fraction for the throttle); shape (n,).
+    """
     out: dict[str, np.ndarray] = {}
     for design in designs:
         for s, u in design.signals(t).items():
@@ -369,7 +405,20 @@ class Maneuvers(InputDesign):
 
 def scale_amplitude(design: InputDesign, c: float) -> InputDesign:
     """A copy of ``design`` with its amplitude(s) times ``c`` (every part of a Maneuvers);
-    ValueError naming the design when it has no amplitude to scale."""
+    ValueError naming the design when it has no amplitude to scale.
+
+    Parameters
+    ----------
+    design : InputDesign
+        The design to scale.
+    c : float
+        Scale factor, 1.
+
+    Returns
+    -------
+    InputDesign
+        The scaled copy.
+    """
     if isinstance(design, Maneuvers):
         return dataclasses.replace(design, parts=tuple(scale_amplitude(d, c)
                                                         for d in design.parts))
@@ -397,7 +446,20 @@ def _uniform_dt(t: np.ndarray) -> float:
 
 
 def energy(t: np.ndarray, u: np.ndarray) -> float:
-    """Input energy: the integral of u^2 dt (rad^2 s), trapezoidal rule."""
+    """Input energy: the integral of u^2 dt (rad^2 s), trapezoidal rule.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s; shape (n,).
+    u : numpy.ndarray
+        Signal, rad (or its unit); shape (n,).
+
+    Returns
+    -------
+    float
+        Energy, rad^2 s (unit^2 s).
+    """
     t = check_time(t)
     u = np.asarray(u, float)
     if u.shape != t.shape:
@@ -410,6 +472,18 @@ def spectrum(t: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Scaled so that ``sum(power) * df`` equals the sum of u^2 dt (Parseval), i.e. the
     energy of a signal that starts and ends at zero.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Uniformly spaced sample times, s; shape (n,).
+    u : numpy.ndarray
+        Signal; shape (n,).
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray]
+        Frequencies, Hz, and energy spectral density, unit^2 s/Hz; each of shape (n // 2 + 1,).
     """
     dt = _uniform_dt(t)
     u = np.asarray(u, float)
@@ -428,6 +502,20 @@ def scale_to_energy(design: InputDesign, t: np.ndarray, target: float) -> InputD
     The energy is summed over the surfaces the design moves (rad^2 s). With rate
     limiting the energy is not quadratic in amplitude, so the scale is refined by a few
     secant steps until the energy is within 1e-6 of the target.
+
+    Parameters
+    ----------
+    design : InputDesign
+        The design to scale.
+    t : numpy.ndarray
+        Sample times, s; shape (n,).
+    target : float
+        Total energy wanted, rad^2 s; > 0.
+
+    Returns
+    -------
+    InputDesign
+        The scaled copy.
     """
     if target <= 0:
         raise ValueError(f"target energy must be > 0, got {target}")

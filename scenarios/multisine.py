@@ -47,14 +47,40 @@ class Components:
 
 
 def harmonic_indices(f_min: float, f_max: float, period: float) -> np.ndarray:
-    """Harmonic numbers k with f_min <= k / period <= f_max (Hz, s)."""
+    """Harmonic numbers k with f_min <= k / period <= f_max (Hz, s).
+
+    Parameters
+    ----------
+    f_min, f_max : float
+        Frequency band, Hz.
+    period : float
+        Fundamental period, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Harmonic numbers k (int), ascending.
+    """
     k0 = max(1, int(np.ceil(f_min * period - 1e-9)))
     k1 = int(np.floor(f_max * period + 1e-9))
     return np.arange(k0, k1 + 1)
 
 
 def split_harmonics(k: np.ndarray, n_inputs: int) -> list[np.ndarray]:
-    """Interleave harmonics between inputs: input j gets k[j], k[j + n], ... (Morelli 2003)."""
+    """Interleave harmonics between inputs: input j gets k[j], k[j + n], ... (Morelli 2003).
+
+    Parameters
+    ----------
+    k : numpy.ndarray
+        Harmonic numbers.
+    n_inputs : int
+        Number of inputs sharing them.
+
+    Returns
+    -------
+    list[numpy.ndarray]
+        Harmonic numbers of each input; length ``n_inputs``.
+    """
     return [np.asarray(k[j::n_inputs]) for j in range(n_inputs)]
 
 
@@ -63,6 +89,16 @@ def schroeder_phases(amps: np.ndarray) -> np.ndarray:
 
     phi_k = -2 pi sum_{i<k} (k - i) p_i with p_i the relative power a_i^2 / sum a^2;
     for a flat spectrum this is phi_k = -pi k^2 / M up to a linear term.
+
+    Parameters
+    ----------
+    amps : numpy.ndarray
+        Component amplitudes; shape (M,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Phases, rad; shape (M,).
     """
     p = np.asarray(amps, float) ** 2
     p = p / p.sum()
@@ -72,7 +108,18 @@ def schroeder_phases(amps: np.ndarray) -> np.ndarray:
 
 
 def relative_peak_factor(u: np.ndarray) -> float:
-    """RPF = (max u - min u) / (2 sqrt(2) rms(u)); 1 for a sinusoid (Morelli 2003, eq. 9)."""
+    """RPF = (max u - min u) / (2 sqrt(2) rms(u)); 1 for a sinusoid (Morelli 2003, eq. 9).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Signal samples over a period; not all zero.
+
+    Returns
+    -------
+    float
+        Relative peak factor, 1.
+    """
     u = np.asarray(u, float)
     rms = np.sqrt(np.mean(u**2))
     if rms == 0:
@@ -91,6 +138,18 @@ def optimize_phases(comp: Components, period: float) -> Components:
     Minimises the L_p norm of u relative to its (phase-independent) rms with analytic
     gradients for p = 4, 8, ..., 256 (the L_p route to the min-max problem, Guillaume et
     al. 1991), keeping the phases with the lowest true RPF.
+
+    Parameters
+    ----------
+    comp : Components
+        Starting components (frequencies, Hz; amplitudes; phases, rad).
+    period : float
+        Fundamental period, s.
+
+    Returns
+    -------
+    Components
+        The same frequencies and amplitudes with the optimised phases, rad.
     """
     t = _grid(comp.freqs, period)
     theta = 2 * np.pi * np.outer(comp.freqs, t)
@@ -130,6 +189,18 @@ def start_at_zero(comp: Components, period: float) -> Components:
 
     Of the upward zero crossings, the one with the smallest slope is taken, so the
     input starts gently; the shift changes neither the spectrum nor the peak factor.
+
+    Parameters
+    ----------
+    comp : Components
+        The multisine's components.
+    period : float
+        Fundamental period, s.
+
+    Returns
+    -------
+    Components
+        Components with shifted phases, rad; ``comp`` itself if there is no upward crossing.
     """
     t = _grid(comp.freqs, period, 64)
     u = comp(t)
@@ -143,7 +214,25 @@ def start_at_zero(comp: Components, period: float) -> Components:
 
 
 def design_components(k: np.ndarray, period: float, peak: float, optimized: bool) -> Components:
-    """Flat-spectrum multisine on harmonics ``k`` of ``period`` scaled to ``peak`` amplitude."""
+    """Flat-spectrum multisine on harmonics ``k`` of ``period`` scaled to ``peak`` amplitude.
+
+    Parameters
+    ----------
+    k : numpy.ndarray
+        Harmonic numbers.
+    period : float
+        Fundamental period, s.
+    peak : float
+        Peak amplitude of the sum, rad (or the input's unit).
+    optimized : bool
+        True optimises the phases for a low peak factor (:func:`optimize_phases`); False
+        keeps Schroeder phases.
+
+    Returns
+    -------
+    Components
+        Frequencies, Hz; amplitudes; phases, rad.
+    """
     freqs = np.asarray(k, float) / period
     amps = np.ones(freqs.size)
     comp = Components(freqs, amps, schroeder_phases(amps))

@@ -37,7 +37,13 @@ _PANELS: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = (
 
 
 def list_cards() -> list[tuple[str, str]]:
-    """(name, one-line description) of every library card."""
+    """(name, one-line description) of every library card.
+
+    Returns
+    -------
+    list[tuple[str, str]]
+        (card name, description) pairs.
+    """
     return [(name, describe(path)) for name, path in library_cards().items()]
 
 
@@ -46,7 +52,24 @@ def plot_record(measured: FlightRecord, path: str | Path, truth: FlightRecord | 
     """PNG of inputs and responses (measured as lines, truth dashed) on one time axis (s).
 
     Drawn on a bare matplotlib ``Figure`` (no pyplot, no backend chosen: the caller's
-    matplotlib state is left alone)."""
+    matplotlib state is left alone).
+
+    Parameters
+    ----------
+    measured : FlightRecord
+        The measured flight.
+    path : str or Path
+        PNG file to write.
+    truth : FlightRecord or None, optional
+        The truth record, drawn dashed; None draws only the measured one.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    Path
+        The written PNG.
+    """
     def has(name: str) -> bool:
         return name in measured or (truth is not None and name in truth)
 
@@ -91,7 +114,24 @@ def fly_with_progress(card: Card, seed: int | None = None, show: bool = True,
     """``fly_card`` reporting its progress: ``progress(flown_s, total_s)`` (simulated
     seconds) is called about once per simulated second. The library draws nothing; the
     command line passes a callback that draws a bar (``flightid.cli.progress``).
-    ``show=False`` turns the callback off (kept for the callers that passed ``show``)."""
+    ``show=False`` turns the callback off.
+
+    Parameters
+    ----------
+    card : Card
+        The card to fly.
+    seed : int or None, optional
+        Noise and turbulence seed; None uses the card's seed.
+    show : bool, optional
+        False turns ``progress`` off. Default True.
+    progress : callable or None, optional
+        ``progress(flown_s, total_s)``, simulated seconds; None reports nothing.
+
+    Returns
+    -------
+    tuple[FlightRecord, FlightRecord]
+        (measured, truth) records.
+    """
     if progress is None or not show:
         return fly_card(card, seed)
 
@@ -116,7 +156,20 @@ def clipped_inputs(card: Card, truth: FlightRecord) -> dict[str, dict[str, float
     """The surfaces whose commanded increments (the card's maneuvers) went beyond what the
     aircraft flew, i.e. were clipped at the surface's travel limit: {surface:
     {"commanded_rad", "flown_rad", "samples"}} with the peak |increment| commanded and
-    flown (rad from the trim) and how many samples fell short."""
+    flown (rad from the trim) and how many samples fell short.
+
+    Parameters
+    ----------
+    card : Card
+        The flown card (its maneuvers give the commanded increments).
+    truth : FlightRecord
+        The truth record of the flight (surfaces flown, rad).
+
+    Returns
+    -------
+    dict[str, dict[str, float]]
+        Surface name -> {"commanded_rad", "flown_rad", "samples"}; empty if nothing clipped.
+    """
     if not card.maneuvers:
         return {}
     planned = total_signals(list(card.maneuvers), truth.time)
@@ -160,8 +213,29 @@ def simulate(card: str | Card, output: str | Path, truth_path: str | Path | None
              ) -> tuple[FlightRecord, FlightRecord]:
     """Fly ``card`` (a loaded card, a path or a library name) and write the measured record
     to ``output``; ``progress(flown_s, total_s)`` as in :func:`fly_with_progress`. An input
-clipped at a surface's travel limit is recorded in ``meta.extra['clipped']`` of both
-records and warned about (:class:`ClippedInputWarning`)."""
+    clipped at a surface's travel limit is recorded in ``meta.extra['clipped']`` of both
+    records and warned about (:class:`ClippedInputWarning`).
+
+    Parameters
+    ----------
+    card : str or Card
+        A loaded card, a card file path or a library card name.
+    output : str or Path
+        File for the measured record.
+    truth_path : str or Path or None, optional
+        File for the truth record; None writes none.
+    plot_path : str or Path or None, optional
+        PNG of the flight (:func:`plot_record`); None draws none.
+    seed : int or None, optional
+        Noise and turbulence seed; None uses the card's seed.
+    progress : callable or None, optional
+        ``progress(flown_s, total_s)``, simulated seconds.
+
+    Returns
+    -------
+    tuple[FlightRecord, FlightRecord]
+        (measured, truth) records.
+    """
     c = card if isinstance(card, Card) else load_card(card)
     measured, truth = fly_with_progress(c, seed, progress=progress)
     _mark_clipped(c, measured, truth)

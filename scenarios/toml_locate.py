@@ -19,7 +19,19 @@ def _split_dotted(key: str) -> list[str]:
 
 
 def line_index(text: str) -> dict[tuple, int]:
-    """Map each key path (strings and array-of-tables indices) to its line (1-based)."""
+    """Map each key path (strings and array-of-tables indices) to its line (1-based).
+
+    Parameters
+    ----------
+    text : str
+        Text of a TOML file.
+
+    Returns
+    -------
+    dict[tuple, int]
+        Key path (table names, keys and array-of-tables indices) -> first line where it
+        appears, 1-based.
+    """
     index: dict[tuple, int] = {}
     counts: dict[tuple, int] = {}
     prefix: tuple = ()
@@ -53,7 +65,20 @@ def _resolve(names: tuple, counts: dict[tuple, int]) -> tuple:
 
 
 def line_of(index: dict[tuple, int], path: tuple) -> int | None:
-    """Line of ``path`` or of its nearest enclosing table; None if nothing matches."""
+    """Line of ``path`` or of its nearest enclosing table; None if nothing matches.
+
+    Parameters
+    ----------
+    index : dict[tuple, int]
+        Key path -> line, as made by :func:`line_index`.
+    path : tuple
+        Key path to look up.
+
+    Returns
+    -------
+    int or None
+        Line number, 1-based, or None.
+    """
     path = tuple(path)
     while path:
         if path in index:

@@ -11,8 +11,8 @@ with every float stored exactly (``float.hex``):
   error from the equation-error start and frequency-domain output error, as
   benchmarks/twin_otter_reproduction.py computes them.
 
-``python tests/reference_outputs.py`` rewrites tests/reference_outputs.json; only do so for
-a change that is meant to change the numbers, and say so in the commit message.
+``python -m tests.reference_outputs`` (from the checkout) rewrites tests/reference_outputs.json;
+only do so for a change that is meant to change the numbers, and say so in the commit message.
 """
 
 from __future__ import annotations
@@ -22,7 +22,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from conftest import TWIN_OTTER
 from threadpoolctl import threadpool_limits
 
 from flightid.identification.estimate import Estimate
@@ -38,6 +37,7 @@ from flightid.record import read
 from flightid.scenarios import demo
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.testing import MethodContract, contract_record
+from tests.conftest import TWIN_OTTER
 
 HERE = Path(__file__).resolve().parent
 SAVED = HERE / "reference_outputs.json"

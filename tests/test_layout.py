@@ -9,6 +9,8 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
+from tests.conftest import SLOW_MODULES
+
 ROOT = Path(__file__).resolve().parent.parent
 MAX_LINES = 500
 MAX_MODULES = 12
@@ -52,3 +54,25 @@ def test_no_folder_has_too_many_loose_modules():
             if (n := sum(1 for m in folder.glob("*.py") if m.name != "__init__.py"))
             > MAX_MODULES}
     assert over == {}
+
+
+# test folders that check the whole package rather than one part of it
+CROSS_CUTTING = {"contract", "badinput"}
+
+
+def test_the_tests_mirror_the_package():
+    """Every test folder below tests/ is a package folder's mirror (tests/sim/bridge holds
+    the tests of sim/bridge), apart from the cross-cutting suites."""
+    tests = ROOT / "tests"
+    packages = {relative(p) for p in package_folders()}
+    folders = {p.parent.relative_to(tests).as_posix() for p in tests.rglob("__init__.py")
+               if p.parent != tests}
+    strays = {f for f in folders if f not in packages and f.split("/")[0] not in CROSS_CUTTING}
+    assert strays == set()
+
+
+def test_every_slow_module_exists():
+    """The keys of conftest's SLOW_MODULES name test modules that exist (a move that missed
+    a key would silently put a slow module back into ``-m "not slow"``)."""
+    missing = [m for m in SLOW_MODULES if not (ROOT / "tests" / m).is_file()]
+    assert missing == []

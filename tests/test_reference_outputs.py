@@ -9,8 +9,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import TWIN_OTTER
-from reference_outputs import SAVED, contract, demo_estimates, twin_otter
+
+from tests.conftest import TWIN_OTTER
+from tests.reference_outputs import SAVED, contract, demo_estimates, twin_otter
 
 REFERENCE = json.loads(SAVED.read_text(encoding="utf-8"))
 

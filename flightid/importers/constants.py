@@ -14,7 +14,7 @@ sensor positions, as a weight-and-balance sheet gives them. A TOML file::
     chord = 2.15
     [sensors]                  # body axes from the CG (x forward, y right, z down), m
     alpha_vane = [4.6, 0.0, -0.3]
-    accelerometer = ["1.2 ft", "0 ft", "0 ft"]
+    accelerometers = ["1.2 ft", "0 ft", "0 ft"]
 
 The same constants from a project or JSBSim aircraft name are the command line's
 (``flightid.sim.jsbsim.model``, a layer above this one).
@@ -36,6 +36,9 @@ from flightid.units import to_si
 MASS_PROPERTIES = {"mass": "kg", "Ixx": "kg*m^2", "Iyy": "kg*m^2", "Izz": "kg*m^2",
                    "Ixz": "kg*m^2"}
 REFERENCE = {"area": "m^2", "span": "m", "chord": "m"}
+# the sensor positions a record's meta.extra['sensor_positions'] holds and the standard data
+# reduction corrects (docs/record.md, identification.data.reduction)
+SENSOR_POSITIONS = ("accelerometers", "alpha_vane", "beta_vane")
 
 
 @dataclass
@@ -52,7 +55,8 @@ class AircraftConstants:
     def apply(self, record: FlightRecord) -> FlightRecord:
         """``record`` with the mass properties as constant channels (a channel the record
         already has is kept), the reference geometry, the aircraft name and the sensor
-        positions (``meta.extra['sensor_positions']``, m) in its metadata."""
+        positions (``meta.extra['sensor_positions']``, m) in its metadata; a reference
+        condition without a mass gets the mass."""
         n = len(record)
         added = {k: np.full(n, v) for k, v in self.mass_properties.items()
                  if k not in record}
@@ -61,13 +65,37 @@ class AircraftConstants:
             extra["sensor_positions"] = {k: list(v) for k, v in self.sensors.items()}
         if self.source:
             extra["constants"] = self.source
+        condition = dict(record.meta.condition or {})
+        if condition and "mass" not in condition and "mass" in added:
+            condition["mass"] = float(added["mass"][0])  # the reference condition's mass
         meta = replace(record.meta, aircraft=record.meta.aircraft or self.name,
-                       reference=self.reference or record.meta.reference, extra=extra)
+                       reference=self.reference or record.meta.reference, extra=extra,
+                       condition=condition or record.meta.condition)
         return FlightRecord(record.time, {**record.channels, **added}, meta)
 
 
 def quantity(value: Any, si_unit: str, where: str) -> float:
-    """A number (already SI) or 'VALUE UNIT' text converted to ``si_unit``."""
+    """A number (already SI) or 'VALUE UNIT' text converted to ``si_unit``.
+
+    Parameters
+    ----------
+    value : int, float or str
+        The number, or text such as '12.5 ft'.
+    si_unit : str
+        SI unit of the quantity, e.g. "kg", "m".
+    where : str
+        Names the entry in error messages.
+
+    Returns
+    -------
+    float
+        The value in ``si_unit``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``where`` for a value that is not a finite number or has a wrong unit.
+    """
     if isinstance(value, bool):
         raise ValueError(f"{where}: {value!r} is not a number")
     if isinstance(value, int | float):
@@ -91,7 +119,23 @@ def quantity(value: Any, si_unit: str, where: str) -> float:
 
 
 def read_constants(path: str | Path) -> AircraftConstants:
-    """Aircraft constants from a TOML file (module docstring); values in SI after it."""
+    """Aircraft constants from a TOML file (format in the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The constants file.
+
+    Returns
+    -------
+    AircraftConstants
+        Name, mass properties, reference geometry and sensor positions, SI.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and entry for an unknown entry or an invalid value.
+    """
     path = Path(path)
     data = read_toml(path, "aircraft constants file", "TOML file")
     unknown = sorted(set(data) - {"name", "mass_properties", "reference", "sensors"})
@@ -119,6 +163,9 @@ def read_constants(path: str | Path) -> AircraftConstants:
             raise ValueError(f"{path} [reference]: area, span and chord must be > 0")
         out.reference = Reference(**values)
     for name, position in data.get("sensors", {}).items():
+        if name not in SENSOR_POSITIONS:
+            raise ValueError(f"{path} [sensors] {name}: not a sensor the data reduction "
+                             f"corrects; valid: {', '.join(SENSOR_POSITIONS)}")
         if not isinstance(position, list) or len(position) != 3:
             raise ValueError(f"{path} [sensors] {name}: give [x, y, z] (m, body axes "
                              "from the CG)")

@@ -14,7 +14,9 @@ Messages used (ArduPlane names, ``dataflash_formats``):
   positions, and the record says so (``meta.extra['surfaces'] = 'command'``). Without a
   mapping, the log's own parameters give the outputs (SERVOn_FUNCTION), the trims
   (SERVOn_TRIM), the reversals (SERVOn_REVERSED) and the throttle's range (SERVOn_MIN,
-  SERVOn_MAX); the throws, which no parameter holds, are then 30 deg, and a note says so;
+  SERVOn_MAX); the throws, which no parameter holds, are then 30 deg, and a note says so.
+  An aileron, elevator or rudder output above trim, not reversed, is ArduPilot's demand
+  for a positive moment: a negative deflection (``dataflash_formats.SERVO_DEFLECTION_SIGN``);
 * AOA (alpha, beta in deg), BARO (static pressure, pressure altitude h), GPS (latitude,
   longitude) when the log has them;
 * SIDS and SIDD (ArduPilot's system-identification mode): each chirp becomes a maneuver
@@ -41,7 +43,11 @@ from pymavlink import DFReader
 from flightid.atmosphere import RHO0, isa_density, isa_pressure_altitude
 from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
-from flightid.importers.dataflash_formats import SERVO_FUNCTIONS, SYSID_AXES
+from flightid.importers.dataflash_formats import (
+    SERVO_DEFLECTION_SIGN,
+    SERVO_FUNCTIONS,
+    SYSID_AXES,
+)
 from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.units import DEG
 
@@ -124,7 +130,19 @@ def _collect(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, in
 
 def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
     """The servo mapping the log's ArduPilot parameters give (module docstring), with
-    :data:`DEFAULT_THROW`; None when no SERVOn_FUNCTION names a control."""
+    :data:`DEFAULT_THROW`; None when no SERVOn_FUNCTION names a control.
+
+    Parameters
+    ----------
+    params : the log's PARM values, name -> value.
+
+    Returns
+    -------
+    ServoMapping, or None. A surface's throw has the sign of flightid's deflection for an
+    output above trim (``dataflash_formats.SERVO_DEFLECTION_SIGN``: an aileron, elevator or
+    rudder output above trim asks for a positive moment, a negative deflection), turned
+    over on a reversed output.
+    """
     functions = {int(v): k for k, v in SERVO_FUNCTIONS.items()}
     surfaces: dict[str, Servo] = {}
     throttle = None
@@ -137,8 +155,14 @@ def servos_from_params(params: dict[str, float]) -> ServoMapping | None:
             low, high = params.get(f"SERVO{n}_MIN", 1000.0), params.get(f"SERVO{n}_MAX", 2000.0)
             throttle = Throttle(n, high, low) if sign < 0 else Throttle(n, low, high)
         elif name not in surfaces:
-            surfaces[name] = Servo(n, params.get(f"SERVO{n}_TRIM", 1500.0),
-                                   sign * DEFAULT_THROW)
+            trim = params.get(f"SERVO{n}_TRIM", 1500.0)
+            throw = sign * SERVO_DEFLECTION_SIGN[name] * DEFAULT_THROW
+            low, high = params.get(f"SERVO{n}_MIN"), params.get(f"SERVO{n}_MAX")
+            # ArduPilot scales a demand onto trim..max above trim and min..trim below it
+            # (SRV_Channel::pwm_from_angle): the same demand, the same deflection
+            below = throw * (high - trim) / (trim - low) if low is not None and \
+                high is not None and low < trim < high else None
+            surfaces[name] = Servo(n, trim, throw, below)
     if not surfaces and throttle is None:
         return None
     return ServoMapping(surfaces, throttle)

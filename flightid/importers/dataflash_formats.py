@@ -74,6 +74,13 @@ MULTS: dict[str, float] = {"-": 0.0, "0": 1.0, "B": 1e-2, "C": 1e-3, "F": 1e-6, 
 # ArduPilot SERVOn_FUNCTION values of the controls (SRV_Channel.h: k_flap 2, k_aileron 4,
 # k_elevator 19, k_rudder 21, k_throttle 70)
 SERVO_FUNCTIONS: dict[str, int] = {"da": 4, "de": 19, "throttle": 70, "dr": 21, "df": 2}
+# The sign, in flightid's deflections (channels.py: Etkin's, a positive deflection gives a
+# negative moment), of a servo output above its trim on an output not reversed. ArduPilot's
+# scaled outputs are moment demands: a positive aileron, elevator or rudder output asks for
+# a right roll, nose up or nose right (SRV_Channel's k_aileron, k_elevator, k_rudder, as the
+# roll, pitch and yaw controllers write them), so it is a negative da, de, dr; a positive
+# flap output lowers the flaps (df > 0)
+SERVO_DEFLECTION_SIGN: dict[str, float] = {"da": -1.0, "de": -1.0, "dr": -1.0, "df": 1.0}
 
 # ArduPilot's SystemId AxisType (SID_AXIS) -> the control it excites
 SYSID_AXES: dict[int, str] = {

@@ -39,13 +39,31 @@ class ColumnMap:
 
 
 def valid_channels() -> list[str]:
-    """The names a column may be mapped to: ``time`` and the canonical channels."""
+    """The names a column may be mapped to: ``time`` and the canonical channels.
+
+    Returns
+    -------
+    list of str
+        ``time`` followed by the canonical channel names.
+    """
     return [TIME, *CHANNELS]
 
 
 def check_channel(channel: str, where: str) -> str:
-    """``channel`` if it is ``time`` or canonical, else a ValueError naming the valid
-    names (``where`` says which entry of which map)."""
+    """``channel`` if it is ``time`` or canonical, else a ValueError naming the valid names.
+
+    Parameters
+    ----------
+    channel : str
+        Channel name to check.
+    where : str
+        Says which entry of which map, for the message.
+
+    Returns
+    -------
+    str
+        ``channel``.
+    """
     if channel not in valid_channels():
         raise ValueError(f"{where}: {channel!r} is not a flightid channel; valid channels: "
                          f"{', '.join(valid_channels())}")
@@ -53,8 +71,20 @@ def check_channel(channel: str, where: str) -> str:
 
 
 def check_unit(unit: str, where: str) -> str:
-    """``unit`` if :data:`flightid.units.UNIT_NAMES` knows it, else a ValueError naming
-    the known units."""
+    """``unit`` if :data:`flightid.units.UNIT_NAMES` knows it, else a ValueError naming them.
+
+    Parameters
+    ----------
+    unit : str
+        Unit name to check.
+    where : str
+        Says which entry of which map, for the message.
+
+    Returns
+    -------
+    str
+        ``unit``.
+    """
     if unit_key(unit) not in UNIT_NAMES:
         raise ValueError(f"{where}: unknown unit {unit!r}; known units: "
                          f"{', '.join(k for k in UNIT_NAMES if k)}")
@@ -74,8 +104,20 @@ def _pairs(text: str, option: str) -> list[tuple[str, str]]:
 
 
 def parse_map(texts: list[str], unit_texts: list[str] | None = None) -> ColumnMap:
-    """A ColumnMap from ``--map`` texts ('ALFCG=alpha,TASCG=V', repeatable) and ``--unit``
-    texts ('ALFCG=deg,...'); unknown channels and units are refused."""
+    """A ColumnMap from ``--map`` and ``--unit`` texts; unknown channels and units are refused.
+
+    Parameters
+    ----------
+    texts : list of str
+        ``--map`` texts, e.g. 'ALFCG=alpha,TASCG=V' (repeatable).
+    unit_texts : list of str, optional
+        ``--unit`` texts, e.g. 'ALFCG=deg'.
+
+    Returns
+    -------
+    ColumnMap
+        Column to channel and column to unit maps.
+    """
     out = ColumnMap()
     for text in texts:
         for column, channel in _pairs(text, "--map"):
@@ -88,7 +130,18 @@ def parse_map(texts: list[str], unit_texts: list[str] | None = None) -> ColumnMa
 
 
 def read_map(path: str | Path) -> ColumnMap:
-    """A ColumnMap from a TOML mapping file (module docstring)."""
+    """A ColumnMap from a TOML mapping file (format in the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The mapping file, with [columns] and [units] tables.
+
+    Returns
+    -------
+    ColumnMap
+        Column to channel and column to unit maps.
+    """
     path = Path(path)
     data = read_toml(path, "mapping file", "TOML mapping file")
     unknown = sorted(set(data) - {"columns", "units"})

@@ -4,15 +4,17 @@ its trim and its throws, as an RC aircraft's set-up sheet gives them. A TOML fil
     [da]                 # surface: a flightid control channel (de, da, dr, df)
     channel = 1          # servo output (RCOU C1..C14 of ArduPilot, 1-based)
     trim = 1500          # PWM at zero deflection (us)
-    throw = "25 deg"     # deflection at trim + 500 us, canonical sign (negative: reversed)
-    throw_low = "20 deg" # optional: deflection magnitude per 500 us below trim (default: throw)
+    throw = "25 deg"     # deflection at trim + 500 us, in flightid's sign (channels.py)
+    throw_low = "20 deg" # optional: deflection per 500 us below trim, its size (default: throw)
     [throttle]
     channel = 3
     low = 1000           # PWM at throttle 0 and 1 (us)
     high = 2000
 
 The default is ArduPlane's output order (1 aileron, 2 elevator, 3 throttle, 4 rudder)
-with 1500 us trims and 30 deg throws. The values are commands: what the autopilot sent
+with 1500 us trims and 30 deg throws, the outputs not reversed: an aileron, elevator or
+rudder output above trim asks for a right roll, nose up or nose right, which is a negative
+da, de or dr (throw -30 deg). The values are commands: what the autopilot sent
 to the servos, not where the surfaces went.
 """
 
@@ -26,6 +28,7 @@ import numpy as np
 
 from flightid.files import read_toml
 from flightid.importers.constants import quantity
+from flightid.importers.dataflash_formats import SERVO_DEFLECTION_SIGN
 from flightid.units import DEG
 
 SURFACES = ("de", "da", "dr", "df")
@@ -49,13 +52,14 @@ class Servo:
         low = self.throw if self.throw_low is None else self.throw_low
         return (pwm - self.trim) / HALF_RANGE_US * np.where(pwm >= self.trim, self.throw, low)
 
-    def pwm(self, deflection: np.ndarray) -> np.ndarray:
-        """PWM (us, whole) commanding ``deflection`` (rad): the inverse of
-        :meth:`deflection`, rounded to the microsecond as a servo output is."""
+    def pwm(self, deflection: np.ndarray, whole: bool = True) -> np.ndarray:
+        """PWM (us) commanding ``deflection`` (rad): the inverse of :meth:`deflection`,
+        rounded to the microsecond as a servo output is unless ``whole`` is False."""
         d = np.asarray(deflection, dtype=float)
         low = self.throw if self.throw_low is None else self.throw_low
         above = d / self.throw >= 0
-        return np.round(self.trim + HALF_RANGE_US * d / np.where(above, self.throw, low))
+        pwm = self.trim + HALF_RANGE_US * d / np.where(above, self.throw, low)
+        return np.round(pwm) if whole else pwm
 
 
 @dataclass(frozen=True)
@@ -76,7 +80,10 @@ class Throttle:
 
 
 def _default_surfaces() -> dict[str, Servo]:
-    return {"da": Servo(1), "de": Servo(2), "dr": Servo(4)}
+    """ArduPlane's default outputs, not reversed: an output above trim is a negative
+    deflection (``dataflash_formats.SERVO_DEFLECTION_SIGN``)."""
+    return {name: Servo(n, throw=SERVO_DEFLECTION_SIGN[name] * 30 * DEG)
+            for name, n in (("da", 1), ("de", 2), ("dr", 4))}
 
 
 @dataclass(frozen=True)
@@ -85,6 +92,9 @@ class ServoMapping:
 
     surfaces: dict[str, Servo] = field(default_factory=_default_surfaces)
     throttle: Throttle | None = field(default_factory=Throttle)
+    # a second servo of a surface (a PX4 right aileron beside the left one): the surface's
+    # command is the mean of the two deflections
+    partners: dict[str, Servo] = field(default_factory=dict)
 
     def outputs(self) -> dict[str, int]:
         """Channel -> servo output number (1-based)."""
@@ -97,6 +107,9 @@ class ServoMapping:
         """Plain data (for a record's metadata)."""
         out: dict = {name: {"channel": s.channel, "trim_us": s.trim, "throw_rad": s.throw,
                             "throw_low_rad": s.throw_low} for name, s in self.surfaces.items()}
+        for name, s in self.partners.items():
+            out[f"{name} (second servo)"] = {"channel": s.channel, "trim_us": s.trim,
+                                             "throw_rad": s.throw, "throw_low_rad": s.throw_low}
         if self.throttle is not None:
             out["throttle"] = {"channel": self.throttle.channel, "low_us": self.throttle.low,
                                "high_us": self.throttle.high}
@@ -117,9 +130,21 @@ def _pwm(value: object, where: str) -> float:
 
 
 def read_servo_map(path: str | Path) -> ServoMapping:
-    """A ServoMapping from a TOML file (module docstring); a surface that is not a
-    flightid control channel, or an output outside 1..14, is refused naming the valid
-    ones."""
+    """A ServoMapping from a TOML file (format in the module docstring).
+
+    A surface that is not a flightid control channel, or an output outside 1..14, is refused
+    naming the valid ones.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The servo mapping file.
+
+    Returns
+    -------
+    ServoMapping
+        Surfaces (output, trim PWM, throw in rad) and the throttle, if given.
+    """
     path = Path(path)
     data = read_toml(path, "servo mapping file", "TOML file")
     surfaces: dict[str, Servo] = {}
@@ -148,10 +173,10 @@ def read_servo_map(path: str | Path) -> ServoMapping:
                              "channel, trim, throw, throw_low")
         throw = quantity(table.get("throw", 30 * DEG), "rad", f"{where} throw")
         low = table.get("throw_low")
+        if low is not None:  # a magnitude: the sign is the throw's
+            low = math.copysign(quantity(low, "rad", f"{where} throw_low"), throw)
         servo = Servo(_output(table["channel"], where), _pwm(table.get("trim", 1500),
-                                                             f"{where} trim"),
-                      throw, None if low is None else quantity(low, "rad",
-                                                               f"{where} throw_low"))
+                                                             f"{where} trim"), throw, low)
         if servo.throw == 0 or servo.throw_low == 0:
             raise ValueError(f"{where}: a throw of 0 maps every PWM to no deflection")
         surfaces[name] = servo

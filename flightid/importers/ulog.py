@@ -8,7 +8,8 @@ Topics used (``ulog_topics``):
 * ``airspeed``: true airspeed V (m/s); ``differential_pressure``: qbar (Pa);
 * ``actuator_outputs`` (instance 0): servo outputs (PWM, us) mapped to de, da, dr and
   throttle through a :class:`~flightid.importers.servos.ServoMapping`; without it,
-  ``actuator_servos``' normalised controls (-1..1, as trim +- 500 us) give the surfaces.
+  ``actuator_servos``' values (-1..1, trims included) give the surfaces as the PWM PX4
+  puts out for them (:func:`servo_pwm`; the servo of an output from PWM_MAIN_FUNCn).
   These are COMMANDS (``meta.extra['surfaces'] = 'command'``);
 * ``airflow_aoa``, ``airflow_slip`` (vanes), ``vehicle_air_data`` (h, static pressure,
   density), ``vehicle_global_position`` (latitude, longitude) when logged.
@@ -32,13 +33,15 @@ from pyulog import ULog
 from flightid.console import captured_output
 from flightid.flight_record import FlightRecord, RecordMeta, check_samples
 from flightid.importers.dataflash import DEFAULT_THROW
-from flightid.importers.servos import HALF_RANGE_US, Servo, ServoMapping, Throttle
+from flightid.importers.servos import Servo, ServoMapping, Throttle
 from flightid.importers.ulog_topics import (
+    PX4_DEFAULT_TORQUE,
     PX4_MOTOR_FUNCTION,
     PX4_OUTPUTS,
     PX4_RIGHT_AILERON,
     PX4_SERVO_FUNCTION,
     PX4_SURFACE_TYPES,
+    PX4_TORQUE_AXIS,
     TOPICS,
 )
 
@@ -48,8 +51,20 @@ CONDITION_CHANNELS = ("V", "h", "alpha", "beta", "qbar", "rho", "mass")
 
 
 def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """phi, theta, psi (rad; ZYX Euler angles) of unit quaternions q = (w, x, y, z), N x 4,
-    rotating body axes to NED (Stevens, Lewis & Johnson 2016, sec. 1.8)."""
+    """phi, theta, psi (ZYX Euler angles) of unit quaternions rotating body axes to NED.
+
+    Stevens, Lewis & Johnson 2016, sec. 1.8.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        Unit quaternions (w, x, y, z); shape (n, 4).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (phi, theta, psi), rad; each shape (n,).
+    """
     w, x, y, z = (q[:, i] for i in range(4))
     phi = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     theta = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
@@ -59,9 +74,22 @@ def euler_from_quaternion(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
 
 def servos_from_params(params: dict[str, float], notes: list[str]) -> ServoMapping | None:
     """The servo mapping PX4's control allocation parameters give (``ulog_topics``:
-    PWM_MAIN_FUNCn, CA_SV_CS{i}_TYPE and _TRIM, PWM_MAIN_MINn, _MAXn, PWM_MAIN_REV), with
-    the throws :data:`~flightid.importers.dataflash.DEFAULT_THROW`; None when no output is
-    a control surface or motor 1. What is assumed or not read goes to ``notes``."""
+    PWM_MAIN_FUNCn, CA_SV_CS{i}_TYPE, _TRIM and _TRQ_R/P/Y, PWM_MAIN_MINn, _MAXn,
+    PWM_MAIN_REV), with the throws :data:`~flightid.importers.dataflash.DEFAULT_THROW`;
+    None when no output is a control surface or motor 1. What is assumed or not read goes
+    to ``notes``.
+
+    Parameters
+    ----------
+    params : the log's parameters, name -> value.
+    notes : list the notes are appended to.
+
+    Returns
+    -------
+    ServoMapping, or None. A surface's throw has the sign of flightid's deflection for a
+    positive actuator value (``ulog_topics.PX4_DEFAULT_TORQUE``): opposite to its torque
+    parameter (else its type's default torque), reversed again on a reversed output.
+    """
     reversed_mask = int(params.get("PWM_MAIN_REV", 0))
     surfaces: dict[str, Servo] = {}
     throttle = None
@@ -78,25 +106,35 @@ def servos_from_params(params: dict[str, float], notes: list[str]) -> ServoMappi
         if not 0 <= index < PX4_OUTPUTS:
             continue
         kind = int(params.get(f"CA_SV_CS{index}_TYPE", 0))
+        if kind not in PX4_SURFACE_TYPES:
+            continue
+        name = PX4_SURFACE_TYPES[kind]
+        torque = float(params.get(f"CA_SV_CS{index}_TRQ_{PX4_TORQUE_AXIS[name]}", 0.0)) or \
+            PX4_DEFAULT_TORQUE[kind]
         trim = (low + high) / 2 + float(params.get(f"CA_SV_CS{index}_TRIM", 0.0)) * \
             (high - low) / 2
-        servo = Servo(n, trim, -DEFAULT_THROW if reverse else DEFAULT_THROW)
+        sign = -np.sign(torque) * (-1.0 if reverse else 1.0)
+        servo = Servo(n, trim, sign * DEFAULT_THROW)
         if kind == PX4_RIGHT_AILERON:
             right_aileron = right_aileron or servo
-        elif kind in PX4_SURFACE_TYPES and PX4_SURFACE_TYPES[kind] not in surfaces:
-            surfaces[PX4_SURFACE_TYPES[kind]] = servo
+        elif name not in surfaces:
+            surfaces[name] = servo
+    partners = {}
     if "da" not in surfaces and right_aileron is not None:
         surfaces["da"] = right_aileron
-        notes.append("da is the right aileron's output (no left aileron is set)")
+        notes.append("da is the right aileron's output (no left aileron is set), its sign "
+                     "turned to flightid's (a right aileron's positive value rolls right)")
     elif right_aileron is not None:
-        notes.append("da is the left aileron's output; the right aileron's is not read")
+        partners["da"] = right_aileron
+        notes.append("da is the mean of the left and the right aileron's deflections (the "
+                     "right one's sign turned to flightid's)")
     if not surfaces and throttle is None:
         return None
     notes.append("servo outputs, trims, reversals and throttle range from the log's PX4 "
                  f"parameters (PWM_MAIN_*, CA_SV_CS*); throws are in no parameter: "
                  f"{DEFAULT_THROW / np.pi * 180:g} deg assumed (give a servo mapping for the "
                  "real ones)")
-    return ServoMapping(surfaces, throttle)
+    return ServoMapping(surfaces, throttle, partners)
 
 
 def _topics(path: Path) -> tuple[dict[str, dict[str, np.ndarray]], dict[str, int], list[str],
@@ -131,8 +169,20 @@ MESSAGE_HEADER = 3  # uint16 size, uint8 type
 
 
 def cut_bytes(path: Path) -> int:
-    """Bytes at the end of a ULog file that do not make a whole message (0 for a whole
-    file): the messages' own sizes walked from the file header on."""
+    """Bytes at the end of a ULog file that do not make a whole message.
+
+    The messages' own sizes are walked from the file header on.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The .ulg file.
+
+    Returns
+    -------
+    int
+        Number of trailing bytes; 0 for a whole file.
+    """
     data = path.read_bytes()
     offset = HEADER_BYTES
     while offset + MESSAGE_HEADER <= len(data):
@@ -225,7 +275,8 @@ def read_ulog(path: str | Path, servos: ServoMapping | None = None,
         pos = topics["vehicle_global_position"]
         ch["latitude"] = at("vehicle_global_position", np.radians(pos["lat"]))
         ch["longitude"] = at("vehicle_global_position", np.radians(pos["lon"]))
-    ch.update(_commands(path, topics[command], command, grid, t[command], servos, notes))
+    ch.update(_commands(path, topics[command], command, grid, t[command], servos, notes,
+                        params))
     check_samples(str(path), grid, ch)
     condition: dict[str, Any] = {k: float(np.mean(ch[k])) for k in CONDITION_CHANNELS
                                  if k in ch}
@@ -243,24 +294,79 @@ def read_ulog(path: str | Path, servos: ServoMapping | None = None,
 
 
 def _commands(path: Path, topic: dict[str, np.ndarray], name: str, grid: np.ndarray,
-              t: np.ndarray, servos: ServoMapping, notes: list[str]) -> dict[str, np.ndarray]:
+              t: np.ndarray, servos: ServoMapping, notes: list[str],
+              params: dict[str, float]) -> dict[str, np.ndarray]:
     out = {}
     width = 16 if name == "actuator_outputs" else 8
     for channel, output in servos.outputs().items():
-        if output > width:
-            raise ValueError(f"{path}: {name} has {width} outputs; {channel} is mapped to "
-                             f"output {output}")
-        values = topic[f"{'output' if width == 16 else 'control'}[{output - 1}]"]
+        if name == "actuator_outputs":
+            if output > width:
+                raise ValueError(f"{path}: {name} has {width} outputs; {channel} is mapped "
+                                 f"to output {output}")
+            values = topic[f"output[{output - 1}]"]
+        elif channel == "throttle":
+            notes.append("throttle not read: actuator_servos carries the servos only")
+            continue
+        else:
+            index = servo_index(params, output)
+            if not 0 <= index < width:
+                raise ValueError(f"{path}: {name} has {width} servos; {channel} is on output "
+                                 f"{output}, servo {index + 1}")
+            values = servo_pwm(topic[f"control[{index}]"], output, params)
         if channel == "throttle":
-            if name == "actuator_servos":
-                notes.append("throttle not read: actuator_servos carries the servos only")
-                continue
             out[channel] = np.interp(grid, t, servos.throttle.value(values))
             continue
-        servo = servos.surfaces[channel]
-        pwm = values if name == "actuator_outputs" else servo.trim + HALF_RANGE_US * values
-        if not np.any(np.isfinite(pwm) & (pwm != 0)):
+        if not np.any(np.isfinite(values) & (values != 0)):
             raise ValueError(f"{path}: {name} output {output} (mapped to {channel}) is never "
                              "set: the output is not in use; fix the servo mapping")
-        out[channel] = np.interp(grid, t, servo.deflection(pwm))
+        out[channel] = np.interp(grid, t, servos.surfaces[channel].deflection(values))
+    for channel, servo in servos.partners.items():
+        if name == "actuator_outputs":
+            if servo.channel > width:
+                raise ValueError(f"{path}: {name} has {width} outputs; {channel}'s second "
+                                 f"servo is mapped to output {servo.channel}")
+            values = topic[f"output[{servo.channel - 1}]"]
+        else:
+            values = servo_pwm(topic[f"control[{servo_index(params, servo.channel)}]"],
+                               servo.channel, params)
+        out[channel] = 0.5 * (out[channel] + np.interp(grid, t, servo.deflection(values)))
     return out
+
+
+def servo_index(params: dict[str, float], output: int) -> int:
+    """The servo (0-based, actuator_servos' control index) on PWM output ``output``
+    (1-based): PWM_MAIN_FUNCn - 201, else output - 1 when the log has no such parameter.
+
+    Parameters
+    ----------
+    params : the log's parameters.
+    output : PWM output number, 1-based.
+
+    Returns
+    -------
+    The control index, 0-based.
+    """
+    return int(params.get(f"PWM_MAIN_FUNC{output}", PX4_SERVO_FUNCTION + output - 1)) - \
+        PX4_SERVO_FUNCTION
+
+
+def servo_pwm(control: np.ndarray, output: int, params: dict[str, float]) -> np.ndarray:
+    """The PWM (us) PX4 puts out for actuator_servos' values (-1..1, the servo trims
+    CA_SV_CS{i}_TRIM included) on output ``output``: the middle of PWM_MAIN_MINn..MAXn
+    (default 1000..2000 us) plus the value times the half range, turned over on a
+    reversed output (PWM_MAIN_REV).
+
+    Parameters
+    ----------
+    control : actuator_servos values, -1..1.
+    output : PWM output number, 1-based.
+    params : the log's parameters.
+
+    Returns
+    -------
+    PWM values (us), unrounded.
+    """
+    low = float(params.get(f"PWM_MAIN_MIN{output}", 1000.0))
+    high = float(params.get(f"PWM_MAIN_MAX{output}", 2000.0))
+    sign = -1.0 if int(params.get("PWM_MAIN_REV", 0)) >> (output - 1) & 1 else 1.0
+    return (low + high) / 2 + sign * np.asarray(control, dtype=float) * (high - low) / 2

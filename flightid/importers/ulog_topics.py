@@ -51,7 +51,16 @@ TOPICS: dict[str, tuple[tuple[str, str], ...]] = {
 PX4_SERVO_FUNCTION = 201  # output function of control surface 0 ("Servo 1")
 PX4_MOTOR_FUNCTION = 101  # output function of motor 1, the throttle of a single-engine airplane
 PX4_OUTPUTS = 16  # actuator_outputs' outputs
-# CA_SV_CS{i}_TYPE -> flightid control (1 left aileron, 3 elevator, 4 rudder); 2 (right
-# aileron) is read only when no left aileron is set
-PX4_SURFACE_TYPES = {1: "da", 3: "de", 4: "dr"}
+# CA_SV_CS{i}_TYPE -> flightid control (1 left aileron, 2 right aileron, 3 elevator,
+# 4 rudder); a right aileron is read only when no left aileron is set
+PX4_SURFACE_TYPES = {1: "da", 2: "da", 3: "de", 4: "dr"}
 PX4_RIGHT_AILERON = 2
+# A control surface's torque per unit of its actuator value (-1..1) is CA_SV_CS{i}_TRQ_R,
+# _P, _Y (roll, pitch, yaw; PX4's control allocator). QGroundControl sets them from the
+# type: left aileron roll -0.5, right aileron roll +0.5, elevator pitch +1, rudder yaw +1.
+# A positive torque is a right roll, nose up, nose right; flightid's positive deflections
+# give negative moments (channels.py, Etkin), so a surface's deflection has the opposite
+# sign of its torque parameter: a left aileron's positive value is a positive da, a right
+# aileron's, an elevator's and a rudder's a negative one
+PX4_TORQUE_AXIS = {"da": "R", "de": "P", "dr": "Y"}
+PX4_DEFAULT_TORQUE = {1: -0.5, 2: 0.5, 3: 1.0, 4: 1.0}

@@ -35,7 +35,7 @@ from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link
 from flightid.sim.bridge.messages import message_time
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 from flightid.sim.effects.catalogue import (
     ARRIVAL_TIMES,
     CATALOGUE,
@@ -156,8 +156,22 @@ def _bridged(truth: FlightRecord, entry: Entry | None = None, values=None) -> di
 
 def inject(entry: Entry, values: dict[str, float] | None,
            flight: ContractFlight) -> dict[str, np.ndarray | list]:
-    """The data an entry changes, with it injected at ``values`` (parameter name: value in
-    the parameter's unit): the record's channels, or the link data."""
+    """The data an entry changes, with the effect injected at ``values``.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    values : dict of str to float or None
+        Parameter name to value, in the parameter's unit; None for the defaults.
+    flight : ContractFlight
+        The reference flight.
+
+    Returns
+    -------
+    dict
+        The record's channels, or the link data, by name.
+    """
     truth = flight.truth
     if entry.acts_on is ActsOn.SENSOR:
         rec = _measure(truth, [entry.build(values)], channel=entry.channel)
@@ -177,7 +191,20 @@ def inject(entry: Entry, values: dict[str, float] | None,
 
 
 def baseline(entry: Entry, flight: ContractFlight) -> dict[str, np.ndarray | list]:
-    """The same data without the effect."""
+    """The same data as :func:`inject` returns, without the effect.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    flight : ContractFlight
+        The reference flight.
+
+    Returns
+    -------
+    dict
+        The record's channels, or the link data, by name.
+    """
     if entry.acts_on in (ActsOn.SENSOR, ActsOn.MOUNTING, ActsOn.VIBRATION):
         return dict(_measure(flight.truth).channels)
     if entry.acts_on in (ActsOn.DISTURBANCE, ActsOn.AIRFRAME, ActsOn.ACTUATOR):
@@ -186,7 +213,18 @@ def baseline(entry: Entry, flight: ContractFlight) -> dict[str, np.ndarray | lis
 
 
 def same(a, b) -> bool:
-    """Whether two series are equal to float precision (1e-12 of the larger magnitude)."""
+    """Whether two series are equal to float precision (1e-12 of the larger magnitude).
+
+    Parameters
+    ----------
+    a, b : array_like
+        The series; NaNs in the same places count as equal.
+
+    Returns
+    -------
+    bool
+        True when shapes agree and values are within 1e-12 * max(max|b|, 1).
+    """
     a, b = np.asarray(a, float), np.asarray(b, float)
     if a.shape != b.shape:
         return False
@@ -195,8 +233,16 @@ def same(a, b) -> bool:
 
 
 def check_declaration(entry: Entry) -> None:
-    """A one-line description, parameters with unit, meaning, default and neutral value
-    inside their range, options, and what the effect changes."""
+    """Assert the entry's declaration is complete.
+
+    A one-line description, parameters with unit, meaning, default and neutral value inside
+    their range, options, and what the effect changes.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    """
     assert entry.description and "\n" not in entry.description \
         and len(entry.description) < 120, f"{entry.name}: no one-line description"
     assert entry.parameters, "an effect without parameters cannot be sized or fitted"
@@ -221,13 +267,21 @@ def check_declaration(entry: Entry) -> None:
 
 
 def check_implementation(entry: Entry) -> None:
-    """The entry resolves to a dataclass whose fields are the declared parameters (or,
-    through a Reference, map onto them), taking the default and the zero magnitude."""
+    """Assert the entry resolves to a dataclass whose fields are the declared parameters.
+
+    Through an ExternalImplementation the fields map onto them; the class takes the default
+    and the zero magnitude.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    """
     impl = entry.resolve()
     assert dataclasses.is_dataclass(impl), impl
     declared = {p.name for p in entry.parameters}
     fields = {f.name: f for f in dataclasses.fields(impl) if f.init}
-    if isinstance(entry.implementation, Reference):
+    if isinstance(entry.implementation, ExternalImplementation):
         mapping = entry.implementation.mapping()
         assert set(mapping) == declared, f"{entry.name}: maps {sorted(mapping)}"
         assert set(mapping.values()) <= set(fields), f"{impl} lacks {set(mapping.values())}"
@@ -246,8 +300,15 @@ def check_implementation(entry: Entry) -> None:
 
 
 def check_sections(entry: Entry) -> None:
-    """The card sections that take the entry resolve its name to it; the others refuse
-    it, naming the key and the place it acts on."""
+    """Assert the card sections that take the entry resolve its name to it.
+
+    The other sections refuse it, naming the key and the place it acts on.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    """
     sections = entry.sections()
     if entry.acts_on in (ActsOn.LINK, ActsOn.CLOCK):
         assert not sections, f"{entry.name}: a link or clock effect in a card section"
@@ -269,8 +330,17 @@ def check_sections(entry: Entry) -> None:
 
 
 def check_default_changes(entry: Entry, flight: ContractFlight) -> None:
-    """At its default magnitude the entry changes every datum it declares (a sensor,
-    mounting or vibration effect nothing else)."""
+    """Assert at its default magnitude the entry changes every datum it declares.
+
+    A sensor, mounting or vibration effect changes nothing else.
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    flight : ContractFlight
+        The reference flight.
+    """
     clean = baseline(entry, flight)
     hit = inject(entry, entry.defaults(), flight)
     for c in entry.changes:
@@ -281,7 +351,15 @@ def check_default_changes(entry: Entry, flight: ContractFlight) -> None:
 
 
 def check_zero_unchanged(entry: Entry, flight: ContractFlight) -> None:
-    """At zero magnitude the entry leaves every datum unchanged (to float precision)."""
+    """Assert at zero magnitude the entry leaves every datum unchanged (to float precision).
+
+    Parameters
+    ----------
+    entry : Entry
+        The catalogue entry.
+    flight : ContractFlight
+        The reference flight.
+    """
     clean = baseline(entry, flight)
     zero = inject(entry, entry.zeros(), flight)
     assert set(zero) == set(clean), f"{entry.name}: data {sorted(set(zero) ^ set(clean))}"

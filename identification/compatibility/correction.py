@@ -24,15 +24,27 @@ def _shift(t: np.ndarray, x: np.ndarray, tau: float) -> np.ndarray:
 
 def correct(record: FlightRecord, values: Mapping[str, float],
             reconstruction: tuple[Problem, Estimate] | None = None) -> FlightRecord:
-    """The record with calibration ``values`` (SI; missing ones at their defaults) applied.
+    """The record with calibration ``values`` applied.
 
     Inputs: x = (m - bias) / (1 + scale). V: (m(t + delay) - bias) / (1 + scale). Vanes:
     (m(t + delay) - bias) / (1 + k), then the vane-position effect removed exactly by a
     fixed-point iteration on ``vane_angles`` with the corrected rates. Attitudes, h,
-    north, east: m(t + delay) - bias (psi keeps its wrapping). With ``reconstruction``
-    (problem, estimate) the modelled outputs and u, v, w are added as
-    ``<channel>_reconstructed`` and the estimates are documented in
-    ``meta.extra['compatibility']``.
+    north, east: m(t + delay) - bias (psi keeps its wrapping).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The measured flight, SI channels.
+    values : mapping of str to float
+        Calibration parameters (names of ``PARAMETERS``), SI; missing ones at their defaults.
+    reconstruction : tuple of (Problem, Estimate), optional
+        With it the modelled outputs and u, v, w are added as ``<channel>_reconstructed``
+        and the estimates are documented in ``meta.extra['compatibility']``.
+
+    Returns
+    -------
+    FlightRecord
+        The corrected record.
     """
     P = {n: float(values.get(n, p.default)) for n, p in PARAMETERS.items()}
     t = record.time

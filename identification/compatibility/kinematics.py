@@ -63,7 +63,20 @@ class Problem(problem_skeleton.Problem):
 
 
 def corrected_inputs(problem: Problem, P: Mapping[str, np.ndarray]) -> np.ndarray:
-    """True inputs (N, 6, K) from the measured ones: x = (m - bias) / (1 + scale)."""
+    """True inputs from the measured ones: x = (m - bias) / (1 + scale).
+
+    Parameters
+    ----------
+    problem : Problem
+        The reconstruction problem (measured inputs, SI).
+    P : mapping of str to numpy.ndarray
+        Parameter values per batch member; shape (K,) each.
+
+    Returns
+    -------
+    numpy.ndarray
+        The true inputs ax ay az (m/s^2) p q r (rad/s); shape (N, 6, K).
+    """
     m = problem.inputs[:, :, None]
     bias = np.stack([P[f"bias_{c}"] for c in INPUTS])[None]
     scale = np.stack([P[f"scale_{c}"] for c in INPUTS])[None]
@@ -111,13 +124,27 @@ def _prefix_products(dq: np.ndarray) -> np.ndarray:
 
 
 def integrate(problem: Problem, P: Mapping[str, np.ndarray], a: np.ndarray) -> np.ndarray:
-    """States (N, 9, K): u v w phi theta psi h north east from the true inputs a (N, 6, K).
+    """States u v w phi theta psi h north east from the true inputs.
 
     Flat Earth: ``_navigate`` once. With a latitude, the rotating round Earth enters
     through the transport rate, the Earth rate (for inertial gyros) and the Coriolis
     acceleration (Savage 2007 ch. 4; Titterton & Weston 2004 eq. 3.40). These are 1e-5
     rad/s and 1e-2 m/s^2 at most, so they are evaluated on the flat solution and the
     navigation is run again with them: the neglected part is of their square.
+
+    Parameters
+    ----------
+    problem : Problem
+        The reconstruction problem.
+    P : mapping of str to numpy.ndarray
+        Parameter values per batch member; shape (K,) each.
+    a : numpy.ndarray
+        True inputs; shape (N, 6, K).
+
+    Returns
+    -------
+    numpy.ndarray
+        States (m/s, rad, m); shape (N, 9, K).
     """
     states, rot, v_ned = _navigate(problem, P, a)
     if problem.latitude is None:
@@ -199,9 +226,25 @@ def _navigate(problem: Problem, P: Mapping[str, np.ndarray], a: np.ndarray,
 
 
 def vane_angles(u, v, w, p, q, r, alpha_pos=(0.0, 0.0, 0.0), beta_pos=(0.0, 0.0, 0.0)):
-    """Flow angles (rad) at the alpha and beta vane positions (m, body axes from the CG)
-    for CG air velocity u, v, w (m/s) and body rates p, q, r (rad/s): local velocity
-    V + omega x r_vane (M&K 2016 eq. 10.12 before linearisation)."""
+    """Flow angles at the alpha and beta vane positions: local velocity V + omega x r_vane
+    (M&K 2016 eq. 10.12 before linearisation).
+
+    Parameters
+    ----------
+    u, v, w : numpy.ndarray
+        CG air velocity, body axes, m/s.
+    p, q, r : numpy.ndarray
+        Body rates, rad/s.
+    alpha_pos : tuple of float, optional
+        Alpha vane position (x, y, z), m from the CG, body axes. Default the CG.
+    beta_pos : tuple of float, optional
+        Beta vane position (x, y, z), m from the CG, body axes. Default the CG.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (alpha, beta) at the vanes, rad.
+    """
     xa, ya, za = alpha_pos
     xb, yb, zb = beta_pos
     alpha = np.arctan2(w + p * ya - q * xa, u + q * za - r * ya)
@@ -212,7 +255,24 @@ def vane_angles(u, v, w, p, q, r, alpha_pos=(0.0, 0.0, 0.0), beta_pos=(0.0, 0.0,
 
 def model_outputs(problem: Problem, P: Mapping[str, np.ndarray], x: np.ndarray,
                    a: np.ndarray) -> np.ndarray:
-    """Modelled measurements (N, ny, K) from states x (N, 9, K) and true inputs a."""
+    """Modelled measurements from states and true inputs.
+
+    Parameters
+    ----------
+    problem : Problem
+        The reconstruction problem (its outputs and time).
+    P : mapping of str to numpy.ndarray
+        Parameter values per batch member; shape (K,) each.
+    x : numpy.ndarray
+        States; shape (N, 9, K).
+    a : numpy.ndarray
+        True inputs; shape (N, 6, K).
+
+    Returns
+    -------
+    numpy.ndarray
+        The modelled outputs, SI; shape (N, ny, K).
+    """
     u, v, w = x[:, 0], x[:, 1], x[:, 2]
     p, q, r = a[:, 3], a[:, 4], a[:, 5]
     pos = {name: P[name][None] for name in VANE_POSITIONS}
@@ -248,12 +308,39 @@ def _delayed(t: np.ndarray, y: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def batch(values: Mapping[str, float], k: int) -> dict[str, np.ndarray]:
+    """Every kinematic parameter repeated for ``k`` simultaneous simulations.
+
+    Parameters
+    ----------
+    values : Mapping of str to float
+        Parameter values (SI units); a parameter not given takes its default.
+    k : int
+        The number of simulations.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Each parameter of ``PARAMETERS`` as an array of ``k`` equal values.
+    """
     return {name: np.full(k, float(values.get(name, p.default)))
             for name, p in PARAMETERS.items()}
 
 
 def simulate(problem: Problem, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
-    """Modelled outputs (N, ny) and states (N, 9) at parameter ``values`` (SI units)."""
+    """Modelled outputs and states at parameter ``values``.
+
+    Parameters
+    ----------
+    problem : Problem
+        The reconstruction problem.
+    values : mapping of str to float
+        Parameter values, SI.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Outputs (N, ny) and states (N, 9), SI.
+    """
     P = batch(values, 1)
     a = corrected_inputs(problem, P)
     x = integrate(problem, P, a)
@@ -262,10 +349,25 @@ def simulate(problem: Problem, values: Mapping[str, float]) -> tuple[np.ndarray,
 
 def outputs_and_sensitivities(problem: Problem, values: Mapping[str, float],
                                names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    """Outputs (N, ny) and central-difference sensitivities (N, ny, len(names)).
+    """Outputs and central-difference sensitivities.
 
     One RK4 loop integrates the nominal and every +-step perturbation of the parameters
     that change the states; the output-only parameters reuse the nominal states.
+
+    Parameters
+    ----------
+    problem : Problem
+        The reconstruction problem.
+    values : mapping of str to float
+        Parameter values, SI.
+    names : sequence of str
+        The parameters differentiated.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Outputs (N, ny), SI, and sensitivities (N, ny, len(names)), output unit per
+        parameter unit.
     """
     in_states = [n for n in names if PARAMETERS[n].in_states]
     k_int = 1 + 2 * len(in_states)

@@ -113,9 +113,24 @@ CATALOGUE_EFFECTS: dict[str, tuple[str, str]] = _catalogue_effects()
 
 
 def default_free(record: FlightRecord, outputs: Sequence[str] | None = None) -> list[str]:
-    """The parameters estimated unless told otherwise: the six inertial biases, the alpha
-    and beta vane bias and flow amplification, and the airspeed bias (initial states are
-    always added)."""
+    """The parameters estimated unless told otherwise.
+
+    The six inertial biases, the alpha and beta vane bias and flow amplification, and the
+    airspeed bias, each vane and airspeed term only when its output is fitted (initial states
+    are always added).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+    outputs : sequence of str, optional
+        The outputs fitted. Default ``default_outputs(record)``.
+
+    Returns
+    -------
+    list of str
+        The parameter names.
+    """
     outputs = list(outputs or default_outputs(record))
     free = [f"bias_{c}" for c in INPUTS]
     if "alpha" in outputs:
@@ -128,11 +143,35 @@ def default_free(record: FlightRecord, outputs: Sequence[str] | None = None) -> 
 
 
 def default_outputs(record: FlightRecord) -> list[str]:
+    """The outputs flight path reconstruction fits by default: those of ``DEFAULT_OUTPUTS``
+    the record has, without the channels held for ``MAX_HELD`` of their samples or more.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight record.
+
+    Returns
+    -------
+    list of str
+        The output channels.
+    """
     return [c for c in DEFAULT_OUTPUTS if c in record and held_fraction(record[c]) < MAX_HELD]
 
 
 def held_fraction(x: np.ndarray) -> float:
-    """Fraction of samples that repeat the previous one exactly (a slow or held source)."""
+    """Fraction of samples that repeat the previous one exactly (a slow or held source).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        A channel's samples.
+
+    Returns
+    -------
+    float
+        The fraction, 1; 0 for fewer than two samples.
+    """
     return float(np.mean(np.diff(np.asarray(x)) == 0)) if len(x) > 1 else 0.0
 
 

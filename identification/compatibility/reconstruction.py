@@ -69,15 +69,36 @@ from flightid.record import FlightRecord
 def problem_from_record(record: FlightRecord, outputs: Sequence[str] | None = None,
                         gravity: float | None = None, latitude: float | None = None,
                         gyros: str | None = None) -> tuple[Problem, dict[str, str]]:
-    """Arrange a record for the reconstruction; returns the problem and notes on choices.
+    """Arrange a record for the reconstruction.
 
-    Checks channels, sampling and finite values. ``latitude`` (rad; default the mean of
-    the record's latitude channel) switches on the rotating round Earth; without it the
-    Earth is flat and still. Gravity (m/s^2): given, else the WGS84 normal gravity at the
-    mean altitude and latitude (45 deg if unknown). ``gyros``: 'inertial' (real IMUs,
-    they sense the Earth rate) or 'earth' (rates relative to the Earth, as JSBSim
-    records them); default ``meta.extra['gyro_frame']``, else 'earth' for records whose
-    provenance starts with "jsbsim", else 'inertial'.
+    Checks channels, sampling and finite values.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    outputs : sequence of str, optional
+        Measured channels to fit. Default ``default_outputs(record)``.
+    gravity : float, optional
+        Gravity, m/s^2. Default the WGS84 normal gravity at the mean altitude and latitude
+        (45 deg if unknown).
+    latitude : float, optional
+        Latitude, rad; switches on the rotating round Earth. Default the mean of the record's
+        latitude channel; without either the Earth is flat and still.
+    gyros : str, optional
+        'inertial' (real IMUs, they sense the Earth rate) or 'earth' (rates relative to the
+        Earth, as JSBSim records them). Default ``meta.extra['gyro_frame']``, else 'earth'
+        for records whose provenance starts with "jsbsim", else 'inertial'.
+
+    Returns
+    -------
+    tuple of (Problem, dict of str to str)
+        The problem and notes on the choices made.
+
+    Raises
+    ------
+    ValueError
+        For missing, unknown or non-finite channels, no output, or bad sampling.
     """
     notes: dict[str, str] = {}
     missing = [c for c in REQUIRED if c not in record]
@@ -146,7 +167,21 @@ def _line_start(t: np.ndarray, x: np.ndarray) -> float:
 
 
 def initial_states(record: FlightRecord, values: Mapping[str, float]) -> dict[str, float]:
-    """Start values x0_<state> from the record corrected with ``values`` (SI units)."""
+    """Start values x0_<state> from the record corrected with ``values``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    values : mapping of str to float
+        Calibration parameter values, SI.
+
+    Returns
+    -------
+    dict of str to float
+        x0_u, x0_v, x0_w (m/s), x0_phi, x0_theta (rad) and, where recorded, x0_psi (rad),
+        x0_h, x0_north, x0_east (m).
+    """
     rec = correct(record, values, reconstruction=None)
     t = rec.time
     V, alpha, beta = (_line_start(t, rec[c]) for c in ("V", "alpha", "beta"))
@@ -279,16 +314,48 @@ def reconstruct(
 ) -> tuple[FlightRecord, Estimate]:
     """Flight path reconstruction: estimate sensor calibration and return the corrected record.
 
-    free: parameters to estimate (names of ``PARAMETERS``; default ``default_free``); the
-    initial states x0_<state> are always added unless given in ``fixed``. fixed: known
-    values (SI) of parameters not estimated, e.g. vane positions from drawings. outputs:
-    measured channels to fit (default V alpha beta phi theta psi h, those present).
-    gravity (m/s^2), latitude (rad) and gyros ('inertial' or 'earth') set the Earth model
-    (see ``problem_from_record``). uncertainty: how the standard errors are formed (see
-    ``UNCERTAINTY``). Returns the record with the estimates applied (``correct``) and the
-    Estimate (values in SI units; ``PARAMETERS[name].unit``).
-    A reconstruction that does not converge warns (``convergence.NotConvergedWarning``);
-    ``max_iterations`` below 1 is refused.
+    A reconstruction that does not converge warns (``convergence.NotConvergedWarning``).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    free : sequence of str, optional
+        Parameters to estimate (names of ``PARAMETERS``). Default ``default_free``; the
+        initial states x0_<state> are always added unless given in ``fixed``.
+    fixed : mapping of str to float, optional
+        Known values (SI) of parameters not estimated, e.g. vane positions from drawings.
+    outputs : sequence of str, optional
+        Measured channels to fit. Default V alpha beta phi theta psi h, those present.
+    gravity : float, optional
+        Gravity, m/s^2 (see ``problem_from_record``).
+    latitude : float, optional
+        Latitude, rad (see ``problem_from_record``).
+    gyros : str, optional
+        'inertial' or 'earth' (see ``problem_from_record``).
+    uncertainty : str, optional
+        How the standard errors are formed (see ``UNCERTAINTY``). Default "noise".
+    max_iterations : int, optional
+        Iteration limit, at least 1. Default 60.
+    step_tolerance : float, optional
+        Converged when no parameter moves by more than this many standard errors. Default
+        1e-2.
+    cost_tolerance : float, optional
+        Converged when the cost changes by less than this. Default 1e-4.
+    singular_eigenvalue : float, optional
+        Collinearity threshold of the identifiability check. Default
+        ``ident.SINGULAR_EIGENVALUE``.
+
+    Returns
+    -------
+    tuple of (FlightRecord, Estimate)
+        The record with the estimates applied (``correct``) and the Estimate (values in SI
+        units; ``PARAMETERS[name].unit``).
+
+    Raises
+    ------
+    ValueError
+        For an unknown uncertainty, a bad parameter list, or ``max_iterations`` below 1.
     """
     convergence.check_limit("compatibility", "max_iterations", max_iterations)
     if uncertainty not in UNCERTAINTY:
@@ -347,11 +414,21 @@ OUTPUT_NOISE = "residual"
 
 
 def white_noise_std(x: np.ndarray) -> float:
-    """Standard deviation of the white noise on a sampled signal, in its unit.
+    """Standard deviation of the white noise on a sampled signal.
 
     From third differences, which remove a smooth signal: var(d3 x) = 20 sigma^2 for white
     noise; robust (median absolute deviation) against the few samples where the signal
     jerks, falling back to the rms for a coarsely quantised signal whose median is 0.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit; shape (n,).
+
+    Returns
+    -------
+    float
+        The noise standard deviation, unit of ``x``.
     """
     d = np.diff(np.asarray(x, dtype=float), 3)
     robust = 1.4826 * float(np.median(np.abs(d - np.median(d))))

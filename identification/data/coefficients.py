@@ -52,10 +52,26 @@ def _window_samples(size: int, dt: float, window_s: float, order: int) -> int:
 def smoothed_derivative(
     x: np.ndarray, dt: float, window_s: float = SMOOTHING_WINDOW_S, order: int = 2
 ) -> np.ndarray:
-    """Time derivative of x (units of x per s) by a local polynomial (Savitzky-Golay) fit.
+    """Time derivative of x by a local polynomial (Savitzky-Golay) fit.
 
-    window_s is the span of the local fit in s (rounded to an odd number of samples, at
-    least order + 2); the fit smooths noise above roughly 1 / window_s Hz.
+    The fit smooths noise above roughly 1 / window_s Hz.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit; shape (n,).
+    dt : float
+        Sample interval, s.
+    window_s : float, optional
+        The span of the local fit, s (rounded to an odd number of samples, at least
+        order + 2). Default ``SMOOTHING_WINDOW_S``.
+    order : int, optional
+        The local polynomial's order. Default 2.
+
+    Returns
+    -------
+    numpy.ndarray
+        dx/dt, units of x per s; shape (n,).
     """
     x = np.asarray(x, dtype=float)
     n = _window_samples(x.size, dt, window_s, order)
@@ -64,8 +80,8 @@ def smoothed_derivative(
 
 def smoothed(x: np.ndarray, dt: float, window_s: float = SMOOTHING_WINDOW_S, order: int = 2
              ) -> np.ndarray:
-    """x (its own unit) through the filter that ``smoothed_derivative`` applies to what it
-    differentiates: the regressors of a differentiated signal need it too.
+    """x through the filter that ``smoothed_derivative`` applies to what it differentiates:
+    the regressors of a differentiated signal need it too.
 
     The local-polynomial slope over 2M + 1 samples is the least-squares slope
     sum(k x_k) / (dt sum k^2), i.e. d/dt of x smoothed by a parabolic window
@@ -73,6 +89,22 @@ def smoothed(x: np.ndarray, dt: float, window_s: float = SMOOTHING_WINDOW_S, ord
     sum s_k k^2 = sum k^4 / (3 sum k^2)), so jw S(w) equals the slope filter's response
     to within 0.2 % below its cutoff (a plain polynomial smoothing of the same span is
     off by 90 % at 4 Hz on a 0.2 s window).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit; shape (n,).
+    dt : float
+        Sample interval, s.
+    window_s : float, optional
+        The span of the local fit, s. Default ``SMOOTHING_WINDOW_S``.
+    order : int, optional
+        The local polynomial's order (sets the smallest window). Default 2.
+
+    Returns
+    -------
+    numpy.ndarray
+        The smoothed signal, unit of x; shape (n,).
     """
     x = np.asarray(x, dtype=float)
     n = _window_samples(x.size, dt, window_s, order)
@@ -83,14 +115,40 @@ def smoothed(x: np.ndarray, dt: float, window_s: float = SMOOTHING_WINDOW_S, ord
 
 
 def differentiated(record: FlightRecord, coefficient: str) -> bool:
-    """True when ``coefficient`` is computed from smoothed derivatives of the rates (a
-    moment coefficient the record does not hold, without measured angular accelerations)."""
+    """True when ``coefficient`` is computed from smoothed derivatives of the rates.
+
+    That is a moment coefficient the record does not hold, without measured angular
+    accelerations.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    coefficient : str
+        A coefficient name (CX, ..., Cn).
+
+    Returns
+    -------
+    bool
+        Whether it is computed from differentiated rates.
+    """
     return (coefficient in ("Cl", "Cm", "Cn") and coefficient not in record
             and any(f"{r}dot" not in record for r in ("p", "q", "r")))
 
 
 def nondimensional_rates(record: FlightRecord) -> dict[str, np.ndarray]:
-    """phat = p b/2V, qhat = q cbar/2V, rhat = r b/2V (dimensionless) from p, q, r and V."""
+    """phat = p b/2V, qhat = q cbar/2V, rhat = r b/2V from p, q, r and V.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, with reference geometry in its metadata.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``phat``, ``qhat``, ``rhat``, dimensionless; shape (n,) each.
+    """
     ref = _reference(record)
     two_v = 2.0 * record["V"]
     return {
@@ -102,7 +160,20 @@ def nondimensional_rates(record: FlightRecord) -> dict[str, np.ndarray]:
 
 def angular_accelerations(record: FlightRecord, window_s: float = SMOOTHING_WINDOW_S
                           ) -> dict[str, np.ndarray]:
-    """pdot, qdot, rdot (rad/s^2): the record's channels, or smoothed derivatives of p, q, r."""
+    """pdot, qdot, rdot: the record's channels, or smoothed derivatives of p, q, r.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    window_s : float, optional
+        The smoothing span of ``smoothed_derivative``, s. Default ``SMOOTHING_WINDOW_S``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``pdot``, ``qdot``, ``rdot``, rad/s^2; shape (n,) each.
+    """
     out = {}
     for rate in ("p", "q", "r"):
         name = rate + "dot"
@@ -114,7 +185,23 @@ def angular_accelerations(record: FlightRecord, window_s: float = SMOOTHING_WIND
 
 
 def mass_properties(record: FlightRecord) -> dict[str, np.ndarray]:
-    """mass (kg) and Ixx Iyy Izz Ixz (kg m^2): record channels, else meta.extra values."""
+    """mass and Ixx Iyy Izz Ixz: record channels, else meta.extra values.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``mass`` (kg) and the inertias (kg m^2); shape (n,) each.
+
+    Raises
+    ------
+    ValueError
+        When one is neither a channel nor in meta.extra.
+    """
     out = {}
     for name in MASS_PROPERTIES:
         if name in record:
@@ -134,10 +221,27 @@ def force_moment_coefficients(
 ) -> dict[str, np.ndarray]:
     """CX CY CZ Cl Cm Cn (body axes, about the CG) and CL CD (stability axes), dimensionless.
 
-    include_thrust subtracts the record's ``thrust`` channel (N, along body x) from the
-    x force, so CX and CD are aerodynamic only; the propulsive moments ``L_prop``,
-    ``M_prop``, ``N_prop`` (N m, body axes: torque reaction, p-factor, gyroscopic) are
-    subtracted from the moments where the record has them, so Cl, Cm, Cn are aerodynamic.
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, with mass properties and reference geometry.
+    include_thrust : bool, optional
+        Subtract the record's ``thrust`` channel (N, along body x) from the x force, so CX and
+        CD are aerodynamic only. Default True. The propulsive moments ``L_prop``, ``M_prop``,
+        ``N_prop`` (N m, body axes: torque reaction, p-factor, gyroscopic) are subtracted from
+        the moments where the record has them, so Cl, Cm, Cn are aerodynamic.
+    window_s : float, optional
+        Smoothing span for differentiated rates, s. Default 0.2.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The coefficients, dimensionless; shape (n,) each.
+
+    Raises
+    ------
+    ValueError
+        When the dynamic pressure is not positive, or the thrust is asked for and missing.
     """
     ref = _reference(record)
     mp = mass_properties(record)
@@ -188,7 +292,19 @@ def with_coefficients(
 ) -> FlightRecord:
     """The record with coefficient and nondimensional-rate channels added where missing.
 
-    With overwrite=True the computed ones replace the record's own.
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    overwrite : bool, optional
+        The computed channels replace the record's own. Default False.
+    include_thrust : bool, optional
+        As in ``force_moment_coefficients``. Default True.
+
+    Returns
+    -------
+    FlightRecord
+        The record with the added channels (the record itself when none are added).
     """
     add: dict[str, np.ndarray] = {}
     missing = [c for c in COEFFICIENT_CHANNELS if overwrite or c not in record]
@@ -219,21 +335,71 @@ THRUST_COEFFICIENT = "Tc"
 
 
 def thrust_coefficient(record: FlightRecord) -> np.ndarray:
-    """Tc = T / (qbar S), dimensionless, from the record's thrust (N, body x)."""
+    """Tc = T / (qbar S), dimensionless, from the record's thrust (N, body x).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, with a ``thrust`` channel.
+
+    Returns
+    -------
+    numpy.ndarray
+        Tc, dimensionless; shape (n,).
+
+    Raises
+    ------
+    ValueError
+        When the record has no ``thrust`` channel.
+    """
     if "thrust" not in record:
         raise ValueError("the thrust coefficient Tc needs the record's 'thrust' channel (N)")
     return record["thrust"] / (record["qbar"] * _reference(record).area)
 
 
 def hinge_name(channel: str, knot_deg: float) -> str:
-    """The spline factor (channel - knot)_+ of an angle channel (rad), e.g. hinge_name(
-    'alpha', 8.0) = '(alpha-8deg)+'; ``knot_deg`` in deg."""
+    """The spline factor (channel - knot)_+ of an angle channel (rad).
+
+    For example hinge_name('alpha', 8.0) = '(alpha-8deg)+'.
+
+    Parameters
+    ----------
+    channel : str
+        The angle channel (rad).
+    knot_deg : float
+        The knot, deg.
+
+    Returns
+    -------
+    str
+        The factor's channel name.
+    """
     return f"({channel}{'-' if knot_deg >= 0 else '+'}{abs(knot_deg):g}deg)+"
 
 
 def channel_values(record: FlightRecord, channel: str) -> np.ndarray:
-    """A channel of the record, or one derived from it (phat qhat rhat, alphadot_hat, the
-    thrust coefficient Tc, a spline factor such as '(alpha-8deg)+', see ``hinge_name``)."""
+    """A channel of the record, or one derived from it.
+
+    Derived channels: phat qhat rhat, alphadot_hat, the thrust coefficient Tc, the
+    coefficients, a spline factor such as '(alpha-8deg)+' (see ``hinge_name``).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    channel : str
+        The channel name.
+
+    Returns
+    -------
+    numpy.ndarray
+        The channel's values, SI (dimensionless for the derived ones); shape (n,).
+
+    Raises
+    ------
+    KeyError
+        When the record neither holds nor can derive ``channel``.
+    """
     if channel in record:
         return record[channel]
     hinge = HINGE.match(channel)

@@ -76,7 +76,20 @@ def _checked(y: np.ndarray, lam: float) -> np.ndarray:
 
 
 def total_variation(y: np.ndarray, lam: float) -> np.ndarray:
-    """The total-variation denoised signal (same unit as ``y``), ``lam`` in that unit."""
+    """The total-variation denoised signal.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The signal, any unit; shape (n,).
+    lam : float
+        The total-variation weight, unit of ``y``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The denoised signal, unit of ``y``; shape (n,).
+    """
     y = _checked(y, lam)
     if y.size < 3 or lam == 0:
         return y.copy()
@@ -86,13 +99,28 @@ def total_variation(y: np.ndarray, lam: float) -> np.ndarray:
 def piecewise_constant(y: np.ndarray, sigma: float | None = None,
                        weight: float = DEFAULT_WEIGHT,
                        significance: float = STEP_SIGNIFICANCE) -> np.ndarray:
-    """A noisy multistep measurement made piecewise constant, steps kept (input unit).
+    """A noisy multistep measurement made piecewise constant, steps kept.
 
-    sigma: white-noise standard deviation of ``y`` (default ``white_noise_std(y)``);
-    lambda = weight * sigma. The candidate steps are where the TV dual bound is active;
-    a step whose two sides differ by less than ``significance`` standard errors of the
-    difference, sigma sqrt(1/n1 + 1/n2), is removed (least significant first), and each
-    remaining run is the mean of ``y`` over it.
+    lambda = weight * sigma. The candidate steps are where the TV dual bound is active; a step
+    whose two sides differ by less than ``significance`` standard errors of the difference,
+    sigma sqrt(1/n1 + 1/n2), is removed (least significant first), and each remaining run is
+    the mean of ``y`` over it.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The measured input, its unit; shape (n,).
+    sigma : float, optional
+        White-noise standard deviation of ``y``, its unit. Default ``white_noise_std(y)``.
+    weight : float, optional
+        lambda / sigma. Default ``DEFAULT_WEIGHT``.
+    significance : float, optional
+        Standard errors a kept step must exceed. Default ``STEP_SIGNIFICANCE``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The piecewise-constant input, unit of ``y``; shape (n,).
     """
     sigma = white_noise_std(np.asarray(y, dtype=float)) if sigma is None else float(sigma)
     parts = runs(y, sigma, weight, significance)
@@ -101,8 +129,25 @@ def piecewise_constant(y: np.ndarray, sigma: float | None = None,
 
 def runs(y: np.ndarray, sigma: float, weight: float = DEFAULT_WEIGHT,
          significance: float = STEP_SIGNIFICANCE) -> list[np.ndarray]:
-    """The constant runs of ``piecewise_constant``: consecutive pieces of ``y``, one per
-    plateau (a single piece when there is no significant step)."""
+    """The constant runs of ``piecewise_constant``.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The measured input, its unit; shape (n,).
+    sigma : float
+        White-noise standard deviation of ``y``, its unit.
+    weight : float, optional
+        lambda / sigma. Default ``DEFAULT_WEIGHT``.
+    significance : float, optional
+        Standard errors a kept step must exceed. Default ``STEP_SIGNIFICANCE``.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Consecutive pieces of ``y``, one per plateau (a single piece when there is no
+        significant step).
+    """
     lam = weight * sigma
     y = _checked(y, lam)
     if y.size < 3 or lam == 0:
@@ -126,7 +171,25 @@ def _merged(runs: list[np.ndarray], sigma: float, significance: float) -> list[n
 
 
 def denoise_channels(record: FlightRecord, channels: list[str] | tuple[str, ...]) -> FlightRecord:
-    """``record`` with the named multistep input channels made piecewise constant."""
+    """``record`` with the named multistep input channels made piecewise constant.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    channels : list or tuple of str
+        The multistep input channels.
+
+    Returns
+    -------
+    FlightRecord
+        A new record with those channels replaced.
+
+    Raises
+    ------
+    ValueError
+        When a channel is not in the record.
+    """
     missing = [c for c in channels if c not in record]
     if missing:
         raise ValueError(f"multistep input(s) {', '.join(missing)} not in the record (it has "

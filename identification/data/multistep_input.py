@@ -96,12 +96,37 @@ class MultistepParameters:
 def from_measurement(time: np.ndarray, y: np.ndarray, sigma: float | None = None,
                      hold: str = "foh", weight: float = DEFAULT_WEIGHT,
                      significance: float = STEP_SIGNIFICANCE) -> MultistepParameters:
-    """Levels and edges of a measured multistep (``y`` in its unit at the uniform ``time``, s).
+    """Levels and edges of a measured multistep.
 
-    The steps and plateau levels are those of ``input_denoising.piecewise_constant``
-    (``sigma``, ``weight``, ``significance`` as there); each edge is placed where the
-    step's area matches the measured samples next to it (two samples before the step to
-    one after it), so that a sample caught mid-transition puts it between the samples.
+    The steps and plateau levels are those of ``input_denoising.piecewise_constant``; each
+    edge is placed where the step's area matches the measured samples next to it (two samples
+    before the step to one after it), so that a sample caught mid-transition puts it between
+    the samples.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Uniform sample times, s; shape (n,).
+    y : numpy.ndarray
+        The measured input, its unit; shape (n,).
+    sigma : float, optional
+        White-noise standard deviation of ``y``. Default ``white_noise_std(y)``.
+    hold : str, optional
+        The model's input hold the edges are placed for: "foh" or "zoh". Default "foh".
+    weight : float, optional
+        As in ``piecewise_constant``. Default ``DEFAULT_WEIGHT``.
+    significance : float, optional
+        As in ``piecewise_constant``. Default ``STEP_SIGNIFICANCE``.
+
+    Returns
+    -------
+    MultistepParameters
+        The plateau levels (unit of ``y``) and the step edges (s).
+
+    Raises
+    ------
+    ValueError
+        When ``time`` and ``y`` are not 1-D of one length, or ``hold`` is unknown.
     """
     time = np.asarray(time, dtype=float)
     y = np.asarray(y, dtype=float)

@@ -96,15 +96,28 @@ def _position(value: Any, key: str) -> tuple[float, float, float]:
 
 def accelerometers_to_cg(record: FlightRecord, position: Sequence[float]
                          ) -> dict[str, np.ndarray]:
-    """ax, ay, az (m/s^2) at the CG from accelerometers at ``position`` (x, y, z m from the
-    CG, body axes): a_s - omegadot x r - omega x (omega x r) (M&K eq. 10.9).
+    """ax, ay, az at the CG from accelerometers at ``position``:
+    a_s - omegadot x r - omega x (omega x r) (M&K eq. 10.9).
 
     omegadot by central differences of the measured rates: the accelerometers saw the
     angular acceleration at the bandwidth of the gyros (same anti-alias filters), and a
     smoothed omegadot (``smoothed_derivative``, 0.2 s) leaves its high-frequency part at
     the input edges in the corrected specific forces: on the twinotter-id card flown by
     ``flightid campaign`` it put CY_beta, CY_p, CY_da, CX_de at 3.5-4.7 sigma (6-DOF
-    output error, 19 of 24 within 3 sigma; with central differences 24 of 24)."""
+    output error, 19 of 24 within 3 sigma; with central differences 24 of 24).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, with ax, ay, az, p, q, r.
+    position : sequence of float
+        The accelerometers' (x, y, z), m from the CG, body axes.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``ax``, ``ay``, ``az`` at the CG, m/s^2; shape (n,) each.
+    """
     x, y, z = position
     t = record.time
     p, q, r = record["p"], record["q"], record["r"]
@@ -125,20 +138,26 @@ def _with(record: FlightRecord, channels: Mapping[str, np.ndarray],
 
 
 def calibration_doubts(record: FlightRecord, est: Estimate) -> list[str]:
-    """Why a flight path reconstruction's vane calibration must not be applied (empty: it
-    may be).
+    """Why a flight path reconstruction's vane calibration must not be applied.
+
+    One reason per failed check: alpha or beta residuals above ``MAX_RESIDUAL_RATIO`` times
+    the vane's white noise, at least ``RESIDUAL_FLOOR`` (wind or turbulence the kinematics
+    cannot see; Jategaonkar 2015 ch. 10), a flow amplification K = 1 + k outside
+    1 +- ``MAX_VANE_SCALE``, a bias beyond ``MAX_VANE_BIAS`` (rad), or Cramer-Rao bounds above
+    ``MAX_VANE_SCALE_STD`` / ``MAX_VANE_BIAS_STD`` (not identified to the accuracy a
+    calibration needs).
 
     Parameters
     ----------
-    record : the record the reconstruction was fitted to (SI units).
-    est : the reconstruction's Estimate (``compatibility.reconstruct``, Cramer-Rao bounds).
+    record : FlightRecord
+        The record the reconstruction was fitted to, SI channels.
+    est : Estimate
+        The reconstruction's estimate (``compatibility.reconstruct``, Cramer-Rao bounds).
 
-    Returns one reason per failed check: alpha or beta residuals above
-    ``MAX_RESIDUAL_RATIO`` times the vane's white noise, at least ``RESIDUAL_FLOOR`` (wind
-    or turbulence the kinematics cannot see; Jategaonkar 2015 ch. 10), a flow
-    amplification K = 1 + k outside 1 +- ``MAX_VANE_SCALE``, a bias beyond
-    ``MAX_VANE_BIAS`` (rad), or Cramer-Rao bounds above ``MAX_VANE_SCALE_STD`` /
-    ``MAX_VANE_BIAS_STD`` (not identified to the accuracy a calibration needs).
+    Returns
+    -------
+    list of str
+        One reason per failed check; empty when the calibration may be applied.
     """
     doubts = []
     residual = est.fit.get("noise_std", {})
@@ -231,15 +250,24 @@ def reduce_record(record: FlightRecord,
 
     Parameters
     ----------
-    record : a flight record in SI units.
-    positions : sensor positions (m from the CG, body axes) as in
-        ``meta.extra['sensor_positions']``: ``accelerometers``, ``alpha_vane``,
-        ``beta_vane``, each [x, y, z]; default the record's own.
+    record : FlightRecord
+        A flight record, SI channels.
+    positions : mapping, optional
+        Sensor positions (m from the CG, body axes) as in ``meta.extra['sensor_positions']``:
+        ``accelerometers``, ``alpha_vane``, ``beta_vane``, each [x, y, z]. Default the
+        record's own.
 
-    Returns a Reduction: the corrected record (its sensor positions then say the
-    sensors are at the CG, and ``meta.extra['data_reduction']`` lists what was done),
-    one line per correction applied, and warnings (no positions: the bias to expect).
-    Raises ValueError for malformed positions.
+    Returns
+    -------
+    Reduction
+        The corrected record (its sensor positions then say the sensors are at the CG, and
+        ``meta.extra['data_reduction']`` lists what was done), one line per correction
+        applied, and warnings (no positions: the bias to expect).
+
+    Raises
+    ------
+    ValueError
+        For malformed positions.
     """
     if positions is None:
         positions = record.meta.extra.get(POSITIONS_KEY)
@@ -272,16 +300,28 @@ def reduce_record(record: FlightRecord,
 
 
 def standard_reduction(record: FlightRecord, raw: bool = False) -> Reduction:
-    """What ``flightid identify`` (and each realization of ``flightid montecarlo``) does to
-    a record before identifying it: ``reduce_record`` with the record's own sensor
-    positions, or, with ``raw`` (``--raw``), nothing (``applied`` is [``SKIPPED``]).
+    """What ``flightid identify`` (and each realization of ``flightid montecarlo``) does to a
+    record before identifying it.
+
+    ``reduce_record`` with the record's own sensor positions, or, with ``raw`` (``--raw``),
+    nothing (``applied`` is [``SKIPPED``]).
 
     Parameters
     ----------
-    record : a flight record in SI units.
-    raw : skip the reduction.
+    record : FlightRecord
+        A flight record, SI channels.
+    raw : bool, optional
+        Skip the reduction. Default False.
 
-    Returns a Reduction (see ``reduce_record``). Raises ValueError for malformed positions.
+    Returns
+    -------
+    Reduction
+        See ``reduce_record``.
+
+    Raises
+    ------
+    ValueError
+        For malformed positions.
     """
     if raw:
         return Reduction(record, applied=[SKIPPED])

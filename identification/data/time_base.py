@@ -29,8 +29,18 @@ class RegriddedWarning(UserWarning):
 
 
 def jitter(record: FlightRecord) -> float:
-    """The largest |step - median step| / median step of the record's time (0 when it
-    has fewer than three samples)."""
+    """The largest |step - median step| / median step of the record's time.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+
+    Returns
+    -------
+    float
+        The relative jitter, 1; 0 when the record has fewer than three samples.
+    """
     if len(record) < 3:
         return 0.0
     steps = np.diff(record.time)
@@ -39,10 +49,22 @@ def jitter(record: FlightRecord) -> float:
 
 
 def regrid_jitter(record: FlightRecord) -> FlightRecord:
-    """``record`` on a uniform time grid when its steps jitter by less than
-    ``JITTER_LIMIT`` of the median step (a ``RegriddedWarning`` says so); the record
-    itself when it is uniform already or when its time has gaps (left to
-    ``FlightRecord.uniform_step`` to refuse)."""
+    """``record`` on a uniform time grid when its steps jitter by less than ``JITTER_LIMIT``
+    of the median step (a ``RegriddedWarning`` says so).
+
+    Channels are linearly interpolated onto the least-squares uniform grid.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+
+    Returns
+    -------
+    FlightRecord
+        The re-gridded record; the record itself when it is uniform already or when its time
+        has gaps (left to ``FlightRecord.uniform_step`` to refuse).
+    """
     spread = jitter(record)
     if spread <= UNIFORM_RTOL or spread > JITTER_LIMIT:
         return record

@@ -87,16 +87,39 @@ class UnitRatio:
 
 
 def unit_ratios(record: FlightRecord) -> dict[str, UnitRatio]:
-    """Every ratio of the module docstring that the record's channels allow, by name."""
+    """Every ratio of the module docstring that the record's channels allow, by name.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, channels in their declared units.
+
+    Returns
+    -------
+    dict of str to UnitRatio
+        The ratios by name.
+    """
     found = (_airspeed_qbar(record), _airspeed_uvw(record), _gravity(record),
              _euler(record), _lift_coefficient(record), _gyration(record))
     return {r.name: r for r in found if r is not None}
 
 
 def implausible(record: FlightRecord, channels: list[str] | None = None) -> list[str]:
-    """One message per channel (of ``channels``, default all) whose magnitude is not
-    plausible in its declared unit, and per physical ratio outside its band, naming the
-    likely unit; [] when all are plausible."""
+    """One message per channel whose magnitude is not plausible in its declared unit, and per
+    physical ratio outside its band, naming the likely unit.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, channels in their declared units.
+    channels : list of str, optional
+        The channels judged. Default all.
+
+    Returns
+    -------
+    list of str
+        The messages; [] when all are plausible.
+    """
     names = [c for c in (channels if channels is not None else record.channels)
              if c in record]
     problems = []
@@ -132,18 +155,45 @@ def implausible(record: FlightRecord, channels: list[str] | None = None) -> list
 def check_units(record: FlightRecord, channels: list[str] | None = None,
                 purpose: str = "identification") -> None:
     """Raise ValueError ("units look wrong: ...") listing every implausible channel and
-    ratio with its likely unit."""
+    ratio with its likely unit.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, channels in their declared units.
+    channels : list of str, optional
+        The channels judged. Default all.
+    purpose : str, optional
+        What the record is for, named in the error. Default "identification".
+
+    Raises
+    ------
+    ValueError
+        When any channel or ratio is implausible.
+    """
     problems = implausible(record, channels)
     if problems:
         raise ValueError(f"units look wrong for {purpose}: " + "; ".join(problems))
 
 
 def euler_rate_scale(record: FlightRecord) -> float | None:
-    """The least-squares scale s of (dphi/dt, dtheta/dt) = s * (Euler kinematics of p, q,
-    r): 1 when attitudes and rates share their unit, 1/57.3 when the rates are in deg/s
-    with attitudes in rad, 57.3 in the reverse case (Morelli & Klein 2016, sec. 10.2, the
-    kinematic equations used for data compatibility). None when the channels are missing
-    or the attitude does not move."""
+    """The least-squares scale s of (dphi/dt, dtheta/dt) = s * (Euler kinematics of p, q, r).
+
+    1 when attitudes and rates share their unit, 1/57.3 when the rates are in deg/s with
+    attitudes in rad, 57.3 in the reverse case (Morelli & Klein 2016, sec. 10.2, the
+    kinematic equations used for data compatibility).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, channels in their declared units.
+
+    Returns
+    -------
+    float or None
+        The scale, 1; None when the channels are missing, the attitude does not move, or its
+        motion does not follow the rates.
+    """
     need = ("phi", "theta", "p", "q", "r")
     if any(c not in record for c in need) or len(record) < 10:
         return None

@@ -20,14 +20,38 @@ SETTLE_S = 8.0  # s of free response kept after the last input of a window
 
 
 def maneuvers(record: FlightRecord) -> list[dict[str, Any]]:
-    """The record's maneuvers [{"kind", "surfaces", "start", "end"}], empty when unknown."""
+    """The record's maneuvers, empty when unknown.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+
+    Returns
+    -------
+    list of dict
+        One {"kind", "surfaces", "start", "end"} per maneuver (times in s).
+    """
     return list(record.meta.extra.get(META_KEY) or [])
 
 
 def window(record: FlightRecord, inputs: Sequence[str]) -> tuple[float, float] | None:
-    """(start, end) in s of the record's maneuvers on ``inputs`` plus lead and settling
-    time, ending before the next maneuver on other inputs; None when the record lists no
-    maneuver on them."""
+    """(start, end) of the record's maneuvers on ``inputs`` plus lead and settling time.
+
+    The window ends before the next maneuver on other inputs.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+    inputs : sequence of str
+        The surfaces whose maneuvers are wanted.
+
+    Returns
+    -------
+    tuple of float or None
+        (start, end), s; None when the record lists no maneuver on them.
+    """
     items = maneuvers(record)
     chosen = [m for m in items if set(m["surfaces"]) & set(inputs)]
     if not chosen:
@@ -42,7 +66,20 @@ def window(record: FlightRecord, inputs: Sequence[str]) -> tuple[float, float] |
 
 
 def select(record: FlightRecord, inputs: Sequence[str]) -> tuple[FlightRecord, tuple | None]:
-    """(the record cut to ``window(record, inputs)``, the window) or (record, None)."""
+    """The record cut to ``window(record, inputs)``, and the window.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+    inputs : sequence of str
+        The surfaces whose maneuvers are wanted.
+
+    Returns
+    -------
+    tuple of (FlightRecord, tuple or None)
+        (the cut record, (start, end) s), or (record, None) when there is no window.
+    """
     span = window(record, inputs)
     if span is None:
         return record, None

@@ -25,7 +25,18 @@ LATERAL_LEVERAGE_POWER = 1.5
 
 
 def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
-    """Parameter covariance M^-1 (M&K eq. 6.50), in parameter units squared."""
+    """Parameter covariance M^-1 (M&K eq. 6.50), in parameter units squared.
+
+    Parameters
+    ----------
+    information : numpy.ndarray
+        The Fisher information matrix M, 1 / (parameter unit)^2; shape (np, np).
+
+    Returns
+    -------
+    numpy.ndarray
+        The covariance, parameter units squared; shape (np, np).
+    """
     return np.linalg.inv(information)
 
 
@@ -42,22 +53,40 @@ def colored_residual_covariance(
     sensitivities A = W^(1/2) S and residuals e = W^(1/2) v:
     (1/(L N)) sum_f |e_f^H A_f|^2.
 
-    ``leverage``: the residuals of a fit are (I - P) v, P the projection on A, and in the
-    frequency domain the fit removes from bin f the share H_f = A_f M^-1 A_f^H / N
-    (ny x ny; the shares sum to the number of parameters). Where the sensitivities and a
-    colored residual share the same low band (a flight in turbulence) the sample spectrum
-    is depleted exactly where the bound needs it: the plain eq. 6.54 bounds of output error
-    on the Navion demo card in light turbulence are 1.3-2.1 times too small (coverage of the
-    95 % intervals 57-87 %). Each bin's whitened residual power is therefore divided by
+    The residuals of a fit are (I - P) v, P the projection on A, and in the frequency domain
+    the fit removes from bin f the share H_f = A_f M^-1 A_f^H / N (ny x ny; the shares sum to
+    the number of parameters). Where the sensitivities and a colored residual share the same
+    low band (a flight in turbulence) the sample spectrum is depleted exactly where the bound
+    needs it: the plain eq. 6.54 bounds of output error on the Navion demo card in light
+    turbulence are 1.3-2.1 times too small (coverage of the 95 % intervals 57-87 %). With
+    ``leverage`` each bin's whitened residual power is therefore divided by
     (I - H_f)^``power``, H_f capped at ``MAX_LEVERAGE``: the frequency-domain form of the
-    sandwich corrections of MacKinnon & White (1985), HC2 for ``power`` 1 (unbiased when
-    the residual is white across the bins a parameter mixes) and HC3 for 2 (the jackknife
-    form, recommended for small samples by Long & Ervin 2000, conservative for white
-    errors). The default is HC3; output error's lateral model uses ``LATERAL_LEVERAGE_POWER``
+    sandwich corrections of MacKinnon & White (1985), HC2 for ``power`` 1 (unbiased when the
+    residual is white across the bins a parameter mixes) and HC3 for 2 (the jackknife form,
+    recommended for small samples by Long & Ervin 2000, conservative for white errors). The
+    default is HC3; output error's lateral model uses ``LATERAL_LEVERAGE_POWER``
     (``leverage_power``; docs/validation.md, "Choosing the leverage correction").
-    ``sens`` (N, ny, np), ``residuals`` (N, ny), ``weight`` W = R^-1, ``information`` M;
-    ``power`` >= 0 (dimensionless; unused without ``leverage``); the result is in
-    parameter units squared.
+
+    Parameters
+    ----------
+    sens : numpy.ndarray
+        Output sensitivities dy/dtheta, output unit per parameter unit; shape (N, ny, np).
+    residuals : numpy.ndarray
+        Output residuals v, output units; shape (N, ny).
+    weight : numpy.ndarray
+        W = R^-1, 1 / (output unit)^2; shape (ny, ny).
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+    leverage : bool, optional
+        Restore each bin's residual power for the fit's share. Default True.
+    power : float, optional
+        The power of (I - H_f) dividing each bin's residual power, dimensionless, >= 0;
+        unused without ``leverage``. Default HC3's 2.
+
+    Returns
+    -------
+    numpy.ndarray
+        The covariance, parameter units squared; shape (np, np).
     """
     n = residuals.shape[0]
     size = int(2 ** np.ceil(np.log2(2 * n)))
@@ -82,9 +111,21 @@ def colored_residual_covariance(
 
 
 def leverage_power(model: str) -> float:
-    """The power of (1 - H_f) in ``colored_residual_covariance`` for an output-error fit of
-    the model named ``model``: ``LATERAL_LEVERAGE_POWER`` for the linear lateral model
-    (where it was measured), HC3's 2 for every other."""
+    """The power of (1 - H_f) in ``colored_residual_covariance`` for an output-error fit.
+
+    ``LATERAL_LEVERAGE_POWER`` for the linear lateral model (where it was measured), HC3's 2
+    for every other.
+
+    Parameters
+    ----------
+    model : str
+        The model's name (``Model.name``, e.g. "lateral").
+
+    Returns
+    -------
+    float
+        The power, dimensionless.
+    """
     return LATERAL_LEVERAGE_POWER if model == "lateral" else HC3_POWER
 
 
@@ -92,11 +133,31 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
                             residuals: np.ndarray, noise: np.ndarray,
                             colored: bool, power: float = HC3_POWER,
                             ) -> tuple[np.ndarray, StdKind]:
-    """(covariance, std_kind) of an output-error fit: M^-1, or the colored-residual
-    correction (M&K eq. 6.54) when ``colored``, with the leverage correction's ``power``
-    (``colored_residual_covariance``); an empty matrix when nothing was estimated.
+    """(covariance, std_kind) of an output-error fit.
 
-    ``sens`` (N, ny, np), ``residuals`` (N, ny) and ``noise`` R (ny, ny) of the fit.
+    M^-1, or the colored-residual correction (M&K eq. 6.54) when ``colored``; an empty matrix
+    when nothing was estimated.
+
+    Parameters
+    ----------
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+    sens : numpy.ndarray
+        Output sensitivities of the fit; shape (N, ny, np).
+    residuals : numpy.ndarray
+        Output residuals of the fit, output units; shape (N, ny).
+    noise : numpy.ndarray
+        The noise covariance R, output units squared; shape (ny, ny).
+    colored : bool
+        Correct for colored residuals.
+    power : float, optional
+        The leverage correction's power (``colored_residual_covariance``). Default HC3's 2.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, StdKind)
+        The covariance (parameter units squared, shape (np, np)) and what its standard errors
+        are.
     """
     if information.shape[0] == 0:
         return np.zeros((0, 0)), StdKind.NONE
@@ -109,5 +170,16 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
 
 
 def standard_errors(covariance: np.ndarray) -> np.ndarray:
-    """Standard errors sqrt(diag cov) (parameter units), negative rounding clipped to 0."""
+    """Standard errors sqrt(diag cov), negative rounding clipped to 0.
+
+    Parameters
+    ----------
+    covariance : numpy.ndarray
+        Parameter covariance, parameter units squared; shape (np, np).
+
+    Returns
+    -------
+    numpy.ndarray
+        Standard errors, parameter units; shape (np,).
+    """
     return np.sqrt(np.clip(np.diag(covariance), 0.0, None))

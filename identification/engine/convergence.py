@@ -26,14 +26,41 @@ class NotConvergedError(RuntimeError):
 
 
 def converged(est: Estimate) -> bool:
-    """False only when the estimate says it did not converge (non-iterative methods
-    record nothing and count as converged)."""
+    """False only when the estimate says it did not converge.
+
+    Non-iterative methods record nothing and count as converged.
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+
+    Returns
+    -------
+    bool
+        Whether ``est`` converged.
+    """
     return est.fit.get("converged") is not False
 
 
 def verdict_line(est: Estimate, what: str | None = None) -> str:
-    """'oe: not converged (no convergence in 1 iterations): the values are not at the
-    optimum and their std are not Cramer-Rao bounds', or '' when converged."""
+    """The not-converged line of an estimate, or '' when converged.
+
+    For example 'oe: not converged (no convergence in 1 iterations): the values are not at the
+    optimum and their std are not Cramer-Rao bounds; ...'.
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+    what : str, optional
+        The line's subject. Default the estimate's method.
+
+    Returns
+    -------
+    str
+        The line, or ''.
+    """
     if converged(est):
         return ""
     reason = est.fit.get("reason") or "the iteration limit was reached"
@@ -43,14 +70,35 @@ def verdict_line(est: Estimate, what: str | None = None) -> str:
 
 
 def warn(est: Estimate, what: str | None = None) -> None:
-    """A NotConvergedWarning when ``est`` did not converge."""
+    """A NotConvergedWarning when ``est`` did not converge.
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+    what : str, optional
+        The warning's subject. Default the estimate's method.
+    """
     line = verdict_line(est, what)
     if line:
         warnings.warn(line, NotConvergedWarning, stacklevel=2)
 
 
 def require(est: Estimate, what: str | None = None) -> None:
-    """NotConvergedError when ``est`` did not converge (``--strict``)."""
+    """NotConvergedError when ``est`` did not converge (``--strict``).
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+    what : str, optional
+        The error's subject. Default the estimate's method.
+
+    Raises
+    ------
+    NotConvergedError
+        When ``est`` did not converge.
+    """
     line = verdict_line(est, what)
     if line:
         raise NotConvergedError(line)
@@ -58,6 +106,21 @@ def require(est: Estimate, what: str | None = None) -> None:
 
 def check_limit(method: str, name: str, value: object) -> None:
     """An iteration or relaxation limit (an option named ``max_*``) must be a whole number
-    of at least 1."""
+    of at least 1.
+
+    Parameters
+    ----------
+    method : str
+        The method id, named in the error.
+    name : str
+        The option name.
+    value : object
+        The option's value; only an int is checked.
+
+    Raises
+    ------
+    ValueError
+        When ``value`` is an int below 1.
+    """
     if isinstance(value, int) and not isinstance(value, bool) and value < 1:
         raise ValueError(f"option {name} of method {method} must be >= 1, got {value}")

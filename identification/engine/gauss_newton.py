@@ -55,12 +55,36 @@ def damped_newton_step(
 ) -> DampedStep:
     """One Levenberg-Marquardt-damped Newton step that lowers ``cost`` (or none).
 
-    ``information`` M (Gauss-Newton matrix) and ``hessian`` H of the cost at ``theta``,
-    ``descent`` = -dJ/dtheta, ``cost0`` = J(theta), ``cost(trial)`` the cost of a trial
-    parameter vector (not finite when the model cannot be evaluated there). The problem is
-    scaled to a unit diagonal of M; H is used when it is positive definite, M otherwise
-    (M&K sec. 6.2). The damping ``lam`` grows tenfold (from 1e-3) until a step does not
-    raise the cost, and shrinks tenfold after an accepted step.
+    The problem is scaled to a unit diagonal of M; H is used when it is positive definite, M
+    otherwise (M&K sec. 6.2). The damping ``lam`` grows tenfold (from 1e-3) until a step does
+    not raise the cost, and shrinks tenfold after an accepted step.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        The parameter vector, parameter units; shape (np,).
+    information : numpy.ndarray
+        The Gauss-Newton matrix M at ``theta``; shape (np, np).
+    hessian : numpy.ndarray
+        The Newton matrix H of the cost at ``theta``; shape (np, np).
+    descent : numpy.ndarray
+        -dJ/dtheta at ``theta``; shape (np,).
+    cost0 : float
+        J(theta), nondimensional.
+    cost : callable
+        The cost of a trial parameter vector (not finite when the model cannot be evaluated
+        there).
+    lam : float
+        The damping to start from, 1.
+    step_tol : float
+        The Newton step, in standard errors, below which a failed search counts as at the
+        minimum.
+
+    Returns
+    -------
+    DampedStep
+        Whether a step was accepted, the new parameters, the step, its cost, the next damping,
+        the parameters' standard errors and, when none was accepted, why.
     """
     scale = np.sqrt(np.clip(np.diag(information), 0.0, None))
     scale = np.where(scale > 0, scale, 1.0)
@@ -125,21 +149,44 @@ def maximum_likelihood(
 ) -> MaximumLikelihoodFit:
     """Newton-Raphson on the ML cost with R concentrated out, Levenberg-Marquardt safeguard.
 
-    The model enters only through two functions of the parameter values {name: value}:
-    ``outputs_and_sensitivities`` returns y (N, ny) and dy/dtheta (N, ny, len(names)),
-    ``outputs`` returns y alone; z (N, ny) are the measurements and ``floor`` the smallest
-    admitted noise variance per output. ``values`` holds the start of every name (other
-    entries are ignored). Used by the linear and the nonlinear 6-DOF output error and by
-    flight path reconstruction.
-
-    R is re-estimated from the residuals at every iteration (M&K eq. 6.26). The Newton
-    matrix is the Gauss-Newton information matrix M (M&K eq. 6.33) minus the term from
-    the dependence of R on theta (``likelihood.concentrated_hessian``), which restores
+    Used by the linear and the nonlinear 6-DOF output error and by flight path
+    reconstruction. R is re-estimated from the residuals at every iteration (M&K eq. 6.26).
+    The Newton matrix is the Gauss-Newton information matrix M (M&K eq. 6.33) minus the term
+    from the dependence of R on theta (``likelihood.concentrated_hessian``), which restores
     fast convergence when the residuals are large (real data), where the plain relaxation
     algorithm creeps along one direction. H is used when it is positive definite, M
-    otherwise; a step is accepted only if it lowers N/2 ln det R. Converged when the last
-    step moved no parameter by more than ``step_tol`` standard errors or the cost changed
-    by less than ``cost_tol``.
+    otherwise; a step is accepted only if it lowers N/2 ln det R.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        The measurements, SI units; shape (N, ny).
+    floor : numpy.ndarray
+        The smallest admitted noise variance per output; shape (ny,).
+    outputs_and_sensitivities : callable
+        Maps the parameter values {name: value} to y (N, ny) and dy/dtheta
+        (N, ny, len(names)).
+    outputs : callable
+        Maps the parameter values to y (N, ny) alone.
+    names : list of str
+        The parameters estimated.
+    values : mapping of str to float
+        The start of every name, parameter units (other entries are ignored).
+    max_iterations : int
+        The iteration limit.
+    full : bool
+        Estimate the off-diagonal terms of R.
+    step_tol : float
+        Converged when the last step moved no parameter by more than this many standard
+        errors.
+    cost_tol : float
+        Converged when the cost changed by less than this, nondimensional.
+
+    Returns
+    -------
+    MaximumLikelihoodFit
+        The fitted values, outputs, sensitivities, residuals, noise covariance, information
+        matrix and the iteration history.
     """
     n_samples = z.shape[0]
     cost_history: list[float] = []

@@ -29,7 +29,22 @@ ZERO_SENSITIVITY = 1e-9
 def unexcited_inputs(
     inputs: Sequence[str], data: np.ndarray, min_range: float = MIN_INPUT_RANGE
 ) -> dict[str, float]:
-    """Inputs whose peak-to-peak range (in their SI unit) is below ``min_range``: {name: range}."""
+    """Inputs whose peak-to-peak range is below ``min_range``.
+
+    Parameters
+    ----------
+    inputs : sequence of str
+        The input names, one per column of ``data``.
+    data : numpy.ndarray
+        The input samples, SI units; shape (N, len(inputs)).
+    min_range : float, optional
+        The smallest peak-to-peak range, in the inputs' SI unit. Default ``MIN_INPUT_RANGE``.
+
+    Returns
+    -------
+    dict of str to float
+        {name: range} of the unexcited inputs.
+    """
     ranges = np.ptp(np.asarray(data, dtype=float), axis=0)
     return {n: float(r) for n, r in zip(inputs, ranges, strict=True) if r < min_range}
 
@@ -37,10 +52,28 @@ def unexcited_inputs(
 def input_only_parameters(
     names: Sequence[str], dA: np.ndarray, dB: np.ndarray, dC: np.ndarray, dD: np.ndarray
 ) -> dict[str, int]:
-    """Parameters that enter the model only through one input column of B and D: {name: column}.
+    """Parameters that enter the model only through one input column of B and D.
 
     Such a parameter (a control derivative) is multiplied by that input alone, so it can
     only be estimated when the input moves.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters, one per leading index of the derivative arrays.
+    dA : numpy.ndarray
+        dA/dtheta; shape (np, nx, nx).
+    dB : numpy.ndarray
+        dB/dtheta; shape (np, nx, nu).
+    dC : numpy.ndarray
+        dC/dtheta; shape (np, ny, nx).
+    dD : numpy.ndarray
+        dD/dtheta; shape (np, ny, nu).
+
+    Returns
+    -------
+    dict of str to int
+        {name: input column}.
     """
     found: dict[str, int] = {}
     for k, name in enumerate(names):
@@ -53,7 +86,19 @@ def input_only_parameters(
 
 
 def normalized_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(D^-1 M D^-1, D) with D = sqrt(diag M): the information matrix on a unit diagonal."""
+    """(D^-1 M D^-1, D) with D = sqrt(diag M): the information matrix on a unit diagonal.
+
+    Parameters
+    ----------
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The normalised matrix, shape (np, np), 1; and D, shape (np,), 1 / parameter unit
+        (a zero diagonal entry leaves its row unscaled).
+    """
     scale = np.sqrt(np.clip(np.diag(information), 0.0, None))
     safe = np.where(scale > 0, scale, 1.0)
     return information / np.outer(safe, safe), scale
@@ -63,7 +108,28 @@ def zero_sensitivity(
     names: Sequence[str], information: np.ndarray, values: np.ndarray,
     tolerance: float = ZERO_SENSITIVITY,
 ) -> dict[str, str]:
-    """Parameters that hardly change the outputs at all, with the reason."""
+    """Parameters that hardly change the outputs at all, with the reason.
+
+    Each parameter's whitened sensitivity sqrt(M_kk) times its scale (|value|, at least
+    1e-2) is compared with the strongest.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters.
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+    values : numpy.ndarray
+        The parameter values at the fit, parameter units; shape (np,).
+    tolerance : float, optional
+        The fraction of the strongest sensitivity below which a parameter counts as zero.
+        Default ``ZERO_SENSITIVITY``.
+
+    Returns
+    -------
+    dict of str to str
+        {name: reason}.
+    """
     # sensitivity norm times a parameter scale (|value|, at least 1e-2) makes it unit-free
     scale = np.maximum(np.abs(values), 1e-2)
     strength = np.sqrt(np.clip(np.diag(information), 0.0, None)) * scale
@@ -86,8 +152,24 @@ def collinear(
 
     Repeatedly takes the eigenvector of the smallest eigenvalue of D^-1 M D^-1; while it is
     below ``tolerance`` the parameters with large components in it cannot be separated.
-    The one fixed is the largest component, preferring parameters not in ``prefer_keep``
-    (biases, which absorb trim terms). Returns {name: reason naming the combination}.
+    The one fixed is the largest component, preferring parameters not in ``prefer_keep``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters.
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+    prefer_keep : sequence of str, optional
+        Parameters fixed only when nothing else can be (biases, which absorb trim terms).
+    tolerance : float, optional
+        The smallest eigenvalue of the normalised matrix accepted, 1. Default
+        ``SINGULAR_EIGENVALUE``.
+
+    Returns
+    -------
+    dict of str to str
+        {name: reason naming the combination}.
     """
     names = list(names)
     keep = list(range(len(names)))
@@ -120,10 +202,27 @@ def unidentifiable(
 ) -> dict[str, str]:
     """Parameters a fit's information matrix cannot determine: {name: reason}.
 
-    The zero-sensitivity test first (``values`` at the fit, parameter units); when no
-    parameter fails it, the collinearity test on the normalised information matrix
-    (``collinear`` with ``prefer_keep`` and ``tolerance``). Used by every
-    maximum-likelihood method to decide what to fix before refitting.
+    The zero-sensitivity test first; when no parameter fails it, the collinearity test on the
+    normalised information matrix. Used by every maximum-likelihood method to decide what to
+    fix before refitting.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters.
+    information : numpy.ndarray
+        The information matrix M; shape (np, np).
+    values : numpy.ndarray
+        The values at the fit, parameter units; shape (np,).
+    prefer_keep : sequence of str, optional
+        Passed to ``collinear``.
+    tolerance : float, optional
+        Passed to ``collinear``. Default ``SINGULAR_EIGENVALUE``.
+
+    Returns
+    -------
+    dict of str to str
+        {name: reason}.
     """
     found = zero_sensitivity(names, information, values)
     if found:
@@ -132,7 +231,18 @@ def unidentifiable(
 
 
 def correlation(covariance: np.ndarray) -> np.ndarray:
-    """Correlation matrix of a parameter covariance."""
+    """Correlation matrix of a parameter covariance.
+
+    Parameters
+    ----------
+    covariance : numpy.ndarray
+        Parameter covariance, parameter units squared; shape (np, np).
+
+    Returns
+    -------
+    numpy.ndarray
+        The correlations, 1; shape (np, np).
+    """
     s = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     s = np.where(s > 0, s, 1.0)
     return covariance / np.outer(s, s)
@@ -141,7 +251,22 @@ def correlation(covariance: np.ndarray) -> np.ndarray:
 def high_correlations(
     names: Sequence[str], covariance: np.ndarray, threshold: float = 0.9
 ) -> list[tuple[str, str, float]]:
-    """Pairs of parameters whose estimates correlate more than ``threshold`` in magnitude."""
+    """Pairs of parameters whose estimates correlate more than ``threshold`` in magnitude.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters.
+    covariance : numpy.ndarray
+        Parameter covariance, parameter units squared; shape (np, np).
+    threshold : float, optional
+        The magnitude of correlation above which a pair is listed, 1. Default 0.9.
+
+    Returns
+    -------
+    list of tuple of (str, str, float)
+        (name, name, correlation), the strongest first.
+    """
     corr = correlation(covariance)
     pairs = []
     for i in range(len(names)):
@@ -159,11 +284,25 @@ EXCITATION_AVERAGE_S = 0.2
 
 
 def input_excitation(record: FlightRecord, inputs: Sequence[str]) -> dict[str, str]:
-    """{input: why it is not excited} for the record's ``inputs`` that are constant (peak to
-    peak below MIN_INPUT_RANGE in their SI unit) or noise only: the range of the input
-    averaged over EXCITATION_AVERAGE_S below MIN_SIGNAL_TO_NOISE times the noise of that
-    average (noise from the median absolute sample-to-sample difference, which steps do
-    not inflate)."""
+    """{input: why it is not excited} for the record's ``inputs`` that are constant or noise only.
+
+    Constant: peak to peak below MIN_INPUT_RANGE in their SI unit. Noise only: the range of
+    the input averaged over EXCITATION_AVERAGE_S below MIN_SIGNAL_TO_NOISE times the noise of
+    that average (noise from the median absolute sample-to-sample difference, which steps do
+    not inflate).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    inputs : sequence of str
+        The input channels checked.
+
+    Returns
+    -------
+    dict of str to str
+        {input: reason} of the unexcited inputs.
+    """
     out = {}
     for name in inputs:
         x = np.asarray(record[name], dtype=float)

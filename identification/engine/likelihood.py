@@ -17,9 +17,22 @@ import numpy as np
 def noise_covariance(residuals: np.ndarray, full: bool, floor: np.ndarray) -> np.ndarray:
     """Measurement-noise covariance R = 1/N sum v v^T (M&K eq. 6.26), in output units squared.
 
-    ``residuals`` (N, ny); ``full`` keeps the off-diagonal terms, else R is diagonal. The
-    diagonal is kept above ``floor`` (ny variances) so that an output fitted to rounding
-    (noise-free simulated data) does not make R singular.
+    The diagonal is kept above ``floor`` so that an output fitted to rounding (noise-free
+    simulated data) does not make R singular.
+
+    Parameters
+    ----------
+    residuals : numpy.ndarray
+        Output residuals v, output units; shape (N, ny).
+    full : bool
+        Keep the off-diagonal terms; else R is diagonal.
+    floor : numpy.ndarray
+        The smallest variance per output, output units squared; shape (ny,).
+
+    Returns
+    -------
+    numpy.ndarray
+        R, output units squared; shape (ny, ny).
     """
     r = residuals.T @ residuals / residuals.shape[0]
     if not full:
@@ -29,17 +42,42 @@ def noise_covariance(residuals: np.ndarray, full: bool, floor: np.ndarray) -> np
 
 
 def concentrated_cost(residuals: np.ndarray, full: bool, floor: np.ndarray) -> float:
-    """ML cost (nondimensional) with R at its optimum for these residuals: N/2 ln det R
-    (M&K eq. 6.22); R from ``noise_covariance``."""
+    """ML cost with R at its optimum for these residuals: N/2 ln det R (M&K eq. 6.22).
+
+    Parameters
+    ----------
+    residuals : numpy.ndarray
+        Output residuals, output units; shape (N, ny).
+    full : bool
+        R with off-diagonal terms (``noise_covariance``).
+    floor : numpy.ndarray
+        The smallest variance per output; shape (ny,).
+
+    Returns
+    -------
+    float
+        The cost, nondimensional.
+    """
     noise = noise_covariance(residuals, full, floor)
     return 0.5 * residuals.shape[0] * float(np.linalg.slogdet(noise)[1])
 
 
 def information_matrix(sens: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """Fisher information M = sum_i S_i^T W S_i (M&K eq. 6.33), (np, np).
+    """Fisher information M = sum_i S_i^T W S_i (M&K eq. 6.33).
 
-    ``sens`` (N, ny, np) output sensitivities, ``weight`` W = R^-1 (ny, ny); entries in
-    1 / (parameter unit)^2. A diagonal W takes one matrix product of whitened sensitivities.
+    A diagonal W takes one matrix product of whitened sensitivities.
+
+    Parameters
+    ----------
+    sens : numpy.ndarray
+        Output sensitivities, output unit per parameter unit; shape (N, ny, np).
+    weight : numpy.ndarray
+        W = R^-1, 1 / (output unit)^2; shape (ny, ny).
+
+    Returns
+    -------
+    numpy.ndarray
+        M, 1 / (parameter unit)^2; shape (np, np).
     """
     if np.count_nonzero(weight - np.diag(np.diag(weight))) == 0:
         s = sens * np.sqrt(np.diag(weight))[None, :, None]
@@ -50,12 +88,29 @@ def information_matrix(sens: np.ndarray, weight: np.ndarray) -> np.ndarray:
 
 def concentrated_hessian(sens: np.ndarray, v: np.ndarray, weight: np.ndarray,
                          info: np.ndarray, full: bool) -> np.ndarray:
-    """Newton matrix of the concentrated cost N/2 ln det R(theta), (np, np).
+    """Newton matrix of the concentrated cost N/2 ln det R(theta).
 
     The information matrix M minus the term from the dependence of R on theta,
         H_kl = M_kl - 1/(2N) tr(W C_k W C_l),  C_k = B_k + B_k^T,  B_k = sum_i s_ik v_i^T,
-    with only the diagonal of C_k when R is diagonal (``full`` False). ``sens`` (N, ny, np),
-    residuals ``v`` (N, ny), ``weight`` W = R^-1, ``info`` M from ``information_matrix``.
+    with only the diagonal of C_k when R is diagonal.
+
+    Parameters
+    ----------
+    sens : numpy.ndarray
+        Output sensitivities; shape (N, ny, np).
+    v : numpy.ndarray
+        Output residuals, output units; shape (N, ny).
+    weight : numpy.ndarray
+        W = R^-1; shape (ny, ny).
+    info : numpy.ndarray
+        M from ``information_matrix``; shape (np, np).
+    full : bool
+        R has off-diagonal terms; False keeps only the diagonal of C_k.
+
+    Returns
+    -------
+    numpy.ndarray
+        H, 1 / (parameter unit)^2; shape (np, np).
     """
     n, ny, k = sens.shape
     b = (sens.transpose(2, 1, 0).reshape(k * ny, n) @ v).reshape(k, ny, ny)

@@ -113,7 +113,25 @@ def j_rms(y: np.ndarray, yhat: np.ndarray) -> float:
 
 
 def paired(y: np.ndarray, yhat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The measured and model outputs as float arrays of one shape, not empty."""
+    """The measured and model outputs as float arrays of one shape, not empty.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Measured outputs.
+    yhat : numpy.ndarray
+        Model outputs, same shape and units.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``y`` and ``yhat`` as float arrays.
+
+    Raises
+    ------
+    ValueError
+        When the shapes differ or there are no samples.
+    """
     y = np.asarray(y, dtype=float)
     yhat = np.asarray(yhat, dtype=float)
     if y.shape != yhat.shape:

@@ -34,18 +34,35 @@ def refit_without_unidentifiable(
     probe: Callable[[list[str], dict[str, float]], F] | None = None,
     known: Mapping[str, str] | None = None,
 ) -> tuple[F, dict[str, str]]:
-    """Fit, find the unidentifiable parameters, fix them, refit: (last fit, {name: reason}).
+    """Fit, find the unidentifiable parameters, fix them, refit.
 
-    names: the parameters to estimate; start: the value of each (a priori, parameter
-    units), with any other parameter the fit may read. ``fit(active, values)`` fits the
-    ``active`` parameters starting from ``values`` (every parameter's current value: the
-    fixed ones at their a priori values, unless an earlier pass moved them);
-    ``unidentifiable(active, fit)`` returns {name: reason} of those the fit cannot
-    determine (empty to accept it). ``probe(active, values)``, when given, is evaluated
-    first at the start values of each pass (an iteration-free fit), so that the
-    iteration never meets a singular information matrix. ``known`` are parameters already
-    found unidentifiable (unexcited inputs): never active, and returned with the others.
     After a pass that finds some, the values of the rest become the start of the next.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters to estimate.
+    start : mapping of str to float
+        The value of each (a priori, parameter units), with any other parameter the fit may
+        read.
+    fit : callable
+        ``fit(active, values)`` fits the ``active`` parameters starting from ``values`` (every
+        parameter's current value: the fixed ones at their a priori values, unless an earlier
+        pass moved them).
+    unidentifiable : callable
+        ``unidentifiable(active, fit)`` returns {name: reason} of those the fit cannot
+        determine (empty to accept it).
+    probe : callable, optional
+        ``probe(active, values)``, evaluated first at the start values of each pass (an
+        iteration-free fit), so that the iteration never meets a singular information matrix.
+    known : mapping of str to str, optional
+        Parameters already found unidentifiable (unexcited inputs): never active, and
+        returned with the others.
+
+    Returns
+    -------
+    tuple of (fit, dict of str to str)
+        The last fit and {name: reason} of every parameter fixed.
     """
     found_all = dict(known or {})
     values = dict(start)
@@ -74,10 +91,32 @@ def refit_iterated(
     check_identifiability: bool = True,
     known: Mapping[str, str] | None = None,
 ) -> tuple[F, dict[str, str]]:
-    """``refit_without_unidentifiable`` for an iterative fit ``fit(active, values,
-    iterations)``: with ``check_identifiability`` each pass is first probed at its start
-    values with zero iterations, so the iteration never meets a singular information
-    matrix, and ``singular`` judges the fits; without it the first fit is accepted."""
+    """``refit_without_unidentifiable`` for an iterative fit.
+
+    With ``check_identifiability`` each pass is first probed at its start values with zero
+    iterations, so the iteration never meets a singular information matrix, and ``singular``
+    judges the fits; without it the first fit is accepted.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parameters to estimate.
+    start : mapping of str to float
+        The start values, parameter units.
+    fit : callable
+        ``fit(active, values, iterations)``.
+    singular : callable
+        ``singular(active, fit)`` returns {name: reason} of those the fit cannot determine.
+    check_identifiability : bool, optional
+        Probe and judge each pass. Default True.
+    known : mapping of str to str, optional
+        Parameters already found unidentifiable.
+
+    Returns
+    -------
+    tuple of (fit, dict of str to str)
+        The last fit and {name: reason} of every parameter fixed.
+    """
     if not check_identifiability:
         return refit_without_unidentifiable(names, start, fit, lambda active, f: {},
                                             known=known)

@@ -34,12 +34,31 @@ _CSV_PROBE_BYTES = 1 << 16
 
 
 def estimated_bytes(samples: int, work: str) -> float:
-    """Peak memory (bytes) of ``work`` (a method id or a command) on ``samples`` samples."""
+    """Peak memory of ``work`` on ``samples`` samples.
+
+    Parameters
+    ----------
+    samples : int
+        The record's sample count.
+    work : str
+        A method id or a command.
+
+    Returns
+    -------
+    float
+        The estimate, bytes.
+    """
     return BASE_BYTES + samples * BYTES_PER_SAMPLE.get(work, DEFAULT_BYTES_PER_SAMPLE)
 
 
 def available_bytes() -> float:
-    """Memory the system reports available (bytes)."""
+    """Memory the system reports available.
+
+    Returns
+    -------
+    float
+        Available memory, bytes.
+    """
     try:
         with open("/proc/meminfo", encoding="ascii") as f:
             for line in f:
@@ -51,10 +70,22 @@ def available_bytes() -> float:
 
 
 def samples_in_file(path: str | Path) -> int | None:
-    """The sample count of a record file without reading its values: the Parquet
-    metadata's row count; for CSV the file size over the length of its first data lines;
-    None for other formats (SIDPAC .mat files are small) or an unreadable file (the
-    reader names the problem)."""
+    """The sample count of a record file without reading its values.
+
+    The Parquet metadata's row count; for CSV the file size over the length of its first data
+    lines.
+
+    Parameters
+    ----------
+    path : str or Path
+        The record file.
+
+    Returns
+    -------
+    int or None
+        The (estimated) sample count; None for other formats (SIDPAC .mat files are small) or
+        an unreadable file (the reader names the problem).
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     try:
@@ -74,8 +105,25 @@ def samples_in_file(path: str | Path) -> int | None:
 
 
 def check_memory(samples: int, work: str, what: str, force: bool = False) -> None:
-    """Refuse (ValueError) when ``work`` on ``samples`` samples would need more than
-    ``MARGIN`` of the available memory, unless ``force``."""
+    """Refuse when ``work`` on ``samples`` samples would need more than ``MARGIN`` of the
+    available memory, unless ``force``.
+
+    Parameters
+    ----------
+    samples : int
+        The record's sample count.
+    work : str
+        A method id or a command.
+    what : str
+        The record, named in the error.
+    force : bool, optional
+        Go on anyway. Default False.
+
+    Raises
+    ------
+    ValueError
+        When the memory would not suffice and not ``force``.
+    """
     need = estimated_bytes(samples, work)
     have = available_bytes()
     if need > MARGIN * have and not force:

@@ -32,11 +32,36 @@ def estimate_from_fit(
 ) -> Estimate:
     """The estimate of a finished fit.
 
-    method: the method id; model: the model's name; time (N,) in s; measured (N, ny) the
-    outputs z in SI units, named ``output_names``; fixed: the parameters held at their
-    values; unidentifiable: {name: reason}; colored: correct the bounds for colored
-    residuals; full_noise_covariance: whether R had off-diagonal terms (reported);
-    leverage_power: the colored-residual bounds' power of (1 - H_f) (``bounds``).
+    Parameters
+    ----------
+    fit : MaximumLikelihoodFit
+        The finished fit.
+    method : str
+        The method id.
+    model : str
+        The model's name.
+    time : numpy.ndarray
+        Sample times, s; shape (N,).
+    measured : numpy.ndarray
+        The outputs z, SI units; shape (N, ny).
+    output_names : sequence of str
+        The outputs' names.
+    fixed : mapping of str to float
+        The parameters held at their values, parameter units.
+    unidentifiable : mapping of str to str
+        {name: reason}.
+    colored : bool
+        Correct the bounds for colored residuals.
+    full_noise_covariance : bool
+        Whether R had off-diagonal terms (reported).
+    leverage_power : float, optional
+        The colored-residual bounds' power of (1 - H_f), dimensionless (``bounds``).
+        Default HC3's 2.
+
+    Returns
+    -------
+    Estimate
+        Values, standard errors, covariance, per-output series and fit statistics.
     """
     names = fit.names
     cov, std_kind = output_error_covariance(fit.information, fit.sens, fit.residuals,

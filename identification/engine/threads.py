@@ -20,7 +20,18 @@ R = TypeVar("R")
 
 
 def one_blas_thread(function: Callable[P, R]) -> Callable[P, R]:
-    """``function`` run with a single BLAS thread (the limit is lifted on return)."""
+    """``function`` run with a single BLAS thread (the limit is lifted on return).
+
+    Parameters
+    ----------
+    function : callable
+        The function to wrap.
+
+    Returns
+    -------
+    callable
+        The wrapped function.
+    """
 
     @functools.wraps(function)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:

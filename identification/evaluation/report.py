@@ -21,8 +21,22 @@ from flightid.identification.methods import registry
 
 
 def time_history_figure(estimate: Estimate, title: str = "") -> Figure:
-    """Measured vs model outputs and residuals on a shared time axis (frequency-domain
-    estimates: magnitudes against frequency in Hz)."""
+    """Measured vs model outputs and residuals on a shared time axis (s).
+
+    Frequency-domain estimates get ``frequency_figure`` instead.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        An estimate with per-output series.
+    title : str, optional
+        The figure title. Default the method and model.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     names = list(estimate.outputs)
     if any("frequency" in estimate.outputs[n] for n in names):
         return frequency_figure(estimate, title)
@@ -51,8 +65,21 @@ def time_history_figure(estimate: Estimate, title: str = "") -> Figure:
 
 
 def frequency_figure(estimate: Estimate, title: str = "") -> Figure:
-    """Measured and model magnitudes of each fitted transform or response against
-    frequency (Hz), log axes."""
+    """Measured and model magnitudes of each fitted transform or response against frequency
+    (Hz), log axes.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        A frequency-domain estimate.
+    title : str, optional
+        The figure title. Default the method and model.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     names = list(estimate.outputs)
     fig = Figure(figsize=(11, 1.9 * len(names) + 0.6))
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
@@ -75,7 +102,20 @@ def frequency_figure(estimate: Estimate, title: str = "") -> Figure:
 
 
 def estimates_figure(estimate: Estimate, truth: dict[str, float] | None = None) -> Figure:
-    """Each derivative against truth: estimate/|truth| with 2-sigma bars, and error/std."""
+    """Each derivative against truth: estimate/|truth| with 2-sigma bars, and error/std.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        The estimate; its names starting with "C" are drawn.
+    truth : dict of str to float, optional
+        True values by name; without it the estimates are scaled by themselves.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     names = [n for n in estimate.names if n.startswith("C")]
     scored = [n for n in names if truth and n in truth]
     fig = Figure(figsize=(11, 0.32 * len(names) + 1.2))
@@ -139,9 +179,27 @@ def write_html(
     notes: Sequence[str] = (),
     figures: Sequence[tuple[str, object]] = (),
 ) -> Path:
-    """Write a self-contained HTML report with tables and plots; returns the path.
+    """Write a self-contained HTML report with tables and plots.
 
-    ``figures`` are (caption, matplotlib figure or PNG path) pairs added at the end.
+    Parameters
+    ----------
+    path : str or Path
+        The HTML file written.
+    title : str
+        The report title.
+    estimates : sequence of Estimate
+        The estimates tabulated and plotted.
+    truth : dict of str to float, optional
+        True values by name, for the error columns.
+    notes : sequence of str, optional
+        Paragraphs under the title.
+    figures : sequence of tuple of (str, object), optional
+        (caption, matplotlib figure or PNG path) pairs added at the end.
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",

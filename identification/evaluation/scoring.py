@@ -81,9 +81,21 @@ REFERENCE_SUFFIX = "_0"
 
 
 def record_truth(record: FlightRecord) -> dict[str, float]:
-    """The exact derivatives a simulated record carries (``meta.extra['truth']``), in the
-    body axes of the identification models (CL and CD as in both axes); empty for a record
-    that carries none (real flight data)."""
+    """The exact derivatives a simulated record carries (``meta.extra['truth']``).
+
+    In the body axes of the identification models (CL and CD as in both axes).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+
+    Returns
+    -------
+    dict of str to float
+        {derivative: value}, per rad (rates nondimensional); empty for a record that carries
+        none (real flight data).
+    """
     table = record.meta.extra.get("truth") or {}
     return {k: float(v) for k, v in (table.get("body") or {}).items()}
 
@@ -131,8 +143,22 @@ def score(
 
 
 def verdict(rows: list[ScoreRow], n_sigma: float = 3.0) -> str:
-    """One line: '13 estimated, 13 within 3 sigma, worst Cn_dr at 1.9 sigma' (then the
-    unidentifiable and not-estimated ones by name)."""
+    """One line: '13 estimated, 13 within 3 sigma, worst Cn_dr at 1.9 sigma'.
+
+    Then the unidentifiable and not-estimated ones by name.
+
+    Parameters
+    ----------
+    rows : list of ScoreRow
+        The scored derivatives.
+    n_sigma : float, optional
+        The bound counted, in standard errors. Default 3.
+
+    Returns
+    -------
+    str
+        The line.
+    """
     done = [r for r in rows if r.status == STATUS_ESTIMATED]
     parts = []
     if done:
@@ -154,6 +180,21 @@ def load_truth(path: str | Path) -> dict[str, float]:
 
     The output of ``flightid truth --format json`` reads as is; keys that are not
     derivative names (``trim``, ``flags``) are metadata and skipped.
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file.
+
+    Returns
+    -------
+    dict of str to float
+        {derivative: value}.
+
+    Raises
+    ------
+    ValueError
+        When the file is not UTF-8 JSON, not an object, or a value is not a number.
     """
     path = Path(path)
     try:

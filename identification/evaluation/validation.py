@@ -37,7 +37,20 @@ class Whiteness:
 
 
 def autocorrelation(residual: np.ndarray, max_lag: int) -> np.ndarray:
-    """Normalised autocorrelation r_k (k = 0..max_lag) of a residual, biased estimate."""
+    """Normalised autocorrelation r_k (k = 0..max_lag) of a residual, biased estimate.
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        The residual sequence; shape (N,).
+    max_lag : int
+        The largest lag, samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        r_0 .. r_max_lag, 1 (r_0 = 1; zeros for a constant residual); shape (max_lag + 1,).
+    """
     v = np.asarray(residual, dtype=float) - np.mean(residual)
     n = v.size
     full = np.correlate(v, v, mode="full")[n - 1: n + max_lag]
@@ -45,7 +58,26 @@ def autocorrelation(residual: np.ndarray, max_lag: int) -> np.ndarray:
 
 
 def residual_whiteness(residual: np.ndarray, max_lag: int | None = None) -> Whiteness:
-    """Whiteness of a residual sequence; max_lag defaults to min(20, N/5) (Ljung & Box)."""
+    """Whiteness of a residual sequence: lags inside the 95 % band and the Ljung-Box test.
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        The residual sequence, at least 10 samples; shape (N,).
+    max_lag : int, optional
+        The largest lag, samples. Default min(20, N/5) (Ljung & Box).
+
+    Returns
+    -------
+    Whiteness
+        The lags, the band 1.96/sqrt(N), the fraction of lags inside it, Q, its p-value and
+        whether p > 0.05.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 10 residuals.
+    """
     v = np.asarray(residual, dtype=float)
     n = v.size
     if n < 10:
@@ -60,7 +92,20 @@ def residual_whiteness(residual: np.ndarray, max_lag: int | None = None) -> Whit
 
 
 def metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, float]:
-    """TIC, J_rms, R2 and residual whiteness of a model output against measured data."""
+    """TIC, J_rms, R2 and residual whiteness of a model output against measured data.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Measured output.
+    yhat : numpy.ndarray
+        Model output, same shape and unit.
+
+    Returns
+    -------
+    dict of str to float
+        TIC, J_rms, R2, whiteness_fraction, ljung_box_q, ljung_box_p.
+    """
     y, yhat = paired(y, yhat)
     white = residual_whiteness(y - yhat)
     return {
@@ -95,10 +140,25 @@ class Prediction:
 def predict_record(est: Estimate, record: FlightRecord, refit_bias: bool = True) -> Prediction:
     """Predict the fitted coefficient on another maneuver and score the prediction.
 
-    The derivatives are fixed at the fitted values. With refit_bias the constant term is
-    re-estimated on the new maneuver (the mean prediction error is removed), as in
-    SIDPAC prediction cases: a new maneuver starts from its own trim, which a
-    perturbation model's bias does not know.
+    The derivatives are fixed at the fitted values. With ``refit_bias`` the constant term is
+    re-estimated on the new maneuver (the mean prediction error is removed), as in SIDPAC
+    prediction cases: a new maneuver starts from its own trim, which a perturbation model's
+    bias does not know.
+
+    Parameters
+    ----------
+    est : Estimate
+        An equation-error estimate of one coefficient.
+    record : FlightRecord
+        The other maneuver, SI channels.
+    refit_bias : bool, optional
+        Re-estimate the constant term. Default True.
+
+    Returns
+    -------
+    Prediction
+        The coefficient, time (s), measured and predicted values (dimensionless), the shift
+        and the ``metrics``.
     """
     coefficient = est.fit["coefficient"]
     measured = channel_values(record, coefficient)

@@ -17,10 +17,24 @@ def _is_uniform(frequencies: np.ndarray) -> bool:
 
 
 def discrete_fourier(x: np.ndarray, dt: float, frequencies: np.ndarray) -> np.ndarray:
-    """sum_k x_k exp(-j 2 pi f k dt) along axis 0 at any frequencies (Hz); no dt factor.
+    """sum_k x_k exp(-j 2 pi f k dt) along axis 0 at any frequencies; no dt factor.
 
     A uniform grid goes through the chirp z-transform (scipy.signal.czt, Rabiner et al.
     1969), any other grid through a direct transform.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Samples, time along axis 0; shape (N,) or (N, k).
+    dt : float
+        Sample interval, s.
+    frequencies : numpy.ndarray
+        Frequencies, Hz; shape (n_f,).
+
+    Returns
+    -------
+    numpy.ndarray
+        The complex sums, unit of x; shape (n_f,) or (n_f, k).
     """
     x = np.asarray(x)
     f = np.atleast_1d(np.asarray(frequencies, dtype=float))
@@ -74,12 +88,31 @@ def finite_fourier_transform(
 ) -> np.ndarray:
     """Finite Fourier integral int_0^T x(t) exp(-j 2 pi f t) dt of uniformly sampled data.
 
-    ``x`` has time along axis 0 (shape (N,) or (N, k)), sampled every ``dt`` s from t = 0;
-    ``frequencies`` in Hz (f dt <= 1/2). With ``correct`` the samples are interpolated by
-    cubics and the integral is exact for them (multiplicative and endpoint corrections,
-    Press et al. 1992 sec. 13.9; Morelli & Klein 2016 sec. 7.2, SIDPAC ``fint``); without,
-    it is the plain Euler sum dt * sum x_k exp(-j w t_k). Returns shape (n_f,) or (n_f, k)
-    in unit(x) * s.
+    With ``correct`` the samples are interpolated by cubics and the integral is exact for
+    them (multiplicative and endpoint corrections, Press et al. 1992 sec. 13.9; Morelli &
+    Klein 2016 sec. 7.2, SIDPAC ``fint``); without, it is the plain Euler sum
+    dt * sum x_k exp(-j w t_k).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Samples from t = 0, time along axis 0; shape (N,) or (N, k), N >= 8.
+    dt : float
+        Sample interval, s.
+    frequencies : numpy.ndarray
+        Frequencies, Hz (f dt <= 1/2); shape (n_f,).
+    correct : bool, optional
+        Apply the cubic-interpolation corrections. Default True.
+
+    Returns
+    -------
+    numpy.ndarray
+        The transform, unit(x) * s; shape (n_f,) or (n_f, k).
+
+    Raises
+    ------
+    ValueError
+        For fewer than 8 samples, a non-positive ``dt`` or a frequency above Nyquist.
     """
     x = np.asarray(x, dtype=float)
     f = np.atleast_1d(np.asarray(frequencies, dtype=float))

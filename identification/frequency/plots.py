@@ -15,8 +15,22 @@ COHERENCE_PLOT_MIN = 0.6  # below it a response point is drawn faint (Tischler &
 
 
 def bode_figure(responses: Sequence[FrequencyResponse], title: str = "") -> Figure:
-    """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz);
-    points with coherence below 0.6 are drawn faint."""
+    """Matplotlib figure: magnitude (dB), phase (deg) and coherence against frequency (Hz).
+
+    Points with coherence below 0.6 are drawn faint.
+
+    Parameters
+    ----------
+    responses : sequence of FrequencyResponse
+        The responses drawn, one line each.
+    title : str, optional
+        The figure title. Default none.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(7.5, 8))
     axes = fig.subplots(3, 1, sharex=True,
                         gridspec_kw={"height_ratios": [2, 2, 1]})
@@ -49,9 +63,32 @@ def bode_figure(responses: Sequence[FrequencyResponse], title: str = "") -> Figu
 
 def bode_overlay_figure(measured: Sequence[FrequencyResponse], model: Sequence[np.ndarray],
                         coherence_min: float = 0.6, title: str = ""):
-    """Matplotlib figure: measured responses (points where coherence >= coherence_min)
-    with the identified model's responses (lines, complex arrays on the same frequencies)
-    overlaid: magnitude (dB), phase (deg), coherence against frequency (Hz)."""
+    """Matplotlib figure: measured responses with the identified model's responses overlaid.
+
+    Magnitude (dB), phase (deg), coherence against frequency (Hz); measured points where
+    coherence >= ``coherence_min``, model as lines.
+
+    Parameters
+    ----------
+    measured : sequence of FrequencyResponse
+        The measured responses.
+    model : sequence of numpy.ndarray
+        The model's complex responses on the same frequencies, one per measured response.
+    coherence_min : float, optional
+        The smallest coherence of a drawn measured point. Default 0.6.
+    title : str, optional
+        The figure title. Default none.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        When ``measured`` and ``model`` differ in length.
+    """
     if len(measured) != len(model):
         raise ValueError(f"{len(measured)} measured responses but {len(model)} model ones")
     fig = Figure(figsize=(8, 9))

@@ -124,7 +124,25 @@ def responses_from_spectra(
 ) -> dict[str, FrequencyResponse]:
     """Conditioned frequency responses of ``output`` to each input from a spectral matrix.
 
-    The spectral matrix columns are the inputs in order, then the output.
+    Parameters
+    ----------
+    spectra : Spectra
+        The averaged spectra; the matrix columns are the inputs in order, then the output.
+    inputs : sequence of str
+        The input names.
+    output : str
+        The output name.
+
+    Returns
+    -------
+    dict of str to FrequencyResponse
+        One response per input (output unit per input unit), with partial coherence and
+        random error.
+
+    Raises
+    ------
+    ValueError
+        When the matrix does not have len(inputs) + 1 channels.
     """
     q = len(inputs)
     g = spectra.matrix
@@ -179,8 +197,41 @@ def estimate_response(
     overlap: float = 0.5,
     taper: str = "hann",
 ) -> dict[str, FrequencyResponse]:
-    """Frequency responses of ``output`` to each of ``inputs`` (arrays on one time base)
-    from one window length (s) at ``frequencies`` (Hz); conditioned when several inputs."""
+    """Frequency responses of ``output`` to each of ``inputs`` from one window length;
+    conditioned when several inputs.
+
+    Below two periods per window the coherence is set to 0 and the random error to inf
+    (Tischler & Remple eq. 7.32).
+
+    Parameters
+    ----------
+    inputs : dict of str to numpy.ndarray
+        The input signals on the output's time base, SI units; shape (N,) each.
+    output : numpy.ndarray
+        The output signal, SI units; shape (N,).
+    dt : float
+        Sample interval, s.
+    output_name : str, optional
+        The output's name. Default "y".
+    window : float
+        Segment length, s.
+    frequencies : numpy.ndarray
+        Frequencies, Hz.
+    overlap : float, optional
+        Fraction shared by neighbouring segments. Default 0.5.
+    taper : str, optional
+        "hann", "hamming" or "rectangular". Default "hann".
+
+    Returns
+    -------
+    dict of str to FrequencyResponse
+        One response per input.
+
+    Raises
+    ------
+    ValueError
+        When there is no input or an input's shape differs from the output's.
+    """
     if not inputs:
         raise ValueError("give at least one input")
     names = list(inputs)
@@ -207,8 +258,24 @@ def composite(responses: Sequence[FrequencyResponse]) -> FrequencyResponse:
 
     At each frequency H minimises sum_i |H - H_i|^2 / eps_i^2 (inverse-variance weighted
     mean), the coherence is the same weighted mean of gamma_i^2, and the random error is
-    that of the best window there: the windows reuse the same data, so their errors are
+    the same weighted mean of eps_i: the windows reuse the same data, so their errors are
     not independent and 1/sqrt(sum 1/eps_i^2) would overstate the accuracy.
+    The averages counted are those of the window with the smallest random error there.
+
+    Parameters
+    ----------
+    responses : sequence of FrequencyResponse
+        Responses of one output/input pair on one frequency grid.
+
+    Returns
+    -------
+    FrequencyResponse
+        The composite response.
+
+    Raises
+    ------
+    ValueError
+        When there is no response or the grids differ.
     """
     if not responses:
         raise ValueError("no responses to combine")
@@ -263,11 +330,34 @@ def frequency_response_arrays(
 ) -> dict[str, FrequencyResponse]:
     """Composite (several windows) conditioned frequency responses from plain arrays.
 
-    ``windows`` in s (default half, quarter and eighth of the record); ``frequencies`` in
-    Hz (default log-spaced, 100 points from 2/longest window to a fifth of the sample
-    rate). With ``whole_record`` (single input only) the response itself is the
-    whole-record transform (``full_record_response``) and the windows give its coherence
-    and random error. Returns one response per input.
+    Parameters
+    ----------
+    inputs : dict of str to numpy.ndarray
+        The input signals, SI units; shape (N,) each.
+    output : numpy.ndarray
+        The output signal, SI units; shape (N,).
+    dt : float
+        Sample interval, s.
+    output_name : str, optional
+        The output's name. Default "y".
+    windows : sequence of float, optional
+        Window lengths, s. Default half, quarter and eighth of the record.
+    frequencies : numpy.ndarray, optional
+        Frequencies, Hz. Default log-spaced, 100 points from 2/longest window to a fifth of
+        the sample rate.
+    overlap : float, optional
+        Fraction shared by neighbouring segments. Default 0.5.
+    taper : str, optional
+        Segment taper. Default "hann".
+    whole_record : bool, optional
+        (Single input only) the response itself is the whole-record transform
+        (``full_record_response``) and the windows give its coherence and random error.
+        Default False.
+
+    Returns
+    -------
+    dict of str to FrequencyResponse
+        One response per input.
     """
     y = np.asarray(output, dtype=float)
     duration = y.size * dt
@@ -306,14 +396,40 @@ def full_record_response(
     """Frequency response from one transform of the whole record (single input only).
 
     H = Y(f) / U(f), finite Fourier transforms (unit * s) of the mean-removed channels with
-    a taper only at the ends (Tukey, ``end_taper`` of the record, raised cosine). The
-    whole-record transform has the finest resolution 1/T_rec: segment windows (Hann)
-    smear a lightly damped mode over their main lobe 4/T_win and, on a sweep, cut the
-    mode's ringing at the segment edges (Tischler & Remple 2012 sec. 7.6-7.8; on the
-    Navion yaw sweep 64/32/16 s Hann windows bias Cn_r by +9 %, this transform by < 1 %).
-    One segment cannot estimate coherence (it is 1 whatever the data), so the coherence
-    and random error come from ``windowed``, the composite of overlapped windows on the
-    same frequencies (the "valid" mask of the composite decides where H is used).
+    a taper only at the ends (Tukey, raised cosine). The whole-record transform has the
+    finest resolution 1/T_rec: segment windows (Hann) smear a lightly damped mode over their
+    main lobe 4/T_win and, on a sweep, cut the mode's ringing at the segment edges (Tischler
+    & Remple 2012 sec. 7.6-7.8; on the Navion yaw sweep 64/32/16 s Hann windows bias Cn_r by
+    +9 %, this transform by < 1 %). One segment cannot estimate coherence (it is 1 whatever
+    the data), so the coherence and random error come from ``windowed``.
+
+    Parameters
+    ----------
+    inputs : dict of str to numpy.ndarray
+        The one input signal, SI units; shape (N,).
+    output : numpy.ndarray
+        The output signal, SI units; shape (N,).
+    dt : float
+        Sample interval, s.
+    output_name : str, optional
+        The output's name. Default "y".
+    frequencies : numpy.ndarray
+        Frequencies, Hz.
+    windowed : dict of str to FrequencyResponse
+        The composite of overlapped windows on the same frequencies, by input (its "valid"
+        mask decides where H is used).
+    end_taper : float, optional
+        Fraction of the record tapered at the ends. Default 0.1.
+
+    Returns
+    -------
+    dict of str to FrequencyResponse
+        The response of the one input.
+
+    Raises
+    ------
+    ValueError
+        For more than one input, a missing windowed response, mismatched shapes or grids.
     """
     if len(inputs) != 1:
         raise ValueError(
@@ -353,9 +469,38 @@ def frequency_response(
 ) -> FrequencyResponse:
     """Frequency response output/input of a FlightRecord (SI units per SI unit, Hz).
 
-    ``other_inputs`` are inputs to condition on (their correlated contribution is
-    removed, partial coherence reported). Composite over ``windows`` (s). An input that
-    is constant or noise only (``identifiability.input_excitation``) is refused.
+    Composite over ``windows``. An input that is constant or noise only
+    (``identifiability.input_excitation``) is refused.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A uniformly sampled flight, SI channels.
+    input : str
+        The input channel.
+    output : str
+        The output channel.
+    other_inputs : sequence of str, optional
+        Inputs to condition on (their correlated contribution is removed, partial coherence
+        reported).
+    windows : sequence of float, optional
+        Window lengths, s. Default as ``frequency_response_arrays``.
+    frequencies : numpy.ndarray, optional
+        Frequencies, Hz. Default as ``frequency_response_arrays``.
+    overlap : float, optional
+        Fraction shared by neighbouring segments. Default 0.5.
+    taper : str, optional
+        Segment taper. Default "hann".
+
+    Returns
+    -------
+    FrequencyResponse
+        The response of ``output`` to ``input``.
+
+    Raises
+    ------
+    ValueError
+        When the record is not uniformly sampled or the input is not excited.
     """
     dt = record.dt
     if len(record) > 2 and not np.allclose(np.diff(record.time), dt, rtol=1e-3):

@@ -43,6 +43,20 @@ def effective_averages(taper: np.ndarray, n_segments: int, step: int) -> float:
     Welch (1967) eq. 11 for the variance of an averaged periodogram of white data:
     1/n_eff = (1/K) [1 + 2 sum_{j=1}^{K-1} (1 - j/K) rho(j)^2],
     rho(j) = sum w(k) w(k + j S) / sum w(k)^2, with K segments offset by S samples.
+
+    Parameters
+    ----------
+    taper : numpy.ndarray
+        The segment taper w; shape (segment samples,).
+    n_segments : int
+        K, the segments averaged.
+    step : int
+        S, the offset between segments, samples.
+
+    Returns
+    -------
+    float
+        n_eff, 1.
     """
     k = n_segments
     if k <= 1:
@@ -67,10 +81,35 @@ def cross_spectra(
     overlap: float = 0.5,
     taper: str = "hann",
 ) -> Spectra:
-    """Averaged auto and cross spectra of the columns of ``signals`` (time along axis 0).
+    """Averaged auto and cross spectra of the columns of ``signals``.
 
-    ``window`` is the segment length (s), ``overlap`` the fraction shared by neighbouring
-    segments, ``taper`` hann, hamming or rectangular; each segment's mean is removed.
+    Each segment's mean is removed.
+
+    Parameters
+    ----------
+    signals : numpy.ndarray
+        Signals, time along axis 0; shape (N,) or (N, k).
+    dt : float
+        Sample interval, s.
+    window : float
+        Segment length, s (at least 8 samples, at most the record).
+    frequencies : numpy.ndarray
+        Frequencies, Hz.
+    overlap : float, optional
+        Fraction shared by neighbouring segments, in [0, 1). Default 0.5.
+    taper : str, optional
+        "hann", "hamming" or "rectangular". Default "hann".
+
+    Returns
+    -------
+    Spectra
+        The one-sided spectral matrix (unit_i unit_j / Hz; shape (n_f, k, k)) and its
+        averaging.
+
+    Raises
+    ------
+    ValueError
+        For non-finite samples, a window too short or too long, or an overlap out of range.
     """
     x = np.asarray(signals, dtype=float)
     if x.ndim == 1:

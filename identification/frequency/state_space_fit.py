@@ -72,7 +72,22 @@ REGRESSOR_VARIABLES: dict[str, str] = {
 
 def fourier_data(record: FlightRecord, channels: Sequence[str], frequencies: np.ndarray
                  ) -> dict[str, np.ndarray]:
-    """Finite Fourier transforms of channels minus their means (unit * s) at frequencies (Hz)."""
+    """Finite Fourier transforms of channels minus their means.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A uniformly sampled flight, SI channels.
+    channels : sequence of str
+        The channels transformed.
+    frequencies : numpy.ndarray
+        Frequencies, Hz.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Per channel its transform, unit * s; shape (n_f,).
+    """
     _check_uniform(record)
     x = np.column_stack([record[c] - np.mean(record[c]) for c in channels])
     xf = finite_fourier_transform(x, record.dt, frequencies)
@@ -99,12 +114,33 @@ def equation_error(
     *,
     frequencies: np.ndarray | None = None,
 ) -> Estimate:
-    """Frequency-domain equation error: coefficient channel (e.g. 'Cl') regressed on
-    regressor channels (beta, phat, rhat, da, dr ...) at ``frequencies`` (Hz).
+    """Frequency-domain equation error: a coefficient channel regressed on regressor channels.
 
-    Returns derivatives named C<coef>_<var> (per rad, rates nondimensional). Standard
-    errors from the residual variance of the real-stacked regression,
+    Standard errors from the residual variance of the real-stacked regression,
     cov = s^2 Re(X^H X)^-1, s^2 = sum |v|^2 / (2 n_w - n_p) (Morelli & Klein eq. 7.16).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A uniformly sampled flight, SI channels.
+    coefficient : str
+        The coefficient channel (e.g. 'Cl'); computed from the rigid-body equations when the
+        record lacks it.
+    regressors : sequence of str
+        Regressor channels (beta, phat, rhat, da, dr ...).
+    frequencies : numpy.ndarray, optional
+        Frequencies, Hz. Default ``fourier_frequencies(record)``.
+
+    Returns
+    -------
+    Estimate
+        Derivatives named C<coef>_<var> (per rad, rates nondimensional) with their standard
+        errors.
+
+    Raises
+    ------
+    ValueError
+        For a malformed coefficient, an unknown regressor or too few frequencies.
     """
     if not coefficient.startswith("C") or len(coefficient) != 2:
         raise ValueError(f"coefficient must be a channel like 'Cl' or 'CY', got {coefficient!r}")
@@ -173,7 +209,26 @@ def _endpoint_terms(record: FlightRecord, model: LinearModel, omega: np.ndarray)
 
 def model_outputs(model: LinearModel, values: Mapping[str, float], omega: np.ndarray,
                   inputs: np.ndarray, endpoint: np.ndarray | None = None) -> np.ndarray:
-    """Transformed model outputs Y(jw) (n_w, n_y) for transformed inputs (n_w, n_u)."""
+    """Transformed model outputs Y(jw) for transformed inputs.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float
+        Its parameter values.
+    omega : numpy.ndarray
+        Angular frequencies, rad/s; shape (n_w,).
+    inputs : numpy.ndarray
+        Transformed inputs, unit * s; shape (n_w, n_u).
+    endpoint : numpy.ndarray, optional
+        End terms added to the state equation's right-hand side; shape (n_w, n_x).
+
+    Returns
+    -------
+    numpy.ndarray
+        Y(jw), output unit * s; shape (n_w, n_y).
+    """
     a, b, c, d = _split_bias(model, values)
     n = a.shape[0]
     eye = np.eye(n)
@@ -200,15 +255,41 @@ def output_error(
 ) -> Estimate:
     """Frequency-domain output error (maximum likelihood) of a linear model's parameters.
 
-    ``record`` is one maneuver or several (e.g. a roll and a yaw sweep, each exciting one
-    input): their transformed data are fitted together with one residual spectral
-    density. ``estimate`` names the parameters to fit (default: every parameter of the
-    model but the biases, which the mean removal and end terms replace; the rest stay at
-    their start values). ``frequencies`` in Hz (default 0.1-1.5 Hz spaced 1/T, per
-    record). ``noise``: "full" estimates the real part of the residual spectral matrix
-    S = Re(1/n sum v v^H) (outputs' residuals correlated, as in Morelli & Klein
-    eq. 7.32), "diagonal" only its diagonal. Returns derivatives with Cramer-Rao
-    standard errors.
+    Several records are fitted together with one residual spectral density. The residual
+    spectral density and the parameters are relaxed in turn.
+
+    Parameters
+    ----------
+    record : FlightRecord or sequence of FlightRecord
+        One maneuver or several (e.g. a roll and a yaw sweep, each exciting one input).
+    model : LinearModel
+        The linear model.
+    estimate : sequence of str, optional
+        The parameters to fit. Default every parameter of the model but the biases, which
+        the mean removal and end terms replace; the rest stay at their start values.
+    frequencies : numpy.ndarray, optional
+        Frequencies, Hz. Default 0.1-1.5 Hz spaced 1/T, per record.
+    start : mapping of str to float, optional
+        Start values over the model's own.
+    end_terms : bool, optional
+        Model the records' end terms. Default True.
+    noise : str, optional
+        "full" estimates the real part of the residual spectral matrix
+        S = Re(1/n sum v v^H) (outputs' residuals correlated, as in Morelli & Klein
+        eq. 7.32), "diagonal" only its diagonal. Default "full".
+    max_relaxations : int, optional
+        The limit on noise-density relaxations. Default 20.
+
+    Returns
+    -------
+    Estimate
+        Derivatives with Cramer-Rao standard errors.
+
+    Raises
+    ------
+    ValueError
+        For an unknown noise model or parameter, a bias in ``estimate``, no record, or a
+        record lacking a model channel.
     """
     if noise not in NOISE_MODELS:
         raise ValueError(f"noise must be one of {', '.join(NOISE_MODELS)}, got {noise!r}")
@@ -318,7 +399,26 @@ def _transformed(record: FlightRecord, model: LinearModel, frequencies: np.ndarr
 # ----------------------------------------------------------------------------- CIFER state space
 def model_response(model: LinearModel, values: Mapping[str, float], output: str, input: str,
                    frequency: np.ndarray) -> np.ndarray:
-    """Model frequency response output/input (SI per SI) at frequency (Hz)."""
+    """Model frequency response output/input at ``frequency``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float
+        Its parameter values.
+    output : str
+        A model output.
+    input : str
+        A model input.
+    frequency : numpy.ndarray
+        Frequencies, Hz.
+
+    Returns
+    -------
+    numpy.ndarray
+        The complex response, SI per SI; shape of ``frequency``.
+    """
     a, b, c, d = _split_bias(model, values)
     i, j = model.outputs.index(output), model.inputs.index(input)
     eye = np.eye(a.shape[0])
@@ -336,12 +436,34 @@ def fit_state_space(
 ) -> Estimate:
     """Fit a linear model to measured frequency responses with the CIFER cost.
 
-    Each response's (output, input) must be a pair of the model; its points with
-    coherence >= ``coherence_min`` are used. The total cost is the sum of the pair costs;
-    ``fit['cost_per_pair']`` and ``fit['average_cost']`` are the CIFER numbers
-    (<= 100 per pair is a good fit). Standard errors are Cramer-Rao bounds scaled by the
-    residual variance, insensitivities in ``fit['insensitivity']`` (Tischler & Remple
-    sec. 11.6; guidelines CR <= 20 %, insensitivity <= 10 %).
+    The total cost is the sum of the pair costs; ``fit['cost_per_pair']`` and
+    ``fit['average_cost']`` are the CIFER numbers (<= 100 per pair is a good fit). Standard
+    errors are Cramer-Rao bounds scaled by the residual variance, insensitivities in
+    ``fit['insensitivity']`` (Tischler & Remple sec. 11.6; guidelines CR <= 20 %,
+    insensitivity <= 10 %).
+
+    Parameters
+    ----------
+    responses : sequence of FrequencyResponse
+        Measured responses; each (output, input) must be a pair of the model.
+    model : LinearModel
+        The linear model.
+    estimate : sequence of str, optional
+        The parameters to fit. Default all but the biases.
+    coherence_min : float, optional
+        The smallest coherence of a point used. Default ``COHERENCE_MIN``.
+    start : mapping of str to float, optional
+        Start values over the model's own.
+
+    Returns
+    -------
+    Estimate
+        The fitted parameters and their standard errors.
+
+    Raises
+    ------
+    ValueError
+        When a response is not a model pair or has fewer than 3 usable points.
     """
     names = list(estimate) if estimate is not None else [
         p for p in model.parameters if not p.startswith("bias_")]
@@ -432,11 +554,26 @@ def verify_time_domain(
     """Fly the model on ``record`` (a maneuver not used for fitting) and score the fit.
 
     The model starts from the measured states at the first sample and is driven by the
-    measured inputs (perturbations from the first sample); a bias per state equation
-    and per output (reference shifts) are fitted by linear least squares, as CIFER's
-    VERIFY does. Returns {'J_rms', 'tic' {output: TIC}, 'time', 'measured', 'model',
-    'biases'}; J_rms in the units deg, deg/s, ft/s, ft/s^2 (<= 1-2 is good,
-    Tischler & Remple), TIC = ||z - y|| / (||z|| + ||y||) (< 0.25-0.3 is good).
+    measured inputs (perturbations from the first sample); a bias per state equation and per
+    output (reference shifts) are fitted by linear least squares, as CIFER's VERIFY does.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The verification maneuver, SI channels.
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float or Estimate
+        The parameter values over the model's start values.
+    outputs : sequence of str, optional
+        The outputs scored. Default all the model's.
+
+    Returns
+    -------
+    dict
+        {'J_rms', 'tic' {output: TIC}, 'time', 'measured', 'model', 'biases'}; J_rms in the
+        units deg, deg/s, ft/s, ft/s^2 (<= 1-2 is good, Tischler & Remple),
+        TIC = ||z - y|| / (||z|| + ||y||) (< 0.25-0.3 is good).
     """
     vals = dict(model.start)
     if isinstance(values, Estimate):

@@ -38,18 +38,57 @@ COHERENCE_MIN = 0.6
 
 
 def coherence_weight(coherence: np.ndarray) -> np.ndarray:
-    """CIFER coherence weighting W_gamma = [1.58 (1 - exp(-gamma^2))]^2 (dimensionless)."""
+    """CIFER coherence weighting W_gamma = [1.58 (1 - exp(-gamma^2))]^2.
+
+    Parameters
+    ----------
+    coherence : numpy.ndarray
+        gamma^2, 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        The weights, dimensionless; shape of ``coherence``.
+    """
     return (1.58 * (1.0 - np.exp(-np.asarray(coherence, dtype=float)))) ** 2
 
 
 def wrap_deg(angle: np.ndarray) -> np.ndarray:
-    """Angle wrapped to (-180, 180] deg."""
+    """Angle wrapped to (-180, 180] deg.
+
+    Parameters
+    ----------
+    angle : numpy.ndarray
+        Angles, deg.
+
+    Returns
+    -------
+    numpy.ndarray
+        The wrapped angles, deg.
+    """
     return -((-np.asarray(angle) + 180.0) % 360.0 - 180.0)
 
 
 def central_jacobian(fun, theta: np.ndarray, floor: float = 1e-2) -> np.ndarray:
-    """Central-difference Jacobian of ``fun`` at ``theta``: steps 1e-6 of each value, with
-    the value floored at ``floor`` (so a parameter near zero still gets a usable step)."""
+    """Central-difference Jacobian of ``fun`` at ``theta``.
+
+    Steps are 1e-6 of each value, with the value floored at ``floor`` (so a parameter near
+    zero still gets a usable step).
+
+    Parameters
+    ----------
+    fun : callable
+        Maps a parameter vector to a residual vector.
+    theta : numpy.ndarray
+        The parameters; shape (np,).
+    floor : float, optional
+        The smallest magnitude a step is scaled from. Default 1e-2.
+
+    Returns
+    -------
+    numpy.ndarray
+        d fun / d theta; shape (len(fun(theta)), np).
+    """
     base = fun(theta)
     jac = np.empty((np.size(base), theta.size))
     for j in range(theta.size):
@@ -62,8 +101,23 @@ def central_jacobian(fun, theta: np.ndarray, floor: float = 1e-2) -> np.ndarray:
 
 
 def cifer_residuals(model: np.ndarray, data: np.ndarray, coherence: np.ndarray) -> np.ndarray:
-    """Weighted residuals r with sum(r^2) = CIFER cost J of complex responses on n_w points:
-    first the n_w magnitude terms (dB), then the n_w phase terms (deg, wrapped)."""
+    """Weighted residuals r with sum(r^2) = CIFER cost J of complex responses on n_w points.
+
+    Parameters
+    ----------
+    model : numpy.ndarray
+        The model's complex response; shape (n_w,).
+    data : numpy.ndarray
+        The measured complex response, same unit; shape (n_w,).
+    coherence : numpy.ndarray
+        The measured coherence, 1; shape (n_w,).
+
+    Returns
+    -------
+    numpy.ndarray
+        First the n_w magnitude terms (dB), then the n_w phase terms (deg, wrapped), weighted;
+        shape (2 n_w,).
+    """
     n = data.size
     wg = np.sqrt(20.0 / n * coherence_weight(coherence))
     mag = 20.0 * np.log10(np.abs(model) / np.abs(data))
@@ -72,7 +126,22 @@ def cifer_residuals(model: np.ndarray, data: np.ndarray, coherence: np.ndarray) 
 
 
 def cifer_cost(model: np.ndarray, data: np.ndarray, coherence: np.ndarray) -> float:
-    """CIFER cost J (dimensionless; about 100 or less for a good fit)."""
+    """CIFER cost J (dimensionless; about 100 or less for a good fit).
+
+    Parameters
+    ----------
+    model : numpy.ndarray
+        The model's complex response; shape (n_w,).
+    data : numpy.ndarray
+        The measured complex response; shape (n_w,).
+    coherence : numpy.ndarray
+        The measured coherence; shape (n_w,).
+
+    Returns
+    -------
+    float
+        J.
+    """
     r = cifer_residuals(model, data, coherence)
     return float(r @ r)
 
@@ -203,10 +272,36 @@ def fit_transfer_function(
 ) -> TransferFunctionFit:
     """Fit num(s)/den(s) e^{-tau s} (orders n_num, n_den) to a frequency response.
 
-    ``delay``: True to fit the equivalent delay tau (s), False for none, or a number to
-    fix it. Points used: within ``f_range`` (Hz) and coherence >= ``coherence_min``.
-    The start values come from Levy's linear fit on a grid of delays up to ``max_delay``
-    (default half a period of the highest frequency); then the CIFER cost is minimised.
+    The start values come from Levy's linear fit on a grid of delays up to ``max_delay``;
+    then the CIFER cost is minimised.
+
+    Parameters
+    ----------
+    response : FrequencyResponse
+        The measured response.
+    n_num : int
+        Numerator order, 0 <= n_num <= n_den.
+    n_den : int
+        Denominator order, >= 1.
+    delay : bool or float, optional
+        True to fit the equivalent delay tau (s), False for none, or a number (s) to fix it.
+        Default True.
+    f_range : tuple of float, optional
+        (low, high) frequencies used, Hz. Default all.
+    coherence_min : float, optional
+        The smallest coherence of a point used. Default ``COHERENCE_MIN``.
+    max_delay : float, optional
+        The largest start delay tried, s. Default half a period of the highest frequency.
+
+    Returns
+    -------
+    TransferFunctionFit
+        The fitted transfer function and its cost.
+
+    Raises
+    ------
+    ValueError
+        For bad orders, a negative fixed delay or too few usable points.
     """
     if n_num < 0 or n_den < 1 or n_num > n_den:
         raise ValueError(f"need 0 <= numerator order <= denominator order >= 1, got "

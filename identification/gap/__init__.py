@@ -3,16 +3,16 @@ of the catalogue causes it, and how far the gap shrinks on held-out data.
 
 ``model`` (the model under test: the aircraft linearised at the record's condition, with
 its actuators on a record of commands), ``segments`` (maneuver windows), ``fit`` (output
-error on one window), ``verdict`` (is there a gap), ``where`` (gap map), ``candidates``
-(the catalogue's entries as candidates, their physical ranges and equivalence classes),
-``rank`` (which effect), ``sequence`` (several effects), ``shrink`` (how far), ``jsbsim``
-(the corrected aircraft written, refined and flown again), ``diagnose`` (all of it),
-``report`` (HTML); ``envelope`` (records from several conditions: each diagnosed at
-its own, where in the envelope the model departs) and ``trend`` (a derivative error's
-trend over the conditions).
+error on one window), ``verdict`` (is there a gap), ``residual_map`` (where the gap lies),
+``candidates`` (the catalogue's entries as candidates, their physical ranges and
+equivalence classes), ``rank`` (which effect), ``sequence`` (several effects, and how far
+the gap shrinks), ``jsbsim`` (the corrected aircraft written, refined and flown again),
+``diagnosis`` (all of it: ``diagnose``), ``report`` (HTML); ``envelope`` (records from
+several conditions: each diagnosed at its own, where in the envelope the model departs)
+and ``trend`` (a derivative error's trend over the conditions).
 """
 
-from flightid.identification.gap.diagnose import GapResult, diagnose
+from flightid.identification.gap.diagnosis import GapResult, diagnose
 from flightid.identification.gap.envelope import EnvelopeResult, envelope
 from flightid.identification.gap.jsbsim.write import write_aircraft
 

@@ -190,7 +190,20 @@ def play(x: np.ndarray, width: float) -> np.ndarray:
 
 
 def deadband(x: np.ndarray, width: float) -> np.ndarray:
-    """``x`` through a deadband of full ``width`` around zero (same unit)."""
+    """``x`` through a deadband of full ``width`` around zero.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit.
+    width : float
+        The deadband's full width, unit of ``x``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The output, unit of ``x``; shape of ``x``.
+    """
     half = 0.5 * width
     return np.sign(x) * np.maximum(np.abs(x) - half, 0.0)
 
@@ -220,9 +233,29 @@ def _signals(fit: WindowFit, record: FlightRecord, axis: str,
 
 def known_regressors(sig: Mapping[str, np.ndarray], dt: float, axis: str, target: str,
                      inputs: Sequence[str]) -> np.ndarray:
-    """(N, k) what a linear relation and the catalogue's candidates explain of ``target``
-    (module note): the axis's measured channels and inputs, their rates, the airspeed's
-    product with the flow angle, each surface through a play and a deadband less itself."""
+    """What a linear relation and the catalogue's candidates explain of ``target`` (module note).
+
+    The axis's measured channels and inputs, their rates, the airspeed's product with the flow
+    angle, each surface through a play and a deadband less itself.
+
+    Parameters
+    ----------
+    sig : mapping of str to numpy.ndarray
+        One window's signals, SI; shape (N,) each.
+    dt : float
+        Sample interval, s.
+    axis : str
+        "lateral" or "longitudinal".
+    target : str
+        The channel explained (left out of its own regressors).
+    inputs : sequence of str
+        The axis's surfaces.
+
+    Returns
+    -------
+    numpy.ndarray
+        The regressors, means removed; shape (N, k).
+    """
     cols: list[np.ndarray] = []
     names = [c for c in (*LINEAR[axis], *inputs) if c in sig and c != target]
     for c in names:
@@ -242,8 +275,22 @@ def known_regressors(sig: Mapping[str, np.ndarray], dt: float, axis: str, target
 
 def structures(sig: Mapping[str, np.ndarray], center: Mapping[str, Any]
                ) -> dict[str, np.ndarray]:
-    """{structure name: (N, k) regressors} of one window (module note); ``center``: the
-    vane's reference (rad) and the kink knots, the same on every window."""
+    """The regressors of each nonlinear structure on one window (module note).
+
+    Parameters
+    ----------
+    sig : mapping of str to numpy.ndarray
+        One window's signals, SI; shape (N,) each.
+    center : mapping of str to Any
+        The vane channel (``vane``), its reference (``ref``, rad) and the kink knots
+        (``knots``, rad), the same on every window.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        {structure name: regressors, means removed, shape (N, k)}; empty when the window lacks
+        the vane.
+    """
     out: dict[str, np.ndarray] = {}
     vane = center["vane"]
     if vane in sig:

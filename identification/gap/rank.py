@@ -67,7 +67,18 @@ TIE_Z = 2.0
 
 
 def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
-    """Per channel: residual energy / measured energy (mean removed per window), pooled."""
+    """Per channel: residual energy / measured energy (mean removed per window), pooled.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits, all with the same channels.
+
+    Returns
+    -------
+    dict of str to float
+        {channel: fraction}, 1; nan where the measured energy is zero.
+    """
     out = {}
     for ch in fits[0].residual:
         res = sum(float(np.sum(f.residual[ch] ** 2)) for f in fits)
@@ -78,8 +89,20 @@ def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
 
 
 def pooled_noise(fits: list[WindowFit]) -> dict[str, float]:
-    """Per channel: the white-noise energy of the residual (``fit.noise_energy``) / measured
-    energy, pooled over windows: the floor no effect can take a gap below."""
+    """Per channel: the white-noise energy of the residual / measured energy, pooled over windows.
+
+    The white-noise energy is ``fit.noise_energy``'s: the floor no effect can take a gap below.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits, all with the same channels.
+
+    Returns
+    -------
+    dict of str to float
+        {channel: fraction}, 1; nan where the measured energy is zero.
+    """
     out = {}
     for ch in fits[0].residual:
         noise = sum(noise_energy(f.residual[ch]) for f in fits)
@@ -89,8 +112,19 @@ def pooled_noise(fits: list[WindowFit]) -> dict[str, float]:
     return out
 
 
-def overall(fractions: dict[str, float]) -> float:
-    """The gap of a set of channels: the mean of their fractions (nan: none known)."""
+def mean_gap(fractions: dict[str, float]) -> float:
+    """The gap of a set of channels: the mean of their fractions.
+
+    Parameters
+    ----------
+    fractions : dict of str to float
+        {channel: fraction}, 1.
+
+    Returns
+    -------
+    float
+        The mean of the finite fractions; nan when none is known.
+    """
     known = [v for v in fractions.values() if math.isfinite(v)]
     return float(np.mean(known)) if known else float("nan")
 
@@ -121,7 +155,7 @@ class Ranked:
     @property
     def shrink(self) -> float:
         """Relative shrink of the held-out gap (1: closed, 0: unchanged)."""
-        before, after = overall(self.heldout_before), overall(self.heldout_after)
+        before, after = mean_gap(self.heldout_before), mean_gap(self.heldout_after)
         return 1.0 - after / before if before > 0 else float("nan")
 
     def to_json(self) -> dict:
@@ -139,7 +173,21 @@ class Ranked:
 
 def combine(fits: list[WindowFit], names: tuple[str, ...]
             ) -> tuple[dict[str, float], dict[str, float]] | None:
-    """Inverse-variance mean of the windows' estimates; None when no window identifies."""
+    """Inverse-variance mean of the windows' estimates.
+
+    Parameters
+    ----------
+    fits : list of WindowFit
+        The window fits.
+    names : tuple of str
+        The parameters combined.
+
+    Returns
+    -------
+    tuple of (dict of str to float, dict of str to float) or None
+        ({name: value}, {name: standard error}) in the parameters' units; None when no window
+        identifies some parameter.
+    """
     values, std = {}, {}
     for n in names:
         pts = [(f.values[n], f.std[n]) for f in fits
@@ -270,9 +318,9 @@ class Ranker:
         r.heldout_changes = {}
         for label, b, a in zip(labels, before, after, strict=True):
             r.heldout_changes[label] = r.heldout_changes.get(label, 0.0) + a.cost - b.cost
-        gain = overall(r.heldout_before) - overall(r.heldout_after)
-        level = (MIN_EXCESS_SHRINK * overall(self.above) if self.above
-                 else MIN_SHRINK * overall(r.heldout_before))
+        gain = mean_gap(r.heldout_before) - mean_gap(r.heldout_after)
+        level = (MIN_EXCESS_SHRINK * mean_gap(self.above) if self.above
+                 else MIN_SHRINK * mean_gap(r.heldout_before))
         r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and gain >= MIN_GAIN
                            and gain >= level)
 
@@ -314,11 +362,29 @@ class Ranker:
 
 def rank(ranker: Ranker, candidates: list[Candidate],
          keep: int | None = SCREEN_KEEP) -> list[Ranked]:
-    """The candidates screened (``Ranker.screen``: every one, a few Gauss-Newton steps) and
-    the ``keep`` best by that delta BIC evaluated in full (converged fits, the held-out
-    check, the physical range; all of them when ``keep`` is None), the nonlinear actuator
-    candidates (``candidates.linkage``) scored in full beside them (``Ranker.evaluate_linkage``);
-    sorted by ``rank_key`` after the held-out Occam rule of ``nested``."""
+    """The candidates screened, the best evaluated in full, and sorted.
+
+    Screening (``Ranker.screen``: every one, a few Gauss-Newton steps) keeps the ``keep`` best
+    by delta BIC for the full evaluation (converged fits, the held-out check, the physical
+    range); the nonlinear actuator candidates (``candidates.linkage``) are scored in full
+    beside them (``Ranker.evaluate_linkage``). Sorted by ``rank_key`` after the held-out Occam
+    rule of ``prefer_fewer_parameters``.
+
+    Parameters
+    ----------
+    ranker : Ranker
+        The ranker of the record's windows.
+    candidates : list of Candidate
+        The candidates.
+    keep : int or None, optional
+        How many screened candidates are evaluated in full; all of them when None. Default
+        ``SCREEN_KEEP``.
+
+    Returns
+    -------
+    list of Ranked
+        The evaluated candidates in ranking order.
+    """
     linkage = [c for c in candidates if is_linkage(c)]
     candidates = [c for c in candidates if not is_linkage(c)]
     if keep is not None and len(candidates) > keep:
@@ -327,7 +393,7 @@ def rank(ranker: Ranker, candidates: list[Candidate],
         candidates = [candidates[i] for i in order[:keep]]
     out = [r for c in candidates if (r := ranker.evaluate(c)) is not None]
     out += [r for c in linkage if (r := ranker.evaluate_linkage(c)) is not None]
-    nested(out)
+    prefer_fewer_parameters(out)
     prefer_model_terms(out, MIN_SHRINK)
     return simplest(sorted(out, key=rank_key))
 
@@ -359,10 +425,10 @@ def simplest(ranked: list[Ranked]) -> list[Ranked]:
     """``ranked`` (sorted by ``rank_key``) with the confirmed effects that the held-out data
     cannot tell from the top one (``tied``) listed in its ``alternatives``, and the one that
     frees fewest parameters among them put first (a tie kept in order): an extra parameter
-    that buys no held-out evidence is not named (Occam, as ``nested``). A nonlinear actuator
-    effect (``candidates.linkage``) tied with a linear effect of the same surface (a rate
-    limit with the surface's lag) gives way to it: the nonlinear one adds a law of
-    amplitude that the held-out data do not support.
+    that buys no held-out evidence is not named (Occam, as ``prefer_fewer_parameters``). A
+    nonlinear actuator effect (``candidates.linkage``) tied with a linear effect of the same
+    surface (a rate limit with the surface's lag) gives way to it: the nonlinear one adds a
+    law of amplitude that the held-out data do not support.
 
     Parameters
     ----------
@@ -395,45 +461,76 @@ def simplest(ranked: list[Ranked]) -> list[Ranked]:
 
 
 def rank_key(r: Ranked) -> tuple[bool, float]:
-    """The ranking's sort key: confirmed effects first, by their held-out cost change
-    (the cross-validated evidence: Stone 1974; an effect that fits the fitted windows a
-    little better by fitting their turbulence does no better on held-out ones), the others
-    by delta BIC."""
+    """The ranking's sort key: confirmed effects first, by their held-out cost change, the
+    others by delta BIC.
+
+    The held-out cost change is the cross-validated evidence (Stone 1974): an effect that fits
+    the fitted windows a little better by fitting their turbulence does no better on held-out
+    ones.
+
+    Parameters
+    ----------
+    r : Ranked
+        A ranked candidate.
+
+    Returns
+    -------
+    tuple of (bool, float)
+        (not confirmed, held-out cost change or delta BIC).
+    """
     return (not r.confirmed, r.heldout_cost_change if r.confirmed else r.delta_bic)
 
 
-def nested(ranked: list[Ranked]) -> None:
+def prefer_fewer_parameters(ranked: list[Ranked]) -> None:
     """Unconfirm each confirmed effect that frees more parameters than another confirmed
-    one and is not ``MIN_SHRINK`` better than it on held-out data: the simpler effect is
-    named when the extra parameters only fit the linearisation's small misfit. A Twin
-    Otter elevator at 0.8: a group of three effects had the lower BIC, with Cm_alpha -0.012
-    and Cm_q -0.24 beside the factor, and no lower held-out gap; a Navion Cm_alpha delta
-    of +0.1: ``tail_ice`` (its ``stability`` factor doing the delta's work) had the lower
-    BIC and a higher held-out gap."""
+    one and is not ``MIN_SHRINK`` better than it on held-out data (Occam's razor on
+    held-out evidence): the simpler effect is named when the extra parameters only fit the
+    linearisation's small misfit.
+
+    Parameters
+    ----------
+    ranked : list of Ranked
+        The ranked effects; changed in place (``confirmed`` and ``note``).
+    """
     confirmed = [r for r in ranked if r.confirmed and r.heldout_after]
     for r in confirmed:
-        after = overall(r.heldout_after)
+        after = mean_gap(r.heldout_after)
         for s in confirmed:
             if (len(s.candidate.free) < len(r.candidate.free)
-                    and after > (1 - MIN_SHRINK) * overall(s.heldout_after)):
+                    and after > (1 - MIN_SHRINK) * mean_gap(s.heldout_after)):
                 r.confirmed = False
                 r.note = (f"no better on held-out data than {s.candidate.label}, which "
                           "frees fewer parameters")
                 break
 
 
-def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
-    """The top effect paired with the next ``PAIR_TOP`` ones, when it alone leaves a held-out
-    gap above ``PAIR_LEVEL`` (with the null level known, ``Ranker.above``: when it closes
-    less than ``PAIR_SHARE`` of the gap above that level); a pair
-    is confirmed when it improves the top effect's BIC and shrinks its held-out gap by
-    ``MIN_SHRINK`` more (of that gap; with the null level known, of the gap above it)."""
+def ranked_pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
+    """The top effect paired with the next ``PAIR_TOP`` ones.
+
+    Tried when the top effect alone leaves a held-out gap above ``PAIR_LEVEL`` (with the null
+    level known, ``Ranker.above``: when it closes less than ``PAIR_SHARE`` of the gap above
+    that level); a pair is confirmed when it improves the top effect's BIC and shrinks its
+    held-out gap by ``MIN_SHRINK`` more (of that gap; with the null level known, of the gap
+    above it).
+
+    Parameters
+    ----------
+    ranker : Ranker
+        The ranker that scored ``ranked``.
+    ranked : list of Ranked
+        The single effects, in ranking order.
+
+    Returns
+    -------
+    list of Ranked
+        The pairs, sorted by ``rank_key``; [] when no pair is tried.
+    """
     if not ranked or not ranked[0].confirmed:
         return []
-    if ranker.above is None and overall(ranked[0].heldout_after) < PAIR_LEVEL:
+    if ranker.above is None and mean_gap(ranked[0].heldout_after) < PAIR_LEVEL:
         return []
-    gain = overall(ranked[0].heldout_before) - overall(ranked[0].heldout_after)
-    if ranker.above is not None and gain >= PAIR_SHARE * overall(ranker.above):
+    gain = mean_gap(ranked[0].heldout_before) - mean_gap(ranked[0].heldout_after)
+    if ranker.above is not None and gain >= PAIR_SHARE * mean_gap(ranker.above):
         return []
     top = ranked[0]
     if is_linkage(top.candidate):  # not a model edit: a pair cannot carry it
@@ -443,9 +540,9 @@ def pairs(ranker: Ranker, ranked: list[Ranked]) -> list[Ranked]:
         c = pair(top.candidate, other.candidate)
         if c is None or (r := ranker.evaluate(c)) is None:
             continue
-        single_after = overall(top.heldout_after)
-        pair_after = overall(r.heldout_after) if r.heldout_after else float("nan")
-        better = (single_after - pair_after >= MIN_SHRINK * overall(ranker.above)
+        single_after = mean_gap(top.heldout_after)
+        pair_after = mean_gap(r.heldout_after) if r.heldout_after else float("nan")
+        better = (single_after - pair_after >= MIN_SHRINK * mean_gap(ranker.above)
                   if ranker.above else pair_after <= (1 - MIN_SHRINK) * single_after)
         r.confirmed = bool(r.confirmed and r.delta_bic < top.delta_bic and better)
         out.append(r)

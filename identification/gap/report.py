@@ -5,9 +5,7 @@ unexplained."""
 
 from __future__ import annotations
 
-import base64
 import html
-import io
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -16,12 +14,12 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flightid.identification.data.axes import AXIS_INPUTS
-from flightid.identification.gap.diagnose import GapResult
+from flightid.identification.evaluation.embed import png_img
+from flightid.identification.gap.diagnosis import GapResult
 from flightid.identification.gap.fit import held
 from flightid.identification.gap.rank import Ranked
 from flightid.identification.gap.segments import Segment, segments
-from flightid.identification.gap.sequence import fixed
-from flightid.identification.gap.shrink import shrink_text
+from flightid.identification.gap.sequence import fixed, shrink_text
 from flightid.record import FlightRecord, read
 
 MAX_WINDOWS = 3  # held-out windows drawn
@@ -30,12 +28,6 @@ UNITS = {"beta": "deg", "phi": "deg", "alpha": "deg", "theta": "deg", "p": "deg/
          "r": "deg/s", "q": "deg/s", "V": "m/s"}
 
 Records = Sequence[FlightRecord | str | Path]
-
-
-def _png(fig: Figure) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100, bbox_inches="tight")
-    return base64.b64encode(buf.getvalue()).decode()
 
 
 def _loaded(items: Records, prefix: str = "") -> tuple[list[FlightRecord], list[str]]:
@@ -199,7 +191,7 @@ turbulence; explained: the named effects bring it there; partly_unexplained: the
 unexplained: a gap no catalogue effect closes (docs/gap.md).</p>
 <p>Windows fitted: {html.escape(', '.join(d['windows']['fit']))}; held out:
 {html.escape(', '.join(d['windows']['held_out']) or 'none')}.</p>
-<h2>Where</h2><img src="data:image/png;base64,{_png(result.figure())}" alt="gap map">
+<h2>Where</h2>{png_img(result.figure(), "gap map", dpi=100)}
 <h2>Which</h2><p>Named: <b>{named}</b></p>
 <table><tr><th>#</th><th>effect</th><th>parameters (catalogue units)</th><th>&Delta;BIC</th>
 <th>held-out shrink</th><th>named (step)</th></tr>{''.join(rows)}</table>{unexpl}
@@ -213,11 +205,10 @@ unexplained: a gap no catalogue effect closes (docs/gap.md).</p>
 def _histories(result: GapResult, records: Records | None, validate: Records | None) -> str:
     if not records:
         return ""
-    png = _png(time_histories(result, records, validate))
+    img = png_img(time_histories(result, records, validate), "held-out time histories", dpi=100)
     return ("<h2>Before and after, held out</h2><p>Measured (black), the model as is (red) "
             "and with the named effects at their values fitted on all windows (blue); the "
-            "biases and the initial state refitted on each window.</p>"
-            f'<img src="data:image/png;base64,{png}" alt="held-out time histories">')
+            "biases and the initial state refitted on each window.</p>" + img)
 
 
 def _refly(refly: dict | None) -> str:

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from flightid.channels import LATERAL_INPUTS
 from flightid.identification.data import windows
 from flightid.record import FlightRecord
 
-INPUTS = ("da", "dr")
+INPUTS = LATERAL_INPUTS
 MIN_WINDOW_S = 4.0
 
 

@@ -6,18 +6,20 @@ held-out gap. So, after the top effect is confirmed, the model takes it at its f
 values and the remaining candidates are fitted and checked on the held-out windows again
 (forward selection; Morelli & Klein 2016 ch. 5.4 select regressors the same way), until
 none is confirmed or ``STEPS`` effects are named. The held-out check of a later step uses
-the earlier effects at their values fitted on all windows.
+the earlier effects at their values fitted on all windows. How far the gap shrinks
+(``shrinkage``): per channel, the held-out gap before and after the effects.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Sequence
 
 from flightid.identification.gap.candidates.build import Candidate, catalogue_candidates
 from flightid.identification.gap.candidates.linkage import is_linkage
 from flightid.identification.gap.model.linearise import Linearised
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, rank
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, mean_gap, rank
 
 STEPS = 3  # effects named at most
 
@@ -109,3 +111,54 @@ def following(lin: Linearised, folds: Folds, first: Ranked, steps: int,
         out.append(ranked[0])
         current = fixed(current, ranked[0])
     return out
+
+
+def shrinkage(sequence: Sequence[Ranked]) -> dict:
+    """{"effect", "steps", "channels": {ch: {"before", "after", "shrink"}}, "overall"}:
+    the held-out gap (fraction of the measured energy) of the model as is (before the
+    first effect) and with every effect of ``sequence`` (after the last), and the overall
+    gap after each step; empty without an effect or held-out windows.
+
+    Parameters
+    ----------
+    sequence : sequence of Ranked
+        The named effects in order (each fitted with the ones before it fixed).
+
+    Returns
+    -------
+    dict
+        "effect" (the labels joined by "then"), "windows" (held out), "channels"
+        {channel: before, after, shrink}, "steps" (each effect's held-out gap after it)
+        and "overall" (mean over channels), as fractions of the measured energy; {}
+        without an effect or held-out windows.
+    """
+    if not sequence or not sequence[0].heldout_before or not sequence[-1].heldout_after:
+        return {}
+    first, last = sequence[0], sequence[-1]
+    chans = {}
+    for ch, b in first.heldout_before.items():
+        a = last.heldout_after[ch]
+        chans[ch] = {"before": b, "after": a, "shrink": 1 - a / b if b > 0 else float("nan")}
+    b, a = mean_gap(first.heldout_before), mean_gap(last.heldout_after)
+    return {"effect": " then ".join(r.candidate.label for r in sequence),
+            "windows": list(first.heldout_windows), "channels": chans,
+            "steps": [{"effect": r.candidate.label, "after": mean_gap(r.heldout_after)}
+                      for r in sequence],
+            "overall": {"before": b, "after": a, "shrink": 1 - a / b if b > 0 else float("nan")}}
+
+
+def shrink_text(x: float | None) -> str:
+    """A shrink for a table: a percentage, "worse" when the gap grew, "-" when unknown.
+
+    Parameters
+    ----------
+    x : float or None
+        A relative shrink (1: the gap closed).
+
+    Returns
+    -------
+    str
+    """
+    if x is None or not math.isfinite(x):
+        return "-"
+    return "worse" if x < 0 else f"{x:.0%}"

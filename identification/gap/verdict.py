@@ -6,74 +6,35 @@ sec. 16.6): a right model leaves a residual uncorrelated with the inputs, whatev
 colour of the disturbance (turbulence, sensor noise, filters), while a model error leaves
 a residual that the inputs explain. For each output, the residual v (the model as is,
 only its nuisance biases and initial state fitted on each window) is regressed on
-input-driven regressors:
+input-driven regressors (``regressors``: each input, ``LAGUERRE`` orthonormal Laguerre
+filters of it, Wahlberg 1991, and every output of the model as simulated from the measured
+inputs), all functions of the measured inputs only, so under the null (open-loop inputs)
+uncorrelated with the turbulence response and the noise. Beside them, and not tested, go
+the other outputs' residuals of the axis and ``PARTIAL_LAGUERRE`` Laguerre filters of each
+(``other_outputs``): one gust drives every output of an axis, so they take most of this
+one's turbulence response out, and the input regressors' coefficients stay zero-mean (a
+partial regression). Those coefficients are tested with the Wald statistic
+W = theta^T C^-1 theta, chi-square with k degrees of freedom, C corrected for the colored
+residual (Morelli & Klein 2016 eq. 6.54 with the leverage correction of ``engine.bounds``).
+Where the chi-square p says a channel is a gap, p is calibrated on the record
+(``calibrated_p``: ``SURROGATES`` circularly shifted surrogates, Theiler et al. 1992, and a
+scaled chi-square, Satterthwaite 1946).
 
-- each input u of the axis (its change from the window's first sample) and
-  ``LAGUERRE`` orthonormal Laguerre filters of it (time constant ``LAGUERRE_TAU_S``;
-  Wahlberg 1991; Heuberger, Van den Hof & Wahlberg 2005): the low-frequency response of
-  an error in the model's dynamics;
-- every output of the model as simulated from the measured inputs: the directions a
-  derivative or scale error moves the response in. (Their rates of change were tried
-  too: they made the roll rate of two of nine flights in moderate turbulence a false
-  alarm, p ~ 1e-7 to 1e-11, and added no detection.)
-
-All regressors are functions of the measured inputs only, so under the null (open-loop
-inputs) they are uncorrelated with the turbulence response and the noise. Beside them,
-and not tested, the **other outputs' residuals** of the axis and ``PARTIAL_LAGUERRE``
-Laguerre filters of each (``other_outputs``): one gust drives every output of an axis, so
-the other residuals explain most of this one's turbulence response, and under the null
-they too are independent of the inputs, so the input regressors' coefficients stay
-zero-mean (a partial regression, the instrument of Granger-type tests; the innovations of
-a Kalman predictor whiten the same turbulence with a model of it, Ljung 1999 sec. 16.6).
-The least-squares coefficients of the input regressors, theta (of the joint fit), are
-tested with the Wald statistic W = theta^T C^-1 theta, chi-square with k degrees of
-freedom, where C is their covariance corrected for the colored residual (Morelli & Klein
-2016 eq. 6.54 with the leverage correction of ``engine.bounds``): turbulence makes the
-residual colored, and a test that assumed it white would call every gusty day a model
-error.
-
-The chi-square null is itself only approximate: C is estimated from the same few 10 s
-windows as the residual, and on the blind check's null flights in light turbulence the
-statistic's spread came out up to ten times the chi-square's (longitudinal axis, two
-windows). Where the chi-square p says a channel is a gap, that p is therefore
-**calibrated on the record** (``calibrated_p``): W is recomputed on ``SURROGATES``
-surrogates, each window's regressors circularly shifted against its residual by at least
-``SURROGATE_SHIFT_S`` (surrogate data, Theiler et al. 1992: the shift keeps the residual's
-and the regressors' autocorrelations and destroys any relation between them), and p is
-read from the scaled chi-square c chi2(nu) with the surrogates' mean and variance
-(Satterthwaite 1946), so that a p of ``ALPHA`` is resolved by 100 surrogates; never below
-the chi-square p. The high band's test is calibrated the same way.
-
-Significance alone is not a gap: the linearised model of the exact JSBSim aircraft leaves a
-small, input-correlated misfit that a long calm record makes significant (p ~ 1e-10 at an
-energy share of 1e-4 on the telemaster), and that the turbulence taken out by the other
-outputs makes significant in turbulence too (p down to 1e-50 at shares of 0.002-0.013 on
-the blind check's null flights). A gap is therefore significant (p below ``ALPHA`` on a
-channel) *and* material: the input-explained energy, less what the regression explains by
-chance (trace(M C)), is at least ``MATERIAL`` of the channel's measured energy. The test
-without the other outputs (``ChannelTest.plain``, the seed-6 rules' main test) is kept
-beside it at ``PLAIN_ALPHA`` and ``PLAIN_MATERIAL``: in calm air the other outputs take
-part of a moment error instead of turbulence. Its share (``ChannelTest.level``) is the
-gap above the null level that confirmation is judged against (``NullTest.above``), as
-before. The null level thus counts the
-linearisation misfit of the exact model. (Taking the misfit off instead, as what the
-linearised model leaves on the exact aircraft re-flown with the record's surfaces, moved
-the light-turbulence null flights' shares by less than 0.01, and made two of six calm
-null flights false alarms in the high band: the re-fly has no sensor filters;
-docs/gap_benchmark.md.) Development figures (seeds 11-13, the blind
-check's lateral card, three aircraft, calm, light and moderate turbulence, nothing
-injected): 27 of 27 no_gap (docs/gap.md).
-
-A second, separate test per output looks at the high band, where a structural mode or a
-fast sensor or actuator effect shows and the slow regressors above do not reach:
-``FAST_LAGUERRE`` Laguerre filters of the inputs with a 0.08 s time constant, significant
-at the stricter ``HIGH_ALPHA`` and material when they explain ``HIGH_MATERIAL`` of the
-channel's measured energy above ``HIGH_HZ`` (a 4 Hz structural mode: 0.13-0.23 of the
-roll rate's energy above 1 Hz in light turbulence; no null flight reached p < 1e-3).
+A gap is significant (p below ``ALPHA`` on a channel) *and* material: the input-explained
+energy, less what the regression explains by chance (trace(M C)), is at least ``MATERIAL``
+of the channel's measured energy; the linearised model of the exact JSBSim aircraft
+leaves a small input-correlated misfit that a long record makes significant. The test
+without the other outputs (``ChannelTest.plain``) is kept beside it at ``PLAIN_ALPHA`` and
+``PLAIN_MATERIAL``; its share (``ChannelTest.level``) is the gap above the null level
+(``NullTest.above``). A second test per output looks at the high band (a structural mode,
+a fast sensor or actuator effect): ``FAST_LAGUERRE`` Laguerre filters of the inputs,
+significant at ``HIGH_ALPHA`` and material at ``HIGH_MATERIAL`` of the channel's measured
+energy above ``HIGH_HZ``.
 
 Verdicts (``VERDICTS``): ``no_gap`` (the model as is passes), ``explained`` (something is
 named and the model with it passes), ``partly_unexplained`` (named, still a gap),
-``unexplained`` (a gap, nothing named).
+``unexplained`` (a gap, nothing named). The reasoning, what was tried and dropped, and the
+development figures: docs/gap.md ("Method") and docs/gap_benchmark.md.
 """
 
 from __future__ import annotations
@@ -108,7 +69,8 @@ MATERIAL = 0.02
 # the test without the other outputs (the seed-6 rules' main test) is kept beside it at a
 # stricter level: in calm air the other outputs' residuals carry no turbulence to take out
 # and take part of a moment error instead (a Twin Otter Cn_beta 17 % off at 50 and 75
-# m/s, calm: `no_gap` with the partial test alone; tests/test_gap_envelope.py). On the 568
+# m/s, calm: `no_gap` with the partial test alone;
+# tests/identification/gap/test_gap_envelope.py). On the 568
 # null flights it adds 2 false alarms (16 in all with the high band's 8)
 PLAIN_ALPHA, PLAIN_MATERIAL = 1e-6, 0.005
 # the high band (a structural mode, a fast sensor or actuator effect): fast Laguerre
@@ -234,8 +196,27 @@ class NullTest:
 
 def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
              tau: float = LAGUERRE_TAU_S) -> list[np.ndarray]:
-    """``u`` through the first ``n`` discrete Laguerre filters with pole exp(-dt/tau):
-    L_1 = sqrt(1 - a^2) / (1 - a q^-1), L_(k+1) = L_k (q^-1 - a) / (1 - a q^-1)."""
+    """``u`` through the first ``n`` discrete Laguerre filters with pole exp(-dt/tau).
+
+    L_1 = sqrt(1 - a^2) / (1 - a q^-1), L_(k+1) = L_k (q^-1 - a) / (1 - a q^-1)
+    (Wahlberg 1991).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The signal, any unit; shape (N,).
+    dt : float
+        Sample interval, s.
+    n : int, optional
+        Number of filters. Default ``LAGUERRE``.
+    tau : float, optional
+        The filters' time constant, s. Default ``LAGUERRE_TAU_S``.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        The n filtered signals, unit of ``u``; shape (N,) each.
+    """
     a = math.exp(-dt / tau)
     x = signal.lfilter([math.sqrt(1.0 - a * a)], [1.0, -a], u)
     out = [x]
@@ -247,8 +228,27 @@ def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
 
 def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
                n: int = LAGUERRE) -> np.ndarray:
-    """(N, k) input-driven regressors of one window (module docstring), ``n`` Laguerre
-    filters per input."""
+    """The input-driven regressors of one window (module docstring).
+
+    Each input's change from the window's first sample and ``n`` Laguerre filters of it, then
+    every output of the model as simulated.
+
+    Parameters
+    ----------
+    fit : WindowFit
+        The model's fit on the window.
+    record : FlightRecord
+        The window's record, for the inputs (interpolated to the fit's times).
+    inputs : sequence of str
+        The axis's inputs (those the record lacks are skipped).
+    n : int, optional
+        Laguerre filters per input. Default ``LAGUERRE``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The regressors, means removed, SI units; shape (N, k).
+    """
     t = fit.time
     dt = float(np.median(np.diff(t)))
     cols: list[np.ndarray] = []
@@ -266,10 +266,32 @@ def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
 
 def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: str,
                  nuisance: np.ndarray | None = None) -> ChannelTest:
-    """The Wald test of ``residual`` (N,) on the regressors ``x`` (N, k), p from chi-square
-    with k degrees of freedom; ``spread``: the channel's measured energy (means removed).
-    ``nuisance`` (N, m): regressors fitted beside ``x`` and not tested (the other outputs'
-    residuals, ``PARTIAL_LAGUERRE``): only the coefficients of ``x`` enter W and the share."""
+    """The Wald test of ``residual`` on the regressors ``x``, p from chi-square with k degrees
+    of freedom.
+
+    Regressors that add nothing (a constant input, collinear model outputs) are dropped; the
+    covariance is corrected for the colored residual (``engine.bounds``).
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        The channel's residual, its SI unit; shape (N,).
+    x : numpy.ndarray
+        The tested regressors; shape (N, k).
+    spread : float
+        The channel's measured energy (means removed), unit squared.
+    channel : str
+        The channel's name.
+    nuisance : numpy.ndarray, optional
+        Regressors fitted beside ``x`` and not tested (the other outputs' residuals,
+        ``PARTIAL_LAGUERRE``); only the coefficients of ``x`` enter W and the share;
+        shape (N, m).
+
+    Returns
+    -------
+    ChannelTest
+        W, its degrees of freedom, p, and the explained shares of ``spread``.
+    """
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
     x = _independent(_unit(x))
@@ -295,9 +317,27 @@ def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: st
 
 def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURROGATES,
                      least_s: float = SURROGATE_SHIFT_S) -> np.ndarray:
-    """(b, windows) circular shifts, in samples, of each window's regressors against its
-    residual: drawn uniformly at least ``least_s`` seconds from either end of the window
-    (a fixed stream: the same shifts for every record)."""
+    """Circular shifts of each window's regressors against its residual.
+
+    Drawn uniformly at least ``least_s`` seconds from either end of the window (a fixed
+    stream: the same shifts for every record); half the window when it is too short.
+
+    Parameters
+    ----------
+    lengths : sequence of int
+        The windows' sample counts.
+    dts : sequence of float
+        The windows' sample intervals, s.
+    b : int, optional
+        Number of surrogates. Default ``SURROGATES``.
+    least_s : float, optional
+        The smallest shift, s. Default ``SURROGATE_SHIFT_S``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shifts, samples; shape (b, windows).
+    """
     rng = np.random.default_rng(SURROGATE_SEED)
     out = np.empty((b, len(lengths)), dtype=int)
     for j, (n, dt) in enumerate(zip(lengths, dts, strict=True)):
@@ -308,14 +348,34 @@ def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURR
 
 def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.ndarray],
                  shifts: np.ndarray, spread: float, nuisance: np.ndarray | None = None) -> float:
-    """The p-value of ``test`` (the Wald test of ``residual`` on the stacked ``blocks``,
-    one per window) against its surrogates: ``W`` recomputed with each window's
-    regressors circularly shifted by ``shifts`` (Theiler et al. 1992; a shift keeps the
-    residual's and the regressors' autocorrelations and destroys any relation between
-    them), and judged against c chi2(nu) with the surrogates' mean and variance
-    (Satterthwaite 1946: c = var / (2 mean), nu = 2 mean^2 / var), so that a p of
-    ``ALPHA`` is resolved by a hundred surrogates. Never below the chi-square p.
-    ``nuisance``: as in ``channel_test``, kept aligned with the residual (not shifted)."""
+    """The p-value of ``test`` against its surrogates.
+
+    ``W`` is recomputed with each window's regressors circularly shifted by ``shifts``
+    (Theiler et al. 1992; a shift keeps the residual's and the regressors' autocorrelations
+    and destroys any relation between them), and judged against c chi2(nu) with the
+    surrogates' mean and variance (Satterthwaite 1946: c = var / (2 mean),
+    nu = 2 mean^2 / var), so that a p of ``ALPHA`` is resolved by a hundred surrogates.
+
+    Parameters
+    ----------
+    test : ChannelTest
+        The Wald test of ``residual`` on the stacked ``blocks``.
+    residual : numpy.ndarray
+        The stacked residual; shape (N,).
+    blocks : sequence of numpy.ndarray
+        The regressors, one block per window; shapes (n_j, k).
+    shifts : numpy.ndarray
+        Circular shifts, samples; shape (surrogates, windows).
+    spread : float
+        The channel's measured energy, unit squared.
+    nuisance : numpy.ndarray, optional
+        As in ``channel_test``, kept aligned with the residual (not shifted).
+
+    Returns
+    -------
+    float
+        The calibrated p, never below the chi-square p.
+    """
     ws = np.array([channel_test(residual, np.vstack([np.roll(x, int(s), axis=0)
                                                      for x, s in zip(blocks, row,
                                                                      strict=True)]),
@@ -357,14 +417,43 @@ def _independent_index(x: np.ndarray) -> np.ndarray:
 
 
 def highpass(x: np.ndarray, dt: float, corner: float = HIGHPASS_RAD_S) -> np.ndarray:
-    """``x`` ((N,) or (N, k), means removed) through a causal 2nd-order Butterworth
-    high-pass with corner ``corner`` rad/s, sample time ``dt`` s (along the first axis)."""
+    """``x``, means removed, through a causal 2nd-order Butterworth high-pass.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal(s), time along the first axis; shape (N,) or (N, k).
+    dt : float
+        Sample interval, s.
+    corner : float, optional
+        The corner, rad/s. Default ``HIGHPASS_RAD_S``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered signal(s), unit of ``x``; shape of ``x``.
+    """
     b, a = signal.butter(2, corner * dt / math.pi, "high")
     return signal.lfilter(b, a, x - np.mean(x, axis=0), axis=0)
 
 
 def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
-    """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval."""
+    """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The signal, any unit; shape (N,).
+    dt : float
+        Sample interval, s.
+    low_hz : float
+        The band's lower edge, Hz.
+
+    Returns
+    -------
+    float
+        The energy, unit of ``x`` squared (summed over samples).
+    """
     f = np.fft.rfftfreq(x.size, dt)
     e = np.abs(np.fft.rfft(x - np.mean(x))) ** 2
     w = np.full(f.size, 2.0)
@@ -375,8 +464,25 @@ def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
 
 
 def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> np.ndarray:
-    """(N, k) the high band's regressors of one window: ``FAST_LAGUERRE`` Laguerre filters
-    of each input with time constant ``FAST_TAU_S`` (a few tenths of a second of memory)."""
+    """The high band's regressors of one window.
+
+    ``FAST_LAGUERRE`` Laguerre filters of each input with time constant ``FAST_TAU_S`` (a few
+    tenths of a second of memory).
+
+    Parameters
+    ----------
+    fit : WindowFit
+        The model's fit on the window (its times).
+    record : FlightRecord
+        The window's record, for the inputs.
+    inputs : sequence of str
+        The axis's inputs (those the record lacks are skipped).
+
+    Returns
+    -------
+    numpy.ndarray
+        The regressors, means removed, SI units; shape (N, k).
+    """
     t = fit.time
     dt = float(np.median(np.diff(t)))
     cols: list[np.ndarray] = []
@@ -390,10 +496,24 @@ def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str])
 
 def nuisance_blocks(high_passed: Mapping[str, Sequence[np.ndarray]],
                     dts: Sequence[float]) -> dict[str, list[np.ndarray]]:
-    """{channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}: each output's
-    high-passed residual (``high_passed``: {channel: one array per window}) and its
-    Laguerre filters, the nuisance columns it gives the other outputs' tests; a channel
-    non-finite on any window is left out (each column then holds one channel throughout)."""
+    """Each output's nuisance columns for the other outputs' tests, window by window.
+
+    Each output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it; a
+    channel non-finite on any window is left out (each column then holds one channel
+    throughout).
+
+    Parameters
+    ----------
+    high_passed : mapping of str to sequence of numpy.ndarray
+        {channel: one high-passed residual per window}, SI units.
+    dts : sequence of float
+        The windows' sample intervals, s.
+
+    Returns
+    -------
+    dict of str to list of numpy.ndarray
+        {channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}.
+    """
     return {c: [np.column_stack([v, *laguerre(v, dt, PARTIAL_LAGUERRE)])
                 for v, dt in zip(vs, dts, strict=True)]
             for c, vs in high_passed.items() if all(np.all(np.isfinite(v)) for v in vs)}
@@ -403,11 +523,28 @@ def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
                   dts: Sequence[float],
                   blocks: Mapping[str, Sequence[np.ndarray]] | None = None
                   ) -> np.ndarray | None:
-    """(N, m) the main test's nuisance regressors of ``channel``: every other output's
-    high-passed residual (``high_passed``: {channel: one array per window}) and
-    ``PARTIAL_LAGUERRE`` Laguerre filters of it, window by window (``blocks``: those of
-    ``nuisance_blocks``, computed once for every channel, or None to compute them); None
-    when ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite."""
+    """The main test's nuisance regressors of ``channel``.
+
+    Every other output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it,
+    window by window, stacked.
+
+    Parameters
+    ----------
+    high_passed : mapping of str to sequence of numpy.ndarray
+        {channel: one high-passed residual per window}, SI units.
+    channel : str
+        The channel tested (left out).
+    dts : sequence of float
+        The windows' sample intervals, s.
+    blocks : mapping of str to sequence of numpy.ndarray, optional
+        Those of ``nuisance_blocks``, computed once for every channel. Default: computed here.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The regressors, means removed per window; shape (N, m). None when
+        ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite.
+    """
     if PARTIAL_LAGUERRE < 0:
         return None
     if blocks is None:
@@ -424,8 +561,23 @@ def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
 
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
               inputs: Sequence[str]) -> NullTest:
-    """Each output's input-correlation test over the windows ``fits`` ({label: fit of the
-    model on that window}; ``records``: the windows' records, for the inputs)."""
+    """Each output's input-correlation test over the windows ``fits``.
+
+    Parameters
+    ----------
+    fits : mapping of str to WindowFit
+        {label: fit of the model on that window}.
+    records : mapping of str to FlightRecord
+        The windows' records by label, for the inputs.
+    inputs : sequence of str
+        The axis's inputs.
+
+    Returns
+    -------
+    NullTest
+        Every output's test; the chi-square gaps calibrated on surrogates, the strongest
+        first, until one stands.
+    """
     labels = [k for k in fits if k in records]
     out = NullTest()
     if not labels:
@@ -480,8 +632,22 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
 
 
 def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
-    """The verdict of one axis: ``before`` the model as is, ``after`` with the named
-    effects (None when nothing is named)."""
+    """The verdict of one axis.
+
+    Parameters
+    ----------
+    before : NullTest
+        The test of the model as is.
+    named : bool
+        Whether effects were named.
+    after : NullTest or None
+        The test with the named effects (None when nothing is named).
+
+    Returns
+    -------
+    str
+        One of ``VERDICTS``.
+    """
     if not before.gap:
         return NO_GAP
     if not named:
@@ -490,10 +656,32 @@ def axis_verdict(before: NullTest, named: bool, after: NullTest | None) -> str:
 
 
 def worst(verdicts: Sequence[str]) -> str:
-    """The most severe of several axes' verdicts (``VERDICTS`` order)."""
+    """The most severe of several axes' verdicts (``VERDICTS`` order).
+
+    Parameters
+    ----------
+    verdicts : sequence of str
+        Verdicts of ``VERDICTS``.
+
+    Returns
+    -------
+    str
+        The most severe; ``NO_GAP`` when there is none.
+    """
     return max(verdicts, key=VERDICTS.index) if verdicts else NO_GAP
 
 
 def p_text(p: float) -> str:
-    """A p-value for a table: 3 digits, or '<1e-12'."""
+    """A p-value for a table: 2 significant digits, or '<1e-12'.
+
+    Parameters
+    ----------
+    p : float
+        The p-value.
+
+    Returns
+    -------
+    str
+        The text; '-' for a p that is not finite.
+    """
     return "<1e-12" if p < 1e-12 else (f"{p:.2g}" if math.isfinite(p) else "-")

@@ -85,7 +85,25 @@ class Term:
 
 
 def parse_term(text: str) -> Term:
-    """A Term from text such as 'beta', 'p', 'alpha^2', 'alpha*de'; ValueError if malformed."""
+    """A Term from text such as 'beta', 'p', 'alpha^2', 'alpha*de'.
+
+    Parameters
+    ----------
+    text : str
+        Channels joined by '*', each with an optional power '^k' (k 1-9), or a spline
+        factor such as '(alpha-8deg)+'; 'p', 'q', 'r', 'dt', 'alphadot' name their
+        nondimensional channels (``FACTOR_CHANNEL``).
+
+    Returns
+    -------
+    Term
+        The term, its factors as (channel, power).
+
+    Raises
+    ------
+    ValueError
+        The text is empty or a factor is malformed.
+    """
     text = text.strip()
     if not text:
         raise ValueError("empty regressor name")
@@ -104,7 +122,26 @@ def parse_term(text: str) -> Term:
 
 
 def derivative_name(coefficient: str, term: Term) -> str:
-    """Name of the parameter of ``term`` in the model of ``coefficient`` (Cl, beta -> Cl_beta)."""
+    """Name of the parameter of ``term`` in the model of ``coefficient`` (Cl, beta -> Cl_beta).
+
+    Parameters
+    ----------
+    coefficient : str
+        Coefficient channel, a key of ``COEF_LETTER`` (e.g. 'Cl').
+    term : Term
+        The regressor.
+
+    Returns
+    -------
+    str
+        Canonical derivative name for a linear term (Cl_p), else ``C<letter>_<term>``
+        (Cm_alpha^2).
+
+    Raises
+    ------
+    ValueError
+        ``coefficient`` is unknown.
+    """
     letter = _letter(coefficient)
     if term.is_linear:
         channel = term.factors[0][0]
@@ -117,14 +154,51 @@ def derivative_name(coefficient: str, term: Term) -> str:
 
 
 def bias_name(coefficient: str) -> str:
-    """Name of the bias parameter of a coefficient model (Cl -> Cl_0)."""
+    """Name of the bias parameter of a coefficient model (Cl -> Cl_0).
+
+    Parameters
+    ----------
+    coefficient : str
+        Coefficient channel, a key of ``COEF_LETTER``.
+
+    Returns
+    -------
+    str
+        ``C<letter>_0``.
+
+    Raises
+    ------
+    ValueError
+        ``coefficient`` is unknown.
+    """
     return f"C{_letter(coefficient)}_0"
 
 
 def reference_values(
     record: FlightRecord, terms: Sequence[Term], reference: str = "mean"
 ) -> dict[str, float]:
-    """Reference value of each factor channel of the terms (SI units) for perturbations."""
+    """Reference value of each factor channel of the terms, for perturbations.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    terms : sequence of Term
+        The regressors.
+    reference : str, optional
+        'mean' (default: the record mean), 'initial' (the first sample) or 'none' (0).
+        A spline factor's reference is always 0 (its origin is its knot).
+
+    Returns
+    -------
+    dict of str to float
+        {channel: reference value}, in the channel's SI unit.
+
+    Raises
+    ------
+    ValueError
+        ``reference`` is not in ``REFERENCES``.
+    """
     if reference not in REFERENCES:
         raise ValueError(f"reference must be one of {REFERENCES}, got {reference!r}")
     out: dict[str, float] = {}
@@ -142,7 +216,27 @@ def reference_values(
 def regressor_matrix(
     record: FlightRecord, terms: Sequence[Term], references: dict[str, float]
 ) -> np.ndarray:
-    """N x len(terms) matrix: each term evaluated on perturbations channel - reference."""
+    """Each term evaluated on the perturbations channel - reference.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    terms : sequence of Term
+        The regressors.
+    references : dict of str to float
+        {channel: reference value} (``reference_values``); a missing channel takes 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Regressor matrix, shape (N, len(terms)), in the terms' units.
+
+    Raises
+    ------
+    ValueError
+        A regressor is not finite; the message names the sample and time.
+    """
     columns = []
     cache: dict[str, np.ndarray] = {}
     for term in terms:
@@ -162,8 +256,19 @@ def regressor_matrix(
 def colored_residual_covariance(x: np.ndarray, residual: np.ndarray) -> np.ndarray:
     """Parameter covariance corrected for colored residuals (Morelli & Klein 2016, ch. 5).
 
-    x is the N x p regressor matrix, residual the N equation-error residuals; the
-    residual autocorrelation is the biased estimate over all lags.
+    The residual autocorrelation is the biased estimate over all lags.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Regressor matrix, shape (N, p).
+    residual : numpy.ndarray
+        Equation-error residuals, shape (N,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Covariance, shape (p, p), in the parameters' units squared; symmetric.
     """
     n = residual.size
     rvv = np.correlate(residual, residual, mode="full")[n - 1:] / n if n < 4096 else (
@@ -181,12 +286,28 @@ def colored_residual_covariance(x: np.ndarray, residual: np.ndarray) -> np.ndarr
 def identifiability(
     x: np.ndarray, names: Sequence[str], terms: Sequence[Term], record: FlightRecord
 ) -> dict[str, str]:
-    """Parameters the regressors cannot determine, with the reason (name -> reason).
+    """Parameters the regressors cannot determine, with the reason.
 
     A regressor is unidentifiable when it has no excitation (constant, or a control that
-    moves less than MIN_CONTROL_RANGE), when it is
-    collinear with another (|r| > 0.99), or when it is nearly a linear combination of
-    the others (variance inflation factor above 1/(1 - 0.99^2)).
+    moves less than MIN_CONTROL_RANGE), when it is collinear with another (|r| > 0.99),
+    or when it is nearly a linear combination of the others (variance inflation factor
+    above 1/(1 - 0.99^2)).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Regressor matrix, shape (N, p).
+    names : sequence of str
+        Parameter name of each column.
+    terms : sequence of Term
+        The term of each column.
+    record : FlightRecord
+        The flight, for the units named in the reasons.
+
+    Returns
+    -------
+    dict of str to str
+        {parameter: reason}; empty when all are identifiable.
     """
     bad: dict[str, str] = {}
     keep = []
@@ -257,20 +378,47 @@ def estimate(
 ) -> Estimate:
     """OLS estimate of ``coefficient``'s derivatives on ``regressors`` (per rad, dimensionless).
 
-    ``consistent_smoothing``: where the coefficient comes from smoothed derivatives of the
-    rates (a moment coefficient without measured angular accelerations), pass the
-    regressors through the same smoothing filter, so that both sides of the regression
-    see the same filter (Morelli & Klein 2016 sec. 11.2: a filter applied to the
-    dependent variable alone biases the estimates; a sharp surface input loses up to 20 %
-    of its moment derivative to the 0.2 s fit otherwise).
-    ``a_priori``: derivatives of this coefficient held at known values ({"Cm_alphadot":
-    -4.4}): their terms move to the measured side, y - sum value x (Morelli & Klein 2016
-    sec. 5.5, a priori information), and they leave the regressors.
+    The coefficient is the record's channel of that name, or is computed from the record
+    (flightid.identification.data.coefficients).
 
-    The coefficient is the record's channel of that name, or is computed from the
-    record (flightid.identification.data.coefficients). ``colored`` selects the standard
-    errors corrected for colored residuals (fit['std_kind'] 'corrected') or the plain
-    OLS ones ('OLS').
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    coefficient : str
+        Coefficient to model, a key of ``COEF_LETTER`` (e.g. 'Cl').
+    regressors : iterable of str
+        Regressor terms (``parse_term``), e.g. 'beta', 'p', 'alpha^2'.
+    bias : bool, optional
+        Estimate the constant C<letter>_0. Default True.
+    reference : str, optional
+        Perturbation reference: 'mean' (default), 'initial' or 'none'.
+    colored : bool, optional
+        Standard errors corrected for colored residuals (fit['std_kind'] 'corrected';
+        default) or the plain OLS ones ('OLS').
+    consistent_smoothing : bool, optional
+        Where the coefficient comes from smoothed derivatives of the rates (a moment
+        coefficient without measured angular accelerations), pass the regressors through
+        the same smoothing filter, so that both sides of the regression see the same
+        filter (Morelli & Klein 2016 sec. 11.2: a filter applied to the dependent variable
+        alone biases the estimates; a sharp surface input loses up to 20 % of its moment
+        derivative to the 0.2 s fit otherwise). Default False.
+    a_priori : mapping of str to float or None, optional
+        Derivatives of this coefficient held at known values ({"Cm_alphadot": -4.4}):
+        their terms move to the measured side, y - sum value x (Morelli & Klein 2016
+        sec. 5.5, a priori information), and they leave the regressors.
+
+    Returns
+    -------
+    Estimate
+        Derivatives and bias with standard errors, fit statistics (``least_squares``), the
+        unidentifiable regressors with reasons, and the measured and modelled coefficient.
+
+    Raises
+    ------
+    ValueError
+        An unknown coefficient, repeated or malformed regressors, or no regressor that can
+        be estimated.
     """
     _letter(coefficient)
     terms = [parse_term(t) for t in regressors]
@@ -337,8 +485,25 @@ class LeastSquares:
 
 
 def smooth_columns(x: np.ndarray, terms: Sequence[Term], dt: float) -> np.ndarray:
-    """Regressor columns through ``coefficients.smoothed``; a column that is itself a
-    smoothed derivative (alphadot_hat) already carries the filter and is left as is."""
+    """Regressor columns through ``coefficients.smoothed``.
+
+    A column that is itself a smoothed derivative (alphadot_hat) already carries the
+    filter and is left as is.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Regressor matrix, shape (N, p).
+    terms : sequence of Term
+        The term of each column.
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Smoothed regressor matrix, shape (N, p).
+    """
     cols = [col if any(c in DERIVED_BY_DIFFERENTIATION for c, _ in term.factors)
             else smoothed(col, dt) for col, term in zip(x.T, terms, strict=True)]
     return np.column_stack(cols) if cols else x
@@ -358,8 +523,26 @@ def _held_terms(coefficient: str, a_priori: Mapping[str, float]) -> dict[str, fl
 def least_squares(x: np.ndarray, y: np.ndarray, colored: bool = True) -> LeastSquares:
     """OLS of y on the columns of x with Cramer-Rao bounds, optionally colored-corrected.
 
-    statistics: R2 (about the mean), s2 = SSE/(N - p), F, PSE (Morelli & Klein 5.4),
-    condition_number, std_ols, std_kind.
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Regressor matrix, shape (N, p).
+    y : numpy.ndarray
+        Dependent variable, shape (N,).
+    colored : bool, optional
+        Covariance corrected for colored residuals (default) or plain OLS s^2 (X'X)^-1.
+
+    Returns
+    -------
+    LeastSquares
+        theta (p,), std (p,), covariance (p, p), model (N,) and statistics: R2 (about the
+        mean), s2 = SSE/(N - p), F, PSE (Morelli & Klein 5.4), N, n_parameters,
+        condition_number, std_kind, std_ols.
+
+    Raises
+    ------
+    ValueError
+        N <= p.
     """
     n, p = x.shape
     if n <= p:
@@ -410,7 +593,22 @@ def least_squares(x: np.ndarray, y: np.ndarray, colored: bool = True) -> LeastSq
 def estimate_model(
     record: FlightRecord, model: dict[str, Sequence[str]], **options
 ) -> list[Estimate]:
-    """Equation error for each coefficient of ``model`` ({coefficient: regressors})."""
+    """Equation error for each coefficient of ``model``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : dict of str to sequence of str
+        {coefficient: regressors}.
+    **options
+        Keywords of ``estimate``.
+
+    Returns
+    -------
+    list of Estimate
+        One per coefficient, in ``model`` order.
+    """
     return [estimate(record, coef, regs, **options) for coef, regs in model.items()]
 
 
@@ -421,6 +619,18 @@ def predict(est: Estimate, record: FlightRecord) -> np.ndarray:
     the prediction is the fitted absolute model, not refitted to the new record's mean;
     a fit with consistent smoothing passes them through the same filter as the
     coefficient it is compared with.
+
+    Parameters
+    ----------
+    est : Estimate
+        An estimate of ``estimate`` (one coefficient).
+    record : FlightRecord
+        The flight to predict, SI channels.
+
+    Returns
+    -------
+    numpy.ndarray
+        Predicted coefficient, shape (N,), dimensionless.
     """
     coefficient = est.fit["coefficient"]
     terms = [parse_term(t) for t in est.fit["regressors"]]
@@ -472,8 +682,23 @@ class Options(RegressionOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Equation error for every coefficient of ``model`` (a preset or 'Cn=beta+rhat; ...');
-    one Estimate, the coefficients' fits under ``fit['coefficients']``."""
+    """Equation error for every coefficient of ``model``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : str, optional
+        A preset or an explicit structure 'Cn=beta+rhat; ...'. Default 'lateral'.
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        One estimate; the coefficients' fits under ``fit['coefficients']``, the held a
+        priori values under ``fit['a_priori']``.
+    """
     options = options or Options()
     structure = model_structure.regression(model, options.coefficients)
     held = a_priori.from_record(record) if options.a_priori is None else options.a_priori

@@ -30,7 +30,19 @@ def start_from_equation_error(record: FlightRecord, model: LinearModel) -> dict[
     As in Morelli & Klein (2016) example 6.1: one least-squares fit per coefficient
     (CY, Cl, Cn, CL, CD, Cm) on the variables the model gives it. Derivatives the
     regression cannot estimate, or whose coefficient the record cannot give (CL, CD without
-    a thrust channel), keep the model's start values.
+    a thrust channel), are left out, so they keep the model's start values.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : LinearModel
+        The linear model whose derivatives are wanted.
+
+    Returns
+    -------
+    dict of str to float
+        {derivative: value}, per rad (dimensionless), for the derivatives estimated.
     """
     return {name: value for name, (value, _) in equation_error_fits(record, model).items()}
 
@@ -39,10 +51,30 @@ def equation_error_fits(record: FlightRecord, model: LinearModel,
                         consistent_smoothing: bool = False,
                         held: Mapping[str, float] | None = None,
                         ) -> dict[str, tuple[float, float]]:
-    """Equation error's (value, standard error corrected for colored residuals) of each of
-    ``model``'s derivatives it can estimate from ``record``: the start values
-    (``start_from_equation_error``) and, with ``consistent_smoothing`` and the ``held``
-    (a priori) values as ``--method ee`` takes them, the structure check's reference."""
+    """Equation error's value and standard error of each of ``model``'s derivatives it can
+    estimate from ``record``.
+
+    The start values (``start_from_equation_error``) and, with ``consistent_smoothing``
+    and the ``held`` (a priori) values as ``--method ee`` takes them, the structure check's
+    reference.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : LinearModel
+        The linear model whose derivatives are wanted.
+    consistent_smoothing : bool, optional
+        Regressors through the smoothing filter of a differentiated moment coefficient
+        (``equation_error.estimate``). Default False.
+    held : mapping of str to float or None, optional
+        {derivative: value} held a priori (left out of the result).
+
+    Returns
+    -------
+    dict of str to tuple of float
+        {derivative: (value, standard error corrected for colored residuals)}, per rad.
+    """
     held = dict(held or {})
     groups: dict[str, list[str]] = {}
     for name in model.parameters:
@@ -68,8 +100,25 @@ def equation_error_fits(record: FlightRecord, model: LinearModel,
 
 def check_structure(est: Estimate, record: FlightRecord, model: LinearModel,
                      free: Sequence[str], held: Mapping[str, float]) -> None:
-    """Widen the bounds of the free derivatives on which equation error, as ``--method ee``
-    runs it, disagrees (``engine.structure_bias``); nothing when it cannot run."""
+    """Widen the bounds of the free derivatives on which equation error disagrees.
+
+    Equation error runs as ``--method ee`` runs it; the bounds of ``est`` are widened in
+    place (``engine.structure_bias``). Nothing is done when it cannot run (no
+    accelerometers or coefficients).
+
+    Parameters
+    ----------
+    est : Estimate
+        The output-error estimate, changed in place.
+    record : FlightRecord
+        The flight it was fitted to, SI channels.
+    model : LinearModel
+        The fitted linear model.
+    free : sequence of str
+        The estimated parameters; only these are checked.
+    held : mapping of str to float
+        {parameter: value} held a priori.
+    """
     try:
         fits = equation_error_fits(record, model, consistent_smoothing=True, held=held)
     except (KeyError, ValueError):  # no accelerometers or coefficients: no reference

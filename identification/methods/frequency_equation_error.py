@@ -27,7 +27,23 @@ class Options(RegressionOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Frequency-domain equation error for every coefficient of ``model``; one Estimate."""
+    """Frequency-domain equation error for every coefficient of ``model``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : str, optional
+        A regression preset or an explicit structure 'Cn=beta+rhat; ...'. Default
+        'lateral'.
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        One estimate merging the coefficients' fits.
+    """
     options = options or Options()
     structure = model_structure.regression(model, options.coefficients)
     freqs = None if options.frequencies is None else np.asarray(options.frequencies, float)

@@ -37,7 +37,22 @@ class Options(HeldOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Frequency-domain output error with a linear-model preset, a priori parameters held."""
+    """Frequency-domain output error with a linear-model preset, a priori parameters held.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : str, optional
+        A linear-model preset ('lateral' default, 'short_period', 'longitudinal').
+    options : Options or None, optional
+        Method options; None takes the defaults (band 0.1-1.5 Hz spaced 0.02 Hz).
+
+    Returns
+    -------
+    Estimate
+        The estimate; the held a priori values under ``fit['a_priori']``.
+    """
     options = options or Options()
     linear, free, held = a_priori.linear_model(
         model_structure.linear(model), record, options.derivatives, options.a_priori,

@@ -33,11 +33,27 @@ TRIM_SECONDS = 2.0  # the record's first seconds at trim define the reference co
 
 
 def reference_condition(records: Sequence[FlightRecord], trim_seconds: float = TRIM_SECONDS):
-    """Linearisation point of several maneuvers (ReferenceCondition, SI): channel means over
-    the first ``trim_seconds`` of each record (the trim before the input), averaged over
-    the records. A maneuver's own mean is not the trim: an open-loop roll sweep excites
-    the phugoid and moves the mean dynamic pressure 1 % (all derivatives scale with it);
-    ``trim_seconds`` <= 0 uses the whole records."""
+    """Linearisation point of several maneuvers.
+
+    Channel means over the first ``trim_seconds`` of each record (the trim before the
+    input), averaged over the records. A maneuver's own mean is not the trim: an open-loop
+    roll sweep excites the phugoid and moves the mean dynamic pressure 1 % (all derivatives
+    scale with it).
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The maneuvers, SI channels.
+    trim_seconds : float, optional
+        Seconds at the start of each record that define the condition, s; <= 0 uses the
+        whole records. Default ``TRIM_SECONDS`` (2 s).
+
+    Returns
+    -------
+    ReferenceCondition
+        The condition of the first record with V, qbar, alpha, theta, mass and inertias
+        averaged over the records (SI).
+    """
     conds = []
     for rec in records:
         t0 = rec.time[0]
@@ -73,7 +89,22 @@ class Options(LinearModelOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """The frequency-response fit of one record (see ``fit`` for several)."""
+    """The frequency-response fit of one record (see ``fit`` for several).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : str, optional
+        A linear-model preset ('lateral' default, 'short_period', 'longitudinal').
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        As ``fit``.
+    """
     return fit([record], model, options)
 
 
@@ -84,14 +115,35 @@ def fit(records: Sequence[FlightRecord], model: str = "lateral",
 
     Pairs whose cost exceeds ``max_cost`` (``MAX_PAIR_COST`` = 100 is the guideline of
     Tischler & Remple sec. 11.5; default None keeps all: on the Twin Otter doublets 8 of
-    10 pairs exceed it) after a first fit are dropped and the fit repeated; the pairs
-    kept and dropped are in ``fit['pairs']`` and ``fit['dropped_pairs']``.
+    10 pairs exceed it) after a first fit are dropped and the fit repeated.
     A record with one excited input (a single-axis sweep) gets its responses from the
     whole-record transform (``whole_record``, default True; the windows then give
     coherence and random error only). The model is linearised at
     ``reference_condition``: the first ``trim_seconds`` s of each record when given (the
     trim before a simulated sweep), else the records' means. Start values come
-    from ``output_error`` on the same records unless ``start`` is given.
+    from frequency-domain output error on the same records unless ``start`` is given.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The maneuvers, SI channels, each with a uniform sample interval.
+    model : str, optional
+        A linear-model preset ('lateral' default, 'short_period', 'longitudinal').
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        The CIFER fit; the pairs kept and dropped in ``fit['pairs']`` and
+        ``fit['dropped_pairs']``, with the windows (s), the number of responses and the
+        reference condition.
+
+    Raises
+    ------
+    ValueError
+        No record, no input of the model varies, or no response has 3 points of enough
+        coherence.
     """
     opts = options or Options()
     records = list(records)

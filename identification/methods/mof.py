@@ -38,6 +38,7 @@ from math import ceil, floor
 import numpy as np
 
 from flightid.identification.data.coefficients import HINGE, differentiated, hinge_name
+from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
@@ -54,7 +55,26 @@ REGENERATIONS = 10
 
 
 def candidate_terms(variables: Sequence[str], order: int = 3) -> list[str]:
-    """Every monomial of ``variables`` of degree 1..order, e.g. 'alpha', 'alpha^2*de'."""
+    """Every monomial of ``variables`` of degree 1..order, e.g. 'alpha', 'alpha^2*de'.
+
+    Parameters
+    ----------
+    variables : sequence of str
+        Explanatory variables (record channels or derivative variables).
+    order : int, optional
+        Highest degree, 1 to 4. Default 3.
+
+    Returns
+    -------
+    list of str
+        Term texts for ``equation_error.parse_term``, every degree-1 term before any of
+        degree 2, and so on.
+
+    Raises
+    ------
+    ValueError
+        ``order`` is not 1 to 4.
+    """
     if not 1 <= order <= 4:
         raise ValueError(f"order must be 1 to 4, got {order}")
     terms = []
@@ -107,8 +127,7 @@ def spline_terms(records: Sequence[FlightRecord], spacing_deg: float, order: int
 
 def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | None = None,
            backward: bool = False) -> tuple[list[int], list[dict]]:
-    """Multivariate orthogonal functions of the columns of x for y (a bias always in):
-    the chosen columns and the steps (term, R^2 in percent, PSE, why).
+    """Multivariate orthogonal functions of the columns of x for y (a bias always in).
 
     Morelli (1995) sec. 3; Morelli & Klein (2016) sec. 5.5: the candidates, ordered
     from simple to complex (``candidate_terms`` gives every linear term before any
@@ -128,16 +147,35 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     candidates are the first ones of the order (the chosen functions then span exactly
     the chosen candidates, and the model expands back into them without loss), until a
     chosen set repeats, or ``REGENERATIONS`` times. Of the searches, the chosen set whose
-    own least-squares fit has the least PSE is kept; the steps give its terms in their
-    order of entry with the R^2 and PSE of the least-squares fit of the terms in so far.
-    Without it, on the Twin Otter card the selection path claimed R^2 0.999 for Cm while
-    its chosen terms fitted 0.63.
+    own least-squares fit has the least PSE is kept. Without this regeneration the
+    selection path on the Twin Otter card claims R^2 0.999 for Cm while its chosen terms
+    fit 0.63.
 
-    ``backward``: then remove, one at a time, the chosen term whose removal lowers the PSE
-    of the least-squares fit most, while one does (the backward step of stepwise
-    regression, Morelli & Klein 2016 ch. 5, with the PSE as the criterion): a term that
-    entered to carry part of another's and is left near zero once the other is in. The
-    steps list each removal."""
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Dependent variable (the coefficient), shape (N,).
+    x : numpy.ndarray
+        Candidate regressors in simple-first order, shape (N, m).
+    names : sequence of str
+        Name of each column, used in the steps.
+    max_terms : int or None, optional
+        At most this many terms enter; None: no limit beyond m and N - 2.
+    backward : bool, optional
+        If True, then remove, one at a time, the chosen term whose removal lowers the PSE
+        of the least-squares fit most, while one does (the backward step of stepwise
+        regression, Morelli & Klein 2016 ch. 5, with the PSE as the criterion): a term that
+        entered to carry part of another's and is left near zero once the other is in.
+        Default False.
+
+    Returns
+    -------
+    chosen : list of int
+        Column indices chosen, in their order of entry.
+    steps : list of dict
+        Each entry (in order of entry, with the R^2 in percent and PSE of the least-squares
+        fit of the terms in so far), each removal, and the final 'select' step.
+    """
     n, m = x.shape
     z = y - y.mean()
     sst = float(z @ z)
@@ -161,7 +199,7 @@ def select(y: np.ndarray, x: np.ndarray, names: Sequence[str], max_terms: int | 
     steps = []
     for k in range(1, len(best) + 1):
         sse = _sse(z, q[:, best[:k]])
-        r2 = 100.0 * (1.0 - sse / sst) if sst > 0 else 100.0
+        r2 = 100.0 * determination(sse, sst) if sst > 0 else 100.0
         pse = _pse(sse, sst, n, k)
         steps.append({"action": "enter", "term": names[best[k - 1]], "R2": r2, "PSE": pse,
                       "why": f"largest error reduction of the orthogonal functions left; "
@@ -189,7 +227,7 @@ def _eliminate(z: np.ndarray, q: np.ndarray, chosen: Sequence[int], pse: float
             break
         left.remove(j)
         pse = trial
-        r2 = 100.0 * (1.0 - sses[j] / sst) if sst > 0 else 100.0
+        r2 = 100.0 * determination(sses[j], sst) if sst > 0 else 100.0
         removals.append({"action": "remove", "term": j, "R2": r2, "PSE": pse,
                          "why": f"its removal lowers the PSE most, to {pse:.4g}"})
     return left, pse, removals
@@ -260,16 +298,45 @@ def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
              candidates: Iterable[str], *, reference: str = "mean", colored: bool = True,
              max_terms: int | None = None, consistent_smoothing: bool = True,
              backward: bool = False) -> Estimate:
-    """Multivariate orthogonal functions for ``coefficient`` over candidate terms, from one
-    record or from several (maneuvers and conditions pooled, as a global model is
-    identified: Morelli 1995): the Estimate of the chosen terms (least squares),
-    ``fit['steps']`` the selection path, ``fit['candidates']`` the terms searched (a
-    candidate left with less than ``DEPENDENT`` of its squared norm after the simpler
-    ones never enters). ``reference``: regressors as perturbations from the pooled
-    'mean', the first record's 'initial' value, or 'none'. ``consistent_smoothing``:
-    regressors of a coefficient from smoothed rate derivatives go through the same filter
-    (``equation_error.estimate``), each record on its own. ``backward``: remove the chosen
-    terms whose removal lowers the PSE (``select``)."""
+    """Multivariate orthogonal functions for ``coefficient`` over candidate terms.
+
+    From one record or from several (maneuvers and conditions pooled, as a global model is
+    identified: Morelli 1995). A candidate left with less than ``DEPENDENT`` of its squared
+    norm after the simpler ones never enters.
+
+    Parameters
+    ----------
+    records : FlightRecord or sequence of FlightRecord
+        The flight or flights, SI channels.
+    coefficient : str
+        Coefficient to model (e.g. 'Cm').
+    candidates : iterable of str
+        Candidate terms, simple first (``candidate_terms``, ``spline_terms``).
+    reference : str, optional
+        Regressors as perturbations from the pooled 'mean' (default), the first record's
+        'initial' value, or 'none'.
+    colored : bool, optional
+        Standard errors corrected for colored residuals (default) or plain OLS.
+    max_terms : int or None, optional
+        At most this many terms enter; None: no limit.
+    consistent_smoothing : bool, optional
+        Regressors of a coefficient from smoothed rate derivatives go through the same
+        filter (``equation_error.estimate``), each record on its own. Default True.
+    backward : bool, optional
+        Remove the chosen terms whose removal lowers the PSE (``select``). Default False.
+
+    Returns
+    -------
+    Estimate
+        Least-squares estimate of the chosen terms and a bias; ``fit['steps']`` the
+        selection path, ``fit['candidates']`` the terms searched, ``fit['records']`` the
+        number of records.
+
+    Raises
+    ------
+    ValueError
+        No record, an unknown coefficient or a malformed term.
+    """
     recs = [records] if isinstance(records, FlightRecord) else list(records)
     if not recs:
         raise ValueError("mof needs at least one record")
@@ -331,8 +398,26 @@ def _pooled_fit(coefficient: str, terms: Sequence[ee.Term], y: np.ndarray, x: np
 
 def fit_records(records: Sequence[FlightRecord], model: str = "global",
                 options: Options | None = None) -> Estimate:
-    """A global model of every coefficient of ``model`` from several records (maneuvers
-    and conditions pooled): one Estimate, as ``run`` gives for one record."""
+    """A global model of every coefficient of ``model`` from several records.
+
+    Maneuvers and conditions are pooled; spline candidates in alpha (``options.spline``)
+    join the candidates of the coefficients that depend on alpha.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The flights, SI channels.
+    model : str, optional
+        A regression preset or an explicit structure. Default 'global'.
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        One estimate, as ``run`` gives for one record; the coefficients' fits under
+        ``fit['coefficients']``.
+    """
     options = options or Options()
     structure = model_structure.regression(model, options.coefficients)
     in_alpha = any("alpha" in t for t in structure.values())
@@ -403,8 +488,24 @@ class Options(RegressionOptions):
 
 def run(record: FlightRecord, model: str = "global", options: Options | None = None
         ) -> Estimate:
-    """Multivariate orthogonal functions for every coefficient of ``model`` over its
-    variables' monomials up to ``options.order``; one Estimate."""
+    """Multivariate orthogonal functions for every coefficient of ``model``.
+
+    The candidates are its variables' monomials up to ``options.order``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : str, optional
+        A regression preset or an explicit structure. Default 'global'.
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        One estimate; the coefficients' fits under ``fit['coefficients']``.
+    """
     return fit_records([record], model, options)
 
 

@@ -95,8 +95,32 @@ def problem_from_record(
 ) -> Problem:
     """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling).
 
-    ``multistep_inputs``: input channels estimated as levels and edge times (see
-    ``multistep_input``); their measurements join the outputs.
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval, at least 10 samples.
+    model : LinearModel
+        The linear model; the record needs its inputs and outputs.
+    initial_state : str, optional
+        'measured' (default: x0 from the first sample of the state channels, 0 where the
+        record has none), 'estimate' (x0_<state> parameters) or 'zero'.
+    hold : str, optional
+        Inputs between samples: 'foh' (default, linear) or 'zoh' (held).
+    multistep_inputs : sequence of str, optional
+        Input channels estimated as levels and edge times (see ``multistep_input``); their
+        measurements join the outputs.
+
+    Returns
+    -------
+    Problem
+        Time (s), inputs with the constant 1, held inputs, measured outputs, initial state
+        (SI), x0 parameter names, noise floor and multistep parameters.
+
+    Raises
+    ------
+    ValueError
+        A channel is missing or not finite, the sampling is not uniform, or
+        ``initial_state``, ``hold`` or a multistep input is invalid.
     """
     missing = [c for c in (*model.inputs, *model.outputs) if c not in record]
     if missing:
@@ -246,20 +270,59 @@ def estimate(
 ) -> Estimate:
     """Output-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
 
-    free: parameters to estimate (default all); the others stay at their start values.
-    start: start (a priori) values overriding the model's, or "equation_error" to take
-    the free parameters' from ``start_from_equation_error`` (the fixed ones keep theirs).
-    initial_state: 'measured' (x0 from the first sample of the state channels),
-    'estimate' (x0_<state> parameters, SI units) or 'zero'. Values are nondimensional
-    derivatives and SI-unit biases; standard errors are Cramer-Rao bounds (corrected for
-    colored residuals when ``colored``).
-    multistep_inputs: input channels flown as multisteps (doublet, 3211, pulse) whose
-    levels and edge times are estimated with the derivatives (``multistep_input``:
-    parameters level_<channel>_<k> in the input unit and edge_<channel>_<k> in s); their
-    measurements join the outputs, so the surface noise and the timing of a step between
-    two samples enter the bounds instead of biasing the derivatives.
     Converged when the last step changed no parameter by more than ``step_tolerance``
     of its standard error, or the ML cost N/2 ln det R by less than ``cost_tolerance``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : LinearModel
+        The linear model.
+    free : sequence of str or None, optional
+        Parameters to estimate (default all); the others stay at their start values.
+    start : mapping of str to float, str or None, optional
+        Start (a priori) values overriding the model's, or "equation_error" to take the
+        free parameters' from ``start_from_equation_error`` (the fixed ones keep theirs).
+    initial_state : str, optional
+        'measured' (default: x0 from the first sample of the state channels), 'estimate'
+        (x0_<state> parameters, SI units) or 'zero'.
+    hold : str, optional
+        Inputs between samples: 'foh' (default) or 'zoh'.
+    full_noise_covariance : bool, optional
+        Estimate the full output-noise covariance R instead of its diagonal. Default False.
+    colored : bool, optional
+        Cramer-Rao bounds corrected for colored residuals (M&K eq. 6.54). Default False.
+    multistep_inputs : sequence of str, optional
+        Input channels flown as multisteps (doublet, 3211, pulse) whose levels and edge
+        times are estimated with the derivatives (``multistep_input``: parameters
+        level_<channel>_<k> in the input unit and edge_<channel>_<k> in s); their
+        measurements join the outputs, so the surface noise and the timing of a step
+        between two samples enter the bounds instead of biasing the derivatives.
+    max_iterations : int, optional
+        Gauss-Newton iteration limit. Default 50.
+    step_tolerance : float, optional
+        Converged when no step exceeds this many standard errors. Default 1e-3.
+    cost_tolerance : float, optional
+        Or when the ML cost changes less than this (absolute). Default 1e-7.
+    check_identifiability : bool, optional
+        Fix the parameters the flight cannot determine at their a priori values and refit,
+        listing them in ``unidentifiable``. Default True.
+    min_input_range : float, optional
+        An input spanning less than this (peak to peak, rad) is not excited.
+    singular_eigenvalue : float, optional
+        Relative eigenvalue of the information matrix below which it is singular.
+
+    Returns
+    -------
+    Estimate
+        Nondimensional derivatives and SI-unit biases (and x0, input levels and edges),
+        Cramer-Rao bounds as standard errors, fit statistics and the outputs.
+
+    Raises
+    ------
+    ValueError
+        An invalid ``start``, an unknown free parameter, or a record the model cannot use.
     """
     if isinstance(start, str):
         if start != "equation_error":
@@ -339,8 +402,29 @@ class Options(HeldOptions, OutputErrorOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Output error with a linear-model preset ('lateral', 'longitudinal', 'short_period')
-    at the record's reference condition, a priori parameters held."""
+    """Output error with a linear-model preset at the record's reference condition.
+
+    A priori parameters are held; the model is driven by the measured known inputs
+    (``measured_inputs.driven_by_measurements``); attitudes the record lacks are left out
+    of the outputs. A fit from the equation-error start that explains its outputs poorly
+    (``RESTART_R2``) or withholds too many parameters (``RESTART_WITHHELD``) is repeated
+    from the typical values and the lower cost kept.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : str, optional
+        A linear-model preset ('lateral' default, 'longitudinal', 'short_period').
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        The estimate; ``fit`` also holds the a priori values ('a_priori'), the known
+        inputs, the start used ('start') and the outputs left out.
+    """
     options = options or Options()
     linear, free, held = a_priori.linear_model(
         model_structure.linear(model), record, options.derivatives, options.a_priori,

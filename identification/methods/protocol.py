@@ -86,8 +86,22 @@ class Method:
 
 
 def option(default: Any, help: str, tuning: bool = False) -> Any:
-    """A dataclass field of an options class: its default and its meaning; ``tuning``
-    marks a convergence or threshold setting (listed after the others)."""
+    """A dataclass field of an options class: its default and its meaning.
+
+    Parameters
+    ----------
+    default : Any
+        Default value; a list, dict or set is copied for each instance.
+    help : str
+        What the option means, with its unit.
+    tuning : bool, optional
+        Marks a convergence or threshold setting (listed after the others). Default False.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, ``help`` and ``tuning`` in its metadata.
+    """
     metadata = {"help": help, "tuning": tuning}
     if isinstance(default, list | dict | set):
         return dataclasses.field(default_factory=lambda: type(default)(default),
@@ -96,14 +110,49 @@ def option(default: Any, help: str, tuning: bool = False) -> Any:
 
 
 def type_name(hint: Any) -> str:
-    """A short readable name of a type hint ('float', 'list[str] | None')."""
+    """A short readable name of a type hint ('float', 'list[str] | None').
+
+    Parameters
+    ----------
+    hint : Any
+        A type or type hint.
+
+    Returns
+    -------
+    str
+        Its name without the ``typing.`` and ``collections.abc.`` prefixes.
+    """
     text = str(hint) if not isinstance(hint, type) else hint.__name__
     return text.replace("typing.", "").replace("collections.abc.", "")
 
 
 def convert_option(method: str, name: str, value: Any, hint: Any) -> Any:
     """``value`` as the type ``hint`` asks; a text is read as JSON unless the hint is str.
-    Raises ValueError naming the method, the option and the expected type."""
+
+    A text that is not JSON is split on commas where the hint allows a list or tuple.
+
+    Parameters
+    ----------
+    method : str
+        Method id, named in the error.
+    name : str
+        Option name, named in the error.
+    value : Any
+        The value given (a text from the command line, or a Python value).
+    hint : Any
+        The option's type hint.
+
+    Returns
+    -------
+    Any
+        The value converted (an int to float where a float is asked, a sequence to the
+        list or tuple asked).
+
+    Raises
+    ------
+    ValueError
+        The value does not match the hint; names the method, the option and the type.
+    """
     allowed = _flatten(hint)
     if isinstance(value, str) and str not in allowed:
         try:

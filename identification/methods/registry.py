@@ -37,7 +37,25 @@ _loaded_entry_points = False
 
 
 def register(method: Method) -> Method:
-    """Add a method under its id (a second method with the same id is refused)."""
+    """Add a method under its id (a second method with the same id is refused).
+
+    Parameters
+    ----------
+    method : Method
+        The method to add.
+
+    Returns
+    -------
+    Method
+        ``method`` itself.
+
+    Raises
+    ------
+    TypeError
+        ``method`` is not a Method.
+    ValueError
+        Another method already has its id.
+    """
     if not isinstance(method, Method):
         raise TypeError(f"register takes a Method, got {type(method).__name__}")
     known = _REGISTRY.get(method.id)
@@ -49,15 +67,38 @@ def register(method: Method) -> Method:
 
 
 def unregister(method_id: str) -> None:
-    """Remove a method added by ``register`` (built-in methods stay)."""
+    """Remove a method added by ``register`` (built-in methods stay).
+
+    Parameters
+    ----------
+    method_id : str
+        Id of the method; an id not registered is ignored.
+
+    Raises
+    ------
+    ValueError
+        ``method_id`` is a built-in method.
+    """
     if any(m.id == method_id for m in BUILTIN):
         raise ValueError(f"{method_id!r} is a built-in method")
     _REGISTRY.pop(method_id, None)
 
 
 def load_entry_points() -> list[str]:
-    """Register the methods of every installed ``flightid.methods`` entry point (again
-    after installing a plug-in); the ids found."""
+    """Register the methods of every installed ``flightid.methods`` entry point.
+
+    Call it again after installing a plug-in.
+
+    Returns
+    -------
+    list of str
+        The ids found.
+
+    Raises
+    ------
+    ValueError
+        An entry point fails to load (naming it), or its id is taken.
+    """
     global _loaded_entry_points
     _loaded_entry_points = True
     found = []
@@ -73,14 +114,36 @@ def load_entry_points() -> list[str]:
 
 
 def methods() -> dict[str, Method]:
-    """{id: Method} of every method: built-in, registered, and from entry points."""
+    """{id: Method} of every method: built-in, registered, and from entry points.
+
+    Returns
+    -------
+    dict of str to Method
+        A copy of the registry; entry points are loaded on the first call.
+    """
     if not _loaded_entry_points:
         load_entry_points()
     return dict(_REGISTRY)
 
 
 def get(method_id: str) -> Method:
-    """The method with this id; the error lists the valid ids."""
+    """The method with this id.
+
+    Parameters
+    ----------
+    method_id : str
+        The method id (``--method``).
+
+    Returns
+    -------
+    Method
+        The registered method.
+
+    Raises
+    ------
+    ValueError
+        The id is unknown; the message lists the valid ids.
+    """
     found = methods()
     if method_id not in found:
         raise ValueError(f"unknown method {method_id!r}; known: {', '.join(found)}")
@@ -88,9 +151,27 @@ def get(method_id: str) -> Method:
 
 
 def check_model(method_id: str, model: str) -> str:
-    """``model`` (a preset, its alias, 'auto', or for the regression methods a structure
-    'Coef=term+term; ...') in its canonical spelling if method ``method_id`` takes it;
-    else a ValueError naming the models the method takes."""
+    """``model`` in its canonical spelling if method ``method_id`` takes it.
+
+    Parameters
+    ----------
+    method_id : str
+        The method id.
+    model : str
+        A preset, its alias, 'auto', or for the regression methods a structure
+        'Coef=term+term; ...'.
+
+    Returns
+    -------
+    str
+        The canonical model name (or the structure text).
+
+    Raises
+    ------
+    ValueError
+        The method does not take the model (naming the models it takes), the method is
+        unknown, or the structure is malformed.
+    """
     spec = get(method_id)
     name = model_structure.canonical(str(model))
     if name == "auto" or name in spec.models and name != "structure":

@@ -46,7 +46,25 @@ ID = "swr"
 
 
 def candidate_terms(variables: Sequence[str], order: int = 2) -> list[str]:
-    """Linear terms of ``variables`` plus their squares and pairwise products (order 2)."""
+    """Linear terms of ``variables`` plus their squares and pairwise products (order 2).
+
+    Parameters
+    ----------
+    variables : sequence of str
+        Explanatory variables (record channels or derivative variables).
+    order : int, optional
+        1 (linear terms only) or 2 (default: also squares and products).
+
+    Returns
+    -------
+    list of str
+        Term texts for ``equation_error.parse_term``, e.g. 'alpha', 'alpha^2', 'alpha*de'.
+
+    Raises
+    ------
+    ValueError
+        ``order`` is not 1 or 2.
+    """
     if order not in (1, 2):
         raise ValueError(f"order must be 1 (linear) or 2 (squares and products), got {order}")
     terms = list(variables)
@@ -82,8 +100,30 @@ def select(
 ) -> tuple[list[int], list[dict]]:
     """Stepwise selection of columns of x for y (a bias is always in).
 
-    Returns the chosen column indices (least PSE along the path) and the steps, each a
-    dict with action ('enter' or 'remove'), term, F, R2 (percent), PSE and why.
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Dependent variable (the coefficient), shape (N,).
+    x : numpy.ndarray
+        Candidate regressors, shape (N, m).
+    names : sequence of str
+        Name of each column, used in the steps.
+    f_in : float, optional
+        Partial F a candidate must exceed to enter. Default 4.
+    f_out : float, optional
+        Partial F below which a regressor leaves. Default 4.
+    min_r2_gain : float, optional
+        Smallest R^2 gain of an entry, percentage points. Default 0.5.
+    max_steps : int or None, optional
+        Limit of entry steps; None takes 4 m + 4.
+
+    Returns
+    -------
+    chosen : list of int
+        Column indices of the model of least PSE along the path.
+    steps : list of dict
+        Each with action ('enter', 'remove', 'stop' or 'select'), term, F, R2 (percent),
+        PSE and why.
     """
     n, m = x.shape
     ones = np.ones((n, 1))
@@ -182,9 +222,39 @@ def estimate(
 ) -> Estimate:
     """Stepwise regression of ``coefficient`` over candidate terms; Estimate of the chosen model.
 
-    fit['steps'] explains every entry and removal; fit['candidates'] lists the terms
-    searched. Candidates the data cannot determine (constant or collinear) are left
-    out before the search and reported in ``unidentifiable``.
+    Candidates the data cannot determine (constant or collinear) are left out before the
+    search and reported in ``unidentifiable``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    coefficient : str
+        Coefficient to model (e.g. 'Cl').
+    candidates : iterable of str
+        Candidate terms (``candidate_terms``).
+    f_in : float, optional
+        Partial F to enter. Default 4.
+    f_out : float, optional
+        Partial F to leave. Default 4.
+    min_r2_gain : float, optional
+        Smallest R^2 gain of an entry, percentage points. Default 0.5.
+    reference : str, optional
+        Perturbation reference: 'mean' (default), 'initial' or 'none'.
+    colored : bool, optional
+        Standard errors corrected for colored residuals (default) or plain OLS.
+
+    Returns
+    -------
+    Estimate
+        Equation-error estimate of the chosen structure; ``fit['steps']`` explains every
+        entry and removal, ``fit['candidates']`` lists the terms searched, with
+        ``fit['f_in']`` and ``fit['f_out']``.
+
+    Raises
+    ------
+    ValueError
+        Invalid thresholds, an unknown coefficient or a malformed term.
     """
     check_thresholds(f_in, f_out)
     terms = [ee.parse_term(t) for t in candidates]
@@ -227,9 +297,24 @@ class Options(RegressionOptions):
 
 
 def check_thresholds(f_in: float, f_out: float, name: str = "{}") -> None:
-    """F_in and F_out positive with F_out <= F_in (else a regressor can enter and leave
-    in turn; Klein, Batterson & Murphy 1981): ValueError naming the one that is not
-    (``name`` formats the option's name)."""
+    """Check that F_in and F_out are positive with F_out <= F_in.
+
+    Otherwise a regressor can enter and leave in turn (Klein, Batterson & Murphy 1981).
+
+    Parameters
+    ----------
+    f_in : float
+        Partial F to enter.
+    f_out : float
+        Partial F to leave.
+    name : str, optional
+        Format of the option's name in the message ('{}' is replaced by f_in or f_out).
+
+    Raises
+    ------
+    ValueError
+        Naming the threshold that is not valid.
+    """
     for key, value in (("f_in", f_in), ("f_out", f_out)):
         if not value > 0:
             raise ValueError(f"{name.format(key)} must be > 0 (a partial F), got {value:g}")
@@ -240,8 +325,25 @@ def check_thresholds(f_in: float, f_out: float, name: str = "{}") -> None:
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Stepwise regression for every coefficient of ``model`` over its variables' linear
-    terms, squares and products; one Estimate, the searches under ``fit['coefficients']``."""
+    """Stepwise regression for every coefficient of ``model``.
+
+    The candidates are its variables' linear terms, squares and products (``order``).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : str, optional
+        A regression preset or an explicit structure 'Cn=beta+rhat; ...'. Default
+        'lateral'.
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        One estimate; the searches under ``fit['coefficients']``.
+    """
     options = options or Options()
     structure = model_structure.regression(model, options.coefficients)
     return merge(ID, [

@@ -22,14 +22,38 @@ META_KEY = "a_priori"
 
 
 def from_record(record: FlightRecord) -> dict[str, float]:
-    """{parameter: value} of the record's a priori table (empty when it has none)."""
+    """The record's a priori table as {parameter: value}.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; its table is ``meta.extra['a_priori']``.
+
+    Returns
+    -------
+    dict of str to float
+        {parameter: value}, in the parameter's units (nondimensional derivatives: 1/rad or
+        1); empty when the record has no table.
+    """
     table = record.meta.extra.get(META_KEY) or {}
     return {name: float(entry["value"] if isinstance(entry, Mapping) else entry)
             for name, entry in table.items()}
 
 
 def sources(record: FlightRecord) -> dict[str, str]:
-    """{parameter: source} of the record's a priori table."""
+    """The record's a priori table as {parameter: source}.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; its table is ``meta.extra['a_priori']``.
+
+    Returns
+    -------
+    dict of str to str
+        {parameter: source} ("" where an entry names none); entries given as a bare value
+        are left out.
+    """
     table = record.meta.extra.get(META_KEY) or {}
     return {name: str(entry.get("source", "")) for name, entry in table.items()
             if isinstance(entry, Mapping)}
@@ -38,10 +62,39 @@ def sources(record: FlightRecord) -> dict[str, str]:
 def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] | None,
                  a_priori: Mapping[str, float] | None, method: str
                  ) -> tuple[lm.LinearModel, list[str], dict[str, float]]:
-    """(model, free parameters, held values): the preset at the record's condition with
-    its ``derivatives`` (default: the preset's with its rate derivatives,
-    ``models.linear.RATE_DERIVATIVES``) plus every a priori parameter the preset has,
-    held at its value. ``a_priori`` None takes the record's table."""
+    """The preset at the record's condition with its a priori parameters held.
+
+    The model has the preset's ``derivatives`` plus every a priori parameter the preset
+    has, held at its value (start value of the model).
+
+    Parameters
+    ----------
+    preset : str
+        Linear-model preset: 'lateral', 'short_period' or 'longitudinal'.
+    record : FlightRecord
+        The flight, SI channels; gives the reference condition.
+    derivatives : sequence of str or None
+        Derivatives to estimate; None takes the preset's default set with its rate
+        derivatives (``models.linear.RATE_DERIVATIVES``).
+    a_priori : mapping of str to float or None
+        {parameter: value} to hold; None takes the record's table (``from_record``).
+    method : str
+        Name of the identification method asking, used in error messages.
+
+    Returns
+    -------
+    model : LinearModel
+        The model, held parameters at their values.
+    free : list of str
+        Parameters to estimate (model parameters not held, biases included).
+    held : dict of str to float
+        {parameter: value} held fixed.
+
+    Raises
+    ------
+    ValueError
+        An a priori value is not a finite number, or ``preset`` is not a preset.
+    """
     held_all = from_record(record) if a_priori is None else dict(a_priori)
     for name, value in held_all.items():
         if isinstance(value, bool) or not isinstance(value, int | float) \
@@ -63,7 +116,18 @@ def linear_model(preset: str, record: FlightRecord, derivatives: Sequence[str] |
 
 
 def lm_biases(model: lm.LinearModel) -> list[str]:
-    """The bias parameters of a linear model (``bias_<equation>``)."""
+    """The bias parameters of a linear model (``bias_<equation>``).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The model.
+
+    Returns
+    -------
+    list of str
+        Its parameter names starting with ``bias_``, in model order.
+    """
     return [p for p in model.parameters if p.startswith("bias_")]
 
 
@@ -80,12 +144,37 @@ def _default_derivatives(preset: str) -> tuple[str, ...] | None:
 
 
 def preset_derivatives(preset: str) -> tuple[str, ...]:
-    """Every derivative a linear-model preset can take; () for another model."""
+    """Every derivative a linear-model preset can take.
+
+    Parameters
+    ----------
+    preset : str
+        Model name: 'lateral', 'short_period' or 'longitudinal'.
+
+    Returns
+    -------
+    tuple of str
+        The preset's derivative names; () for another model.
+    """
     return {"lateral": lm.LATERAL_DERIVATIVES, "short_period": lm.SHORT_PERIOD_DERIVATIVES,
             "longitudinal": lm.LONGITUDINAL_DERIVATIVES}.get(preset, ())
 
 
 def describe(record: FlightRecord, held: Mapping[str, float]) -> dict[str, Any]:
-    """{parameter: {"value", "source"}} of what a fit held, for ``Estimate.fit``."""
+    """{parameter: {"value", "source"}} of what a fit held, for ``Estimate.fit``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight whose a priori table names the sources.
+    held : mapping of str to float
+        {parameter: value} the fit held fixed.
+
+    Returns
+    -------
+    dict of str to dict
+        {parameter: {"value": float, "source": str}}; the source is "given" for a value not
+        in the record's table.
+    """
     src = sources(record)
     return {n: {"value": float(v), "source": src.get(n, "given")} for n, v in held.items()}

@@ -28,6 +28,37 @@ def discretize(
     (without the last block row and column for 'zoh'); its blocks are Phi, dPhi/dk and
     the input matrices with their derivatives. The sensitivities are thus the exact
     derivatives of the discrete model that is simulated.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        Continuous-time state matrix, shape (n, n), 1/s.
+    B : numpy.ndarray
+        Continuous-time input matrix, shape (n, m).
+    dt : float
+        Sample interval, s.
+    dA : numpy.ndarray
+        dA/dk for each of the npar parameters, shape (npar, n, n); npar may be 0.
+    dB : numpy.ndarray
+        dB/dk, shape (npar, n, m).
+    hold : str, optional
+        'foh' (default) or 'zoh'.
+
+    Returns
+    -------
+    phi : numpy.ndarray
+        Transition matrix, shape (n, n).
+    gamma : numpy.ndarray
+        Input matrix of w_i, shape (n, m) ('zoh') or (n, 2 m) ('foh').
+    dphi : numpy.ndarray
+        dPhi/dk, shape (npar, n, n).
+    dgamma : numpy.ndarray
+        dGamma/dk, shape (npar, n, m) or (npar, n, 2 m).
+
+    Raises
+    ------
+    ValueError
+        ``hold`` is not one of ``HOLDS``.
     """
     if hold not in HOLDS:
         raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
@@ -57,18 +88,45 @@ def discretize(
 
 
 def hold_inputs(u: np.ndarray, hold: str) -> np.ndarray:
-    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh')."""
+    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh').
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Inputs per sample, shape (N, m), SI units.
+    hold : str
+        'zoh' or 'foh'.
+
+    Returns
+    -------
+    numpy.ndarray
+        w, shape (N, m) ('zoh') or (N, 2 m) ('foh'; the last sample repeats u_{N-1}).
+    """
     if hold == "zoh":
         return u
     return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
 
 
 def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """x_{i+1} = phi x_i + forcing_i from x0; forcing (N, n[, k]) -> states of the same shape.
+    """x_{i+1} = phi x_i + forcing_i from x0.
 
     Blocked recursion so that Python loops run about 2 sqrt(N) times instead of N: within
     blocks of L samples the zero-state responses of all blocks are advanced together, the
     block-start states are chained with phi^L, and phi^j x_block is added back.
+
+    Parameters
+    ----------
+    phi : numpy.ndarray
+        Transition matrix, shape (n, n).
+    forcing : numpy.ndarray
+        Forcing per step, shape (N, n) or (N, n, k) for k columns propagated together.
+    x0 : numpy.ndarray
+        Initial state, shape (n,) or (n, k) to match ``forcing``.
+
+    Returns
+    -------
+    numpy.ndarray
+        States x_0 ... x_{N-1}, same shape as ``forcing``.
     """
     squeeze = forcing.ndim == 2
     f = forcing[:, :, None] if squeeze else forcing
@@ -99,9 +157,27 @@ def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarra
 
 def simulate(model: LinearModel, values: Mapping[str, float], time: np.ndarray,
              inputs: np.ndarray, x0: np.ndarray | None = None, hold: str = "foh") -> np.ndarray:
-    """Outputs (N, ny) of ``model`` at ``values`` for inputs (N, m) sampled at ``time`` (s).
+    """Outputs of ``model`` at ``values`` for inputs sampled at ``time``.
 
-    Inputs in the model's order and SI units; x0 the initial state (default zero).
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float
+        Parameter values (missing ones take the model's start values).
+    time : numpy.ndarray
+        Sample times, s, shape (N,); the mean interval is the sample interval.
+    inputs : numpy.ndarray
+        Inputs in the model's order and SI units, shape (N, m).
+    x0 : numpy.ndarray or None, optional
+        Initial state, shape (n,), SI units; default zero.
+    hold : str, optional
+        'foh' (default) or 'zoh'.
+
+    Returns
+    -------
+    numpy.ndarray
+        Outputs in the model's order and SI units, shape (N, ny).
     """
     time = np.asarray(time, dtype=float)
     u = np.column_stack([np.asarray(inputs, dtype=float).reshape(len(time), -1),
@@ -113,8 +189,34 @@ def simulate(model: LinearModel, values: Mapping[str, float], time: np.ndarray,
 
 
 def simulate_matrices(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
-    """Outputs (N, ny) of the matrices A, B, C, D sampled every ``dt`` s: inputs u (N, m + 1)
-    with the constant 1 last, w their per-step vector (``hold_inputs``), x0 (n,)."""
+    """Outputs of the state-space matrices A, B, C, D sampled every ``dt`` s.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        State matrix, shape (n, n), 1/s.
+    B : numpy.ndarray
+        Input matrix, shape (n, m + 1), the last column for the constant 1.
+    C : numpy.ndarray
+        Output matrix, shape (ny, n).
+    D : numpy.ndarray
+        Feed-through matrix, shape (ny, m + 1).
+    dt : float
+        Sample interval, s.
+    u : numpy.ndarray
+        Inputs with the constant 1 last, shape (N, m + 1), SI units.
+    w : numpy.ndarray
+        Per-step input vector of ``u`` (``hold_inputs``).
+    x0 : numpy.ndarray
+        Initial state, shape (n,).
+    hold : str
+        'foh' or 'zoh', as used for ``w``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Outputs, shape (N, ny).
+    """
     phi, gam, _, _ = discretize(A, B, dt, np.zeros((0, *A.shape)), np.zeros((0, *B.shape)),
                                 hold)
     x = propagate(phi, w @ gam.T, x0)
@@ -123,7 +225,20 @@ def simulate_matrices(A, B, C, D, dt, u, w, x0, hold) -> np.ndarray:
 
 
 def stacked_product(mats: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """out[i, a, k] = sum_b mats[k, a, b] x[i, b], as one matrix product."""
+    """out[i, a, k] = sum_b mats[k, a, b] x[i, b], as one matrix product.
+
+    Parameters
+    ----------
+    mats : numpy.ndarray
+        Stack of K matrices, shape (K, a, b).
+    x : numpy.ndarray
+        Vectors, shape (N, b).
+
+    Returns
+    -------
+    numpy.ndarray
+        Products, shape (N, a, K); (N, a, 0) when K is 0.
+    """
     k, a, b = mats.shape
     if k == 0:
         return np.zeros((x.shape[0], a, 0))

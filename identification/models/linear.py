@@ -94,6 +94,22 @@ def matrix_sensitivities(
 
     Complex step (Martins et al. 2003): d M / d p = Im M(p + i h) / h, exact to rounding
     for the arithmetic builders here.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float
+        Parameter values (missing ones take the model's start values).
+    names : sequence of str
+        Parameters to differentiate with respect to (npar of them).
+
+    Returns
+    -------
+    matrices : tuple of numpy.ndarray
+        Continuous-time (A, B, C, D) at ``values``, real.
+    sensitivities : tuple of numpy.ndarray
+        (dA, dB, dC, dD), each of shape (npar, *matrix shape).
     """
     base = {k: complex(v) for k, v in {**model.start, **values}.items()}
     mats = [np.real(m).astype(float) for m in model.build(base)]
@@ -143,7 +159,28 @@ def lateral(
       phidot  = p + tan(theta0) r
       ay      = qbar S CY / m
     with CY, Cl, Cn linear in beta, phat = p b/2V, rhat = r b/2V, da, dr, plus biases.
-    Derivatives not listed in ``derivatives`` are absent (zero).
+
+    Parameters
+    ----------
+    condition : ReferenceCondition
+        Reference condition, mass properties and geometry (SI).
+    derivatives : sequence of str, optional
+        Nondimensional derivatives to include (per rad), from ``LATERAL_DERIVATIVES``;
+        those not listed are absent (zero). Default ``LATERAL_EXAMPLE_6_1``.
+    start : mapping of str to float or None, optional
+        Start values overriding the typical ones (``LATERAL_TYPICAL``, 0 otherwise).
+    biases : sequence of str, optional
+        Bias parameters to include, from ``LATERAL_BIASES`` (default all), SI units.
+
+    Returns
+    -------
+    LinearModel
+        The model 'lateral'.
+
+    Raises
+    ------
+    ValueError
+        An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
     _check_names(derivatives, LATERAL_DERIVATIVES, "lateral")
     _check_names(biases, LATERAL_BIASES, "lateral")
@@ -265,13 +302,36 @@ def short_period(
 ) -> LinearModel:
     """Short-period model: states alpha (rad), q (rad/s); input de; outputs alpha, q, az.
 
-    Morelli & Klein (2016) eq. 6.?? / SIDPAC ``lon`` short period, lift in stability axes:
+    Morelli & Klein (2016) ch. 3 (short-period approximation) / SIDPAC ``lon``; lift in
+    stability axes:
       alphadot = -qbar S/(m V) CL + q + bias_alphadot
       qdot     = qbar S cbar/Iyy Cm + bias_qdot
       az       = -qbar S/m CL + bias_az          (m/s^2, specific force, z down)
     CL = CL_alpha alpha + CL_q qhat + CL_de de, Cm = Cm_alpha alpha + Cm_q qhat + Cm_de de
     + Cm_alphadot alphadot cbar/2V (qhat = q cbar/2V). The gravity and trim terms are
     constant over a short maneuver and are absorbed by the biases.
+
+    Parameters
+    ----------
+    condition : ReferenceCondition
+        Reference condition, mass properties and geometry (SI).
+    derivatives : sequence of str, optional
+        Nondimensional derivatives to include (per rad), from ``SHORT_PERIOD_DERIVATIVES``;
+        those not listed are absent (zero). Default ``SHORT_PERIOD_DEFAULT``.
+    start : mapping of str to float or None, optional
+        Start values overriding the typical ones (``LONGITUDINAL_TYPICAL``, 0 otherwise).
+    biases : sequence of str, optional
+        Bias parameters to include, from ``SHORT_PERIOD_BIASES`` (default all), SI units.
+
+    Returns
+    -------
+    LinearModel
+        The model 'short_period'.
+
+    Raises
+    ------
+    ValueError
+        An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
     _check_names(derivatives, SHORT_PERIOD_DERIVATIVES, "short_period")
     _check_names(biases, SHORT_PERIOD_BIASES, "short_period")
@@ -349,15 +409,40 @@ def longitudinal(
                  cos(alpha0), the drag terms times sin(alpha0), and the rotation of the
                  trim force (CD_0 cos(alpha0) - CL_0 sin(alpha0)) alpha
     plus biases, gamma0 = theta0 - alpha0. The thrust change with speed is absorbed in
-    CD_0 as an effective speed damping, unless ``thrust_input``: then the record's
-    ``thrust`` channel (N, along body x) is a second input, dT cos(alpha0)/m in Vdot and
-    -dT sin(alpha0)/(m V) in alphadot (its constant part goes into the biases). CL_0 and
-    CD_0 start at the trim force balance, (m g cos(gamma0) - T0 sin(alpha0)) / (qbar S) and
-    (T0 cos(alpha0) - m g sin(gamma0)) / (qbar S) (Telemaster card: 0.9349 and 0.12917
-    against the JSBSim truth 0.9324 and 0.12916). Without the thrust and az terms a slow,
+    CD_0 as an effective speed damping, unless ``thrust_input``. CL_0 and CD_0 start at
+    the trim force balance, (m g cos(gamma0) - T0 sin(alpha0)) / (qbar S) and
+    (T0 cos(alpha0) - m g sin(gamma0)) / (qbar S). Without the thrust and az terms a slow,
     high-lift aircraft is misread: the Telemaster at 15 m/s (CL_0 0.93, T0/(qbar S) 0.13,
     noise-free JSBSim card at 100 Hz, V alpha q az fitted) gave CL_alpha +3.45 %, with them
     +0.49 %.
+
+    Parameters
+    ----------
+    condition : ReferenceCondition
+        Reference condition, mass properties, geometry and trim thrust (SI).
+    derivatives : sequence of str, optional
+        Nondimensional derivatives to include (per rad, CD_0 and CL_0 dimensionless), from
+        ``LONGITUDINAL_DERIVATIVES``; those not listed are absent (zero). Default
+        ``LONGITUDINAL_DEFAULT``.
+    start : mapping of str to float or None, optional
+        Start values overriding the typical ones (``LONGITUDINAL_TYPICAL``, the trim force
+        balance for CL_0 and CD_0, 0 otherwise).
+    biases : sequence of str, optional
+        Bias parameters to include, from ``LONGITUDINAL_BIASES`` (default all), SI units.
+    thrust_input : bool, optional
+        If True, the record's ``thrust`` channel (N, along body x) is a second input:
+        dT cos(alpha0)/m in Vdot and -dT sin(alpha0)/(m V) in alphadot (its constant part
+        goes into the biases). Default False.
+
+    Returns
+    -------
+    LinearModel
+        The model 'longitudinal'.
+
+    Raises
+    ------
+    ValueError
+        An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
     _check_names(derivatives, LONGITUDINAL_DERIVATIVES, "longitudinal")
     _check_names(biases, LONGITUDINAL_BIASES, "longitudinal")
@@ -438,8 +523,29 @@ MODELS: dict[str, Callable[..., LinearModel]] = {
 
 def preset_for_record(preset: str, record: FlightRecord, derivatives: Sequence[str] | None,
                       method: str) -> LinearModel:
-    """The named preset at the record's condition, with ``derivatives`` if given; the
-    error names the ``method`` that asked for it."""
+    """The named preset at the record's condition, with ``derivatives`` if given.
+
+    Parameters
+    ----------
+    preset : str
+        'lateral', 'short_period' or 'longitudinal'.
+    record : FlightRecord
+        The flight, SI channels; gives the reference condition.
+    derivatives : sequence of str or None
+        Derivatives to include; None or empty takes the preset's default.
+    method : str
+        Name of the method asking, named in the error.
+
+    Returns
+    -------
+    LinearModel
+        The preset at the record's condition.
+
+    Raises
+    ------
+    ValueError
+        ``preset`` is not a preset.
+    """
     if preset not in MODELS:
         raise ValueError(f"{method} needs a model preset ({', '.join(MODELS)}), got {preset!r}")
     structure = {"derivatives": tuple(derivatives)} if derivatives else {}
@@ -451,7 +557,27 @@ def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
 
     A record without a pitch attitude channel (a hobby recorder) takes the reference pitch
     attitude from the mean specific force, theta0 = atan2(ax, -az) (unaccelerated flight;
-    ``level_pitch_attitude``)."""
+    ``level_pitch_attitude``).
+
+    Parameters
+    ----------
+    kind : str
+        Model name, a key of ``MODELS``.
+    record : FlightRecord
+        The flight, SI channels.
+    **kwargs
+        Passed to the model builder (``derivatives``, ``start``, ``biases``, ...).
+
+    Returns
+    -------
+    LinearModel
+        The model at the record's reference condition.
+
+    Raises
+    ------
+    ValueError
+        ``kind`` is not a known model.
+    """
     if kind not in MODELS:
         raise ValueError(f"unknown model {kind!r}; known: {', '.join(MODELS)}")
     override = {}
@@ -461,8 +587,22 @@ def model_for_record(kind: str, record: FlightRecord, **kwargs) -> LinearModel:
 
 
 def without_outputs(model: LinearModel, drop: Sequence[str]) -> LinearModel:
-    """``model`` with the outputs in ``drop`` removed (rows of C and D); the states stay,
-    so an unmeasured attitude is still integrated from the rates."""
+    """``model`` with the outputs in ``drop`` removed (rows of C and D).
+
+    The states stay, so an unmeasured attitude is still integrated from the rates.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    drop : sequence of str
+        Output names to remove; names not among the outputs are ignored.
+
+    Returns
+    -------
+    LinearModel
+        A copy with the remaining outputs, same states, inputs and parameters.
+    """
     keep = [i for i, o in enumerate(model.outputs) if o not in drop]
 
     def build(values: Mapping[str, complex]) -> Matrices:

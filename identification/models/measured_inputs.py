@@ -20,14 +20,28 @@ PROPULSIVE_MOMENTS: dict[str, tuple[str, ...]] = {"lateral": ("L_prop", "N_prop"
 
 
 def with_propulsive_moments(model: LinearModel) -> LinearModel:
-    """``model`` driven also by the record's propulsive moments, known inputs with no
-    parameter: the lateral model's pdot and rdot get [[Ixx, -Ixz], [-Ixz, Izz]]^-1
-    [L_prop; N_prop] (Morelli & Klein 2016 eq. 3.37), as equation error subtracts them
-    from the moments it regresses (``data.coefficients``), so that both estimate the
-    aerodynamic derivatives. Without them a twin's differential thrust (each propeller at
-    y sees u - r y) is read as aerodynamic damping: on twinotter-lateral-0alpha's exact
-    truth record output error put Cn_r +2.1 %, Cn_p -1.9 %, Cn_beta -1.1 % off, with them
-    +0.05 %, -0.9 %, -0.6 %. A model of another preset is returned unchanged."""
+    """``model`` driven also by the record's propulsive moments, known inputs with no parameter.
+
+    The lateral model's pdot and rdot get [[Ixx, -Ixz], [-Ixz, Izz]]^-1 [L_prop; N_prop]
+    (Morelli & Klein 2016 eq. 3.37), as equation error subtracts them from the moments it
+    regresses (``data.coefficients``), so that both estimate the aerodynamic derivatives.
+    Without them a twin's differential thrust (each propeller at y sees u - r y) is read as
+    aerodynamic damping: on twinotter-lateral-0alpha's exact truth record output error puts
+    Cn_r +2.1 %, Cn_p -1.9 %, Cn_beta -1.1 % off without them, +0.05 %, -0.9 %, -0.6 % with
+    them.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+
+    Returns
+    -------
+    LinearModel
+        A copy with the inputs L_prop, N_prop (N m, body axes) added before the bias column;
+        ``model`` unchanged for another preset, without a condition, or when it already has
+        them.
+    """
     extra = PROPULSIVE_MOMENTS.get(model.name, ())
     if not extra or model.condition is None or set(extra) & set(model.inputs):
         return model
@@ -72,22 +86,57 @@ def _scheduled_sources(model: LinearModel) -> list[tuple[str, int]]:
 
 
 def dynamic_pressure_inputs(model: LinearModel) -> tuple[str, ...]:
-    """The pseudo-input channels of ``with_dynamic_pressure``: '<x>*dqbar<k>' for each
-    state and input x of ``model`` and power k of 1/V."""
+    """The pseudo-input channels of ``with_dynamic_pressure``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        A lateral linear model.
+
+    Returns
+    -------
+    tuple of str
+        '<x>*dqbar<k>' for each state and input x of ``model`` that a derivative multiplies
+        and each power k of 1/V.
+    """
     return tuple(f"{x}{QBAR_SUFFIX}{k}" for x, k in _scheduled_sources(model))
 
 
 def pseudo_input_source(name: str) -> str:
-    """The state or input a pseudo-input of ``with_dynamic_pressure`` or
-    ``with_stability_axes`` is made of ('dr' for 'dr*dqbar0' and 'dr*dalpha*dqbar0'); any
-    other input name unchanged."""
+    """The state or input a pseudo-input of ``with_dynamic_pressure`` or ``with_stability_axes``
+    is made of.
+
+    Parameters
+    ----------
+    name : str
+        Input name, e.g. 'dr*dqbar0' or 'dr*dalpha*dqbar0'.
+
+    Returns
+    -------
+    str
+        The source name ('dr' for both examples); any other input name unchanged.
+    """
     return name.split(QBAR_SUFFIX, 1)[0].split(ALPHA_SUFFIX, 1)[0]
 
 
 def with_dynamic_pressure_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
-    """``record`` with the pseudo-inputs of ``with_dynamic_pressure(model)``:
+    """``record`` with the pseudo-inputs of ``with_dynamic_pressure(model)``.
+
     eps_k(t) x(t), eps_k = (qbar/qbar_ref) (V_ref/V)^k - 1, for each measured state and
-    input x (reference qbar (Pa) and V (m/s) those of the model)."""
+    input x (reference qbar and V those of the model).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with channels qbar (Pa), V (m/s) and the model's states and inputs (SI).
+    model : LinearModel
+        A lateral linear model with a reference condition.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the channels '<x>*dqbar<k>', each in the unit of its source x.
+    """
     c = model.condition
     ratio = record["qbar"] / c.qbar
     names = dynamic_pressure_inputs(model)
@@ -106,20 +155,32 @@ def with_dynamic_pressure(model: LinearModel) -> LinearModel:
     The model holds qbar and V at their reference values, but in a large lateral maneuver
     the airspeed, and so qbar, drops while the forces and moments are largest: on
     twinotter-lateral-0alpha (NASA's 2.8 deg rudder 2-1-1 and 6 deg aileron doublet)
-    qbar falls by 1 %, and output error read the force and moment derivatives 0.5-1.7 %
-    small in magnitude on the exact truth record (Cl_da -0.94 %, Cl_dr -1.6 %, CY_dr
-    -1.0 %), an error that falls with the square of the input amplitude (Cl_da -0.24 % and
-    -0.06 % at half and a quarter of it). Each aerodynamic term, qbar S (...) C with
-    (...) carrying 1/V^k (k from the state equation's and the variable's 1/V,
-    ``QBAR_SCHEDULED``), is written as at the reference times (1 + eps_k),
+    qbar falls by 1 %, and output error without this reads the force and moment
+    derivatives 0.5-1.7 % small in magnitude on the exact truth record (Cl_da -0.94 %,
+    Cl_dr -1.6 %, CY_dr -1.0 %), an error that falls with the square of the input amplitude
+    (Cl_da -0.24 % and -0.06 % at half and a quarter of it). Each aerodynamic term,
+    qbar S (...) C with (...) carrying 1/V^k (k from the state equation's and the variable's
+    1/V, ``QBAR_SCHEDULED``), is written as at the reference times (1 + eps_k),
     eps_k = (qbar/qbar_ref) (V_ref/V)^k - 1; the second-order part takes the measured
     states and inputs as pseudo-inputs '<x>*dqbar<k>' = eps_k x
     (``with_dynamic_pressure_channels``) through the same aerodynamic matrix columns
     (measured variables as pseudo-control inputs, Jategaonkar 2015 ch. 4; their noise
     enters multiplied by eps, about 0.01). The aerodynamic columns are the difference of
     the matrices at the parameter values and with every derivative at zero (the builders
-    are linear in the derivatives), so the sensitivities stay exact. A model of another
-    preset is returned unchanged."""
+    are linear in the derivatives), so the sensitivities stay exact.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+
+    Returns
+    -------
+    LinearModel
+        A copy with the pseudo-inputs ``dynamic_pressure_inputs(model)`` added before the
+        bias column; ``model`` unchanged for a preset not in ``QBAR_SCHEDULED`` or without
+        a condition.
+    """
     if model.name not in QBAR_SCHEDULED or model.condition is None:
         return model
     rows, _ = QBAR_SCHEDULED[model.name]
@@ -160,8 +221,9 @@ KINEMATIC_CHANNELS = ("V", "alpha", "theta", "phi", "p", "q", "r")
 
 
 def with_kinematics_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
-    """``record`` with the known inputs of ``with_kinematics(model)`` (rad/s, rad/s^2):
-    the lateral kinematics and Euler's inertial coupling less their linearisation about
+    """``record`` with the known inputs of ``with_kinematics(model)``.
+
+    The lateral kinematics and Euler's inertial coupling less their linearisation about
     the model's reference condition (level, wings-level, p0 = q0 = r0 = 0),
       betadot: p (sin alpha - sin alpha0) - r (cos alpha - cos alpha0)
                + g (cos theta sin phi / V - cos theta0 phi / V0)
@@ -178,10 +240,25 @@ def with_kinematics_channels(record: FlightRecord, model: LinearModel) -> Flight
     projection on the wind y axis beyond the linear model's qbar S CY/(m V) and g phi/V:
     the model's ay output reads the side force without it, so without the term the betadot
     and ay equations disagree by the factor cos beta (-0.06 % of CY at 2 deg), and output
-    error's CY_beta followed the weight of the ay channel: on twinotter-lateral-0alpha
-    (beta to 5 deg) its mean error was +1.7 bounds (-0.086 %; 16 realizations), +0.9
-    with the ay noise set to zero; with the term +0.5 and +0.4. A record without ay or
-    beta goes without it."""
+    error's CY_beta follows the weight of the ay channel: on twinotter-lateral-0alpha
+    (beta to 5 deg; 16 realizations) its mean error is +1.7 bounds without the term (+0.9
+    with the ay noise set to zero), +0.5 and +0.4 with it. A record without ay or beta
+    goes without it.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with channels V (m/s), alpha, theta, phi (rad), p, q, r (rad/s) and
+        optionally beta (rad), ax, ay, az (m/s^2).
+    model : LinearModel
+        A lateral linear model with a reference condition.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the channels of ``KINEMATIC_INPUTS[model.name]``: betadot_kinematics,
+        phidot_kinematics (rad/s), pdot_inertial, rdot_inertial (rad/s^2).
+    """
     c = model.condition
     a, th, ph = record["alpha"], record["theta"], record["phi"]
     p, q, r = record["p"], record["q"], record["r"]
@@ -212,15 +289,28 @@ def with_kinematics_channels(record: FlightRecord, model: LinearModel) -> Flight
 
 
 def with_kinematics(model: LinearModel) -> LinearModel:
-    """``model`` with the known inputs of ``with_kinematics_channels``, one per state
-    equation they complete (coefficient 1, no parameter). On twinotter-lateral-0alpha
-    (bank to 10 deg, alpha moving 0.3 deg, theta 1.4 deg) the linearised kinematics left
-    output error's yaw derivatives 0.4-2.5 % off on the exact truth record once the
-    dynamic pressure was followed (``with_dynamic_pressure``). On navion-sweep-roll (a 90 s
-    aileron sweep, airspeed 45-49 m/s, bank to 19 deg) the omitted inertial coupling and
-    the betadot's sin beta term left output error's Cn_r -0.97 %, Cn_p -0.91 %, Cn_beta
-    -0.21 % off on the exact truth record once the propulsive moments were driven: with
-    them -0.43 %, -0.57 %, -0.00 %. A model of another preset is returned unchanged."""
+    """``model`` with the known inputs of ``with_kinematics_channels``.
+
+    One input per state equation it completes (coefficient 1, no parameter). On
+    twinotter-lateral-0alpha (bank to 10 deg, alpha moving 0.3 deg, theta 1.4 deg), with
+    the dynamic pressure followed (``with_dynamic_pressure``), linearised kinematics put
+    output error's yaw derivatives 0.4-2.5 % off on the exact truth record. On
+    navion-sweep-roll (a 90 s aileron sweep, airspeed 45-49 m/s, bank to 19 deg), with the
+    propulsive moments driven, the omitted inertial coupling and betadot's sin beta term
+    put output error's Cn_r -0.97 %, Cn_p -0.91 %, Cn_beta -0.21 % off; with them -0.43 %,
+    -0.57 %, -0.00 %.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+
+    Returns
+    -------
+    LinearModel
+        A copy with the known inputs added before the bias column; ``model`` unchanged for a
+        preset not in ``KINEMATIC_INPUTS`` or without a condition.
+    """
     names = KINEMATIC_INPUTS.get(model.name)
     if not names or model.condition is None:
         return model
@@ -249,17 +339,34 @@ def driven_by_measurements(record: FlightRecord, model: LinearModel, *,
 
     Parameters
     ----------
-    record : the flight; the pseudo-input channels are added to a copy.
-    model : a linear model (``linear.LinearModel``); other presets than the lateral one
-        come back unchanged.
-    dynamic_pressure : the aerodynamic terms follow the measured qbar (Pa) and V (m/s)
+    record : FlightRecord
+        The flight, SI channels; the pseudo-input channels are added to a copy.
+    model : LinearModel
+        A linear model (``linear.LinearModel``); other presets than the lateral one come
+        back unchanged.
+    dynamic_pressure : bool, optional
+        The aerodynamic terms follow the measured qbar (Pa) and V (m/s)
         (``with_dynamic_pressure``), and with them the full kinematics and inertial
-        coupling (``with_kinematics``) where the record has their channels.
-    propulsive_moments : drive the model with the record's L_prop, N_prop (N m)
-        (``with_propulsive_moments``) where it has them.
-    moment_axes : 'body', or 'stability' for an aircraft whose lateral aerodynamics are
+        coupling (``with_kinematics``) where the record has their channels. Default True.
+    propulsive_moments : bool, optional
+        Drive the model with the record's L_prop, N_prop (N m)
+        (``with_propulsive_moments``) where it has them. Default True.
+    moment_axes : str, optional
+        'body' (default), or 'stability' for an aircraft whose lateral aerodynamics are
         linear in the stability axes of the instantaneous alpha (``with_stability_axes``;
         the record needs ``alpha``, rad).
+
+    Returns
+    -------
+    record : FlightRecord
+        The flight with the pseudo-input channels the model reads.
+    model : LinearModel
+        The model with those known inputs.
+
+    Raises
+    ------
+    ValueError
+        ``moment_axes`` is not in ``MOMENT_AXES``, or 'stability' without an alpha channel.
     """
     if moment_axes not in MOMENT_AXES:
         raise ValueError(f"moment_axes must be one of {', '.join(MOMENT_AXES)}, got "
@@ -283,8 +390,19 @@ def driven_by_measurements(record: FlightRecord, model: LinearModel, *,
 
 
 def known_input_notes(model: LinearModel) -> dict[str, str]:
-    """What ``driven_by_measurements`` gave ``model``, for an estimate's ``fit``:
-    {'dynamic_pressure' | 'propulsive_moments' | 'moment_axes': description}."""
+    """What ``driven_by_measurements`` gave ``model``, for an estimate's ``fit``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        A model returned by ``driven_by_measurements``.
+
+    Returns
+    -------
+    dict of str to str
+        {'dynamic_pressure' | 'propulsive_moments' | 'moment_axes': description}, only the
+        keys that apply.
+    """
     notes = {}
     if is_scheduled(model):
         notes["dynamic_pressure"] = (f"aerodynamic terms times qbar(t)/"
@@ -298,8 +416,18 @@ def known_input_notes(model: LinearModel) -> dict[str, str]:
 
 
 def is_scheduled(model: LinearModel) -> bool:
-    """True when ``model``'s aerodynamic terms follow the measured dynamic pressure
-    (``with_dynamic_pressure``)."""
+    """Whether ``model``'s aerodynamic terms follow the measured dynamic pressure.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+
+    Returns
+    -------
+    bool
+        True when it has the pseudo-inputs of ``with_dynamic_pressure``.
+    """
     return any(QBAR_SUFFIX in name for name in model.inputs)
 
 
@@ -316,15 +444,41 @@ MOMENT_AXES = ("body", "stability")
 
 
 def stability_axes_inputs(model: LinearModel) -> tuple[str, ...]:
-    """The pseudo-input channels of ``with_stability_axes``: '<x>*dalpha' for each state
-    and surface of ``model`` an aerodynamic derivative multiplies."""
+    """The pseudo-input channels of ``with_stability_axes``.
+
+    Parameters
+    ----------
+    model : LinearModel
+        A lateral linear model.
+
+    Returns
+    -------
+    tuple of str
+        '<x>*dalpha' for each state and surface of ``model`` an aerodynamic derivative
+        multiplies.
+    """
     return tuple(f"{x}{ALPHA_SUFFIX}" for x in _aerodynamic_sources(model))
 
 
 def with_stability_axes_channels(record: FlightRecord, model: LinearModel) -> FlightRecord:
-    """``record`` with the pseudo-inputs of ``with_stability_axes(model)``:
-    (alpha - alpha_ref) x for each measured state and surface x (alpha in rad, alpha_ref
-    the model's reference angle of attack)."""
+    """``record`` with the pseudo-inputs of ``with_stability_axes(model)``.
+
+    (alpha - alpha_ref) x for each measured state and surface x (alpha_ref the model's
+    reference angle of attack).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with alpha (rad) and the model's states and inputs (SI).
+    model : LinearModel
+        A lateral linear model with a reference condition.
+
+    Returns
+    -------
+    FlightRecord
+        A copy with the channels '<x>*dalpha', each in the unit of its source x (per rad
+        of alpha).
+    """
     d_alpha = record["alpha"] - model.condition.alpha
     extra, units = {}, dict(record.meta.units)
     for x, name in zip(_aerodynamic_sources(model), stability_axes_inputs(model), strict=True):
@@ -350,9 +504,21 @@ def with_stability_axes(model: LinearModel) -> LinearModel:
     model's own aerodynamic columns, as ``with_dynamic_pressure`` does, so the
     sensitivities stay exact. On navion-demo's exact truth record (stability-axis
     aerodynamics, alpha within 0.25 deg of trim) a regression of the body-axis Cl on
-    beta, phat, rhat, da, dr put Cl_dr +1.7 %, Cn_da +4.5 %, Cn_p -0.9 % off; with the
-    stability-axis rates and moments it fits to 1e-8. A model of another preset is
-    returned unchanged."""
+    beta, phat, rhat, da, dr puts Cl_dr +1.7 %, Cn_da +4.5 %, Cn_p -0.9 % off; with the
+    stability-axis rates and moments it fits to 1e-8.
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+
+    Returns
+    -------
+    LinearModel
+        A copy with the pseudo-inputs ``stability_axes_inputs(model)`` added before the bias
+        column; ``model`` unchanged for a preset not in ``STABILITY_AXES`` or without a
+        condition.
+    """
     if model.name not in STABILITY_AXES or model.condition is None:
         return model
     roll, yaw = (model.states.index(s) for s in STABILITY_AXES[model.name])

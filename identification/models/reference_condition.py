@@ -59,9 +59,19 @@ MIN_TRIM_S = 0.5  # s of trim before the first maneuver needed to take the condi
 
 
 def trim_lead(record: FlightRecord) -> np.ndarray | None:
-    """Boolean mask of the samples before the record's first listed maneuver
-    (``meta.extra['maneuvers']``), or None when it lists none or they span less than
-    ``MIN_TRIM_S``."""
+    """Boolean mask of the samples before the record's first listed maneuver.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; its maneuvers are ``meta.extra['maneuvers']`` (each with a ``start``, s).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Mask, shape (n,), True before the first maneuver's start; None when the record lists
+        no maneuver or the lead spans less than ``MIN_TRIM_S`` s.
+    """
     listed = record.meta.extra.get("maneuvers") or []
     if not listed:
         return None
@@ -77,10 +87,28 @@ def condition_from_record(record: FlightRecord, **override: float) -> ReferenceC
     """Reference condition of a record: channel means (SI) and meta.reference geometry.
 
     V, qbar, alpha and theta are the means over the trim before the record's first listed
-    maneuver (``trim_lead``) when it lists them, else over the whole record.
+    maneuver (``trim_lead``) when it lists them, else over the whole record. The mean
+    thrust (N) is taken when the record has a ``thrust`` channel.
 
-    Any field of ReferenceCondition can be given as a keyword to override the record (needed
-    when the record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with channels V (m/s), qbar (Pa), alpha, theta (rad), mass (kg), Ixx,
+        Iyy, Izz, Ixz (kg m^2) and ``meta.reference`` (area m^2, span and chord m).
+    **override : float
+        Any field of ReferenceCondition, in SI units, overriding the record (needed when the
+        record lacks a channel, e.g. ``Ixz=0.0`` or ``mass=...`` for a simulation).
+
+    Returns
+    -------
+    ReferenceCondition
+        The reference condition.
+
+    Raises
+    ------
+    ValueError
+        A condition channel or the reference geometry is missing and not overridden, or a
+        value is not positive and finite.
     """
     values: dict[str, float] = {}
     for name in CONDITION_CHANNELS:
@@ -111,9 +139,26 @@ def condition_from_record(record: FlightRecord, **override: float) -> ReferenceC
 
 
 def level_pitch_attitude(record: FlightRecord) -> float:
-    """The pitch attitude (rad) of unaccelerated flight from the record's mean specific
-    forces: theta0 = atan2(ax, -az) (the accelerometers read -g sin(theta), g cos(theta)
-    in steady wings-level flight, Morelli & Klein 2016 eq. 10.13)."""
+    """The pitch attitude of unaccelerated flight from the record's mean specific forces.
+
+    theta0 = atan2(ax, -az) (the accelerometers read -g sin(theta), g cos(theta) in steady
+    wings-level flight, Morelli & Klein 2016 eq. 10.13).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with channels ax and az (m/s^2).
+
+    Returns
+    -------
+    float
+        theta0, rad.
+
+    Raises
+    ------
+    ValueError
+        The record has no ax or az channel.
+    """
     missing = [c for c in ("ax", "az") if c not in record]
     if missing:
         raise ValueError(f"record has no channel theta for the reference condition, nor "

@@ -52,12 +52,24 @@ _A, _F, _M = 6378137.0, 1.0 / 298.257223563, 0.00344978650684
 
 
 def local_gravity(latitude: float, altitude: float = 0.0) -> float:
-    """Effective gravity (m/s^2) at a geodetic latitude (rad) and altitude (m above sea level).
+    """Effective gravity at a geodetic latitude and altitude.
 
     The acceleration a plumb line feels (gravitation plus the centrifugal part of the
     earth's rotation), as in the flat-earth equations of a rotating-earth simulation:
     9.780 m/s^2 at the equator, 9.832 m/s^2 at the poles; Somigliana's formula with the
     second-order free-air term (TR8350.2 eq. 4-3).
+
+    Parameters
+    ----------
+    latitude : float
+        Geodetic latitude, rad.
+    altitude : float, optional
+        Altitude above sea level (the ellipsoid), m. Default 0.
+
+    Returns
+    -------
+    float
+        Gravity, m/s^2.
     """
     s2 = math.sin(latitude) ** 2
     g0 = _G_EQUATOR * (1 + _SOMIGLIANA_K * s2) / math.sqrt(1 - _E2 * s2)
@@ -88,9 +100,21 @@ class MassProperties:
 
 
 def air_data(x, xp=np) -> tuple:
-    """True airspeed V (m/s), angle of attack alpha and sideslip beta (rad) of states x[9, ...].
+    """True airspeed, angle of attack and sideslip of states x[9, ...].
 
     alpha = arctan(w/u), beta = arcsin(v/V) (complex-step safe; u > 0 in normal flight).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States (``STATES`` on the first axis), shape (9, ...), SI units.
+    xp : module or namespace, optional
+        Namespace of sqrt, arctan, arcsin: numpy (default) or ``SCALAR``.
+
+    Returns
+    -------
+    tuple
+        (V m/s, alpha rad, beta rad), each of the trailing shape of ``x``.
     """
     u, v, w = x[0], x[1], x[2]
     speed = xp.sqrt(u * u + v * v + w * w)
@@ -98,21 +122,65 @@ def air_data(x, xp=np) -> tuple:
 
 
 def state_from_air_data(speed: float, alpha: float, beta: float) -> tuple[float, float, float]:
-    """Body velocities u, v, w (m/s) from airspeed (m/s), alpha and beta (rad)."""
+    """Body velocities u, v, w from airspeed, alpha and beta.
+
+    Parameters
+    ----------
+    speed : float
+        True airspeed, m/s.
+    alpha : float
+        Angle of attack, rad.
+    beta : float
+        Sideslip angle, rad.
+
+    Returns
+    -------
+    tuple of float
+        (u, v, w), m/s, body axes.
+    """
     cb = np.cos(beta)
     return speed * np.cos(alpha) * cb, speed * np.sin(beta), speed * np.sin(alpha) * cb
 
 
 def euler_trig(x, xp=np) -> tuple:
-    """(sin phi, cos phi, sin theta, cos theta) of states x[9, ...]."""
+    """(sin phi, cos phi, sin theta, cos theta) of states x[9, ...].
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (9, ...); phi and theta in rad.
+    xp : module or namespace, optional
+        Namespace of sin, cos: numpy (default) or ``SCALAR``.
+
+    Returns
+    -------
+    tuple
+        (sin phi, cos phi, sin theta, cos theta), each of the trailing shape of ``x`` (1).
+    """
     return xp.sin(x[6]), xp.cos(x[6]), xp.sin(x[7]), xp.cos(x[7])
 
 
 def translational(x, ax, ay, az, g: float, trig: tuple | None = None) -> tuple:
-    """(udot, vdot, wdot) in m/s^2 for body specific forces ax, ay, az (m/s^2, force/mass).
+    """(udot, vdot, wdot) for body specific forces ax, ay, az.
 
-    g is the gravity (m/s^2). Specific forces rather than forces so that a mass that
-    changes along the record (fuel burn) enters as a time history.
+    Specific forces rather than forces so that a mass that changes along the record (fuel
+    burn) enters as a time history.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (9, ...), SI units.
+    ax, ay, az : float or numpy.ndarray
+        Non-gravitational specific forces along body x, y, z (force/mass), m/s^2.
+    g : float
+        Gravity, m/s^2.
+    trig : tuple or None, optional
+        ``euler_trig(x)`` if already computed.
+
+    Returns
+    -------
+    tuple
+        (udot, vdot, wdot), m/s^2.
     """
     u, v, w, p, q, r = x[0], x[1], x[2], x[3], x[4], x[5]
     sf, cf, st, ct = euler_trig(x) if trig is None else trig
@@ -122,7 +190,24 @@ def translational(x, ax, ay, az, g: float, trig: tuple | None = None) -> tuple:
 
 
 def rotational(x, roll, pitch, yaw, mp: MassProperties, rotor_momentum=0.0) -> tuple:
-    """(pdot, qdot, rdot) in rad/s^2 for moments about the CG (N m) and rotor momentum (N m s)."""
+    """(pdot, qdot, rdot) for moments about the CG and the rotor's angular momentum.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (9, ...), SI units.
+    roll, pitch, yaw : float or numpy.ndarray
+        Moments L, M, N about the CG, body axes, N m.
+    mp : MassProperties
+        Inertias (kg m^2).
+    rotor_momentum : float or numpy.ndarray, optional
+        Angular momentum h of the engine rotor along body x, N m s. Default 0.
+
+    Returns
+    -------
+    tuple
+        (pdot, qdot, rdot), rad/s^2.
+    """
     p, q, r = x[3], x[4], x[5]
     ixx, iyy, izz, ixz = mp.Ixx, mp.Iyy, mp.Izz, mp.Ixz
     h = rotor_momentum
@@ -135,7 +220,20 @@ def rotational(x, roll, pitch, yaw, mp: MassProperties, rotor_momentum=0.0) -> t
 
 
 def kinematic(x, trig: tuple | None = None) -> tuple:
-    """(phidot, thetadot, psidot) in rad/s from the body rates and Euler angles."""
+    """(phidot, thetadot, psidot) from the body rates and Euler angles.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (9, ...), SI units.
+    trig : tuple or None, optional
+        ``euler_trig(x)`` if already computed.
+
+    Returns
+    -------
+    tuple
+        (phidot, thetadot, psidot), rad/s.
+    """
     q, r = x[4], x[5]
     sf, cf, st, ct = euler_trig(x) if trig is None else trig
     qr = q * sf + r * cf
@@ -144,7 +242,26 @@ def kinematic(x, trig: tuple | None = None) -> tuple:
 
 def derivative(x: np.ndarray, force: tuple, moment: tuple, mp: MassProperties,
                rotor_momentum=0.0) -> np.ndarray:
-    """dx/dt (9, ...) for body forces (N) and moments about the CG (N m), each a 3-tuple."""
+    """dx/dt of the rigid-body equations for body forces and moments.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        States, shape (9, ...), SI units.
+    force : tuple
+        (X, Y, Z) non-gravitational forces, body axes, N.
+    moment : tuple
+        (L, M, N) moments about the CG, body axes, N m.
+    mp : MassProperties
+        Mass (kg), inertias (kg m^2) and gravity (m/s^2).
+    rotor_momentum : float or numpy.ndarray, optional
+        Angular momentum of the engine rotor along body x, N m s. Default 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        dx/dt, shape of ``x``: m/s^2, rad/s^2, rad/s.
+    """
     trig = euler_trig(x)
     specific = [f / mp.mass for f in force]
     return np.stack([*translational(x, *specific, mp.g, trig),
@@ -153,10 +270,24 @@ def derivative(x: np.ndarray, force: tuple, moment: tuple, mp: MassProperties,
 
 def rk4(rhs: Callable[[np.ndarray, int, int], np.ndarray], x0: np.ndarray, steps: int,
         dt: float) -> np.ndarray:
-    """Fixed-step classical Runge-Kutta: states at samples 0..steps, shape (steps + 1, *x0.shape).
+    """Fixed-step classical Runge-Kutta integration.
 
-    ``rhs(x, i, stage)`` is dx/dt at sample i with stage 0 (t_i), 1 (t_i + dt/2) or
-    2 (t_i + dt), so the caller supplies its inputs at those three instants.
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(x, i, stage)`` is dx/dt at sample i with stage 0 (t_i), 1 (t_i + dt/2) or
+        2 (t_i + dt), so the caller supplies its inputs at those three instants.
+    x0 : numpy.ndarray
+        Initial state, any shape.
+    steps : int
+        Number of steps.
+    dt : float
+        Step, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        States at samples 0..steps, shape (steps + 1, *x0.shape).
     """
     out = np.empty((steps + 1, *x0.shape), dtype=x0.dtype)
     out[0] = x = x0

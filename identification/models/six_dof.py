@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.identification.models import rigid_body as rb
 from flightid.record import Reference
 
@@ -20,7 +21,7 @@ MOMENTS = ("Cl", "Cm", "Cn")
 VARIABLES = ("alpha", "beta", "p", "q", "r", "de", "da", "dr", "alphadot")
 VARIABLE_CHANNEL = {"alpha": "alpha", "beta": "beta", "p": "phat", "q": "qhat", "r": "rhat",
                     "de": "de", "da": "da", "dr": "dr", "alphadot": "alphadot_hat"}
-CONTROLS = ("de", "da", "dr")
+CONTROLS = CONTROL_SURFACES
 LONGITUDINAL = ("alpha", "q", "de")
 LATERAL = ("beta", "p", "r", "da", "dr")
 PROPULSIVE_MOMENTS = ("L_prop", "M_prop", "N_prop")
@@ -46,7 +47,22 @@ def default_structure(force_axes: str = "body", alphadot: bool = False
                       ) -> dict[str, tuple[str, ...]]:
     """{coefficient: variables}: longitudinal ones on alpha, q, de, lateral on beta, p, r, da, dr.
 
-    ``alphadot`` adds Cm_alphadot.
+    Parameters
+    ----------
+    force_axes : str, optional
+        'body' (CX, CY, CZ; default) or 'stability' (CD, CY, CL) force coefficients.
+    alphadot : bool, optional
+        If True, the pitching moment also depends on alphadot (Cm_alphadot). Default False.
+
+    Returns
+    -------
+    dict of str to tuple of str
+        {coefficient: its variables} for the six force and moment coefficients.
+
+    Raises
+    ------
+    ValueError
+        ``force_axes`` is not in ``FORCE_AXES``.
     """
     if force_axes not in FORCE_AXES:
         raise ValueError(f"force_axes must be one of {', '.join(FORCE_AXES)}, got {force_axes!r}")
@@ -56,7 +72,20 @@ def default_structure(force_axes: str = "body", alphadot: bool = False
 
 
 def parameter_name(coefficient: str, variable: str) -> str:
-    """Canonical name of a term: parameter_name('Cm', 'q') == 'Cm_q', ('CL', '0') == 'CL_0'."""
+    """Canonical name of a term: parameter_name('Cm', 'q') == 'Cm_q', ('CL', '0') == 'CL_0'.
+
+    Parameters
+    ----------
+    coefficient : str
+        Coefficient name, e.g. 'Cm'.
+    variable : str
+        Variable name, or '0' for the constant term.
+
+    Returns
+    -------
+    str
+        '<coefficient>_<variable>'.
+    """
     return f"{coefficient}_{variable}"
 
 
@@ -127,6 +156,20 @@ class SixDofModel:
 
 
 def check_structure(structure: Mapping[str, Sequence[str]], force_axes: str) -> None:
+    """Check a coefficient structure against the force axes.
+
+    Parameters
+    ----------
+    structure : Mapping of str to sequence of str
+        {coefficient: the variables of its terms}.
+    force_axes : str
+        ``body`` or ``stability``.
+
+    Raises
+    ------
+    ValueError
+        Naming the force axes, coefficient or variable that is not allowed.
+    """
     if force_axes not in FORCE_AXES:
         raise ValueError(f"force_axes must be one of {', '.join(FORCE_AXES)}, got {force_axes!r}")
     allowed = SLOTS[force_axes]

@@ -55,14 +55,42 @@ _COEFFICIENT_CHANNELS = {
 
 
 def canonical(model: str) -> str:
-    """The model name with ``lat``/``lon`` spelled out and surrounding blanks removed."""
+    """The model name with ``lat``/``lon`` spelled out and surrounding blanks removed.
+
+    Parameters
+    ----------
+    model : str
+        A ``--model`` value.
+
+    Returns
+    -------
+    str
+        The canonical name (or the stripped text, when it is no alias).
+    """
     text = model.strip()
     return ALIASES.get(text, text)
 
 
 def regression(model: str, coefficients: Sequence[str] | None = None) -> dict[str, list[str]]:
-    """{coefficient: variables} of a preset or of 'Cn=beta+phat; CY=beta+rhat', restricted
-    to ``coefficients`` when given."""
+    """{coefficient: variables} of a preset or of an explicit structure.
+
+    Parameters
+    ----------
+    model : str
+        A preset of ``REGRESSION`` (or an alias) or 'Cn=beta+phat; CY=beta+rhat'.
+    coefficients : sequence of str or None, optional
+        Coefficients to keep; None or empty keeps all.
+
+    Returns
+    -------
+    dict of str to list of str
+        {coefficient: explanatory variables}.
+
+    Raises
+    ------
+    ValueError
+        An unknown model, a malformed structure part, or a coefficient not in the model.
+    """
     text = canonical(model)
     if text in REGRESSION:
         structure = {c: list(t) for c, t in REGRESSION[text].items()}
@@ -85,7 +113,18 @@ def regression(model: str, coefficients: Sequence[str] | None = None) -> dict[st
 
 
 def regression_channels(model: str) -> tuple[str, ...]:
-    """The record channels a regression model needs (variables and coefficients)."""
+    """The record channels a regression model needs (variables and coefficients).
+
+    Parameters
+    ----------
+    model : str
+        A preset or explicit structure, as for ``regression``.
+
+    Returns
+    -------
+    tuple of str
+        Channel names, each once, in order of first use.
+    """
     out: list[str] = []
     for coef, terms in regression(model).items():
         out.extend(_COEFFICIENT_CHANNELS.get(coef, (coef,)))
@@ -96,7 +135,23 @@ def regression_channels(model: str) -> tuple[str, ...]:
 
 
 def linear(model: str) -> str:
-    """The linear-model preset named by ``model``; raises naming the presets."""
+    """The linear-model preset named by ``model``.
+
+    Parameters
+    ----------
+    model : str
+        A preset name or alias (lat, lon).
+
+    Returns
+    -------
+    str
+        The preset: 'lateral', 'short_period' or 'longitudinal'.
+
+    Raises
+    ------
+    ValueError
+        ``model`` is not a linear-model preset; the message names the presets.
+    """
     text = canonical(model)
     if text not in lm.MODELS:
         raise ValueError(f"model {model!r} is not a linear-model preset; use one of "
@@ -105,8 +160,21 @@ def linear(model: str) -> str:
 
 
 def linear_channels(model: str) -> tuple[str, ...]:
-    """The record channels a linear-model preset needs: its inputs and outputs, and the
-    channels its reference condition is averaged from (``condition_from_record``)."""
+    """The record channels a linear-model preset needs.
+
+    Its inputs and outputs, and the channels its reference condition is averaged from
+    (``condition_from_record``).
+
+    Parameters
+    ----------
+    model : str
+        A preset name or alias.
+
+    Returns
+    -------
+    tuple of str
+        Channel names, each once.
+    """
     preset = _PRESET_SIGNALS[linear(model)]
     return tuple(dict.fromkeys((*preset[0], *preset[1], *CONDITION_CHANNELS)))
 
@@ -119,7 +187,18 @@ OPTIONAL_OUTPUTS = ("phi", "theta")
 
 def output_error_channels(model: str) -> tuple[str, ...]:
     """``linear_channels`` without the attitudes (``OPTIONAL_OUTPUTS``), which output error
-    leaves out of the outputs when the record has none."""
+    leaves out of the outputs when the record has none.
+
+    Parameters
+    ----------
+    model : str
+        A preset name or alias.
+
+    Returns
+    -------
+    tuple of str
+        Channel names, each once.
+    """
     return tuple(c for c in linear_channels(model) if c not in OPTIONAL_OUTPUTS)
 
 

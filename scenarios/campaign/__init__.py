@@ -78,7 +78,31 @@ def run(card: str | Path | Campaign, output: str | Path, workers: int | None = N
     held-out points and put the gap before and after into OUTPUT/update.json. A method
     that fits several records at once (``mof``) also fits one global model over every
     point's record (``global_model``), written to OUTPUT/global_model.json with its
-    prediction of the held-out points (``global_model.validate``)."""
+    prediction of the held-out points (``global_model.validate``).
+
+    Parameters
+    ----------
+    card : str or Path or Campaign
+        Campaign card path, library campaign name or a loaded campaign.
+    output : str or Path
+        Output folder.
+    workers : int or None, optional
+        Local worker processes; None uses one per CPU.
+    dask_address : str or None, optional
+        Dask scheduler address; None runs locally unless ``dask_scheduler_file`` is given.
+    dask_scheduler_file : str or None, optional
+        Dask scheduler file.
+    progress : callable or None, optional
+        ``progress(done, total)``, points, after each point.
+    update_aircraft : str or Path or None, optional
+        Where to write the updated model aircraft; None updates nothing.
+
+    Returns
+    -------
+    CampaignResult
+        Folder, estimates, model curve, scores, report path and, with ``update_aircraft``,
+        the update summary and aircraft XML.
+    """
     campaign = card if isinstance(card, Campaign) else load_campaign(card)
     folder = Path(output)
 
@@ -178,7 +202,22 @@ def _global_notes(pooled: dict | None) -> list[str]:
 
 def updated_curve(campaign: Campaign, curve: pd.DataFrame, effects: list) -> pd.DataFrame:
     """The model curve with the correction effects' deltas added (what the updated
-    aircraft's tables say along the campaign's path)."""
+    aircraft's tables say along the campaign's path).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    curve : pandas.DataFrame
+        The model curve (columns ``name``, ``model``, ``speed``, ``alpha``).
+    effects : list
+        The correction effects.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy of ``curve`` with corrected ``model`` values.
+    """
     out = curve.copy()
     for e in effects:
         rows = out["name"] == e.derivative

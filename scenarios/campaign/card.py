@@ -1,43 +1,10 @@
 """Campaign cards: a test-point matrix flown with one flight card's maneuvers.
 
-A campaign card (TOML; lengths m, speeds m/s, angles rad or degrees with ``_deg``):
-
-    name = "twinotter-envelope"     # optional, default: the file name
-    description = "one line"
-    card = "twinotter-id"           # the flight card flown at every point (a library name,
-                                    # or a path relative to this file): its maneuvers,
-                                    # sensors, duration, rate and disturbances
-    method = "oe6dof"               # identification method (flightid methods) and model
-    model = "6dof"
-    seed = 1                        # base seed; each point's seed derives from it
-    x = "speed"                     # what the report plots against: speed, altitude, alpha
-                                    # (the point's trim alpha), flaps, mass, cg_x
-    start = "method"                # each point's fit starts where the method starts it
-                                    # ("method", default), from the model aircraft's
-                                    # derivatives at the point ("model"; oe6dof), or from
-                                    # the nearest flown point's estimates ("neighbour";
-                                    # oe6dof; campaign.neighbour)
-    [options]                       # the method's options
-    propulsive_moments = true
-
-    [[point]]                       # any number of test points ...
-    altitude = 1897.0               # m
-    speed = 61.7                    # m/s true airspeed
-    flaps_deg = 0.0                 # optional (also flaps in rad)
-    mass = 1.0                      # optional: mass scale of the aircraft (mass_scale effect)
-    cg_x = 0.0                      # optional: CG shift forward, m (cg_offset effect)
-
-    [matrix]                        # ... and/or a full-factorial matrix of the same fields
-    altitude = [1500.0, 1900.0]
-    speed = [50.0, 60.0, 70.0]
-
-    [[held_out]]                    # test points kept out of the fit (--update-aircraft
-    altitude = 1800.0               # re-flies them and reports the gap before and after)
-    speed = 66.0
-
-    [[maneuver]]                    # optional: replaces the flight card's maneuvers
-    [[effect]]                      # optional airframe effects of the flown aircraft (the
-                                    # "real" aircraft); the model is the card's aircraft
+A campaign card is a TOML file (lengths m, speeds m/s, angles rad or degrees with
+``_deg``): the flight card flown at every point, the method and model, the seed, the
+report's x axis, the fit's start, ``[[point]]`` tables and/or a ``[matrix]``,
+``[[held_out]]`` points, optional ``[[maneuver]]`` and ``[[effect]]`` tables; the fields
+are described in docs/campaign.md ("The campaign card").
 
 ``load_campaign(path) -> Campaign`` validates everything; a ``CardError`` names the file,
 the line and the field. ``point_card(campaign, point)`` is the flight card of one point.
@@ -189,7 +156,22 @@ def _matrix(d: Any, path: str, index: dict) -> list[TestPoint]:
 
 def campaign_from_dict(data: dict[str, Any], path: str = "<campaign>",
                        text: str | None = None) -> Campaign:
-    """A Campaign from a parsed card; CardError names the file, line and field."""
+    """A Campaign from a parsed card; CardError names the file, line and field.
+
+    Parameters
+    ----------
+    data : dict[str, Any]
+        The parsed TOML card.
+    path : str, optional
+        File name used in errors.
+    text : str or None, optional
+        The card's text, for line numbers in errors; None gives none.
+
+    Returns
+    -------
+    Campaign
+        The validated campaign.
+    """
     index = line_index(text) if text else {}
     for key in data:
         if key not in TOP_FIELDS:
@@ -268,7 +250,24 @@ def point_card(campaign: Campaign, point: TestPoint, where: str | None = None,
                with_effects: bool = True) -> Card:
     """The flight card of one test point: the campaign's flight card at the point's
     condition, its mass and CG as ``mass_scale``/``cg_offset`` effects; ``with_effects``
-    False leaves out the campaign's other effects (the model aircraft)."""
+    False leaves out the campaign's other effects (the model aircraft).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    point : TestPoint
+        The test point.
+    where : str or None, optional
+        Source named in card errors; None names the campaign's file.
+    with_effects : bool, optional
+        Keep the campaign's effects. Default True.
+
+    Returns
+    -------
+    Card
+        The point's flight card.
+    """
     data = json.loads(json.dumps(campaign.card_data))
     condition = {k: v for k, v in data.get("condition", {}).items()
                  if k not in ("altitude", "speed", "flaps", "flaps_deg")}
@@ -288,7 +287,18 @@ def point_card(campaign: Campaign, point: TestPoint, where: str | None = None,
 
 def load_campaign(path: str | Path) -> Campaign:
     """Read and validate a campaign card (a path, or a library name under
-    scenarios/library/campaigns/)."""
+    scenarios/library/campaigns/).
+
+    Parameters
+    ----------
+    path : str or Path
+        Campaign card file, or a library campaign name.
+
+    Returns
+    -------
+    Campaign
+        The validated campaign.
+    """
     p = Path(path)
     if not p.is_file():
         lib = Path(__file__).resolve().parent.parent / "library" / "campaigns" / f"{p.stem}.toml"
@@ -308,6 +318,12 @@ def load_campaign(path: str | Path) -> Campaign:
 
 
 def library_campaigns() -> list[str]:
-    """The names of the library's campaign cards."""
+    """The names of the library's campaign cards.
+
+    Returns
+    -------
+    list[str]
+        Campaign names, sorted.
+    """
     folder = Path(__file__).resolve().parent.parent / "library" / "campaigns"
     return sorted(p.stem for p in folder.glob("*.toml"))

@@ -35,7 +35,20 @@ CURVE_COLUMNS = ("condition", "altitude", "speed", "flaps", "mass", "cg_x", "alp
 def ordered_points(campaign: Campaign, alphas: dict[int, float] | None = None
                    ) -> list[TestPoint]:
     """The campaign's points ordered by its x (the trim alpha from ``alphas``, {point
-    index: rad}, when x is alpha), duplicates of a condition once."""
+    index: rad}, when x is alpha), duplicates of a condition once.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    alphas : dict[int, float] or None, optional
+        Point index -> trim angle of attack, rad; needed when x is alpha.
+
+    Returns
+    -------
+    list[TestPoint]
+        The ordered, distinct points (those without a finite x left out).
+    """
     def key(item: tuple[int, TestPoint]) -> float:
         i, p = item
         if campaign.x == "alpha":
@@ -52,7 +65,20 @@ def ordered_points(campaign: Campaign, alphas: dict[int, float] | None = None
 
 def path_conditions(points: list[TestPoint], steps: int = STEPS) -> list[TestPoint]:
     """Conditions on the straight segments between consecutive ``points``: ``steps`` per
-    segment (the segment's first point included) and the last point."""
+    segment (the segment's first point included) and the last point.
+
+    Parameters
+    ----------
+    points : list[TestPoint]
+        Ordered test points.
+    steps : int, optional
+        Conditions per segment; reduced to keep the total within ``MAX_CONDITIONS``.
+
+    Returns
+    -------
+    list[TestPoint]
+        The interpolated conditions.
+    """
     if len(points) < 2:
         return list(points)
     steps = max(1, min(steps, (MAX_CONDITIONS - 1) // (len(points) - 1)))
@@ -73,7 +99,22 @@ def model_curve(campaign: Campaign, alphas: dict[int, float] | None = None,
                 steps: int = STEPS) -> pd.DataFrame:
     """The model's derivatives along the campaign's path: one row per (condition,
     derivative), columns ``CURVE_COLUMNS`` (``alpha`` the model's trim alpha, rad). A
-    condition the model cannot be trimmed at is left out."""
+    condition the model cannot be trimmed at is left out.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    alphas : dict[int, float] or None, optional
+        Point index -> trim angle of attack, rad, for ordering when x is alpha.
+    steps : int, optional
+        Conditions per segment of the path.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The model curve.
+    """
     rows: list[dict[str, Any]] = []
     for k, cond in enumerate(path_conditions(ordered_points(campaign, alphas), steps)):
         try:

@@ -32,7 +32,18 @@ POOLED: dict[str, Callable[[Sequence[FlightRecord], str, Any], Estimate]] = {
 
 
 def has_global_model(campaign: Campaign) -> bool:
-    """Whether the campaign's method fits one model over several records."""
+    """Whether the campaign's method fits one model over several records.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its method).
+
+    Returns
+    -------
+    bool
+        True for a method that pools records.
+    """
     return campaign.method in POOLED
 
 
@@ -66,7 +77,20 @@ def fit_global(campaign: Campaign, indices: Sequence[int]) -> Estimate:
 def summary(est: Estimate, indices: Sequence[int]) -> dict[str, Any]:
     """The global model as plain data (global_model.json): the points pooled, every term
     with its value and standard error, and per coefficient the chosen terms, R^2 and
-    predicted square error (PSE) of the fit and its number of samples."""
+    predicted square error (PSE) of the fit and its number of samples.
+
+    Parameters
+    ----------
+    est : Estimate
+        The pooled estimate.
+    indices : Sequence[int]
+        Indices of the pooled test points.
+
+    Returns
+    -------
+    dict[str, Any]
+        The contents of global_model.json.
+    """
     coefficients = est.fit.get("coefficients", {})
     return {"method": est.method, "points": [int(i) for i in indices],
             "terms": {n: {"estimate": float(est[n]), "std": float(est.std_of(n))}

@@ -33,13 +33,38 @@ STATUS_FAILED = "failed"
 
 
 def point_seed(campaign: Campaign, index: int) -> int:
-    """The seed of test point ``index`` (independent of the other points)."""
+    """The seed of test point ``index`` (independent of the other points).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its seed).
+    index : int
+        Test point index.
+
+    Returns
+    -------
+    int
+        The point's seed.
+    """
     return sub_seed(campaign.seed, f"campaign:{int(index)}")
 
 
 def model_values(card: Card) -> tuple[float, dict[str, float]]:
     """(trim alpha in rad, the exact body-axis derivatives) of ``card``'s aircraft at its
-    condition: the JSBSim tables' derivatives (``sim.jsbsim.truth.derivatives``)."""
+    condition: the JSBSim tables' derivatives (``sim.jsbsim.truth.derivatives``).
+
+    Parameters
+    ----------
+    card : Card
+        Flight card of the point.
+
+    Returns
+    -------
+    tuple[float, dict[str, float]]
+        Trim angle of attack, rad, and derivative name -> value (per rad, rates
+        nondimensional).
+    """
     with quiet(), contextlib.redirect_stdout(io.StringIO()):
         model, trimmed = trim_card(card)
         values = derivatives(model, trimmed, axes="body").values
@@ -48,7 +73,20 @@ def model_values(card: Card) -> tuple[float, dict[str, float]]:
 
 def run_point(campaign: Campaign, index: int) -> list[dict[str, Any]]:
     """Fly, reduce, identify and score test point ``index``; never empty (a point that
-    departs, cannot be trimmed or is refused by the method is one 'failed' row)."""
+    departs, cannot be trimmed or is refused by the method is one 'failed' row).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    index : int
+        Test point index.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        Rows of the estimates table, one per derivative (or one 'failed' row).
+    """
     with threadpool_limits(1):  # one BLAS thread: the parallelism is the points
         return _point_rows(campaign, index, campaign.points[int(index)])
 
@@ -59,7 +97,22 @@ def run_point_from(starts: dict[int, tuple[int, dict[str, float]]], campaign: Ca
     ``start = "neighbour"``): ``starts[index]`` is (the neighbour, its estimates by
     derivative name), from ``neighbour.neighbour_starts``; a point not in ``starts``
     starts where the method starts it. A module-level function of picklable arguments
-    (``functools.partial(run_point_from, starts)`` is an executor's task)."""
+    (``functools.partial(run_point_from, starts)`` is an executor's task).
+
+    Parameters
+    ----------
+    starts : dict[int, tuple[int, dict[str, float]]]
+        Point index -> (neighbour index, its estimates by derivative name).
+    campaign : Campaign
+        The campaign.
+    index : int
+        Test point index.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        Rows of the estimates table, as :func:`run_point`.
+    """
     start = starts.get(int(index))
     with threadpool_limits(1):
         return _point_rows(campaign, index, campaign.points[int(index)], start)
@@ -69,7 +122,20 @@ def fly_point(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, Fligh
     """Test point ``index`` flown with its own seed: (its flight card, the measured record
     after the standard data reduction, the truth record). A pure function of the campaign
     and the index: the same records in a worker and in the process that pools them.
-    Raises what ``fly_card`` and ``reduce_record`` raise (``REALIZATION_ERRORS``)."""
+    Raises what ``fly_card`` and ``reduce_record`` raise (``REALIZATION_ERRORS``).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    index : int
+        Test point index.
+
+    Returns
+    -------
+    tuple[Card, FlightRecord, FlightRecord]
+        (flight card, reduced measured record, truth record).
+    """
     card = point_card(campaign, campaign.points[int(index)])
     with quiet(), contextlib.redirect_stdout(io.StringIO()):
         measured, truth_record = fly_card(card, point_seed(campaign, index))
@@ -77,7 +143,20 @@ def fly_point(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, Fligh
 
 
 def held_out_seed(campaign: Campaign, index: int) -> int:
-    """The seed of held-out point ``index`` (independent of the test points)."""
+    """The seed of held-out point ``index`` (independent of the test points).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its seed).
+    index : int
+        Held-out point index.
+
+    Returns
+    -------
+    int
+        The held-out point's seed.
+    """
     return sub_seed(campaign.seed, f"held_out:{int(index)}")
 
 
@@ -85,7 +164,20 @@ def fly_held_out(campaign: Campaign, index: int) -> tuple[Card, FlightRecord, Fl
     """Held-out point ``index`` (``[[held_out]]``) flown with the flown aircraft (the
     campaign's effects included) and its own seed: (its flight card, the measured record
     after the standard data reduction, the truth record), as ``fly_point`` flies a test
-    point."""
+    point.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    index : int
+        Held-out point index.
+
+    Returns
+    -------
+    tuple[Card, FlightRecord, FlightRecord]
+        (flight card, reduced measured record, truth record).
+    """
     card = point_card(campaign, campaign.held_out[int(index)])
     with quiet(), contextlib.redirect_stdout(io.StringIO()):
         measured, truth_record = fly_card(card, held_out_seed(campaign, index))
@@ -138,7 +230,20 @@ def model_start(campaign: Campaign, model: dict[str, float]) -> dict[str, float]
     parameter the method takes a start for that the tables give (campaign field
     ``start = "model"``). The model's tables are the a priori values a flight test starts
     from (Jategaonkar 2015 ch. 4: start values from wind-tunnel data); the fit
-    then converges to the same minimum as from equation error's start."""
+    then converges to the same minimum as from equation error's start.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its method, model and options).
+    model : dict[str, float]
+        Model aircraft's derivatives at the point, body axes.
+
+    Returns
+    -------
+    dict[str, float]
+        Parameter name -> start value, for the finite ones the method takes.
+    """
     spec = registry.get(campaign.method)
     names = MODEL_START[campaign.method](campaign.model, spec.make_options(campaign.options))
     return {n: float(model[n]) for n in names if n in model and math.isfinite(model[n])}
@@ -159,7 +264,21 @@ def flown_condition(record: Any, derivative: str) -> dict[str, float]:
     derivative changes with the condition, the estimate belongs to this weighted mean,
     not to the trim: on twinotter-hidden-trend the phugoid after the elevator input put
     the sideslip-weighted airspeed 0.76 m/s above the 68 m/s trim, which moves Cn_beta by
-    -0.0009 (5 of its standard errors). Without the channel: the record's mean."""
+    -0.0009 (5 of its standard errors). Without the channel: the record's mean.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight (channels ``V``, m/s, and ``alpha``, rad).
+    derivative : str
+        Derivative name, e.g. ``"Cn_beta"``; the part after ``_`` picks the variable.
+
+    Returns
+    -------
+    dict[str, float]
+        ``"speed_flown"`` (m/s) and ``"alpha_flown"`` (rad); NaN where the record lacks the
+        channel.
+    """
     var = derivative.partition("_")[2]
     channel = VARIABLE_CHANNEL.get(var)
     out = {}

@@ -7,7 +7,6 @@ DIR/derivative-<name>.png and embedded in it as base64 PNG (the HTML stands alon
 
 from __future__ import annotations
 
-import base64
 import html
 import io
 import math
@@ -20,6 +19,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
+from flightid.identification.evaluation.embed import png_img
 from flightid.identification.evaluation.scoring import STATUS_ESTIMATED
 from flightid.scenarios.campaign.card import Campaign
 
@@ -53,7 +53,18 @@ class PointScore:
 
 
 def point_scores(df: pd.DataFrame) -> list[PointScore]:
-    """Per test point, the share of the estimates within 3 sigma of the truth."""
+    """Per test point, the share of the estimates within 3 sigma of the truth.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The estimates table (columns ``index``, ``status``, ``sigmas``, ...).
+
+    Returns
+    -------
+    list[PointScore]
+        One score per test point, by index.
+    """
     out = []
     for index, rows in df.groupby("index", sort=True):
         first = rows.iloc[0]
@@ -71,7 +82,18 @@ def point_scores(df: pd.DataFrame) -> list[PointScore]:
 
 
 def figure_name(derivative: str) -> str:
-    """The file name of a derivative's figure beside the report."""
+    """The file name of a derivative's figure beside the report.
+
+    Parameters
+    ----------
+    derivative : str
+        Derivative name.
+
+    Returns
+    -------
+    str
+        File name, characters outside ``[A-Za-z0-9_.-]`` replaced by ``_``.
+    """
     return f"derivative-{re.sub(r'[^A-Za-z0-9_.-]', '_', derivative)}.png"
 
 
@@ -80,7 +102,26 @@ def derivative_figure(name: str, points: pd.DataFrame, curve: pd.DataFrame, x: s
     """Top: the flight estimates of ``name`` with +-3 standard errors against ``x``, the
     model's curve, and the truth of the flown aircraft where it differs from the model;
     bottom: estimate minus model (the flight's correction to the tables). ``updated``:
-    the updated model's curve (same columns as ``curve``), drawn when given."""
+    the updated model's curve (same columns as ``curve``), drawn when given.
+
+    Parameters
+    ----------
+    name : str
+        Derivative name.
+    points : pandas.DataFrame
+        The estimates table.
+    curve : pandas.DataFrame
+        The model curve.
+    x : str
+        Column on the x axis, e.g. ``"speed"`` or ``"alpha"``.
+    updated : pandas.DataFrame or None, optional
+        The updated model's curve; None draws none.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The two-panel figure.
+    """
     label, scale = X_AXES[x]
     u = unit(name)
     ulabel = f" [{u}]" if u else ""
@@ -125,7 +166,28 @@ def derivative_figure(name: str, points: pd.DataFrame, curve: pd.DataFrame, x: s
 def write_report(folder: str | Path, campaign: Campaign, df: pd.DataFrame,
                  curve: pd.DataFrame, notes: list[str] | None = None,
                  updated: pd.DataFrame | None = None) -> Path:
-    """Write DIR/report.html (and the PNG figures beside it); its path."""
+    """Write DIR/report.html (and the PNG figures beside it); its path.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Campaign output folder DIR.
+    campaign : Campaign
+        The campaign.
+    df : pandas.DataFrame
+        The estimates table.
+    curve : pandas.DataFrame
+        The model curve.
+    notes : list[str] or None, optional
+        Paragraphs added to the report.
+    updated : pandas.DataFrame or None, optional
+        The updated model's curve, drawn in the figures when given.
+
+    Returns
+    -------
+    Path
+        The report's path.
+    """
     folder = Path(folder)
     scores = point_scores(df)
     rows = []
@@ -142,9 +204,7 @@ def write_report(folder: str | Path, campaign: Campaign, df: pd.DataFrame,
         buf = io.BytesIO()
         fig.savefig(buf, format="png")
         (folder / figure_name(name)).write_bytes(buf.getvalue())
-        data = base64.b64encode(buf.getvalue()).decode()
-        figures.append(f'<figure><img alt="{html.escape(name)}" '
-                       f'src="data:image/png;base64,{data}"></figure>')
+        figures.append(f"<figure>{png_img(buf.getvalue(), name)}</figure>")
     note_html = "".join(f"<p>{html.escape(n)}</p>" for n in notes or [])
     text = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>campaign {html.escape(campaign.name)}</title>

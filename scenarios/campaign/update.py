@@ -108,7 +108,20 @@ def flown_model(campaign: Campaign, df: pd.DataFrame) -> pd.DataFrame:
 
 def corrections(campaign: Campaign, df: pd.DataFrame) -> list[Correction]:
     """Per estimated derivative, its model curve relocated to the flight points: each
-    estimate against the model's value at its flown condition (``flown_model``)."""
+    estimate against the model's value at its flown condition (``flown_model``).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    df : pandas.DataFrame
+        The estimates table, optionally with the ``model_flown`` column.
+
+    Returns
+    -------
+    list[Correction]
+        One fitted correction per estimated derivative, sorted by name.
+    """
     est = df if "model_flown" in df else flown_model(campaign, df)
     est = est[est["status"] == STATUS_ESTIMATED]
     out = []
@@ -123,7 +136,22 @@ def corrections(campaign: Campaign, df: pd.DataFrame) -> list[Correction]:
 
 def correction_effects(campaign: Campaign, df: pd.DataFrame, fitted: list[Correction]
                        ) -> list[AugmentEffect]:
-    """The catalogue effects that write the kept corrections into the model aircraft."""
+    """The catalogue effects that write the kept corrections into the model aircraft.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign.
+    df : pandas.DataFrame
+        The estimates table, optionally with the ``model_flown`` column.
+    fitted : list[Correction]
+        The corrections from :func:`corrections`.
+
+    Returns
+    -------
+    list[AugmentEffect]
+        A derivative delta or a delta table scheduled on the campaign's x, per kept correction.
+    """
     effects: list[AugmentEffect] = []
     est = df if "model_flown" in df else flown_model(campaign, df)
     est = est[est["status"] == STATUS_ESTIMATED]
@@ -147,7 +175,22 @@ def correction_effects(campaign: Campaign, df: pd.DataFrame, fitted: list[Correc
 def write_updated(campaign: Campaign, effects: list[AugmentEffect], folder: str | Path
                   ) -> Path:
     """OUT/aircraft/<aircraft>-updated/<aircraft>-updated.xml: the model aircraft with the
-    corrections (plain JSBSim loads it from OUT)."""
+    corrections (plain JSBSim loads it from OUT).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign (its aircraft).
+    effects : list[AugmentEffect]
+        The correction effects.
+    folder : str or Path
+        Output folder OUT.
+
+    Returns
+    -------
+    Path
+        The updated aircraft's XML file.
+    """
     return augment(campaign.aircraft, effects, folder, name=f"{campaign.aircraft}-updated")
 
 
@@ -180,7 +223,21 @@ def held_out_gaps(campaign: Campaign, effects: list[AugmentEffect]) -> list[Held
     """Fly every held-out point and its gap with the model, with the model plus the
     correction ``effects`` (the updated aircraft, with the point's mass and CG) and with
     the flown aircraft (the floor), window by window as the gap diagnosis re-flies
-    (``window_gaps``), and over the whole record open loop (``open_loop``)."""
+    (``window_gaps``), and over the whole record open loop (``open_loop``).
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The campaign with its held-out points.
+    effects : list[AugmentEffect]
+        The correction effects.
+
+    Returns
+    -------
+    list[HeldOutGap]
+        One per held-out point: gaps per axis before, after and floor, window by window and
+        open loop.
+    """
     out = []
     for i, p in enumerate(campaign.held_out):
         gap = HeldOutGap(i, p.altitude, p.speed)
@@ -211,7 +268,20 @@ def window_gaps(aircraft: str | Path, record: FlightRecord) -> dict[str, float]:
     windows (``identification.gap.segments``) of the mean over its channels, each window
     flown as the gap diagnosis's re-fly (``identification.gap.jsbsim.refly.fly_window``: start
     state, offsets refitted); NaN for an axis without a window or where every window
-    departs."""
+    departs.
+
+    Parameters
+    ----------
+    aircraft : str or Path
+        Aircraft name or XML path.
+    record : FlightRecord
+        The measured flight.
+
+    Returns
+    -------
+    dict[str, float]
+        Axis -> mean gap, 1 (NaN as above).
+    """
     model = load(str(augment_cached(str(aircraft), [], CACHE, surface_drive=True)))
     altitude, speed = start_condition(record)
     trimmed = trim(model, max(altitude, 0.0), speed)
@@ -232,7 +302,20 @@ def summary(fitted: list[Correction], gaps: list[HeldOutGap]) -> dict[str, Any]:
     (before - after) / before and the shrink of the model's part of the gap,
     (before - after) / (before - floor); the same means of the whole record flown open
     loop (``open_loop``); per corrected derivative the RMS over the held-out points of
-    model minus flown and updated minus flown."""
+    model minus flown and updated minus flown.
+
+    Parameters
+    ----------
+    fitted : list[Correction]
+        The fitted corrections.
+    gaps : list[HeldOutGap]
+        The held-out points' gaps.
+
+    Returns
+    -------
+    dict[str, Any]
+        The contents of update.json.
+    """
     axes = list(AXIS_OUTPUTS)
     mean = {key: {a: float(np.nanmean([getattr(g, key).get(a, math.nan) for g in gaps]))
                   for a in axes} for key in ("before", "after", "floor")} if gaps else {}

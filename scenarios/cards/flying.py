@@ -35,7 +35,20 @@ AUGMENT_CACHE = Path(tempfile.gettempdir()) / "flightid-augmented"
 
 
 def sub_seed(seed: int, purpose: str) -> int:
-    """An independent 32-bit seed for one random part of a flight (e.g. 'sensors')."""
+    """An independent 32-bit seed for one random part of a flight (e.g. 'sensors').
+
+    Parameters
+    ----------
+    seed : int
+        The flight's seed.
+    purpose : str
+        Name of the random part.
+
+    Returns
+    -------
+    int
+        Seed in 0..2**32 - 1.
+    """
     ss = np.random.SeedSequence([int(seed), zlib.crc32(purpose.encode())])
     return int(ss.generate_state(1)[0])
 
@@ -53,7 +66,18 @@ def _flown_designs(card: Card, seed: int) -> list[InputDesign]:
 def trim_card(card: Card):
     """The card's aircraft (augmented when the card says so) and its trim at the card's
     condition: ``(model, trimmed)``. Raises TrimError (a condition that cannot be flown)
-    or TrimInputError (one that is not a condition)."""
+    or TrimInputError (one that is not a condition).
+
+    Parameters
+    ----------
+    card : Card
+        The flight card.
+
+    Returns
+    -------
+    tuple
+        (model, trimmed): the loaded JSBSim model and its trim.
+    """
     model = load(augmented(card) if card.augmentation else card.aircraft)
     return model, trim(model, card.condition)
 
@@ -67,6 +91,20 @@ def fly_card(card: Card, seed: int | None = None,
     the card's sensor suite (the truth itself without one). Both carry the card
     (``meta.scenario['card']``) and the seed (``meta.scenario['seed']``). Raises
     TrimError or DepartureError (with ``.record``) from the flight core.
+
+    Parameters
+    ----------
+    card : Card
+        The flight card.
+    seed : int or None, optional
+        Seed, 0..2**32 - 1; None uses the card's seed.
+    progress : callable or None, optional
+        ``progress(k, n)`` with k samples of n flown.
+
+    Returns
+    -------
+    tuple[FlightRecord, FlightRecord]
+        (measured, truth) records.
     """
     seed = card.seed if seed is None else int(seed)
     if not 0 <= seed <= 2**32 - 1:
@@ -109,12 +147,40 @@ def fly_card(card: Card, seed: int | None = None,
 
 
 def augmented(card: Card, cache: Path | None = None) -> str:
-    """The XML path of the card's aircraft with its [[effect]]s (written once, then reused)."""
+    """The XML path of the card's aircraft with its [[effect]]s (written once, then reused).
+
+    Parameters
+    ----------
+    card : Card
+        The flight card.
+    cache : Path or None, optional
+        Cache folder; None uses the default.
+
+    Returns
+    -------
+    str
+        Path of the augmented aircraft's XML.
+    """
     return augmented_aircraft(card.aircraft, card.augmentation, cache)
 
 
 def augmented_aircraft(aircraft: str, effects: Sequence[Any], cache: Path | None = None) -> str:
     """The XML path of ``aircraft`` with the airframe and actuator ``effects`` (catalogue
-    effects), written once into the cache folder, then reused."""
+    effects), written once into the cache folder, then reused.
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft name.
+    effects : Sequence[Any]
+        Catalogue effects.
+    cache : Path or None, optional
+        Cache folder; None uses the default.
+
+    Returns
+    -------
+    str
+        Path of the augmented aircraft's XML.
+    """
     return str(augment_cached(aircraft, tuple(effects), cache or AUGMENT_CACHE,
                               name=f"{aircraft}-augmented"))

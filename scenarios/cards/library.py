@@ -11,12 +11,29 @@ LIBRARY = Path(__file__).resolve().parent.parent / "library"
 
 
 def library_cards() -> dict[str, Path]:
-    """Library card names -> paths (scenarios/library/*.toml)."""
+    """Library card names -> paths (scenarios/library/*.toml).
+
+    Returns
+    -------
+    dict[str, Path]
+        Card name -> file, sorted by name.
+    """
     return {p.stem: p for p in sorted(LIBRARY.glob("*.toml"))}
 
 
 def find_card(name_or_path: str | Path) -> Path:
-    """Path of a card given as a file path or a library card name."""
+    """Path of a card given as a file path or a library card name.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A card file path or a library card name.
+
+    Returns
+    -------
+    Path
+        The card file.
+    """
     p = Path(name_or_path)
     if p.is_file():
         return p
@@ -30,7 +47,18 @@ def find_card(name_or_path: str | Path) -> Path:
 
 
 def describe(path: Path) -> str:
-    """The one-line description of a card file (without validating it)."""
+    """The one-line description of a card file (without validating it).
+
+    Parameters
+    ----------
+    path : Path
+        Card file.
+
+    Returns
+    -------
+    str
+        The ``description`` field ("" if none; a note if the file is unreadable).
+    """
     try:
         return str(tomllib.loads(path.read_text(encoding="utf-8")).get("description", ""))
     except (OSError, tomllib.TOMLDecodeError) as exc:

@@ -79,18 +79,30 @@ def override(card_data: dict[str, Any], assignments: Sequence[str] = (),
 
     Parameters
     ----------
-    card_data : the card as parsed (``Card.data``); not modified.
-    assignments : ``KEY=VALUE`` strings, KEY a card field by its TOML path
-        (``condition.speed``, ``sensors.drop``, ``maneuver[0].amplitude_deg``), VALUE a
-        TOML scalar or array (a bare word is a string, ``a,b`` an array of two). Applied
-        after ``turbulence`` and ``sensors``.
-    turbulence : ``none`` removes the card's turbulence, ``light`` or ``moderate`` replaces
-        it by the Dryden turbulence of that intensity (other disturbances are kept).
-    sensors : a built-in suite (``research``, ``hobby``, ``ideal``) replacing the card's
-        whole [sensors] table.
+    card_data : dict[str, Any]
+        The card as parsed (``Card.data``); not modified.
+    assignments : Sequence[str], optional
+        ``KEY=VALUE`` strings, KEY a card field by its TOML path (``condition.speed``,
+        ``sensors.drop``, ``maneuver[0].amplitude_deg``), VALUE a TOML scalar or array (a
+        bare word is a string, ``a,b`` an array of two). Applied after ``turbulence`` and
+        ``sensors``.
+    turbulence : str or None, optional
+        ``none`` removes the card's turbulence, ``light`` or ``moderate`` replaces it by the
+        Dryden turbulence of that intensity (other disturbances are kept).
+    sensors : str or None, optional
+        A built-in suite (``research``, ``hobby``, ``ideal``) replacing the card's whole
+        [sensors] table.
 
-    Raises ValueError naming the option and, for an unknown field, the valid keys at that
-    level. The result still has to pass ``card_from_dict`` (``overridden_card`` does both).
+    Returns
+    -------
+    dict[str, Any]
+        The changed copy. It still has to pass ``card_from_dict`` (``overridden_card`` does
+        both).
+
+    Raises
+    ------
+    ValueError
+        Naming the option and, for an unknown field, the valid keys at that level.
     """
     data = plain(card_data)
     if turbulence is not None:
@@ -120,7 +132,24 @@ def override(card_data: dict[str, Any], assignments: Sequence[str] = (),
 def overridden_card(card: Card, assignments: Sequence[str] = (), turbulence: str | None = None,
                     sensors: str | None = None) -> Card:
     """``card`` with ``override``'s changes, validated again by ``card_from_dict`` (every
-    card check applies; a CardError names the overridden field). No change: ``card``."""
+    card check applies; a CardError names the overridden field). No change: ``card``.
+
+    Parameters
+    ----------
+    card : Card
+        The card.
+    assignments : Sequence[str], optional
+        ``KEY=VALUE`` overrides, as in :func:`override`.
+    turbulence : str or None, optional
+        ``none``, ``light`` or ``moderate``, as in :func:`override`.
+    sensors : str or None, optional
+        A built-in sensor suite, as in :func:`override`.
+
+    Returns
+    -------
+    Card
+        The validated card.
+    """
     if not assignments and turbulence is None and sensors is None:
         return card
     data = override(card.data, assignments, turbulence, sensors)

@@ -246,7 +246,22 @@ def _a_priori(chk: _Checker, table: Any) -> dict[str, dict[str, Any]]:
 
 
 def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None = None) -> Card:
-    """Validate a parsed card; ``text`` (the TOML source) lets errors name the line."""
+    """Validate a parsed card; ``text`` (the TOML source) lets errors name the line.
+
+    Parameters
+    ----------
+    data : dict[str, Any]
+        The parsed TOML card.
+    path : str, optional
+        File name used in errors.
+    text : str or None, optional
+        The card's TOML source; None gives no line numbers.
+
+    Returns
+    -------
+    Card
+        The validated card.
+    """
     chk = _Checker(path, text)
     for key in data:
         if key not in TOP_FIELDS:
@@ -289,7 +304,18 @@ def card_from_dict(data: dict[str, Any], path: str = "<card>", text: str | None 
 
 
 def load_card(path: str | Path) -> Card:
-    """Read and validate a card file (path or library name); CardError names line and field."""
+    """Read and validate a card file (path or library name); CardError names line and field.
+
+    Parameters
+    ----------
+    path : str or Path
+        Card file path or library card name.
+
+    Returns
+    -------
+    Card
+        The validated card.
+    """
     p = find_card(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -308,7 +334,18 @@ def load_maneuvers(path: str | Path) -> tuple[str, tuple[InputDesign, ...]]:
     """A maneuver table: a TOML file of ``[[maneuver]]`` tables in the card's syntax (any
     kinds and surfaces, flown together), with an optional ``name`` (default the file's
     stem) and ``description``. Returns (name, maneuvers); CardError names the file, line
-    and field."""
+    and field.
+
+    Parameters
+    ----------
+    path : str or Path
+        The maneuver table's TOML file.
+
+    Returns
+    -------
+    tuple[str, tuple[InputDesign, ...]]
+        (name, maneuvers).
+    """
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")

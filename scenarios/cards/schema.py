@@ -66,7 +66,18 @@ class Card:
 
 
 def plain(x: Any) -> Any:
-    """A copy of a parsed card as plain dicts and lists (tuples become lists)."""
+    """A copy of a parsed card as plain dicts and lists (tuples become lists).
+
+    Parameters
+    ----------
+    x : Any
+        Parsed card or a part of it.
+
+    Returns
+    -------
+    Any
+        The plain copy.
+    """
     if isinstance(x, dict):
         return {k: plain(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
@@ -75,7 +86,18 @@ def plain(x: Any) -> Any:
 
 
 def field_path(field_name: str) -> tuple:
-    """'maneuver[2].amplitude_deg' -> ('maneuver', 2, 'amplitude_deg')."""
+    """'maneuver[2].amplitude_deg' -> ('maneuver', 2, 'amplitude_deg').
+
+    Parameters
+    ----------
+    field_name : str
+        Dotted field name with optional ``[i]`` indices.
+
+    Returns
+    -------
+    tuple
+        Path of keys (str) and indices (int).
+    """
     out: list = []
     for part in field_name.split("."):
         m = re.fullmatch(r"([^\[\]]+)((?:\[\d+\])*)", part)

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
 from flightid.sim.effects.catalogue import CATALOGUE
 
 LATERAL, LONGITUDINAL, BOTH = "lateral", "longitudinal", "both"
@@ -90,7 +91,7 @@ STABLE_SIGN = {"Cn_beta": 1.0, "Cl_beta": -1.0, "Cn_r": -1.0, "Cl_p": -1.0, "CY_
 # the channels a sensor effect is drawn on, per axis
 CHANNELS = {LATERAL: ("beta", "p", "r", "ay"), LONGITUDINAL: ("alpha", "q", "az")}
 FLOW_ANGLE = {LATERAL: ("beta",), LONGITUDINAL: ("alpha",)}  # biases the trim fixes
-SURFACES = {LATERAL: ("da", "dr"), LONGITUDINAL: ("de",)}
+SURFACES = {LATERAL: LATERAL_INPUTS, LONGITUDINAL: LONGITUDINAL_INPUTS}
 INERTIA = {LATERAL: ("ixx", "izz"), LONGITUDINAL: ("iyy",)}
 K_RANGE = (0.5, 1.5)  # the drawn multiple of an entry's default magnitude
 
@@ -189,7 +190,7 @@ def _kinds() -> tuple[Kind, ...]:
 KINDS: tuple[Kind, ...] = _kinds()
 KIND_BY_NAME = {k.name: k for k in KINDS}
 
-# effects outside the catalogue (``outside.py``): name -> axis it shows on
+# effects outside the catalogue (``outside_catalogue.py``): name -> axis it shows on
 OUTSIDE = {"structural_mode": (LATERAL, LONGITUDINAL), "vane_nonlinearity": (LATERAL,),
            "vane_hysteresis": (LATERAL, LONGITUDINAL), "cm_alpha_break": (LONGITUDINAL,)}
 
@@ -260,7 +261,13 @@ class Case:
 
 def fingerprint() -> str:
     """A hash of everything the draw draws from (kinds, outside kinds, pattern, ranges,
-    the aircraft's flights): a stored study continues only under the same draw."""
+    the aircraft's flights): a stored study continues only under the same draw.
+
+    Returns
+    -------
+    str
+        16 hex digits of a SHA-256.
+    """
     text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
                        DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
                        THRUST_ARM_M, SIZED_BASE, {a: asdict(f) for a, f in AIRCRAFT.items()}],
@@ -275,6 +282,24 @@ def draw(n: int, seed: int, truths: dict[str, dict[str, float]], nulls: int = 0,
     ``truths``: each aircraft's derivatives at its condition (lateral in body axes,
     longitudinal in stability axes; ``run.truths``); ``aircraft``: the ones drawn from.
     Case k of a seed is the same whatever n (its block's pattern and its own stream).
+
+    Parameters
+    ----------
+    n : int
+        Number of drawn cases.
+    seed : int
+        Study seed.
+    truths : dict[str, dict[str, float]]
+        Aircraft -> derivative values.
+    nulls : int, optional
+        Number of null cases. Default 0.
+    aircraft : tuple[str, ...], optional
+        Aircraft drawn from. Default all of ``AIRCRAFT``.
+
+    Returns
+    -------
+    list[Case]
+        The drawn cases, then the null cases.
     """
     out = [_case(k, seed, truths, aircraft) for k in range(n)]
     out += [_null(k, seed, aircraft) for k in range(nulls)]

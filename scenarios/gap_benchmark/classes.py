@@ -118,7 +118,18 @@ def _named_matches(m: Member, ranked: Any) -> bool:
 
 
 def class_of(effect: Effect) -> str:
-    """The name of the injected effect's class; its own label when it has none."""
+    """The name of the injected effect's class; its own label when it has none.
+
+    Parameters
+    ----------
+    effect : Effect
+        The injected effect.
+
+    Returns
+    -------
+    str
+        Class name.
+    """
     for name, members in CLASSES.items():
         if any(_effect_matches(m, effect) for m in members):
             return name
@@ -126,14 +137,38 @@ def class_of(effect: Effect) -> str:
 
 
 def classes_of(effect: Effect) -> list[str]:
-    """The names of every class the injected effect is a member of."""
+    """The names of every class the injected effect is a member of.
+
+    Parameters
+    ----------
+    effect : Effect
+        The injected effect.
+
+    Returns
+    -------
+    list[str]
+        Class names, in ``CLASSES`` order.
+    """
     return [name for name, members in CLASSES.items()
             if any(_effect_matches(m, effect) for m in members)]
 
 
 def same(effect: Effect, ranked: Any) -> bool:
     """Whether a named effect (a single Ranked of the diagnosis) is ``effect`` itself (its
-    entry and options; the axes of a derivative delta aside) or in its class."""
+    entry and options; the axes of a derivative delta aside) or in its class.
+
+    Parameters
+    ----------
+    effect : Effect
+        The injected effect.
+    ranked : Any
+        A single ``Ranked`` of the diagnosis.
+
+    Returns
+    -------
+    bool
+        True if it names ``effect`` or its class.
+    """
     c = ranked.candidate
     if not c.parts and c.entry == effect.entry and all(
             c.options.get(k) == v for k, v in effect.options.items()
@@ -151,7 +186,20 @@ def same(effect: Effect, ranked: Any) -> bool:
 
 def exact(effect: Effect, ranked: Any) -> bool:
     """The named effect is the injected entry with its options (so its parameters can be
-    compared with the injected magnitude)."""
+    compared with the injected magnitude).
+
+    Parameters
+    ----------
+    effect : Effect
+        The injected effect.
+    ranked : Any
+        A single ``Ranked`` of the diagnosis.
+
+    Returns
+    -------
+    bool
+        True if it is the injected entry with its options.
+    """
     c = ranked.candidate
     return (not c.parts and c.entry == effect.entry
             and all(c.options.get(k) == v for k, v in effect.options.items()))

@@ -28,12 +28,13 @@ from typing import Any
 
 import numpy as np
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import GapResult, diagnose
 from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, overall, pooled_fractions
+from flightid.identification.gap.rank import Folds, Ranked, Ranker, mean_gap, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.trim_level import TrimOffset
 from flightid.record import FlightRecord
@@ -49,7 +50,7 @@ from flightid.scenarios.gap_benchmark.cases import (
     Case,
     Effect,
 )
-from flightid.scenarios.gap_benchmark.outside import RECORD, cm_alpha_break
+from flightid.scenarios.gap_benchmark.outside_catalogue import RECORD, cm_alpha_break
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.sim.jsbsim.model import load
@@ -95,7 +96,30 @@ def card(aircraft: str, seed: int, effects: list[dict[str, Any]] | None = None,
          disturbances: list[dict[str, Any]] | None = None, xml: str | None = None) -> Card:
     """The test card of ``aircraft`` (module note) with airframe or actuator ``effects``
     (``[[effect]]`` tables), a sensor ``mounting`` list, extra ``disturbances``; ``xml``:
-    fly this aircraft file instead (an aircraft-level change outside the catalogue)."""
+    fly this aircraft file instead (an aircraft-level change outside the catalogue).
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft name, a key of ``AIRCRAFT``.
+    seed : int
+        The flight's seed.
+    effects : list[dict[str, Any]] or None, optional
+        ``[[effect]]`` tables.
+    turbulence : str, optional
+        ``"calm"``, ``"light"`` or ``"moderate"``. Default ``"light"``.
+    mounting : list[dict[str, Any]] or None, optional
+        Sensor mounting effects; replaces the suite's list.
+    disturbances : list[dict[str, Any]] or None, optional
+        Extra ``[[disturbance]]`` tables.
+    xml : str or None, optional
+        Aircraft XML file to fly instead of ``aircraft``.
+
+    Returns
+    -------
+    Card
+        The validated flight card.
+    """
     f = AIRCRAFT[aircraft]
     cond: dict[str, float] = {"altitude": f.altitude_m, "speed": f.speed_m_s}
     if f.flaps_deg:
@@ -123,7 +147,19 @@ def card(aircraft: str, seed: int, effects: list[dict[str, Any]] | None = None,
 def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, float]]:
     """Each aircraft's derivatives at its test condition: lateral ones in body axes,
     longitudinal ones in stability axes (the axes of the diagnosis's models), and
-    ``trim_alpha`` (rad)."""
+    ``trim_alpha`` (rad).
+
+    Parameters
+    ----------
+    aircraft : tuple[str, ...], optional
+        Aircraft names. Default every one of ``AIRCRAFT``.
+
+    Returns
+    -------
+    dict[str, dict[str, float]]
+        Aircraft -> derivative name -> value (per rad, rates nondimensional), plus
+        ``trim_alpha``, rad.
+    """
     out = {}
     for name in aircraft:
         f = AIRCRAFT[name]
@@ -155,10 +191,27 @@ def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | 
     aircraft has its own actuators' rate limit between command and position (40 deg/s on
     the Twin Otter, reached by every doublet), which the linear model does not carry, so
     null flights recorded as commands are not at the null level (measured: every channel
-    of a Twin Otter null flight above it)."""
+    of a Twin Otter null flight above it).
+
+    Parameters
+    ----------
+    measured : FlightRecord
+        The measured record of the flight.
+    truth : FlightRecord
+        Its truth record.
+    plain : FlightRecord or None
+        Truth of the same card on the plain aircraft, or None.
+    flown : Card
+        The flown card (its sensors and seed).
+
+    Returns
+    -------
+    FlightRecord
+        ``measured``, or the command record.
+    """
     if plain is None:
         return measured
-    surfaces = [s for s in ("de", "da", "dr") if s in measured and s in truth and s in plain]
+    surfaces = [s for s in CONTROL_SURFACES if s in measured and s in truth and s in plain]
     commanded = truth.with_channels(**{
         s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
         for s in surfaces})
@@ -173,7 +226,20 @@ def blind(record: FlightRecord, aircraft: str) -> FlightRecord:
     name, the metadata of ``KEPT`` only (the maneuvers and inputs flown, how it was
     measured, what its surface channels hold), the card without its effects and
     disturbances. Gone: what was injected, the augmented aircraft's file and exact truth,
-    the turbulence."""
+    the turbulence.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The measured record.
+    aircraft : str
+        The plain aircraft's name.
+
+    Returns
+    -------
+    FlightRecord
+        A blinded copy.
+    """
     extra = {k: v for k, v in record.meta.extra.items() if k in KEPT}
     scenario = dict(record.meta.scenario)
     if "card" in scenario:
@@ -196,7 +262,22 @@ def _parameters(effect: Effect) -> dict[str, Any]:
 def fly_case(case: Case, turbulence: str = "light",
              truth: dict[str, float] | None = None) -> FlightRecord:
     """The measured, blinded record of ``case`` (its effects injected; module note).
-    ``truth``: the aircraft's ``truths`` entry (needed by a pitch break)."""
+    ``truth``: the aircraft's ``truths`` entry (needed by a pitch break).
+
+    Parameters
+    ----------
+    case : Case
+        The benchmark case.
+    turbulence : str, optional
+        Turbulence intensity, as in :func:`card`.
+    truth : dict[str, float] or None, optional
+        The aircraft's :func:`truths` entry; None computes it when needed.
+
+    Returns
+    -------
+    FlightRecord
+        The blinded measured record.
+    """
     effects, mounting, disturbances, xml = [], [], [], None
     for e in case.effects:
         if e.inject == "card" and e.in_catalogue:
@@ -238,7 +319,24 @@ def fly_case(case: Case, turbulence: str = "light",
 def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
                plain: FlightRecord | None = None) -> dict[str, float]:
     """Per axis: the held-out gap of the plain model on the plain flight of ``case``'s
-    aircraft and seed (the same turbulence and sensor noise): what no effect can close."""
+    aircraft and seed (the same turbulence and sensor noise): what no effect can close.
+
+    Parameters
+    ----------
+    case : Case
+        The benchmark case.
+    axes : tuple[str, ...]
+        Axes to measure.
+    turbulence : str, optional
+        Turbulence intensity, as in :func:`card`.
+    plain : FlightRecord or None, optional
+        The plain flight; None flies it.
+
+    Returns
+    -------
+    dict[str, float]
+        Axis -> held-out gap, 1.
+    """
     if plain is None:
         plain = fly_case(Case(case.index, case.seed, case.aircraft, NULL), turbulence)
     out = {}
@@ -246,7 +344,7 @@ def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
         inputs = AXIS_INPUTS[axis]
         ranker = Ranker(linearise(case.aircraft, [plain], axis),
                         Folds.make(segments([plain], None, inputs), None))
-        out[axis] = overall(pooled_fractions(list(ranker.base_held.values())))
+        out[axis] = mean_gap(pooled_fractions(list(ranker.base_held.values())))
     return out
 
 
@@ -254,12 +352,36 @@ def null_level(case: Case, axes: tuple[str, ...], turbulence: str = "light",
 
 
 def axis_result(result: GapResult, axis: str) -> GapResult | None:
-    """The diagnosis of one axis (None when the axis was not diagnosed)."""
+    """The diagnosis of one axis (None when the axis was not diagnosed).
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+    axis : str
+        Axis name.
+
+    Returns
+    -------
+    GapResult or None
+        The axis's diagnosis.
+    """
     return result.axes().get(axis)
 
 
 def verdict(result: GapResult) -> str:
-    """no_gap, explained, partly_unexplained or unexplained."""
+    """no_gap, explained, partly_unexplained or unexplained.
+
+    Parameters
+    ----------
+    result : GapResult
+        The diagnosis.
+
+    Returns
+    -------
+    str
+        The verdict.
+    """
     return result.verdict
 
 
@@ -341,7 +463,20 @@ def _effect_axes(e: Effect) -> tuple[str, ...]:
 
 
 def score(case: Case, result: GapResult) -> CaseResult:
-    """``case`` scored from its diagnosis (the null level is filled in by ``run_case``)."""
+    """``case`` scored from its diagnosis (the null level is filled in by ``run_case``).
+
+    Parameters
+    ----------
+    case : Case
+        The benchmark case.
+    result : GapResult
+        Its diagnosis.
+
+    Returns
+    -------
+    CaseResult
+        Verdicts and named effects per axis and the case's scores.
+    """
     per_axis = {a: g for a in AXES if (g := axis_result(result, a)) is not None}
     out = CaseResult(case, {a: verdict(g) for a, g in per_axis.items()},
                      {a: [_label(r) for r in g.named] for a, g in per_axis.items()})
@@ -375,8 +510,8 @@ def score(case: Case, result: GapResult) -> CaseResult:
             g = per_axis.get(a)
             if g is not None and g.named and g.named[0].heldout_before \
                     and g.named[-1].heldout_after:
-                out.before[a] = overall(g.named[0].heldout_before)
-                out.after[a] = overall(g.named[-1].heldout_after)
+                out.before[a] = mean_gap(g.named[0].heldout_before)
+                out.after[a] = mean_gap(g.named[-1].heldout_after)
     return out
 
 
@@ -409,7 +544,26 @@ def run_case(case: Case, turbulence: str = "light", truth: dict[str, float] | No
              null: bool = True, **options: Any) -> CaseResult:
     """Fly ``case``, diagnose it (``options`` as for ``diagnose``), score it; with
     ``null``, the null level of the injected effects' axes where something is named too
-    (one more flight; a null case needs none: nothing injected, nothing to shrink)."""
+    (one more flight; a null case needs none: nothing injected, nothing to shrink).
+
+    Parameters
+    ----------
+    case : Case
+        The benchmark case.
+    turbulence : str, optional
+        Turbulence intensity, as in :func:`card`.
+    truth : dict[str, float] or None, optional
+        The aircraft's :func:`truths` entry; None computes it when needed.
+    null : bool, optional
+        Measure the null level. Default True.
+    **options : Any
+        Options of ``diagnose``.
+
+    Returns
+    -------
+    CaseResult
+        The scored case with its wall and CPU time, s.
+    """
     t0, c0 = time.perf_counter(), time.process_time()
     record = fly_case(case, turbulence, truth)
     result = diagnose([record], case.aircraft, **options)

@@ -53,7 +53,20 @@ class Plan:
 
 def run_index(plan: Plan, index: int) -> list[dict[str, Any]]:
     """One case of ``plan`` run and scored, as one JSON-able row (a failed case with its
-    error): the task the executors give each worker."""
+    error): the task the executors give each worker.
+
+    Parameters
+    ----------
+    plan : Plan
+        The study's plan.
+    index : int
+        Case index in ``plan.cases``.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        One row.
+    """
     case = plan.cases[index]
     try:
         result = run_case(case, plan.turbulence, plan.truths.get(case.aircraft),
@@ -86,7 +99,25 @@ class Benchmark:
 def check(n: int, seed: int, nulls: int, turbulence: str, aircraft: tuple[str, ...],
           output: str | Path | None, workers: int | None) -> None:
     """Raise ValueError (or the OSError of an unwritable output) naming the option, before
-    anything is flown."""
+    anything is flown.
+
+    Parameters
+    ----------
+    n : int
+        Number of drawn cases, >= 1.
+    seed : int
+        Study seed, >= 0.
+    nulls : int
+        Number of null cases, >= 0.
+    turbulence : str
+        Turbulence intensity, one of ``TURBULENCE``.
+    aircraft : tuple[str, ...]
+        Aircraft to draw from, keys of ``AIRCRAFT``.
+    output : str or Path or None
+        Output folder, or None.
+    workers : int or None
+        Worker processes, or None.
+    """
     if isinstance(n, bool) or int(n) < 1:
         raise ValueError(f"--n must be at least 1, got {n}")
     if int(seed) < 0:
@@ -118,7 +149,24 @@ def check(n: int, seed: int, nulls: int, turbulence: str, aircraft: tuple[str, .
 def identity(seed: int, turbulence: str, aircraft: tuple[str, ...],
              options: dict[str, Any]) -> dict[str, Any]:
     """What makes two runs the same study (n and nulls may grow): the seed, turbulence,
-    aircraft, diagnosis options and the draw's ``fingerprint``."""
+    aircraft, diagnosis options and the draw's ``fingerprint``.
+
+    Parameters
+    ----------
+    seed : int
+        Study seed.
+    turbulence : str
+        Turbulence intensity.
+    aircraft : tuple[str, ...]
+        Aircraft drawn from.
+    options : dict[str, Any]
+        Diagnosis options.
+
+    Returns
+    -------
+    dict[str, Any]
+        The identity, JSON-able.
+    """
     return {"seed": int(seed), "turbulence": turbulence, "aircraft": list(aircraft),
             "options": {k: options[k] for k in sorted(options)}, "draw": fingerprint()}
 

@@ -31,7 +31,18 @@ def _median(xs: list[float]) -> float | None:
 
 
 def figures(results: list[CaseResult]) -> dict[str, Any]:
-    """The six figures of ``results`` (None where no case counts) and the case counts."""
+    """The six figures of ``results`` (None where no case counts) and the case counts.
+
+    Parameters
+    ----------
+    results : list[CaseResult]
+        The scored cases.
+
+    Returns
+    -------
+    dict[str, Any]
+        Case counts and the figures (fractions, or the median magnitude error).
+    """
     flown = [r for r in results if not r.error]
     by = {c: [r for r in flown if r.case.category == c] for c in (SINGLE, PAIR, OUT, NULL)}
     # an outside effect's verdict is its own axis's
@@ -59,7 +70,18 @@ def figures(results: list[CaseResult]) -> dict[str, Any]:
 def summary(results: list[CaseResult]) -> dict[str, Any]:
     """``figures`` overall, ``targets`` and whether each is met (``met``: None where no
     case counts), ``by_kind`` (the figures of each kind: an entry/axis, "pair" or "null"),
-    and ``failed_cases`` (label: error)."""
+    and ``failed_cases`` (label: error).
+
+    Parameters
+    ----------
+    results : list[CaseResult]
+        The scored cases.
+
+    Returns
+    -------
+    dict[str, Any]
+        The summary, JSON-able.
+    """
     overall = figures(results)
     met = {k: None if overall[k] is None else
            (overall[k] >= t if higher else overall[k] <= t)

@@ -55,10 +55,42 @@ def _pattern(t: np.ndarray, start: float, unit: float, levels: Sequence[float]) 
 
 
 def zero(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """No input: every action zero.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     return np.zeros((env.n_decisions, 3))
 
 
 def doublet(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    """An aileron doublet at 1 s, then a rudder doublet at 6 s, each 1 s a side.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+    amplitude : float
+        The action's amplitude (fraction of full deflection).
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     t, a = _grid(env), np.zeros((env.n_decisions, 3))
     a[:, 1] = _pattern(t, 1.0, 1.0, (amplitude, -amplitude))
     a[:, 2] = _pattern(t, 6.0, 1.0, (amplitude, -amplitude))
@@ -66,6 +98,23 @@ def doublet(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.n
 
 
 def three211(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.ndarray:
+    """An aileron 3-2-1-1 at 1 s, then a rudder 3-2-1-1 at 8 s, on 0.5 s steps.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Unused.
+    amplitude : float
+        The action's amplitude (fraction of full deflection).
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     t, a = _grid(env), np.zeros((env.n_decisions, 3))
     levels = (amplitude, amplitude, amplitude, -amplitude, -amplitude, amplitude, -amplitude)
     a[:, 1] = _pattern(t, 1.0, 0.5, levels)
@@ -76,7 +125,26 @@ def three211(env: ExcitationEnv, seed: int, amplitude: float = AMPLITUDE) -> np.
 def multisine(env: ExcitationEnv, seed: int, amp_da: float = AMPLITUDE,
               amp_dr: float = AMPLITUDE, f_max: float = 1.5, period: float = 20.0
               ) -> np.ndarray:
-    """Aileron and rudder multisines on interleaved harmonics k / period up to f_max (Hz)."""
+    """Aileron and rudder multisines on interleaved harmonics k / period up to f_max (Hz).
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (decision grid).
+    seed : int
+        Episode seed (unused: the schedule is deterministic).
+    amp_da, amp_dr : float, optional
+        Peak normalised aileron and rudder action, 1.
+    f_max : float, optional
+        Highest frequency, Hz.
+    period : float, optional
+        Fundamental period, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Normalised actions (de, da, dr); shape (n_decisions, 3).
+    """
     t, a = _grid(env), np.zeros((env.n_decisions, 3))
     k = np.arange(1, max(2, int(f_max * period)) + 1)
     for col, ks, amp in ((1, k[0::2], amp_da), (2, k[1::2], amp_dr)):
@@ -87,13 +155,41 @@ def multisine(env: ExcitationEnv, seed: int, amp_da: float = AMPLITUDE,
 
 
 def full_rudder(env: ExcitationEnv, seed: int) -> np.ndarray:
-    """Full rudder (+1) on every decision: on the Navion the bank limit ends it at 2.5 s."""
+    """Full rudder (+1) on every decision: on the Navion the bank limit ends it at 2.5 s.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (decision grid).
+    seed : int
+        Episode seed (unused).
+
+    Returns
+    -------
+    numpy.ndarray
+        Normalised actions (de, da, dr); shape (n_decisions, 3).
+    """
     a = np.zeros((env.n_decisions, 3))
     a[:, 2] = 1.0
     return a
 
 
 def random_policy(env: ExcitationEnv, seed: int) -> np.ndarray:
+    """Uniformly random actions from the action space.
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its number of decisions and decision rate).
+    seed : int
+        The episode's seed.
+        Seeds the action space.
+
+    Returns
+    -------
+    ndarray
+        The actions, one row (elevator, aileron, rudder; -1 to 1) per decision.
+    """
     env.action_space.seed(seed)
     return np.array([env.action_space.sample() for _ in range(env.n_decisions)])
 
@@ -108,6 +204,18 @@ def closed_loop(predict: Callable[[np.ndarray], np.ndarray], scale: float = AMPL
     baselines' travel limit), and the actions taken are the schedule (0 after a
     termination). The environment is deterministic given the seed, so the schedule flown
     open loop on the same seed is the same flight.
+
+    Parameters
+    ----------
+    predict : callable
+        Scaled observation -> action in [-1, 1], shape (3,).
+    scale : float, optional
+        Factor on the actions, 1.
+
+    Returns
+    -------
+    Schedule
+        ``schedule(env, seed)`` -> normalised actions, shape (n_decisions, 3).
     """
 
     def schedule(env: ExcitationEnv, seed: int) -> np.ndarray:
@@ -160,7 +268,22 @@ HEADER = (f"{'policy':<22}{'return':>10}{'min':>10}" + "".join(f"{r:>12}" for r 
 
 def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
                 ) -> tuple[float, dict, bool]:
-    """Fly one episode with the schedule; (return, last info, terminated early)."""
+    """Fly one episode with the schedule; (return, last info, terminated early).
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment.
+    actions : numpy.ndarray
+        Normalised actions (de, da, dr); shape (n, 3).
+    seed : int
+        Episode seed.
+
+    Returns
+    -------
+    tuple[float, dict, bool]
+        (return, last step's info, terminated early).
+    """
     env.reset(seed=seed)
     total, info, terminated = 0.0, {}, False
     for a in actions:
@@ -174,7 +297,26 @@ def run_episode(env: ExcitationEnv, actions: np.ndarray, seed: int
 def evaluate(env: ExcitationEnv, name: str, schedule: Schedule, seeds: Sequence[int],
              others: Sequence[ExcitationEnv] = ()) -> Result:
     """The policy on ``seeds`` in ``env``, and its returns in ``others`` (the same
-    environment under other rewards)."""
+    environment under other rewards).
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment scored in.
+    name : str
+        Policy name.
+    schedule : Schedule
+        ``schedule(env, seed)`` -> actions.
+    seeds : Sequence[int]
+        Episode seeds.
+    others : Sequence[ExcitationEnv], optional
+        Environments under other rewards.
+
+    Returns
+    -------
+    Result
+        Returns, relative bounds and errors per seed, and the number of early terminations.
+    """
     res = Result(name, [], [], [], 0)
     truth = np.abs(env._truth_vec)
     for s in seeds:
@@ -239,7 +381,20 @@ def cross_entropy(env: ExcitationEnv, seeds: Sequence[int] = TRAIN_SEEDS, iterat
 def per_target(env: ExcitationEnv, results: Sequence[Result]) -> list[str]:
     """Per target and policy: the final bound relative to |truth| (mean over seeds; the
     information the policy gathered) and the error in units of the bound (RMS over seeds;
-    about 1 when the estimate is as good as its bound says)."""
+    about 1 when the estimate is as good as its bound says).
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its targets and truth).
+    results : Sequence[Result]
+        The evaluated policies.
+
+    Returns
+    -------
+    list[str]
+        Lines of the two tables.
+    """
     truth = np.abs(env._truth_vec)
     head = f"{'policy':<22}" + "".join(f"{t:>9}" for t in env.targets)
     lines = ["final Cramer-Rao bound / |truth| per target (mean over seeds)", head]
@@ -254,7 +409,22 @@ def per_target(env: ExcitationEnv, results: Sequence[Result]) -> list[str]:
 
 def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
     """Bars of the final bound / |truth| per target and policy (log scale), the RMS error
-    / |truth| as dots on them; written to ``path`` (PNG)."""
+    / |truth| as dots on them; written to ``path`` (PNG).
+
+    Parameters
+    ----------
+    env : ExcitationEnv
+        The environment (its targets and truth).
+    results : Sequence[Result]
+        The evaluated policies.
+    path : Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     truth = np.abs(env._truth_vec)
     fig = Figure(figsize=(11, 4.8), dpi=100)
     FigureCanvasAgg(fig)
@@ -282,6 +452,23 @@ def plot(env: ExcitationEnv, results: Sequence[Result], path: Path) -> Path:
 
 def main(seeds: Sequence[int] = HELD_OUT_SEEDS, out: Path | None = DEFAULT_OUT,
          search: bool = True) -> str:
+    """Every baseline policy on the held-out seeds: the reward table as text.
+
+    Parameters
+    ----------
+    seeds : sequence of int
+        The episodes' seeds.
+    out : Path or None
+        Where the table is written (None: not written).
+    search : bool
+        Whether to tune the multisine by the cross-entropy method on the training seeds
+        and add it to the table.
+
+    Returns
+    -------
+    str
+        The table.
+    """
     env = ExcitationEnv()
     others = [ExcitationEnv(reward=r) for r in OTHER_REWARDS]
     results = [evaluate(env, n, p, seeds, others) for n, p in POLICIES.items()]

@@ -1,72 +1,18 @@
 """``ExcitationEnv``: a gymnasium environment for excitation-policy research.
 
 An episode starts at a trim and lets a policy move the elevator, aileron and rudder
-(normalised commands) at the decision rate; the reward is the gain in information about
-the target derivatives (D-optimality) gathered inside the linear range of the regression,
-with termination when the flight leaves a safe envelope. ``record()`` gives the episode
-as a measured FlightRecord, so that any identification method (``flightid.identify``)
-runs on it.
+(normalised commands, Box(-1, 1, (3,)) = (de, da, dr), 0 at trim) at the decision rate;
+the observation is ``OBS_CHANNELS`` in SI units plus the sensor suite's white noise. The
+reward is the gain in information about the target derivatives (D-optimality; Morelli &
+Klein 2016, ch. 9) gathered inside the linear range of the regression, with termination
+when the flight leaves a safe envelope (``LIMITS``). ``record()`` flies the episode again
+from its actions and gives it as a measured FlightRecord, so that any identification
+method (``flightid.identify``) runs on it. The per-decision work after the flight core's
+read is one compiled call (``kernels.decide``).
 
-Spaces
-------
-Action: Box(-1, 1, (3,)) = (de, da, dr). 0 is the trim position; +1 moves the surface to
-the positive end of its travel, -1 to the negative end (piecewise linear, through the
-flight core's command path: FCS command map and its limits). Project signs
-(flightid/channels.py): +de trailing edge down (nose down), so -1 on de is full up elevator.
-Held for one decision interval (zero-order hold).
-
-Observation: Box of ``OBS_CHANNELS`` = (t, V, alpha, beta, p, q, r, phi, theta, ax, ay,
-az, de, da, dr, h) in SI units (s, m/s, rad, rad/s, m/s^2, m): the flight core's channels
-at the decision instant plus the white noise of the sensor suite's channels (``research``:
-its ``noise`` sigmas; ``ideal``: none). The full sensor model (anti-alias filters,
-quantisation, mounting) is applied to the whole episode by ``record()``.
-``observation="scaled"``: (value - trim value) / ``obs_scale`` (``OBS_SCALES``), 1 at the
-edge of the linear range, the envelope, the surface travel or the episode.
-
-Reward (D-optimality; Morelli & Klein 2016, ch. 9)
---------------------------------------------------
-Targets are grouped by coefficient (Cl, Cn, Cm, CX, CY, CZ); each group's regressors are a
-bias and the variables of its targets (beta, alpha: measured; p, q, r: phat, qhat, rhat
-from the measured rates and airspeed; de, da, dr: measured surfaces), as perturbations
-from trim: the equation-error model y = theta^T x + e with e white, std ``SIGMA[coef]``.
-Each group carries the information M = I + sum x x^T / sigma^2 (the identity is a prior of
-std 1 per derivative and on the bias, so M is invertible from the first step); the
-information of the targets is the Schur complement S of the bias in M. The reward of a
-step is the increase of sum_groups log det S, updated by rank-one (Sherman-Morrison)
-updates; an episode's return is therefore log det of the final target information (minus
-penalties). ``info['crb']``: sqrt of the diagonal of S^-1 (Cramer-Rao bounds, in target
-order); ``info['estimate']``: the regularised least-squares estimate M^-1 X^T y (updated
-recursively), with y the simulator's aerodynamic coefficient plus white noise of
-``SIGMA``; ``info['error']``: estimate - truth (flightid.sim.jsbsim.truth at the trim, body axes);
-``info['validity']``: the last sample's weight w (below); docs/gym.md lists every key.
-
-``reward="valid-information"`` (default): each sample enters M with a weight w (weighted
-least squares, residual variance sigma^2 / w): d = the largest perturbation from trim of
-alpha, beta, p, q, r and airspeed in units of ``LINEAR_RANGE``, w = 1 for d <= 1,
-2 - d for 1 < d < 2, 0 beyond (the flight's truth values, not the measured ones). At
-termination the information gathered is forfeit with the penalty: a terminated episode
-returns exactly -penalty. ``reward="information"``: every sample with w = 1, and at
-termination -penalty only (a policy can raise it by leaving the linear range).
-``reward="accuracy"``: every sample with w = 1; the return so far is ``ACCURACY_SCALE`` x
-(1 - mean over the targets of min(|estimate - truth| / |truth|, 1)), 0 at reset, and a
-step's reward its increase; forfeit at termination as under the default.
-
-Speed
------
-A step reads from JSBSim only the observed channels and the target coefficients (the
-flight core's lean ``Simulation.stepper``) and keeps no sample: ``record()`` flies the
-episode again from its actions, bit for bit the same flight (tested). The per-decision
-work after the read (measured vector, regressors, weight, information update, bounds and
-estimate) is one compiled call (``kernels.decide``).
-
-Termination
------------
-At the envelope limits ``LIMITS`` (alpha, bank, load factor, airspeed, altitude loss) or
-on the flight core's DepartureError: terminated, reward - ``penalty`` (and - the return
-gathered so far under "valid-information" and "accuracy"). Truncated at the episode length.
-
-Every option and reset argument is checked before anything changes; a bad one raises a
-ValueError naming it.
+Spaces, rewards (``valid-information``, ``information``, ``accuracy``), the ``info`` keys,
+termination and measured throughput: docs/gym.md. Every option and reset argument is
+checked before anything changes; a bad one raises a ValueError naming it.
 """
 
 from __future__ import annotations

@@ -15,7 +15,18 @@ from flightid.scenarios.gym.options import SIGMA
 def regression_designs(spec: Sequence[tuple[str, tuple[str, ...]]]
              ) -> tuple[list[int], list[tuple[tuple[str, ...], float]]]:
     """(each coefficient's design, the designs): a design is (variables, residual std);
-    coefficients with the same one share an information matrix."""
+    coefficients with the same one share an information matrix.
+
+    Parameters
+    ----------
+    spec : Sequence[tuple[str, tuple[str, ...]]]
+        Per coefficient, (coefficient name, its regressor variables).
+
+    Returns
+    -------
+    tuple[list[int], list[tuple[tuple[str, ...], float]]]
+        (design index per coefficient, the distinct designs).
+    """
     keys = [(v, SIGMA[c]) for c, v in spec]
     unique = list(dict.fromkeys(keys))
     return [unique.index(k) for k in keys], unique

@@ -77,7 +77,42 @@ def pack(design: np.ndarray, slot_idx: np.ndarray, range_idx: np.ndarray, places
          w_design: np.ndarray, count: np.ndarray, w_coef: np.ndarray, slot_par: np.ndarray,
          range_par: np.ndarray, m: int, i_speed: int, n_obs: int, weighted: bool
          ) -> tuple[np.ndarray, np.ndarray]:
-    """``decide``'s (layout, par) from its parts (see ``decide``)."""
+    """``decide``'s (layout, par) from its parts (see ``decide``).
+
+    Parameters
+    ----------
+    design : numpy.ndarray
+        Per coefficient, its design index; shape (G,).
+    slot_idx : numpy.ndarray
+        Per design and regressor slot, its entry in the measured vector; shape (D, k - 1).
+    range_idx : numpy.ndarray
+        Per linear-range variable, its entry in the flight core's values; shape (R,).
+    places : numpy.ndarray
+        Per target, (design, slot, coefficient); shape (T, 3).
+    w_design : numpy.ndarray
+        Per design, w = 1 / sigma^2; shape (D,).
+    count : numpy.ndarray
+        Per design, how many coefficients share it; shape (D,).
+    w_coef : numpy.ndarray
+        Per coefficient, 1 / sigma^2; shape (G,).
+    slot_par : numpy.ndarray
+        Per slot, (trim value, scaling, scaling x V); shape (D, k - 1, 3).
+    range_par : numpy.ndarray
+        Per linear-range variable, (trim value, 1 / range); shape (R, 2).
+    m : int
+        Length of the measured vector (observation, then y).
+    i_speed : int
+        Entry of the airspeed in the measured vector.
+    n_obs : int
+        Length of the observation.
+    weighted : bool
+        Weight samples by the linear range.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray]
+        (layout, par): int64 header and indices, float parameters.
+    """
     d, k1 = slot_idx.shape
     head = [d, k1 + 1, len(design), len(places), len(range_idx), m, i_speed, n_obs,
             int(weighted)]

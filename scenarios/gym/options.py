@@ -8,12 +8,13 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.units import G0
 
 OBS_CHANNELS = ("t", "V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az",
                 "de", "da", "dr", "h")
-CONTROLS = ("de", "da", "dr")
+CONTROLS = CONTROL_SURFACES
 # |value| bounds of the observation space (far outside the envelope, which ends episodes)
 OBS_BOUNDS = {"V": 400.0, "alpha": math.pi, "beta": math.pi, "p": 20.0, "q": 20.0, "r": 20.0,
               "phi": math.pi, "theta": math.pi, "ax": 200.0, "ay": 200.0, "az": 200.0,
@@ -62,7 +63,17 @@ LIGHT = {"turbulence": "milspec", "windspeed_20ft_m_s": 15 * 0.514444, "severity
 
 
 def check_one_of(option: str, value: Any, choices: Sequence[str]) -> None:
-    """A ValueError naming ``option`` unless ``value`` is one of the strings ``choices``."""
+    """A ValueError naming ``option`` unless ``value`` is one of the strings ``choices``.
+
+    Parameters
+    ----------
+    option : str
+        Option name for the error.
+    value : Any
+        The given value.
+    choices : Sequence[str]
+        The allowed strings.
+    """
     if not isinstance(value, str) or value not in choices:
         raise ValueError(f"{option} must be one of {', '.join(map(repr, choices))}; "
                          f"got {value!r}")
@@ -70,7 +81,24 @@ def check_one_of(option: str, value: Any, choices: Sequence[str]) -> None:
 
 def check_positive(option: str, value: Any, most: float = math.inf, zero: bool = False) -> float:
     """``value`` as a finite float in (0, most] ([0, most] with ``zero``), or a ValueError
-    naming ``option``."""
+    naming ``option``.
+
+    Parameters
+    ----------
+    option : str
+        Option name for the error.
+    value : Any
+        The given value.
+    most : float, optional
+        Upper bound (inclusive). Default infinity.
+    zero : bool, optional
+        Allow 0. Default False.
+
+    Returns
+    -------
+    float
+        The value.
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -83,7 +111,18 @@ def check_positive(option: str, value: Any, most: float = math.inf, zero: bool =
 
 
 def check_condition(condition: Sequence[float] | None) -> FlightCondition:
-    """(altitude m, true airspeed m/s) as a FlightCondition; None: ``DEFAULT_CONDITION``."""
+    """(altitude m, true airspeed m/s) as a FlightCondition; None: ``DEFAULT_CONDITION``.
+
+    Parameters
+    ----------
+    condition : Sequence[float] or None
+        (altitude m >= 0, true airspeed m/s > 0), or None.
+
+    Returns
+    -------
+    FlightCondition
+        The condition.
+    """
     if condition is None:
         return FlightCondition(*DEFAULT_CONDITION)
     try:
@@ -97,7 +136,18 @@ def check_condition(condition: Sequence[float] | None) -> FlightCondition:
 
 
 def check_targets(targets: str | Sequence[str]) -> tuple[str, ...]:
-    """The target derivatives: a preset's or the given names, checked."""
+    """The target derivatives: a preset's or the given names, checked.
+
+    Parameters
+    ----------
+    targets : str or Sequence[str]
+        A preset name (``PRESETS``) or distinct derivative names ``C{l,m,n,X,Y,Z}_<variable>``.
+
+    Returns
+    -------
+    tuple[str, ...]
+        The target derivative names.
+    """
     if isinstance(targets, str):
         check_one_of("targets", targets, tuple(PRESETS))
         return PRESETS[targets]

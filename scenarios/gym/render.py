@@ -14,7 +14,24 @@ def render_episode(obs: np.ndarray, act: np.ndarray, aircraft: str, logdet: floa
     """An RGB image (height x width x 3, uint8) of an episode: the actions (-1..1), the
     rates p, q, r (deg/s) and the angles alpha, beta, phi (deg) against time (s), from the
     observations ``obs`` (rows of ``OBS_CHANNELS``) and actions ``act`` (rows of de, da,
-    dr), titled with the aircraft and the log det of the information gathered."""
+    dr), titled with the aircraft and the log det of the information gathered.
+
+    Parameters
+    ----------
+    obs : numpy.ndarray
+        Observations, rows of ``OBS_CHANNELS`` (time first, s); shape (n, len(OBS_CHANNELS)).
+    act : numpy.ndarray
+        Normalised actions (de, da, dr); shape (n, 3).
+    aircraft : str
+        Aircraft name for the title.
+    logdet : float
+        Log det of the targets' information, for the title.
+
+    Returns
+    -------
+    numpy.ndarray
+        RGB image, uint8; shape (height, width, 3).
+    """
     fig = Figure(figsize=(6.4, 4.8), dpi=80)
     canvas = FigureCanvasAgg(fig)
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)

@@ -114,7 +114,18 @@ def _title(description: Study | dict[str, Any]) -> str:
 
 
 def rebuild_report(study_dir: str | Path) -> tuple[Path, Summary]:
-    """Rebuild STUDY/report.html from the stored rows (all of them)."""
+    """Rebuild STUDY/report.html from the stored rows (all of them).
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder STUDY.
+
+    Returns
+    -------
+    tuple[Path, Summary]
+        The report's path and the summary.
+    """
     stored = store.read_description(study_dir)
     df = load(study_dir, SUMMARY_COLUMNS)
     summary = summarize(df)

@@ -19,7 +19,26 @@ def card_with_overrides(card: str | Path, study_dir: str | Path,
     """``card`` (a library name or a file) unchanged without overrides; else the path of
     ``study_dir/card.toml``, the card with ``flightid.scenarios.cards.override``'s changes,
     validated, and written only when its text differs. Raises CardError or ValueError
-    naming the override."""
+    naming the override.
+
+    Parameters
+    ----------
+    card : str or Path
+        Library card name or card file.
+    study_dir : str or Path
+        The study folder.
+    assignments : Sequence[str], optional
+        ``KEY=VALUE`` overrides.
+    turbulence : str or None, optional
+        ``none``, ``light`` or ``moderate``.
+    sensors : str or None, optional
+        A built-in sensor suite.
+
+    Returns
+    -------
+    str
+        The card to fly: ``card`` or the written card's path.
+    """
     if not assignments and turbulence is None and sensors is None:
         return str(card)
     base = load_card(card)

@@ -81,7 +81,19 @@ class Dispersion:
 
 
 def parse(text: str) -> Dispersion:
-    """A dispersion from its spec string; errors name what is wrong."""
+    """A dispersion from its spec string; errors name what is wrong.
+
+    Parameters
+    ----------
+    text : str
+        ``EFFECT[OPTION=VALUE][.PARAMETER]:WIDTH[:normal|uniform]``, e.g.
+        ``mass_scale:0.05``.
+
+    Returns
+    -------
+    Dispersion
+        The dispersion.
+    """
     m = _SPEC.match(str(text))
     if not m:
         raise ValueError(f"dispersion {text!r}: expected EFFECT[OPTION=VALUE][.PARAMETER]:"
@@ -142,7 +154,18 @@ def _options(text: str, body: str) -> tuple[tuple[str, str], ...]:
 
 
 def parse_all(texts: Iterable[str]) -> tuple[Dispersion, ...]:
-    """Several dispersions; the same parameter twice is an error."""
+    """Several dispersions; the same parameter twice is an error.
+
+    Parameters
+    ----------
+    texts : Iterable[str]
+        Spec strings, as in :func:`parse`.
+
+    Returns
+    -------
+    tuple[Dispersion, ...]
+        The dispersions, in order.
+    """
     out = tuple(parse(t) for t in texts)
     keys = [d.key for d in out]
     twice = sorted({k for k in keys if keys.count(k) > 1})
@@ -152,7 +175,20 @@ def parse_all(texts: Iterable[str]) -> tuple[Dispersion, ...]:
 
 
 def draw(dispersions: Sequence[Dispersion], seed: int) -> dict[str, float]:
-    """The drawn value of each dispersion (by key) for a realization's ``seed``."""
+    """The drawn value of each dispersion (by key) for a realization's ``seed``.
+
+    Parameters
+    ----------
+    dispersions : Sequence[Dispersion]
+        The dispersions.
+    seed : int
+        The realization's seed.
+
+    Returns
+    -------
+    dict[str, float]
+        Dispersion key -> drawn value, in the parameter's unit.
+    """
     rng = np.random.default_rng(sub_seed(seed, "disperse"))
     return {d.key: d.draw(rng) for d in dispersions}
 
@@ -161,7 +197,22 @@ def dispersed_card(card: Card, dispersions: Sequence[Dispersion],
                    values: Mapping[str, float]) -> Card:
     """``card`` with the drawn ``values``: airframe and actuator effects added to its
     augmentation (one effect per effect and options, undispersed parameters neutral),
-    sensor effects put first in their channel's chain."""
+    sensor effects put first in their channel's chain.
+
+    Parameters
+    ----------
+    card : Card
+        The flight card.
+    dispersions : Sequence[Dispersion]
+        The dispersions.
+    values : Mapping[str, float]
+        Their drawn values by key.
+
+    Returns
+    -------
+    Card
+        The changed card.
+    """
     groups: dict[str, list[Dispersion]] = {}
     for d in dispersions:
         groups.setdefault(d.group, []).append(d)

@@ -91,7 +91,27 @@ def run_local(description: Any, indices: Iterable[int], on_result: OnResult,
     CPU). Workers start from a clean process (forkserver), never a fork of this one.
     ``store_in``: each worker writes its realizations to this study folder
     (``store.write_realization``) and ``on_result`` is not called (Monte Carlo studies
-    only). ``task``: what each index runs (default ``run_realization`` of a ``Study``)."""
+    only). ``task``: what each index runs (default ``run_realization`` of a ``Study``).
+
+    Parameters
+    ----------
+    description : Any
+        What ``task`` takes (a ``Study`` by default).
+    indices : Iterable[int]
+        Realization indices to run.
+    on_result : OnResult
+        ``on_result(index, rows)`` for each finished index.
+    workers : int or None, optional
+        Worker processes; None uses one per CPU.
+    progress : Progress or None, optional
+        ``progress(done, total)``.
+    window : int or None, optional
+        Indices in flight at a time; None uses twice ``workers``.
+    store_in : str or Path or None, optional
+        Study folder the workers write to.
+    task : Task, optional
+        ``task(description, index)`` -> rows.
+    """
     todo = list(indices)
     workers = max(1, int(workers or os.cpu_count() or 1))
     window = max(1, int(window or 2 * workers))
@@ -141,7 +161,20 @@ def run_local(description: Any, indices: Iterable[int], on_result: OnResult,
 def dask_client(address: str | None = None, scheduler_file: str | None = None
                 ) -> distributed.Client:
     """A client of the Dask scheduler at ``address`` (e.g. tcp://host:8786) or described
-    by ``scheduler_file`` (as written by ``dask scheduler --scheduler-file``)."""
+    by ``scheduler_file`` (as written by ``dask scheduler --scheduler-file``).
+
+    Parameters
+    ----------
+    address : str or None, optional
+        Scheduler address.
+    scheduler_file : str or None, optional
+        Scheduler file; give exactly one of the two.
+
+    Returns
+    -------
+    distributed.Client
+        The connected client.
+    """
     if (address is None) == (scheduler_file is None):
         raise ValueError("give a Dask scheduler address or a scheduler file (one of them)")
     where = f"--dask-scheduler-file {scheduler_file}" if scheduler_file is not None \
@@ -170,7 +203,27 @@ def run_dask(description: Any, indices: Iterable[int], on_result: OnResult,
     """Run the realizations ``indices`` on the workers of a Dask ``client`` (flightid
     must be installed on them); at most ``window`` (default: twice the worker threads)
     are submitted at a time. ``task`` as for ``run_local``; ``key``: the prefix of the
-    Dask task keys (default: from a ``Study``'s card)."""
+    Dask task keys (default: from a ``Study``'s card).
+
+    Parameters
+    ----------
+    description : Any
+        What ``task`` takes (a ``Study`` by default).
+    indices : Iterable[int]
+        Realization indices to run.
+    on_result : OnResult
+        ``on_result(index, rows)`` for each finished index.
+    client : distributed.Client
+        The Dask client.
+    progress : Progress or None, optional
+        ``progress(done, total)``.
+    window : int or None, optional
+        Tasks submitted at a time.
+    task : Task, optional
+        ``task(description, index)`` -> rows.
+    key : str or None, optional
+        Prefix of the Dask task keys.
+    """
     todo = list(indices)
     total, finished = len(todo), 0
     _report(progress, 0, total)

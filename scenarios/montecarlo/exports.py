@@ -17,7 +17,20 @@ def _text(v: object) -> str:
 
 
 def markdown_table(df: pd.DataFrame, index: bool = True) -> str:
-    """``df`` as a Markdown table (the index as the first column when ``index``)."""
+    """``df`` as a Markdown table (the index as the first column when ``index``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    index : bool, optional
+        Include the index. Default True.
+
+    Returns
+    -------
+    str
+        Markdown text.
+    """
     frame = df.reset_index() if index else df
     head = [str(c) for c in frame.columns]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -27,14 +40,42 @@ def markdown_table(df: pd.DataFrame, index: bool = True) -> str:
 
 
 def latex_table(df: pd.DataFrame, index: bool = True) -> str:
-    """``df`` as a LaTeX ``tabular`` (booktabs), underscores and percent signs escaped."""
+    """``df`` as a LaTeX ``tabular`` (booktabs), underscores and percent signs escaped.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    index : bool, optional
+        Include the index. Default True.
+
+    Returns
+    -------
+    str
+        LaTeX text.
+    """
     frame = df.reset_index() if index else df
     frame = frame.map(_text)
     return frame.to_latex(index=False, escape=True)
 
 
 def write_tables(df: pd.DataFrame, stem: str | Path, index: bool = True) -> list[Path]:
-    """Write ``stem``.md and ``stem``.tex (``markdown_table``, ``latex_table``); their paths."""
+    """Write ``stem``.md and ``stem``.tex (``markdown_table``, ``latex_table``); their paths.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    stem : str or Path
+        Output path; its suffix is replaced.
+    index : bool, optional
+        Include the index. Default True.
+
+    Returns
+    -------
+    list[Path]
+        The .md and .tex paths.
+    """
     stem = Path(stem)
     md, tex = stem.with_suffix(".md"), stem.with_suffix(".tex")
     md.write_text(markdown_table(df, index), encoding="utf-8")

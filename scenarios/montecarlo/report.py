@@ -32,14 +32,42 @@ _DENSITY_UNIT = {"1/rad": "rad", "1": "1"}
 
 
 def histogram_name(derivative: str) -> str:
-    """The file name of a derivative's histogram beside the report."""
+    """The file name of a derivative's histogram beside the report.
+
+    Parameters
+    ----------
+    derivative : str
+        Derivative name.
+
+    Returns
+    -------
+    str
+        File name, characters outside ``[A-Za-z0-9_.-]`` replaced by ``_``.
+    """
     return f"histogram-{re.sub(r'[^A-Za-z0-9_.-]', '_', derivative)}.png"
 
 
 def histogram(name: str, values: np.ndarray, truth: float, bound: float) -> Figure:
     """The histogram (as a density) of ``values``, the estimates of derivative ``name``,
     with the truth and N(truth, bound); the x axis in the derivative's unit
-    (``derivatives.unit``), the y axis in its inverse."""
+    (``derivatives.unit``), the y axis in its inverse.
+
+    Parameters
+    ----------
+    name : str
+        Derivative name.
+    values : numpy.ndarray
+        Its estimates, in its unit; shape (n,).
+    truth : float
+        True value.
+    bound : float
+        Mean reported standard error; the normal curve is drawn when finite and > 0.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     u = unit(name)
     # fixed margins: a constrained layout draws every figure twice (half the report's time)
     fig = Figure(figsize=(4.2, 3.0), dpi=100)
@@ -73,7 +101,24 @@ def _cell(v: object) -> str:
 def render(df: pd.DataFrame, summary: Summary, title: str,
            pngs: dict[str, bytes] | None = None) -> str:
     """The report as HTML text; ``pngs``: each derivative's histogram (``histograms``),
-    drawn here when not given."""
+    drawn here when not given.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The study's rows.
+    summary : Summary
+        The study's summary.
+    title : str
+        Report title.
+    pngs : dict[str, bytes] or None, optional
+        Derivative -> histogram PNG; None draws them.
+
+    Returns
+    -------
+    str
+        HTML text.
+    """
     head = ["derivative", "truth", "estimated", "mean", "bias", "scatter", "mean bound",
             "scatter/bound", "coverage of the 95 % intervals",
             "its 95 % interval (Clopper-Pearson)", "unidentifiable", "failures"]
@@ -105,7 +150,20 @@ def render(df: pd.DataFrame, summary: Summary, title: str,
 
 
 def histograms(df: pd.DataFrame, summary: Summary) -> dict[str, bytes]:
-    """Each estimated derivative's histogram (``histogram``) as PNG bytes."""
+    """Each estimated derivative's histogram (``histogram``) as PNG bytes.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The study's rows.
+    summary : Summary
+        The study's summary.
+
+    Returns
+    -------
+    dict[str, bytes]
+        Derivative name -> PNG bytes.
+    """
     est = df[df["status"] == STATUS_ESTIMATED]
     out = {}
     for r in summary.rows:
@@ -121,7 +179,24 @@ def write_report(study_dir: str | Path, df: pd.DataFrame, summary: Summary,
                  title: str = "Monte Carlo study") -> Path:
     """Write STUDY/report.html, each histogram beside it (``histogram_name``) and the
     summary's rows as STUDY/summary.csv, .md and .tex (the columns of ``Summary.frame``);
-    return the report's path."""
+    return the report's path.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder STUDY.
+    df : pandas.DataFrame
+        The study's rows.
+    summary : Summary
+        The study's summary.
+    title : str, optional
+        Report title.
+
+    Returns
+    -------
+    Path
+        The report's path.
+    """
     if summary.rows:
         summary.frame().to_csv(Path(study_dir) / CSV)
         write_tables(summary.frame(), Path(study_dir) / CSV)

@@ -37,7 +37,13 @@ class StudyMismatch(ValueError):
 
 
 def versions() -> dict[str, str]:
-    """The versions that produced a study (flightid, jsbsim, numpy, python)."""
+    """The versions that produced a study (flightid, jsbsim, numpy, python).
+
+    Returns
+    -------
+    dict[str, str]
+        Package -> version ("unknown" if not installed).
+    """
     out = {}
     for name in ("flightid", "jsbsim", "numpy"):
         try:
@@ -49,6 +55,20 @@ def versions() -> dict[str, str]:
 
 
 def result_path(study_dir: str | Path, index: int) -> Path:
+    """Where a study keeps one realization's result.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study's folder.
+    index : int
+        The realization's index.
+
+    Returns
+    -------
+    Path
+        The result's file below the study's results folder.
+    """
     return Path(study_dir) / RESULTS / f"{_PREFIX}{int(index):06d}{_SUFFIX}"
 
 
@@ -57,16 +77,31 @@ def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
     identity (the card's content hash, method, model, options, base seed, dispersions;
     not the card's path, kept for information; n may differ: a larger n extends it).
     Raises StudyMismatch naming each difference. Returns the stored description
-    document."""
+    document.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder STUDY.
+    description : Study
+        The study.
+
+    Returns
+    -------
+    dict[str, Any]
+        The stored description document.
+    """
     root = Path(study_dir)
     path = root / DESCRIPTION
     identity = description.identity()
     if path.exists():
         stored = _read_json(path)
         old = stored["identity"]
-        diffs = [f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}"
-                 for k in sorted(set(old) | set(identity))
-                 if k not in INFORMATION_ONLY and old.get(k) != identity.get(k)]
+        keys = [k for k in sorted(set(old) | set(identity))
+                if k not in INFORMATION_ONLY and old.get(k) != identity.get(k)]
+        diffs = [f"{k}: not stored, asked {identity[k]!r} (a study of an earlier flightid, "
+                 "whose rows were identified without it)" if k not in old else
+                 f"{k}: stored {old.get(k)!r}, asked {identity.get(k)!r}" for k in keys]
         if diffs:
             raise StudyMismatch(f"{root} holds another study ({'; '.join(diffs)}); "
                                 "use another folder or the stored description")
@@ -82,7 +117,18 @@ def open_study(study_dir: str | Path, description: Study) -> dict[str, Any]:
 
 
 def read_description(study_dir: str | Path) -> dict[str, Any]:
-    """The stored study.json of ``study_dir``."""
+    """The stored study.json of ``study_dir``.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder.
+
+    Returns
+    -------
+    dict[str, Any]
+        The description document.
+    """
     path = Path(study_dir) / DESCRIPTION
     if not path.exists():
         raise FileNotFoundError(f"{study_dir}: not a Monte Carlo study (no {DESCRIPTION})")
@@ -112,7 +158,18 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
 
 def frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
     """Result rows as a DataFrame with the study's columns and dtypes; any other key of
-    the rows (the drawn dispersions, ``disperse:<parameter>``) follows as a float column."""
+    the rows (the drawn dispersions, ``disperse:<parameter>``) follows as a float column.
+
+    Parameters
+    ----------
+    rows : Iterable[dict[str, Any]]
+        Result rows.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per input row.
+    """
     rows = list(rows)
     extra = sorted({k for r in rows for k in r} - set(COLUMNS))
     df = pd.DataFrame(rows, columns=[*COLUMNS, *extra])
@@ -122,7 +179,22 @@ def frame(rows: Iterable[dict[str, Any]]) -> pd.DataFrame:
 
 
 def write_realization(study_dir: str | Path, index: int, rows: list[dict[str, Any]]) -> Path:
-    """Store one realization's rows (atomically: a reader sees all of them or none)."""
+    """Store one realization's rows (atomically: a reader sees all of them or none).
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder.
+    index : int
+        Realization index.
+    rows : list[dict[str, Any]]
+        Its rows.
+
+    Returns
+    -------
+    Path
+        The written Parquet file.
+    """
     path = result_path(study_dir, index)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -132,7 +204,18 @@ def write_realization(study_dir: str | Path, index: int, rows: list[dict[str, An
 
 
 def done(study_dir: str | Path) -> set[int]:
-    """The indices of the realizations already stored in ``study_dir``."""
+    """The indices of the realizations already stored in ``study_dir``.
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder.
+
+    Returns
+    -------
+    set[int]
+        Stored realization indices.
+    """
     folder = Path(study_dir) / RESULTS
     if not folder.is_dir():
         return set()
@@ -149,10 +232,22 @@ def done(study_dir: str | Path) -> set[int]:
 def load(study_dir: str | Path, columns: Sequence[str] | None = None) -> pd.DataFrame:
     """Every stored row of the study, sorted by realization index and derivative name.
 
-    ``columns``: only these, their strings as categories (the summary and the report read
-    ``SUMMARY_COLUMNS``), else every column any realization has (the dispersions drawn).
-    Read as Arrow tables, one DataFrame at the end: 10,000 realizations in 8 s instead of
-    53 s with one DataFrame per file (docs/montecarlo.md).
+    Read as Arrow tables and concatenated once: 10,000 realizations load in 8 s (53 s with
+    one DataFrame per file; docs/montecarlo.md).
+
+    Parameters
+    ----------
+    study_dir : str or Path
+        The study folder.
+    columns : Sequence[str] or None, optional
+        Columns to read, their strings as categories (the summary and the report read
+        ``SUMMARY_COLUMNS``); None reads every column any realization has (the
+        dispersions drawn).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows.
     """
     files = sorted((Path(study_dir) / RESULTS).glob(f"{_PREFIX}*{_SUFFIX}"))
     if not files:

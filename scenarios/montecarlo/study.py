@@ -98,7 +98,18 @@ def dry_run(description: Study) -> Card:
     seed in 0..2**32-1, the method, model and options (``registry``), the dispersions,
     and one realization's trim (the card with every dispersion at its neutral value at the
     card's condition). Raises ValueError (CardError) for a bad description, TrimError when
-    the card cannot be trimmed: nothing of the study is written before."""
+    the card cannot be trimmed: nothing of the study is written before.
+
+    Parameters
+    ----------
+    description : Study
+        The study.
+
+    Returns
+    -------
+    Card
+        The study's card.
+    """
     if isinstance(description.n, bool) or int(description.n) < 1:
         raise ValueError(f"n must be at least 1, got {description.n}")
     if description.seed is not None and not 0 <= int(description.seed) <= MAX_SEED:
@@ -127,7 +138,20 @@ def run_realization(description: Study, index: int) -> list[dict[str, Any]]:
     """Fly, identify and score realization ``index``: one row per scored derivative
     (columns ``COLUMNS``), or one row with status 'failed' and the reason (the flight
     departed or could not be trimmed, the method refused the record, the fit did not
-    converge). Never empty."""
+    converge). Never empty.
+
+    Parameters
+    ----------
+    description : Study
+        The study.
+    index : int
+        Realization index.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        The rows.
+    """
     with threadpool_limits(1):  # one BLAS thread: the parallelism is the realizations
         return _realization(description, index)
 

@@ -19,7 +19,18 @@ from flightid.scenarios.montecarlo.summary import summarize
 
 
 def study_names(dirs: Sequence[str | Path]) -> list[str]:
-    """A short name per study: its folder's name, with its parent's where two clash."""
+    """A short name per study: its folder's name, with its parent's where two clash.
+
+    Parameters
+    ----------
+    dirs : Sequence[str or Path]
+        Study folders.
+
+    Returns
+    -------
+    list[str]
+        One name per folder, in order.
+    """
     names = [Path(d).resolve().name for d in dirs]
     return [f"{Path(d).resolve().parent.name}/{n}" if names.count(n) > 1 else n
             for d, n in zip(dirs, names, strict=True)]
@@ -28,7 +39,18 @@ def study_names(dirs: Sequence[str | Path]) -> list[str]:
 def compare_studies(dirs: Sequence[str | Path]) -> Comparison:
     """The studies in ``dirs`` (two or more, each a folder holding study.json and rows) as
     a Comparison, one result per study in the given order; costs not known to a study
-    (flight and input time, energy, peak) are NaN."""
+    (flight and input time, energy, peak) are NaN.
+
+    Parameters
+    ----------
+    dirs : Sequence[str or Path]
+        Two or more study folders.
+
+    Returns
+    -------
+    Comparison
+        One result per study, named by :func:`study_names`.
+    """
     if len(dirs) < 2:
         raise ValueError("study-compare needs two or more study folders")
     descriptions = [read_description(d)["description"] for d in dirs]
@@ -49,7 +71,18 @@ def compare_studies(dirs: Sequence[str | Path]) -> Comparison:
 def against_first(comparison: Comparison) -> dict[str, Any]:
     """Every other study against the first: per-derivative scatter ratios with intervals
     (``Comparison.scatter_ratios``) and the mean scatter / |truth| ratio with its paired
-    interval (``Comparison.mean_relative_scatter``)."""
+    interval (``Comparison.mean_relative_scatter``).
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The studies, first one the base.
+
+    Returns
+    -------
+    dict[str, Any]
+        Study name -> {"ratios", "mean_relative_scatter"}.
+    """
     kinds = [r.kind for r in comparison.results]
     base = kinds[0]
     return {k: {"ratios": comparison.scatter_ratios(k, base),

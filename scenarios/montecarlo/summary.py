@@ -58,7 +58,20 @@ class DerivativeSummary:
 
 def coverage_warning(covered: int, n: int) -> str:
     """The warning of a coverage of ``covered`` in ``n`` outside the ``BAND_LEVEL`` band of
-    ``NOMINAL`` (``intervals.binomial_band``); "" inside it or for n = 0."""
+    ``NOMINAL`` (``intervals.binomial_band``); "" inside it or for n = 0.
+
+    Parameters
+    ----------
+    covered : int
+        Intervals that held the truth.
+    n : int
+        Intervals.
+
+    Returns
+    -------
+    str
+        The warning, or "".
+    """
     if n <= 0:
         return ""
     low, high = binomial_band(n, NOMINAL, BAND_LEVEL)
@@ -106,7 +119,18 @@ class Summary:
 
 
 def summarize(df: pd.DataFrame) -> Summary:
-    """The Summary of a study's rows (``store.load``)."""
+    """The Summary of a study's rows (``store.load``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The study's rows.
+
+    Returns
+    -------
+    Summary
+        Realizations, failures and per-derivative statistics.
+    """
     if df.empty:
         return Summary(0, 0)
     realizations = int(df["index"].nunique())

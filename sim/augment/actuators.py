@@ -42,10 +42,22 @@ def _number(text: str | None, default: float) -> float:
 
 
 def actuator_chains(aircraft: str) -> dict[str, list[Actuator]]:
-    """Per surface (``de``, ``da``, ``dr``): the ``<actuator>`` elements writing its position
-    in ``aircraft``'s XML (a project name, stock JSBSim name or XML path), in series from
-    the command to the position; [] for a surface without one (or an FCS kept in a
-    separate systems file)."""
+    """Per surface, the ``<actuator>`` elements writing its position in the aircraft's XML.
+
+    In series from the command to the position; [] for a surface without one (or an FCS kept
+    in a separate systems file).
+
+    Parameters
+    ----------
+    aircraft : str
+        A project name, stock JSBSim name or XML path.
+
+    Returns
+    -------
+    dict of str to list of Actuator
+        Chain by surface (``de``, ``da``, ``dr``); each Actuator's lag time constant (s) and
+        rate limit (rad/s).
+    """
     _, xml, _ = locate(aircraft)
     root = ET.parse(xml).getroot()
     writers = {}
@@ -70,7 +82,18 @@ def actuator_chains(aircraft: str) -> dict[str, list[Actuator]]:
 
 
 def actuator_lags(aircraft: str) -> dict[str, float]:
-    """Per surface (``de``, ``da``, ``dr``): the time constant (s) of the actuator lags
-    writing its position in ``aircraft``'s XML (``actuator_chains``; lags in series add);
-    0 for a surface without one."""
+    """Per surface, the time constant of the actuator lags writing its position.
+
+    Taken from :func:`actuator_chains`; lags in series add.
+
+    Parameters
+    ----------
+    aircraft : str
+        A project name, stock JSBSim name or XML path.
+
+    Returns
+    -------
+    dict of str to float
+        Time constant (s) by surface (``de``, ``da``, ``dr``); 0 for a surface without one.
+    """
     return {s: sum((a.tau for a in chain), 0.0) for s, chain in actuator_chains(aircraft).items()}

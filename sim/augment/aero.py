@@ -82,6 +82,16 @@ def _targets(axes: str, coef: str, force: str, moment: str) -> list[tuple[str, s
 
 
 def derivative_delta(doc: Document, e: DerivativeDelta) -> None:
+    """Add a constant delta to one derivative: a term ``delta x variable`` (``x abs(variable)``
+    for the even form) on the coefficient's axis.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : DerivativeDelta
+        The effect: the derivative, its axes and the delta (per rad).
+    """
     form = " x abs(variable)" if e.form == "even" else ""
     _derivative_term(doc, e.derivative, e.axes, lambda s: [val_el(s * e.delta)],
                      f"derivative_delta {e.derivative} {e.delta:+.6g} per rad{form}",
@@ -93,6 +103,18 @@ SCHEDULE_PROPERTY = {"airspeed": ("velocities/vt-fps", FT_PER_M), "alpha": ("aer
 
 
 def derivative_table(doc: Document, e: DerivativeTable) -> None:
+    """Add a delta to one derivative that changes with airspeed or alpha: a JSBSim ``<table>``
+    of the property ``SCHEDULE_PROPERTY`` names, through (``low``, ``delta_low``) and
+    (``high``, ``delta_high``), held constant beyond them.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : DerivativeTable
+        The effect: the derivative, the schedule (airspeed in m/s or alpha in rad) and the
+        deltas (per rad) at its two points.
+    """
     prop, scale = SCHEDULE_PROPERTY[e.schedule]
 
     def table(s: float) -> list[ET.Element]:
@@ -147,6 +169,20 @@ def _mentions(el: ET.Element, words: set[str], keyword: str) -> bool:
 
 
 def control_effectiveness(doc: Document, e: ControlEffectiveness) -> None:
+    """Scale every aerodynamic term that reads a surface's deflection by a factor.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : ControlEffectiveness
+        The effect: the surface (``de``, ``da``, ``dr``) and the factor (dimensionless).
+
+    Raises
+    ------
+    AugmentError
+        When no aerodynamic term reads the surface.
+    """
     keyword = MASS_KEYWORD[e.surface]
     aero = doc.aero()
     helpers = {f.get("name", "") for f in aero.findall("function")
@@ -182,6 +218,21 @@ def _reads_any(el: ET.Element, props: set[str]) -> bool:
 
 
 def tail_ice(doc: Document, e: TailIce) -> None:
+    """Horizontal-tail ice: scale the pitching-moment terms that read the elevator, alpha
+    (``stability``) and pitch rate or alphadot (``damping``) by the effect's factors.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : TailIce
+        The effect: the ``elevator``, ``stability`` and ``damping`` factors (dimensionless).
+
+    Raises
+    ------
+    AugmentError
+        When no pitching-moment term reads any of them.
+    """
     aero = doc.aero()
     helpers = aero.findall("function")
     reads: dict[str, set[str]] = {}

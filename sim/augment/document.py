@@ -28,6 +28,18 @@ class AugmentError(ValueError):
 
 
 def parse_xml(path: Path) -> ET.ElementTree:
+    """A JSBSim XML file parsed with its comments kept.
+
+    Parameters
+    ----------
+    path : Path
+        The XML file.
+
+    Returns
+    -------
+    ElementTree
+        The parsed tree.
+    """
     parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
     return ET.parse(path, parser)
 
@@ -109,6 +121,24 @@ class Document:
 
 
 def xml_el(tag: str, *children: ET.Element, text: str | None = None, **attrs: str) -> ET.Element:
+    """An XML element.
+
+    Parameters
+    ----------
+    tag : str
+        The element's tag.
+    *children : Element
+        Its children, in order.
+    text : str or None
+        Its text.
+    **attrs : str
+        Its attributes.
+
+    Returns
+    -------
+    Element
+        The element.
+    """
     e = ET.Element(tag, attrs)
     e.text = text
     e.extend(children)
@@ -116,14 +146,50 @@ def xml_el(tag: str, *children: ET.Element, text: str | None = None, **attrs: st
 
 
 def prop_el(p: str) -> ET.Element:
+    """A JSBSim ``<property>`` element.
+
+    Parameters
+    ----------
+    p : str
+        The property's name (``aero/alpha-rad``).
+
+    Returns
+    -------
+    Element
+        The element.
+    """
     return xml_el("property", text=p)
 
 
 def val_el(v: float) -> ET.Element:
+    """A JSBSim ``<value>`` element holding a number exactly (``repr``).
+
+    Parameters
+    ----------
+    v : float
+        The number.
+
+    Returns
+    -------
+    Element
+        The element.
+    """
     return xml_el("value", text=repr(float(v)))
 
 
 def trig_el(kind: str) -> ET.Element:
+    """A JSBSim trigonometric function of alpha (``<sin>``, ``<cos>``, ...).
+
+    Parameters
+    ----------
+    kind : str
+        The function's tag.
+
+    Returns
+    -------
+    Element
+        The element, reading ``aero/alpha-rad``.
+    """
     return xml_el(kind, prop_el("aero/alpha-rad"))
 
 

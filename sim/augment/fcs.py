@@ -90,6 +90,18 @@ def _positions(doc: Document, surface: str) -> list[tuple[str, float]]:
 
 
 def dynamic(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
+    """Actuator dynamics in series with a surface: a lag and a rate limit in the flight
+    control system, so that the surface position shows them.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    surface : str
+        The surface (``de``, ``da``, ``dr``).
+    effects : list of AugmentEffect
+        The surface's ``actuator_lag`` (time constant in s) and ``rate_limit`` (rad/s).
+    """
     children = []
     for e in effects:
         if isinstance(e, ActuatorLag):
@@ -105,6 +117,18 @@ def dynamic(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
 
 
 def linkage(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
+    """A linkage between a surface's position and the aerodynamics: a deadband, backlash
+    (hysteresis) and a bias, which the aerodynamic terms read and the position does not show.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    surface : str
+        The surface (``de``, ``da``, ``dr``).
+    effects : list of AugmentEffect
+        The surface's ``deadband`` and ``backlash`` (widths in rad) and ``actuator_bias`` (rad).
+    """
     what = "; ".join(e.label() for e in effects)
     aero = doc.aero()
     for prop, sign in POSITIONS[surface]:
@@ -134,7 +158,18 @@ def linkage(doc: Document, surface: str, effects: list[AugmentEffect]) -> None:
 
 
 def surface_drive_switches(doc: Document) -> None:
-    """A switch behind each surface position: the FCS's value, or the drive when on."""
+    """A switch behind each surface position: the FCS's value, or the drive when on.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft being augmented; changed in place.
+
+    Raises
+    ------
+    AugmentError
+        When a surface position is written outside <flight_control> and <system>.
+    """
     declared = False
     for surface, drive in DRIVE.items():
         for prop, sign in _positions(doc, surface):

@@ -38,6 +38,16 @@ def _scale_text(el: ET.Element, factor: float, why: str, parent: ET.Element) -> 
 
 
 def cg_offset(doc: Document, e: CgOffset) -> None:
+    """Move every location of the mass balance (the empty-weight CG, the point masses) and
+    of the tanks by the effect's offset, which moves the CG by the same amount.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : CgOffset
+        The effect: ``x`` (m forward) and ``z`` (m down).
+    """
     mb = _mass_balance(doc)
     locations = [loc for loc in mb.iter("location")]
     prop = doc.root.find("propulsion")
@@ -54,6 +64,15 @@ def cg_offset(doc: Document, e: CgOffset) -> None:
 
 
 def mass_scale(doc: Document, e: MassScale) -> None:
+    """Scale the empty weight and every point mass by a factor.
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : MassScale
+        The effect: the factor (dimensionless).
+    """
     mb = _mass_balance(doc)
     why = "flightid augment: mass_scale (mass error)"
     for el in [mb.find("emptywt"), *(pm.find("weight") for pm in mb.iter("pointmass"))]:
@@ -64,6 +83,16 @@ def mass_scale(doc: Document, e: MassScale) -> None:
 
 
 def inertia_scale(doc: Document, e: InertiaScale) -> None:
+    """Scale the moments of inertia by their factors (``ixz`` by the geometric mean of the
+    ``ixx`` and ``izz`` factors).
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : InertiaScale
+        The effect: the ``ixx``, ``iyy`` and ``izz`` factors (dimensionless).
+    """
     mb = _mass_balance(doc)
     why = "flightid augment: inertia_scale (inertia error)"
     for tag, f in (("ixx", e.ixx), ("iyy", e.iyy), ("izz", e.izz),
@@ -74,6 +103,21 @@ def inertia_scale(doc: Document, e: InertiaScale) -> None:
 
 
 def thrust_moment(doc: Document, e: ThrustMoment) -> None:
+    """Add a pitching moment of the engines' total thrust times an arm (a thrust line off
+    the CG, or propwash).
+
+    Parameters
+    ----------
+    doc : Document
+        The aircraft's JSBSim XML, changed in place.
+    e : ThrustMoment
+        The effect: the arm (m; N m per N of thrust, nose up positive).
+
+    Raises
+    ------
+    AugmentError
+        When the aircraft has no engine.
+    """
     prop = doc.root.find("propulsion")
     n = len(prop.findall("engine")) if prop is not None else 0
     if not n:

@@ -48,6 +48,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.augment.aero import (
     control_effectiveness,
     derivative_delta,
@@ -83,7 +84,24 @@ from flightid.sim.jsbsim.model import locate
 ET.register_namespace("xsi", "http://www.w3.org/2001/XMLSchema-instance")
 def cache_folder(base: Path, aircraft: str, effects: Sequence[AugmentEffect],
                  surface_drive: bool = False) -> Path:
-    """A folder under ``base`` keyed by the aircraft, the effects and the drive (for reuse)."""
+    """A folder under ``base`` keyed by the aircraft, the effects and the drive (for reuse).
+
+    Parameters
+    ----------
+    base : pathlib.Path
+        The cache folder.
+    aircraft : str
+        Aircraft name or XML path.
+    effects : sequence of AugmentEffect
+        The effects added.
+    surface_drive : bool, optional
+        Whether the surface drive switches are added. Default False.
+
+    Returns
+    -------
+    pathlib.Path
+        ``base / <16 hex digits of a SHA-256 of the key>``.
+    """
     key = json.dumps([aircraft, [e.to_dict() for e in effects]]
                      + (["surface_drive"] if surface_drive else []),
                      sort_keys=True, default=str)
@@ -97,6 +115,24 @@ def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base:
     The folder is ``cache_folder(base, aircraft, effects, surface_drive)``; a process that
     finds the XML there reuses it. Written into a temporary folder and renamed, so processes
     that write the same aircraft at once do not see half a folder.
+
+    Parameters
+    ----------
+    aircraft : str or pathlib.Path
+        A name (project or jsbsim) or an XML path.
+    effects : sequence of AugmentEffect
+        The effects to add.
+    base : str or pathlib.Path
+        The cache folder.
+    name : str, optional
+        The new aircraft's name; default ``<aircraft>-augmented``.
+    surface_drive : bool, optional
+        Add the surface drive switches. Default False.
+
+    Returns
+    -------
+    pathlib.Path
+        The augmented aircraft's XML.
     """
     old = locate(str(aircraft))[0]
     new = name or f"{old}-augmented"
@@ -111,9 +147,18 @@ def augment_cached(aircraft: str | Path, effects: Sequence[AugmentEffect], base:
 
 
 def publish(tmp: Path, folder: Path) -> None:
-    """Move ``tmp/aircraft``, written whole, to ``folder/aircraft`` in one rename (so that
-    a process reading the cache never sees half an aircraft), and remove ``tmp``; a folder
-    another process published first is kept."""
+    """Move ``tmp/aircraft``, written whole, to ``folder/aircraft`` in one rename.
+
+    A process reading the cache so never sees half an aircraft; ``tmp`` is removed, and a
+    folder another process published first is kept.
+
+    Parameters
+    ----------
+    tmp : pathlib.Path
+        The temporary folder written.
+    folder : pathlib.Path
+        The cache folder to publish into.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     try:
         (tmp / "aircraft").rename(folder / "aircraft")
@@ -126,11 +171,27 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
             name: str | None = None, surface_drive: bool = False) -> Path:
     """Write the aircraft with ``effects`` added under ``folder``; the new XML's path.
 
-    ``aircraft``: a name (project or jsbsim) or an XML path; the original stays untouched.
-    ``name``: the new aircraft's name (default ``<aircraft>-augmented``). Effects at their
-    neutral value are only noted in a comment. ``surface_drive``: add the switches that let
-    a flight set the surface positions directly (module note). ``flightid.sim.jsbsim.model.load``
-    takes the path.
+    Effects at their neutral value are only noted in a comment.
+    ``flightid.sim.jsbsim.model.load`` takes the path.
+
+    Parameters
+    ----------
+    aircraft : str or pathlib.Path
+        A name (project or jsbsim) or an XML path; the original stays untouched.
+    effects : sequence of AugmentEffect
+        The effects to add.
+    folder : str or pathlib.Path
+        Output folder; the aircraft goes to ``folder/aircraft/<name>``, replacing it.
+    name : str, optional
+        The new aircraft's name; default ``<aircraft>-augmented``.
+    surface_drive : bool, optional
+        Add the switches that let a flight set the surface positions directly (module note).
+        Default False.
+
+    Returns
+    -------
+    pathlib.Path
+        The new aircraft's XML.
     """
     old, xml, _ = locate(str(aircraft))
     new = name or f"{old}-augmented"
@@ -150,7 +211,7 @@ def augment(aircraft: str | Path, effects: Sequence[AugmentEffect], folder: str 
     for e in effects:
         if not e.neutral():
             _APPLY[type(e)](doc, e)
-    for surface in ("de", "da", "dr"):
+    for surface in CONTROL_SURFACES:
         dyn = [e for e in effects if isinstance(e, DYNAMIC) and e.surface == surface
                and not e.neutral()]
         link = [e for e in effects if isinstance(e, LINKAGE) and e.surface == surface

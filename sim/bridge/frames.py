@@ -201,7 +201,26 @@ def _plausible(data: bytes, pos: int, mav, last_usec: int | None) -> tuple[int, 
 
 
 def read_tlog(path: str | Path) -> TlogRead:
-    """All intact packets of a .tlog; a cut or damaged file is read up to what is good."""
+    """All intact packets of a .tlog; a cut or damaged file is read up to what is good.
+
+    Unreadable bytes between good packets are skipped and noted.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .tlog file.
+
+    Returns
+    -------
+    TlogRead
+        The packets with their time stamps (s), the file size, and the bytes skipped or cut
+        with notes naming their offsets.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    """
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")

@@ -173,7 +173,13 @@ class PtyPair:
 
 
 def open_pty_pair() -> PtyPair:
-    """A pty in raw mode (no echo, no line editing: binary-safe) and its device name."""
+    """A pty in raw mode (no echo, no line editing: binary-safe) and its device name.
+
+    Returns
+    -------
+    PtyPair
+        Master and slave file descriptors and the slave's device path.
+    """
     master, slave = os.openpty()
     tty.setraw(slave)
     tty.setraw(master)
@@ -194,7 +200,24 @@ def _loopback(host: str) -> str:
 
 
 def parse_hostport(text: str) -> tuple[str, int]:
-    """``"127.0.0.1:14550"`` -> (address, port), loopback only."""
+    """``"127.0.0.1:14550"`` -> (address, port), loopback only.
+
+    Parameters
+    ----------
+    text : str
+        ``HOST:PORT``; an empty host means 127.0.0.1.
+
+    Returns
+    -------
+    tuple of (str, int)
+        Loopback address and UDP port (1..65535).
+
+    Raises
+    ------
+    ValueError
+        Naming ``text`` when it is malformed, the port is out of range or the host is not
+        loopback.
+    """
     host, sep, port = text.rpartition(":")
     if not sep or not port.isdigit():
         raise ValueError(f"expected HOST:PORT (e.g. 127.0.0.1:14550), got {text!r}")

@@ -17,10 +17,34 @@ def record_bridged(
     record: FlightRecord, tlog_path: str | Path, config=None, *, transport: str = "pty",
     port: int = 0,
 ):
-    """Stream a record through the bridge to a recorder on this machine, over a pty pair
-    (``transport='pty'``) or loopback UDP (``'udp'``, ``port`` 0 = any free port).
+    """Stream a record through the bridge to a recorder on this machine.
 
-    Returns (air-side BridgeReport, ground-side RecordingReport); the tlog is written.
+    Over a pty pair (``transport='pty'``) or loopback UDP (``'udp'``); the tlog is written.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight to stream, SI channels.
+    tlog_path : str or pathlib.Path
+        The .tlog file the recorder writes.
+    config : BridgeConfig, optional
+        Bridge settings; default ``BridgeConfig()``.
+    transport : str, optional
+        "pty" (default) or "udp".
+    port : int, optional
+        UDP port for ``'udp'``; 0 (default) = any free port.
+
+    Returns
+    -------
+    tuple
+        (air-side BridgeReport, ground-side RecordingReport).
+
+    Raises
+    ------
+    ValueError
+        For an unknown transport.
+    TimeoutError
+        When the recorder does not finish within 60 s of the end of the stream.
     """
     config = config or BridgeConfig()
     stop = threading.Event()

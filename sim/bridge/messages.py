@@ -60,12 +60,39 @@ _WGS_A, _WGS_E2 = 6378137.0, 6.69437999014e-3
 
 
 def frame_size(name: str) -> int:
-    """Largest MAVLink 2 frame (bytes, unsigned) of a message: 10 header + payload + 2 CRC."""
+    """Largest MAVLink 2 frame of a message, unsigned: 10 header + payload + 2 CRC.
+
+    Parameters
+    ----------
+    name : str
+        Message name, e.g. ``HIGHRES_IMU``.
+
+    Returns
+    -------
+    int
+        Frame size, bytes.
+    """
     return 12 + message_class(name).unpacker.size
 
 
 def message_class(name: str) -> type:
-    """The pymavlink class of a message given its name (e.g. ``HIGHRES_IMU``)."""
+    """The pymavlink class of a message given its name.
+
+    Parameters
+    ----------
+    name : str
+        Message name, e.g. ``HIGHRES_IMU``.
+
+    Returns
+    -------
+    type
+        The pymavlink message class (dialect ardupilotmega).
+
+    Raises
+    ------
+    ValueError
+        For an unknown message.
+    """
     cls = getattr(mavlink2, f"MAVLink_{name.lower()}_message", None)
     if cls is None:
         raise ValueError(f"unknown MAVLink message {name!r} (dialect ardupilotmega)")
@@ -140,7 +167,18 @@ class GeoOrigin:
 
 
 def euler_to_quaternion(phi: float, theta: float, psi: float) -> tuple[float, ...]:
-    """Quaternion (w, x, y, z) of 3-2-1 Euler angles (rad) (Stevens & Lewis 2003, 1.8)."""
+    """Quaternion (w, x, y, z) of 3-2-1 Euler angles (Stevens & Lewis 2003, 1.8).
+
+    Parameters
+    ----------
+    phi, theta, psi : float
+        Roll, pitch and yaw angles, rad.
+
+    Returns
+    -------
+    tuple of float
+        Unit quaternion (w, x, y, z).
+    """
     cr, sr = math.cos(phi / 2), math.sin(phi / 2)
     cp, sp = math.cos(theta / 2), math.sin(theta / 2)
     cy, sy = math.cos(psi / 2), math.sin(psi / 2)
@@ -153,7 +191,18 @@ def euler_to_quaternion(phi: float, theta: float, psi: float) -> tuple[float, ..
 
 
 def quaternion_to_euler(q: tuple[float, ...]) -> tuple[float, float, float]:
-    """3-2-1 Euler angles (rad) of a quaternion (w, x, y, z)."""
+    """3-2-1 Euler angles of a quaternion (w, x, y, z).
+
+    Parameters
+    ----------
+    q : tuple of float
+        Unit quaternion (w, x, y, z).
+
+    Returns
+    -------
+    tuple of float
+        (phi, theta, psi), rad.
+    """
     w, x, y, z = q
     phi = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     theta = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
@@ -162,7 +211,18 @@ def quaternion_to_euler(q: tuple[float, ...]) -> tuple[float, float, float]:
 
 
 def wrap_pi(angle: float) -> float:
-    """Angle (rad) wrapped to [-pi, pi)."""
+    """Angle wrapped to [-pi, pi).
+
+    Parameters
+    ----------
+    angle : float
+        Angle, rad.
+
+    Returns
+    -------
+    float
+        The wrapped angle, rad.
+    """
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
@@ -235,8 +295,31 @@ def _i(x: float, lo: int, hi: int, unknown: int) -> int:
 def encode(
     name: str, s: Mapping[str, float], t_true: float, t_local: float, ctx: EncodeContext
 ):
-    """The MAVLink message ``name`` for sample ``s`` at sim time t_true and recorder clock
-    t_local (s)."""
+    """The MAVLink message ``name`` for one sample.
+
+    Parameters
+    ----------
+    name : str
+        Message name, one of ``TELEMETRY``.
+    s : Mapping of str to float
+        The sample: canonical channels by name, SI.
+    t_true : float
+        Sim time, s.
+    t_local : float
+        Recorder clock, s.
+    ctx : EncodeContext
+        Servo mapping, common time base and vehicle type.
+
+    Returns
+    -------
+    pymavlink message
+        The message, ready to pack.
+
+    Raises
+    ------
+    ValueError
+        For a message the bridge cannot encode.
+    """
     g = lambda k: s.get(k, NAN)  # noqa: E731
     usec = int(round(t_local * 1e6))
     if name == "HEARTBEAT":
@@ -332,7 +415,18 @@ CHANNEL_SOURCES: dict[str, tuple[str, ...]] = {
 
 
 def message_time(msg) -> float | None:
-    """Time stamp (s, the sender's clock) carried by a message, or None if it has none."""
+    """Time stamp carried by a message, or None if it has none.
+
+    Parameters
+    ----------
+    msg : pymavlink message
+        A received message.
+
+    Returns
+    -------
+    float or None
+        Time stamp, s, on the sender's clock (``time_usec`` or ``time_boot_ms``).
+    """
     if hasattr(msg, "time_usec"):
         return msg.time_usec * 1e-6
     if hasattr(msg, "time_boot_ms"):
@@ -353,7 +447,20 @@ def _imu_fields(msg, out: dict[str, float]) -> None:
 
 
 def decode(msg, servo_map: ServoMap) -> dict[str, float]:
-    """Canonical channels (SI) carried by a received message; unknown fields are left out."""
+    """Canonical channels (SI) carried by a received message; unknown fields are left out.
+
+    Parameters
+    ----------
+    msg : pymavlink message
+        A received message.
+    servo_map : ServoMap
+        Maps servo outputs (PWM) back to surface deflections.
+
+    Returns
+    -------
+    dict of str to float
+        Finite channel values by name, SI (rad, rad/s, m, m/s, m/s^2, Pa).
+    """
     kind = msg.get_type()
     out: dict[str, float] = {}
     if kind in ("HIGHRES_IMU", "HIL_SENSOR"):
@@ -388,6 +495,22 @@ def resolution(channel: str, message: str, value: float, servo_map: ServoMap) ->
     """Quantisation step of a channel as carried by a message, near ``value`` (SI).
 
     float32 fields: one unit in the last place; integer fields: their scale.
+
+    Parameters
+    ----------
+    channel : str
+        Canonical channel name.
+    message : str
+        Message name carrying it.
+    value : float
+        Value near which the step is taken, SI.
+    servo_map : ServoMap
+        Gives the step of a surface carried as PWM.
+
+    Returns
+    -------
+    float
+        The step, in the channel's SI unit.
     """
     f32 = float(np.spacing(np.float32(abs(value) if np.isfinite(value) else 1.0)))
     if message == "SERVO_OUTPUT_RAW":

@@ -11,7 +11,7 @@ The names below are re-exported so that ``from flightid.sim.effects import Bias`
 working; ``docs/effects.md`` lists the catalogue (``flightid effects`` prints it).
 """
 
-from flightid.sim.effects.base import Effect, NamedEffect, Reference
+from flightid.sim.effects.base import Effect, ExternalImplementation, NamedEffect
 from flightid.sim.effects.catalogue import (
     CATALOGUE,
     EFFECTS,
@@ -44,8 +44,8 @@ from flightid.sim.effects.sensor import (
 
 __all__ = [
     "CATALOGUE", "EFFECTS", "SECTIONS", "ActsOn", "Bias", "Catalogue", "Delay", "Drift",
-    "Effect", "Entry", "Lag", "LowPass", "NamedEffect", "Option", "Parameter",
-    "Quantization", "RandomWalk", "Reference", "Sample", "Saturation", "ScaleFactor",
+    "Effect", "Entry", "ExternalImplementation", "Lag", "LowPass", "NamedEffect", "Option",
+    "Parameter", "Quantization", "RandomWalk", "Sample", "Saturation", "ScaleFactor",
     "SecondOrder", "WhiteNoise", "antialias", "effect_from_dict", "listing", "lti_filter",
     "uniform_dt",
 ]

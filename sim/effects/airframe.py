@@ -19,9 +19,10 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.effects.base import NamedEffect
 
-SURFACE_CHOICES = ("de", "da", "dr")
+SURFACE_CHOICES = CONTROL_SURFACES
 AXES_CHOICES = ("stability", "body")
 # coefficient letters (flightid.derivatives) per axes and variables a delta can act on
 COEFS = {"stability": ("L", "D", "Y", "l", "m", "n"), "body": ("X", "Y", "Z", "l", "m", "n")}

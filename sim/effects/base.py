@@ -60,7 +60,24 @@ class Effect(NamedEffect):
 
 
 def positive(value: float, field: str, name: str, strict: bool = True) -> None:
-    """Raise naming ``field`` of effect ``name`` unless value > 0 (>= 0 if not strict)."""
+    """Raise naming ``field`` of effect ``name`` unless value > 0 (>= 0 if not strict).
+
+    Parameters
+    ----------
+    value : float
+        The value to check; NaN is refused.
+    field : str
+        The field's name, for the message.
+    name : str
+        The effect's name, for the message.
+    strict : bool, optional
+        Require > 0 (default) rather than >= 0.
+
+    Raises
+    ------
+    ValueError
+        Naming the effect and field.
+    """
     ok = value > 0 if strict else value >= 0
     if not ok or np.isnan(value):
         raise ValueError(
@@ -69,7 +86,7 @@ def positive(value: float, field: str, name: str, strict: bool = True) -> None:
 
 
 @dataclass(frozen=True)
-class Reference:
+class ExternalImplementation:
     """An implementation outside the effects package, named instead of imported.
 
     ``target`` is ``"module:attribute"``; ``fields`` maps each catalogue parameter to the

@@ -2,8 +2,8 @@
 
 An entry says what an effect is called, where it acts, what it does in one line, its
 parameters and options, what it changes in the data, and the implementation that
-injects it: a class of this package, or a ``Reference`` (module, attribute and parameter
-mapping) for the bridge's link faults and recorder clocks. The schema (``Entry``,
+injects it: a class of this package, or an ``ExternalImplementation`` (module, attribute
+and parameter mapping) for the bridge's link faults and recorder clocks. The schema (``Entry``,
 ``Parameter``, ``ActsOn``, ...) is ``schema``'s, re-exported here.
 
 Where an effect acts decides how it is injected (docs/effects.md, "Where effects act"):
@@ -359,7 +359,19 @@ EFFECTS: dict[str, type] = CATALOGUE.classes(ActsOn.SENSOR)
 def effect_from_dict(d: dict[str, Any], context: str = "", unit: str | None = None):
     """Build a channel effect from ``{"effect": name, ...parameters}``; errors name the field.
 
-    ``unit`` is the unit of the channel it acts on (for ``_deg``/``_g`` parameters).
+    Parameters
+    ----------
+    d : dict
+        The effect table: ``effect`` (its name) and its parameters.
+    context : str, optional
+        Where the table is, prefixed to field names in messages.
+    unit : str, optional
+        The unit of the channel it acts on (for ``_deg``/``_g`` parameters).
+
+    Returns
+    -------
+    NamedEffect
+        The effect.
     """
     return CATALOGUE.from_dict(d, "channel", context, unit)
 

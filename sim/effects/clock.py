@@ -11,9 +11,9 @@ clock_drift) t (the three recorders of the Monash Boomerang 60 paper, c. 2008;
 
 from __future__ import annotations
 
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 
-RECORDER_CLOCK = Reference(
+RECORDER_CLOCK = ExternalImplementation(
     "flightid.sim.bridge.air.schedule:StreamSpec",
     (("offset", "clock_offset"), ("drift", "clock_drift")),
     "dataclasses.replace(stream, clock_offset=..., clock_drift=...) for a recorder stream "

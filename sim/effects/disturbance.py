@@ -43,12 +43,31 @@ TURBULENCE_MODELS = ("dryden", "von_karman", "jsbsim")
 
 def mil_f_8785c(intensity: str, h_agl_m: float, form: str = "dryden"
                 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """((sigma_u, sigma_v, sigma_w) m/s, (L_u, L_v, L_w) m) at height h_agl_m above ground.
+    """Turbulence intensities and scale lengths at height h_agl_m above ground.
 
     MIL-F-8785C 3.7.2-3.7.3: below 1000 ft L_w = h, L_u = L_v = h / (0.177 + 0.000823 h)^1.2,
     sigma_w = 0.1 W20, sigma_u = sigma_v = sigma_w / (0.177 + 0.000823 h)^0.4 (h in ft,
     clipped at 10 ft); above 2000 ft L = 1750 ft (Dryden) or 2500 ft (von Karman) and sigma
     from Fig. 7 by probability of exceedance; linear in h between.
+
+    Parameters
+    ----------
+    intensity : str
+        Turbulence intensity, one of ``INTENSITIES``.
+    h_agl_m : float
+        Height above ground, m.
+    form : str, optional
+        "dryden" (default) or "von_karman"; sets the scale length above 2000 ft.
+
+    Returns
+    -------
+    tuple of tuple of float
+        ((sigma_u, sigma_v, sigma_w) m/s, (L_u, L_v, L_w) m).
+
+    Raises
+    ------
+    ValueError
+        For an unknown intensity.
     """
     if intensity not in INTENSITIES:
         raise ValueError(f"field 'intensity': {intensity!r} is not one of {', '.join(INTENSITIES)}")
@@ -94,12 +113,31 @@ def _shape(form: str, axis: str, L: float, V: float) -> tuple[list[float], list[
 
 def filtered_noise(num: Sequence[float], den: Sequence[float], sigma: float, n: int,
                    rate_hz: float, rng: np.random.Generator, settle_s: float) -> np.ndarray:
-    """n samples at rate_hz of white noise through num/den (s-domain), scaled to std sigma.
+    """n samples of white noise through num/den (s-domain), scaled to standard deviation sigma.
 
     Bilinear (Tustin) discretisation as in Yeager 1998 (NASA CR-1998-206937); the gain is
     set from the exact stationary variance of the discrete filter (discrete Lyapunov
     equation), so the process has variance sigma^2 whatever the spectrum's constant.
-    ``settle_s`` seconds are generated first and dropped, so the record starts stationary.
+
+    Parameters
+    ----------
+    num, den : sequence of float
+        Numerator and denominator of the shaping filter, s-domain.
+    sigma : float
+        Standard deviation of the output, in the output's unit.
+    n : int
+        Number of samples.
+    rate_hz : float
+        Sample rate, Hz.
+    rng : numpy.random.Generator
+        Random source.
+    settle_s : float
+        Time generated first and dropped, s, so the record starts stationary.
+
+    Returns
+    -------
+    numpy.ndarray
+        The noise; shape (n,).
     """
     if sigma == 0 or n == 0:
         return np.zeros(n)

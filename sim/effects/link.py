@@ -10,12 +10,25 @@ catalogue names that class and maps each entry's parameter to its field, e.g.
 
 from __future__ import annotations
 
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 
 LINK_FAULTS = "flightid.sim.bridge.link:LinkFaults"
 HOW = "BridgeConfig(faults=LinkFaults(...)); command line: flightid bridge serve --faults"
 
 
-def link_fault(field: str, parameter: str) -> Reference:
-    """The bridge's ``LinkFaults.<field>`` as the implementation of one catalogue parameter."""
-    return Reference(LINK_FAULTS, ((parameter, field),), HOW)
+def link_fault(field: str, parameter: str) -> ExternalImplementation:
+    """The bridge's ``LinkFaults.<field>`` as the implementation of one catalogue parameter.
+
+    Parameters
+    ----------
+    field : str
+        The ``LinkFaults`` field.
+    parameter : str
+        The catalogue parameter it implements.
+
+    Returns
+    -------
+    ExternalImplementation
+        The mapping of ``parameter`` onto ``field``.
+    """
+    return ExternalImplementation(LINK_FAULTS, ((parameter, field),), HOW)

@@ -7,13 +7,24 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from flightid.sim.effects.base import Reference
+from flightid.sim.effects.base import ExternalImplementation
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.effects.schema import ActsOn, number_text
 
 
 def listing(where: ActsOn | str | None = None) -> list[dict[str, Any]]:
-    """The catalogue as plain, JSON-safe data (non-finite numbers as "inf"/"-inf")."""
+    """The catalogue as plain, JSON-safe data (non-finite numbers as "inf"/"-inf").
+
+    Parameters
+    ----------
+    where : ActsOn or str, optional
+        Only the entries acting there; default all.
+
+    Returns
+    -------
+    list of dict
+        One dict per entry: name, acts_on, description, parameters, options, changes, etc.
+    """
     entries = CATALOGUE.acting_on(ActsOn(where)) if where else list(CATALOGUE.values())
     return [{
         "name": e.name,
@@ -31,13 +42,19 @@ def listing(where: ActsOn | str | None = None) -> list[dict[str, Any]]:
         "sized_for_channel": e.channel,
         "implementation": e.implementation_name(),
         "parameter_mapping": (e.implementation.mapping()
-                              if isinstance(e.implementation, Reference) else {}),
+                              if isinstance(e.implementation, ExternalImplementation) else {}),
         "inject": e.how(),
     } for e in entries]
 
 
 def markdown_table() -> str:
-    """The catalogue as a Markdown table (docs/effects.md holds it; a test keeps it current)."""
+    """The catalogue as a Markdown table (docs/effects.md holds it; a test keeps it current).
+
+    Returns
+    -------
+    str
+        The table, newline-terminated.
+    """
     rows = ["| name | acts on | parameters: default (blind tests), allowed range | "
             "description | injected by |",
             "|---|---|---|---|---|"]

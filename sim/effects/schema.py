@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from flightid.sim.effects.base import NamedEffect, Reference
+from flightid.sim.effects.base import ExternalImplementation, NamedEffect
 from flightid.units import DEG, G0
 
 INF = math.inf
@@ -149,7 +149,7 @@ class Entry:
     acts_on: ActsOn
     description: str
     parameters: tuple[Parameter, ...]
-    implementation: type[NamedEffect] | Reference
+    implementation: type[NamedEffect] | ExternalImplementation
     changes: tuple[str, ...]  # the record channels (or link/clock data) it changes
     options: tuple[Option, ...] = ()
     channel: str = ""  # sensor effects: the channel the default magnitudes are sized for
@@ -172,19 +172,19 @@ class Entry:
 
     def implementation_name(self) -> str:
         """``module:attribute`` of the implementation."""
-        if isinstance(self.implementation, Reference):
+        if isinstance(self.implementation, ExternalImplementation):
             return self.implementation.target
         return f"{self.implementation.__module__}:{self.implementation.__qualname__}"
 
     def resolve(self) -> Any:
-        """The implementation object (a Reference's target is imported by name)."""
-        if isinstance(self.implementation, Reference):
+        """The implementation object (an ExternalImplementation's target is imported by name)."""
+        if isinstance(self.implementation, ExternalImplementation):
             return self.implementation.resolve()
         return self.implementation
 
     def build(self, values: Mapping[str, float] | None = None, **options: str) -> NamedEffect:
         """The effect object with parameter ``values`` (default: the blind-test magnitudes)."""
-        if isinstance(self.implementation, Reference):
+        if isinstance(self.implementation, ExternalImplementation):
             raise TypeError(f"{self.name} is injected by {self.implementation.target}; "
                             f"use Entry.fields for its keyword arguments")
         values = self.defaults() if values is None else dict(values)
@@ -193,7 +193,7 @@ class Entry:
     def fields(self, values: Mapping[str, float] | None = None) -> dict[str, float]:
         """The implementation's keyword arguments for ``values`` (the parameter mapping)."""
         values = self.defaults() if values is None else dict(values)
-        if isinstance(self.implementation, Reference):
+        if isinstance(self.implementation, ExternalImplementation):
             return self.implementation.kwargs(values)
         return {k: float(v) for k, v in values.items()}
 
@@ -268,7 +268,7 @@ class Entry:
     def from_dict(self, d: Mapping[str, Any], context: str = "", unit: str | None = None,
                   skip: tuple[str, ...] = ("effect",)) -> NamedEffect:
         """The effect from a card table (``skip``: the key naming it); errors name the field."""
-        if isinstance(self.implementation, Reference):
+        if isinstance(self.implementation, ExternalImplementation):
             raise ValueError(f"{context or self.name}: {self.name} acts on the {self.acts_on} "
                              f"and is injected by {self.how()}")
         kwargs = self.parse(d, context, unit, skip)
@@ -285,7 +285,18 @@ class Entry:
 
 
 def number_text(x: float) -> str:
-    """A number as the catalogue prints it (inf as inf)."""
+    """A number as the catalogue prints it (inf as inf).
+
+    Parameters
+    ----------
+    x : float
+        The number.
+
+    Returns
+    -------
+    str
+        ``format(x, 'g')``, or "inf"/"-inf".
+    """
     return ("-inf" if x < 0 else "inf") if math.isinf(x) else f"{x:g}"
 
 
@@ -315,7 +326,7 @@ class Catalogue(Mapping[str, Entry]):
     def classes(self, *where: ActsOn) -> dict[str, type]:
         """Name -> implementing class for the entries acting on ``where``."""
         return {e.name: e.implementation for e in self.acting_on(*where)
-                if not isinstance(e.implementation, Reference)}
+                if not isinstance(e.implementation, ExternalImplementation)}
 
     def of(self, effect: NamedEffect | type) -> Entry:
         """The entry an effect object (or class) implements."""

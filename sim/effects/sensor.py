@@ -27,7 +27,25 @@ from flightid.sim.effects.base import positive as _positive
 
 
 def uniform_dt(t: np.ndarray, who: str) -> float:
-    """The sample interval (s) of a uniform grid; raises naming ``who`` otherwise."""
+    """The sample interval of a uniform grid.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    who : str
+        Names the caller in messages.
+
+    Returns
+    -------
+    float
+        The interval, s.
+
+    Raises
+    ------
+    ValueError
+        Naming ``who`` with fewer than two samples or a varying interval.
+    """
     if t.size < 2:
         raise ValueError(f"{who}: needs at least two samples")
     d = np.diff(t)
@@ -41,6 +59,22 @@ def lti_filter(num: list[float], den: list[float], t: np.ndarray, x: np.ndarray,
 
     First-order-hold discretisation (exact for piecewise-linear input), initial
     condition the steady state at x[0] (unity DC gain assumed).
+
+    Parameters
+    ----------
+    num, den : list of float
+        Numerator and denominator coefficients, s-domain.
+    t : numpy.ndarray
+        Sample times, s; uniform.
+    x : numpy.ndarray
+        Input signal; same shape as ``t``.
+    who : str
+        Names the caller in messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        Filtered signal, unit of ``x``; same shape.
     """
     dt = uniform_dt(t, who)
     b, a, _ = signal.cont2discrete((num, den), dt, method="foh")
@@ -200,7 +234,26 @@ class SecondOrder(Effect):
 
 
 def antialias(t: np.ndarray, x: np.ndarray, cutoff: float, order: int, who: str) -> np.ndarray:
-    """Causal Butterworth low-pass of ``order`` at ``cutoff`` (Hz) on a uniform grid."""
+    """Causal Butterworth low-pass of ``order`` at ``cutoff`` on a uniform grid.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s; uniform.
+    x : numpy.ndarray
+        Input signal; same shape as ``t``.
+    cutoff : float
+        Cutoff frequency, Hz; below the Nyquist frequency.
+    order : int
+        Filter order.
+    who : str
+        Names the caller in messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        Filtered signal, started at steady state on x[0]; unit and shape of ``x``.
+    """
     dt = uniform_dt(t, who)
     if cutoff >= 0.5 / dt:
         raise ValueError(

@@ -58,8 +58,17 @@ class Atmosphere:
 
 
 def set_atmosphere(model: Model, a: Atmosphere) -> None:
-    """Write the random seeds and the turbulence settings of ``a`` into the model's
-    FGFDMExec (JSBSim units; the steady wind is set with the initial conditions)."""
+    """Write the random seeds and the turbulence settings of ``a`` into the model's FGFDMExec.
+
+    Values go in JSBSim units; the steady wind is set with the initial conditions.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
+    a : Atmosphere
+        Seed, turbulence type, 20 ft wind speed (m/s), severity, gain and rate.
+    """
     fdm = model.fdm
     fdm["simulation/randomseed"] = a.seed
     if model.has("atmosphere/randomseed"):
@@ -76,11 +85,24 @@ def fill_calm(raw: dict[str, np.ndarray], gust_fps: np.ndarray,
     """The columns not read with JSBSim's turbulence off, from what JSBSim computes them of.
 
     With ``Atmosphere.turbulence == "none"`` JSBSim's turbulence velocities and rates are
-    zero, so the aero-relative rates equal the body rates and the total wind is the
-    steady wind plus the gusts the loop wrote (``gust_fps``, n x 3 NED, ft/s). ``get``
-    reads a JSBSim property at the last sample: each filled column is checked against
-    JSBSim's own value there, so that a JSBSim whose winds work otherwise fails loudly
+    zero, so the aero-relative rates equal the body rates and the total wind is the steady
+    wind plus the gusts the loop wrote. Each filled column is checked against JSBSim's own
+    value at the last sample, so that a JSBSim whose winds work otherwise fails loudly
     instead of recording wrong winds.
+
+    Parameters
+    ----------
+    raw : dict of str to numpy.ndarray
+        Raw JSBSim columns by property; the filled columns are added in place.
+    gust_fps : numpy.ndarray
+        Gusts the loop wrote, NED, ft/s; shape (n, 3).
+    get : callable
+        Reads a JSBSim property at the last sample.
+
+    Raises
+    ------
+    RuntimeError
+        When a filled column differs from JSBSim's value.
     """
     steady = [get(p) for p in STEADY_WIND]
     n = len(gust_fps)

@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from flightid.channels import CONTROL_SURFACES
 from flightid.sim.jsbsim.model import (
     COMMANDS,
     SURFACES,
@@ -29,18 +30,46 @@ COMMAND_MAPS: dict[tuple, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
 
 
 def command_maps(model: Model, trim: Trim) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """FCS maps of de, da, dr at a trim, cached per aircraft file and trim setting."""
+    """FCS maps of de, da, dr at a trim, cached per aircraft file and trim setting.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
+    trim : Trim
+        The trim; its JSBSim settings key the cache.
+
+    Returns
+    -------
+    dict of str to tuple of numpy.ndarray
+        By surface, (positions in rad, pilot commands) as :func:`command_map` gives them;
+        surfaces without a map are left out.
+    """
     key = (str(model.xml_path), tuple(sorted(trim.jsbsim.items())))
     if key not in COMMAND_MAPS:
         if len(COMMAND_MAPS) > 64:
             COMMAND_MAPS.clear()
-        COMMAND_MAPS[key] = {c: m for c in ("de", "da", "dr")
+        COMMAND_MAPS[key] = {c: m for c in CONTROL_SURFACES
                       if (m := command_map(model, c)) is not None}
     return COMMAND_MAPS[key]
 
 
 def command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | None:
-    """(positions, commands) of the FCS map pilot command -> surface (project sign), or None."""
+    """The FCS map pilot command -> surface position (project sign), or None.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model, at its trim.
+    control : str
+        "de", "da" or "dr".
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        (positions in rad, increasing; pilot commands), saturated plateaus dropped; None when
+        the model lacks the properties or the map has fewer than two points.
+    """
     cmd, _ = COMMANDS[control]
     prop, sign = SURFACES[control]
     if not (model.has(cmd) and model.has(prop)):
@@ -70,24 +99,60 @@ def command_map(model: Model, control: str) -> tuple[np.ndarray, np.ndarray] | N
 
 
 def hold_center(rate_hz: float) -> float:
-    """Where a control given for sample k acts, relative to t_k (s).
+    """Where a control given for sample k acts, relative to t_k.
 
     JSBSim computes the forces of a run after its FCS, so the control set before the run
     that ends at t_k makes the forces at t_k and at every substep up to the next setting,
     t_k + (substeps - 1) h: their middle is (substeps - 1) h / 2, h the internal step. An
     input sampled from a continuous signal is best taken there.
+
+    Parameters
+    ----------
+    rate_hz : float
+        Record rate, Hz.
+
+    Returns
+    -------
+    float
+        The offset from t_k, s.
     """
     n = substeps(rate_hz)
     return (n - 1) / (2.0 * n * rate_hz)
 
 
 def substeps(rate_hz: float) -> int:
-    """JSBSim runs per record interval at ``rate_hz``: at least ``MIN_INTERNAL_HZ``."""
+    """JSBSim runs per record interval at ``rate_hz``: at least ``MIN_INTERNAL_HZ``.
+
+    Parameters
+    ----------
+    rate_hz : float
+        Record rate, Hz.
+
+    Returns
+    -------
+    int
+        Runs per record interval, >= 1.
+    """
     return max(1, math.ceil(MIN_INTERNAL_HZ / rate_hz - 1e-9))
 
 
 def interp_point(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
-    """``np.interp`` of one point with numpy's arithmetic (same result, no array overhead)."""
+    """``np.interp`` of one point with numpy's arithmetic (same result, no array overhead).
+
+    Parameters
+    ----------
+    x : float
+        The point.
+    xp : sequence of float
+        Increasing abscissae.
+    fp : sequence of float
+        Ordinates; same length as ``xp``.
+
+    Returns
+    -------
+    float
+        The interpolated value, ends held.
+    """
     if x <= xp[0]:
         return fp[0]
     if x >= xp[-1]:
@@ -106,8 +171,23 @@ def interp_point(x: float, xp: Sequence[float], fp: Sequence[float]) -> float:
 
 def schedule_writes(schedules: Iterable[tuple[Callable[[float], None], np.ndarray]], n: int
              ) -> list[tuple[tuple[Callable[[float], None], float], ...]]:
-    """Per sample k, the (setter, value) pairs to write before it: those whose value
-    differs from sample k - 1, or every sample for a schedule that changes most of them."""
+    """Per sample k, the (setter, value) pairs to write before it.
+
+    Those whose value differs from sample k - 1, or every sample for a schedule that changes
+    at more than a quarter of them.
+
+    Parameters
+    ----------
+    schedules : iterable of tuple
+        (setter, values per sample) pairs.
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    list of tuple
+        Per sample, the tuple of (setter, value) pairs.
+    """
     dense = []
     sparse: dict[int, list[tuple[Callable[[float], None], float]]] = {}
     for setter, values in schedules:
@@ -127,7 +207,28 @@ def schedule_writes(schedules: Iterable[tuple[Callable[[float], None], np.ndarra
 
 def sampled_controls(controls: Mapping[str, Control], n: int, rate_hz: float
                      ) -> dict[str, np.ndarray]:
-    """Control increments sampled at the record times (arrays checked, callables evaluated)."""
+    """Control increments sampled at the record times (arrays checked, callables evaluated).
+
+    Parameters
+    ----------
+    controls : Mapping of str to Control
+        de, da, dr (rad) and throttle (fraction): arrays of at least n samples, callables of
+        time (s) or constants.
+    n : int
+        Number of samples.
+    rate_hz : float
+        Record rate, Hz.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Increment per sample, shape (n,), by control.
+
+    Raises
+    ------
+    ValueError
+        For an unknown control, too few samples or non-finite values.
+    """
     out: dict[str, np.ndarray] = {}
     t = np.arange(n) / rate_hz
     for name, c in controls.items():
@@ -159,12 +260,33 @@ def command_schedule(setters: Mapping[str, Callable[[float], None]],
                      ) -> list[tuple[Callable[[float], None], np.ndarray]]:
     """(setter, command per sample) of every pilot command node for a whole flight.
 
-    ``setters``: control -> the setter of its pilot command node; ``maps``: control ->
-    (surface positions in rad, pilot commands), the FCS map of ``command_maps``;
-    ``trim_cmd`` and ``trim_pos``: the trim's command and surface position (rad) per
-    control; ``inputs``: control -> increment per sample (rad; throttle as a fraction).
     The same mapping as a single step's (a zero increment keeps the trim command exactly),
     one vectorised call per control; the throttle is clipped to 0..1.
+
+    Parameters
+    ----------
+    setters : Mapping of str to callable
+        Control -> the setter of its pilot command node.
+    maps : Mapping of str to tuple
+        Control -> (surface positions in rad, pilot commands), the FCS map of
+        :func:`command_maps`.
+    trim_cmd : Mapping of str to float
+        The trim's pilot command per control.
+    trim_pos : Mapping of str to float
+        The trim's surface position per control, rad.
+    trim_throttle : float
+        The trim's throttle, fraction.
+    throttle_setters : sequence of callable
+        Setters of the throttle command of each engine.
+    inputs : Mapping of str to numpy.ndarray
+        Control -> increment per sample (rad; throttle as a fraction).
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    list of tuple
+        (setter, command per sample, shape (n,)) pairs.
     """
     out = []
     for c, set_cmd in setters.items():

@@ -35,8 +35,22 @@ class Limits:
 
 
 def envelope(limits: Limits, model: Model, trim: Trim) -> tuple[float, float, float, float]:
-    """(lowest alpha, highest alpha) in rad and (lowest, highest) airspeed in ft/s, JSBSim's
-    units, so that the flight loop compares raw properties."""
+    """The alpha and airspeed limits in JSBSim's units, so the flight loop compares raw values.
+
+    Parameters
+    ----------
+    limits : Limits
+        Departure limits; None entries take defaults from the model and trim.
+    model : Model
+        The loaded JSBSim model (its alpha limits).
+    trim : Trim
+        The trim (its airspeed).
+
+    Returns
+    -------
+    tuple of float
+        (lowest alpha, highest alpha) in rad and (lowest, highest) airspeed in ft/s.
+    """
     if limits.alpha_rad is not None:
         a_lo, a_hi = limits.alpha_rad
     elif model.alpha_limits is not None:
@@ -52,9 +66,29 @@ def envelope(limits: Limits, model: Model, trim: Trim) -> tuple[float, float, fl
 def departure_reason(row: Sequence[float], col: Mapping[str, int],
                      bounds: tuple[float, float, float, float], agl_node: Any,
                      wow_node: Any) -> str | None:
-    """Why the sample ``row`` (raw values, column index ``col``) left the envelope
-    ``bounds`` (``envelope``), or None. The height above ground and weight on wheels are
-    read from their property nodes when the row lacks them."""
+    """Why the sample ``row`` left the envelope ``bounds``, or None.
+
+    The height above ground and weight on wheels are read from their property nodes when the
+    row lacks them.
+
+    Parameters
+    ----------
+    row : sequence of float
+        Raw JSBSim values of one sample.
+    col : Mapping of str to int
+        Column index of each property in ``row``.
+    bounds : tuple of float
+        Alpha (rad) and airspeed (ft/s) limits from :func:`envelope`.
+    agl_node : JSBSim property node
+        Height above ground, ft.
+    wow_node : JSBSim property node
+        Weight on wheels.
+
+    Returns
+    -------
+    str or None
+        The reason (SI units in the text), or None inside the envelope.
+    """
     if not all(map(math.isfinite, row)):
         bad = [p for p, i in col.items() if not math.isfinite(row[i])]
         return f"state is not finite ({', '.join(bad[:4])})"

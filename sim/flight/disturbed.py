@@ -73,6 +73,18 @@ def disturbance_from_dict(d: Mapping[str, Any], context: str = "") -> Any:
     Wind may also be given as ``speed`` (m/s) and ``from_deg`` (meteorological: the
     direction it blows from, deg true). ``engine_vibration`` takes the fields of
     ``flightid.sim.effects.vibration.EngineVibration`` (gyro amplitudes also as ``p_deg``...).
+
+    Parameters
+    ----------
+    d : Mapping
+        The disturbance table.
+    context : str, optional
+        Where the table is, prefixed to field names in messages.
+
+    Returns
+    -------
+    NamedEffect
+        The disturbance.
     """
     pre = f"{context}." if context else ""
     entry = CATALOGUE.lookup_table(d, "disturbance", context)
@@ -102,7 +114,20 @@ def _number(value: Any, where: str) -> float:
 
 
 def atmosphere_for(disturbances: Sequence[Any], seed: int) -> Atmosphere:
-    """The flight core's Atmosphere: summed steady winds, JSBSim turbulence, JSBSim seed."""
+    """The flight core's Atmosphere: summed steady winds, JSBSim turbulence, JSBSim seed.
+
+    Parameters
+    ----------
+    disturbances : sequence
+        The disturbances.
+    seed : int
+        Random seed (taken modulo 2^31).
+
+    Returns
+    -------
+    Atmosphere
+        Steady wind (NED, m/s) and JSBSim turbulence settings.
+    """
     wind = np.zeros(3)
     severity = 0
     for d in disturbances:
@@ -121,7 +146,26 @@ def atmosphere_for(disturbances: Sequence[Any], seed: int) -> Atmosphere:
 
 def wind_schedule(disturbances: Sequence[Any], n: int, rate_hz: float, trim: Trim,
                   rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """(gusts, turbulence): n x 3 NED wind velocities (m/s) on the record grid."""
+    """(gusts, turbulence): wind velocities on the record grid.
+
+    Parameters
+    ----------
+    disturbances : sequence
+        The disturbances; gusts and non-JSBSim turbulence are scheduled.
+    n : int
+        Number of samples.
+    rate_hz : float
+        Record rate, Hz.
+    trim : Trim
+        The trim (airspeed, height above ground, heading).
+    rng : numpy.random.Generator
+        Random source.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (gusts, turbulence), NED, m/s; each shape (n, 3).
+    """
     t = np.arange(n) / rate_hz
     gusts = np.zeros((n, 3))
     turb = np.zeros((n, 3))
@@ -140,7 +184,23 @@ def wind_schedule(disturbances: Sequence[Any], n: int, rate_hz: float, trim: Tri
 
 
 def vibration_of(disturbances: Sequence[Any]) -> EngineVibration | None:
-    """The engine vibration among the disturbances (at most one), or None."""
+    """The engine vibration among the disturbances (at most one), or None.
+
+    Parameters
+    ----------
+    disturbances : sequence
+        The disturbances.
+
+    Returns
+    -------
+    EngineVibration or None
+        The vibration.
+
+    Raises
+    ------
+    ValueError
+        With more than one engine vibration.
+    """
     vib = [d for d in disturbances if isinstance(d, EngineVibration)]
     if len(vib) > 1:
         raise ValueError("at most one engine_vibration disturbance")
@@ -152,14 +212,48 @@ def fly_disturbed(model: Model, trim: Trim, controls: Mapping[str, np.ndarray],
                   wind: np.ndarray | None = None, turbulence: np.ndarray | None = None,
                   limits: Limits | None = None, scenario: dict[str, Any] | None = None,
                   progress: Callable[[int, int], None] | None = None) -> FlightRecord:
-    """Fly from trim through the flight core's loop (``sim.flight.simulation.fly``) with wind
-    schedules.
+    """Fly from trim through the flight core's loop with wind schedules.
 
-    ``wind`` (gusts) and ``turbulence`` (n x 3 NED, m/s, e.g. from ``wind_schedule``) are
-    written into JSBSim's gust properties before each record step and held over its
-    substeps. ``controls`` are increment arrays of exactly n = duration_s * rate_hz + 1
-    samples. ``progress(k, n)`` is called every second of flight. Raises DepartureError
-    with the record up to the departure.
+    The loop is ``sim.flight.simulation.fly``. ``wind`` and ``turbulence`` are written into
+    JSBSim's gust properties before each record step and held over its substeps.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
+    trim : Trim
+        The trim to start from.
+    controls : Mapping of str to numpy.ndarray
+        Increment arrays of exactly n = duration_s * rate_hz + 1 samples (rad; throttle as a
+        fraction).
+    duration_s : float
+        Flight duration, s.
+    rate_hz : float
+        Record rate, Hz.
+    atmosphere : Atmosphere, optional
+        Steady wind and JSBSim turbulence.
+    wind : numpy.ndarray, optional
+        Gusts, NED, m/s; shape (n, 3), e.g. from :func:`wind_schedule`.
+    turbulence : numpy.ndarray, optional
+        Turbulence, NED, m/s; shape (n, 3).
+    limits : Limits, optional
+        Departure limits.
+    scenario : dict, optional
+        Stored in the record's metadata.
+    progress : callable, optional
+        ``progress(k, n)``, called every second of flight.
+
+    Returns
+    -------
+    FlightRecord
+        The flight, SI channels.
+
+    Raises
+    ------
+    ValueError
+        For a control with the wrong number of samples.
+    DepartureError
+        With the record up to the departure.
     """
     n = int(round(duration_s * rate_hz)) + 1
     for c, col in controls.items():

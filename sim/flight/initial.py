@@ -17,7 +17,13 @@ from flightid.units import FT
 
 
 def evaluate(model: Model) -> None:
-    """Re-run every JSBSim model at the current time without integrating."""
+    """Re-run every JSBSim model at the current time without integrating.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
+    """
     fdm = model.fdm
     fdm.suspend_integration()
     fdm.run()
@@ -25,9 +31,20 @@ def evaluate(model: Model) -> None:
 
 
 def restart(model: Model, trim: Trim, atmosphere: Atmosphere) -> None:
-    """Re-initialise every JSBSim model (turbulence filters, actuators) at the trim state,
-    with the steady wind of ``atmosphere`` (NED, m/s) added to the initial ground
-    velocities so that the airspeed stays trimmed."""
+    """Re-initialise every JSBSim model (turbulence filters, actuators) at the trim state.
+
+    The steady wind of ``atmosphere`` is added to the initial ground velocities so that the
+    airspeed stays trimmed.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
+    trim : Trim
+        The trim state.
+    atmosphere : Atmosphere
+        Steady wind (NED, m/s) and turbulence settings.
+    """
     fdm = model.fdm
     for prop, value in trim.jsbsim.items():
         if not prop.startswith("ic/"):

@@ -66,11 +66,21 @@ CALM_FILLED = AERO_RATES + TURB + TOTAL_WIND
 
 
 def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
-    """The channels that are one raw JSBSim property times a constant, or over a second one:
-    channel -> (property, factor, divisor property or None); SI value = raw * factor [/ divisor].
+    """The channels that are one raw JSBSim property times a constant, or over a second one.
 
-    ``channels_from_raw`` converts them with this table, and ``Simulation.stepper`` reads only the
-    properties of the channels it is asked for.
+    SI value = raw * factor [/ divisor]. :func:`channels_from_raw` converts them with this
+    table, and ``Simulation.stepper`` reads only the properties of the channels it is asked
+    for.
+
+    Parameters
+    ----------
+    ref : Reference
+        Reference geometry (area, m^2; span, chord, m).
+
+    Returns
+    -------
+    dict of str to tuple
+        Channel -> (property, factor, divisor property or None).
     """
     qs = PSF * ref.area  # N per psf of dynamic pressure
     two_ft = 2.0 * FT  # phat = p b / 2V = p (b / 2 FT) / vt
@@ -124,8 +134,26 @@ def scaled_channels(ref: Reference) -> dict[str, tuple[str, float, str | None]]:
 def channels_from_raw(c: Mapping[str, Any], table: Mapping[str, tuple[str, float, str | None]],
               lat0: float, lon0: float, rpm: str | None, sin: Callable, cos: Callable
               ) -> dict[str, Any]:
-    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy);
-    ``table`` is ``scaled_channels`` of the aircraft's reference."""
+    """Canonical SI channels from raw JSBSim values: floats (math) or arrays (numpy).
+
+    Parameters
+    ----------
+    c : Mapping of str to float or numpy.ndarray
+        Raw JSBSim values by property.
+    table : Mapping of str to tuple
+        :func:`scaled_channels` of the aircraft's reference.
+    lat0, lon0 : float
+        Latitude and longitude of the origin of north/east, rad.
+    rpm : str or None
+        Property of the engine speed, or None.
+    sin, cos : callable
+        ``math`` or ``numpy`` functions, matching the values.
+
+    Returns
+    -------
+    dict of str to float or numpy.ndarray
+        Channels by name, SI.
+    """
     out = {ch: c[p] * k if d is None else c[p] * k / c[d] for ch, (p, k, d) in table.items()}
     alpha, fx, fz = out["alpha"], out["CX"], out["CZ"]
     out["CL"] = fx * sin(alpha) - fz * cos(alpha)
@@ -145,7 +173,22 @@ def channels_from_raw(c: Mapping[str, Any], table: Mapping[str, tuple[str, float
 
 def rotate_to_body(n: Any, e: Any, d: Any, phi: Any, theta: Any, psi: Any,
                     sin: Callable, cos: Callable) -> tuple[Any, Any, Any]:
-    """NED components into body axes with the 3-2-1 Euler angles (Etkin); floats or arrays."""
+    """NED components into body axes with the 3-2-1 Euler angles (Etkin); floats or arrays.
+
+    Parameters
+    ----------
+    n, e, d : float or numpy.ndarray
+        North, east and down components.
+    phi, theta, psi : float or numpy.ndarray
+        Euler angles, rad.
+    sin, cos : callable
+        ``math`` or ``numpy`` functions, matching the values.
+
+    Returns
+    -------
+    tuple
+        (x, y, z) body components, unit of the input.
+    """
     cf, sf, ct, st, cp, sp = cos(phi), sin(phi), cos(theta), sin(theta), cos(psi), sin(psi)
     x = ct * cp * n + ct * sp * e - st * d
     y = (sf * st * cp - cf * sp) * n + (sf * st * sp + cf * cp) * e + sf * ct * d
@@ -155,12 +198,33 @@ def rotate_to_body(n: Any, e: Any, d: Any, phi: Any, theta: Any, psi: Any,
 
 def ned_to_body(vec: np.ndarray, phi: np.ndarray, theta: np.ndarray,
                  psi: np.ndarray) -> np.ndarray:
-    """Rotate NED vectors (3 x n) into body axes with the 3-2-1 Euler angles (Etkin)."""
+    """Rotate NED vectors into body axes with the 3-2-1 Euler angles (Etkin).
+
+    Parameters
+    ----------
+    vec : numpy.ndarray
+        NED vectors; shape (3, n).
+    phi, theta, psi : numpy.ndarray
+        Euler angles, rad; shape (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Body-axis vectors, unit of ``vec``; shape (3, n).
+    """
     return np.stack(rotate_to_body(*vec, phi, theta, psi, np.sin, np.cos))
 
 
 def book_turbulence(ch: dict[str, np.ndarray], turb_ned: np.ndarray) -> None:
-    """Book a turbulence schedule (n x 3 NED, m/s) under turb_u/v/w, not wind_*."""
+    """Book a turbulence schedule under turb_u/v/w, not wind_*.
+
+    Parameters
+    ----------
+    ch : dict of str to numpy.ndarray
+        The record's channels; wind_* and turb_* changed in place.
+    turb_ned : numpy.ndarray
+        Turbulence, NED, m/s; shape (n, 3).
+    """
     for i, axis in enumerate(AXES):
         ch[f"wind_{axis}"] = ch[f"wind_{axis}"] - turb_ned[:, i]
     body = rotate_to_body(*turb_ned.T, ch["phi"], ch["theta"], ch["psi"], np.sin, np.cos)
@@ -169,6 +233,17 @@ def book_turbulence(ch: dict[str, np.ndarray], turb_ned: np.ndarray) -> None:
 
 
 def divide(a: float, b: float) -> float:
-    """a / b with numpy's answer for b = 0 (+-inf, or nan for 0 / 0), as records have."""
+    """a / b with numpy's answer for b = 0 (+-inf, or nan for 0 / 0), as records have.
+
+    Parameters
+    ----------
+    a, b : float
+        Numerator and denominator.
+
+    Returns
+    -------
+    float
+        The quotient.
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         return float(np.float64(a) / b)

@@ -479,14 +479,45 @@ def fly(model: Model | str, trim: Trim, controls: Mapping[str, Control] | None =
         turbulence: np.ndarray | None = None,
         progress: Callable[[int, int], None] | None = None,
         surfaces: str = "commanded") -> FlightRecord:
-    """Fly from trim for duration_s (s) with control increments, recording at rate_hz (Hz).
+    """Fly from trim for duration_s with control increments, recording at rate_hz.
 
-    ``controls`` maps de/da/dr (rad) and throttle (fraction) to arrays sampled at rate_hz
-    (at least duration_s * rate_hz + 1 samples), callables of time (s) or constants.
-    ``wind`` / ``turbulence``: optional n x 3 NED schedules (m/s) of gusts and turbulence,
-    ``progress(k, n)``: called every second of flight (see ``Simulation.fly``).
-    ``surfaces``: "commanded" (through the FCS) or "driven" (positions; see the module note).
-    Raises DepartureError (with ``.record`` up to the departure) if the flight departs.
+    Parameters
+    ----------
+    model : Model or str
+        The loaded JSBSim model, or an aircraft name or XML path.
+    trim : Trim
+        The trim to start from.
+    controls : Mapping of str to Control, optional
+        de/da/dr (rad) and throttle (fraction): arrays sampled at rate_hz (at least
+        duration_s * rate_hz + 1 samples), callables of time (s) or constants.
+    duration_s : float, optional
+        Flight duration, s. Default 10.
+    rate_hz : float, optional
+        Record rate, Hz. Default 100.
+    atmosphere : Atmosphere, optional
+        Steady wind and JSBSim turbulence.
+    limits : Limits, optional
+        Departure limits.
+    scenario : dict, optional
+        Stored in the record's metadata.
+    wind, turbulence : numpy.ndarray, optional
+        Gust and turbulence schedules, NED, m/s; shape (n, 3).
+    progress : callable, optional
+        ``progress(k, n)``, called every second of flight (see ``Simulation.fly``).
+    surfaces : str, optional
+        "commanded" (default; through the FCS) or "driven" (positions; see the module note).
+
+    Returns
+    -------
+    FlightRecord
+        The flight, SI channels.
+
+    Raises
+    ------
+    ValueError
+        For a duration that is not positive.
+    DepartureError
+        With ``.record`` up to the departure, if the flight departs.
     """
     if not duration_s > 0:
         raise ValueError(f"duration_s must be positive, got {duration_s}")

@@ -14,8 +14,20 @@ from flightid.sim.jsbsim.model import Model
 
 
 def coefficients(model: Model, propulsion: bool = False) -> dict[str, float]:
-    """Force and moment coefficients of the current JSBSim state: CX CY CZ Cl Cm Cn (body,
-    CG), CL CD; aerodynamic only, or aerodynamic + propulsive with ``propulsion``."""
+    """Force and moment coefficients of the current JSBSim state.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model, at the state to evaluate.
+    propulsion : bool, optional
+        Aerodynamic + propulsive forces and moments; default False (aerodynamic only).
+
+    Returns
+    -------
+    dict of str to float
+        CX CY CZ Cl Cm Cn (body axes, about the CG), CL CD; dimensionless.
+    """
     g = model.get
     qs = g("aero/qbar-psf") * g("metrics/Sw-sqft")
     b, c = g("metrics/bw-ft"), g("metrics/cbarw-ft")

@@ -184,7 +184,13 @@ def silence_jsbsim() -> None:
 
 @contextlib.contextmanager
 def quiet() -> Iterator[None]:
-    """Silence JSBSim's C++ console output (it writes to the process's stdout/stderr)."""
+    """Silence JSBSim's C++ console output (it writes to the process's stdout/stderr).
+
+    Yields
+    ------
+    None
+        File descriptors 1 and 2 go to the null device inside the block.
+    """
     sys.stdout.flush()
     sys.stderr.flush()
     saved = os.dup(1), os.dup(2)
@@ -201,7 +207,13 @@ def quiet() -> Iterator[None]:
 
 
 def available() -> dict[str, list[str]]:
-    """Aircraft names that :func:`load` accepts: {'project': [...], 'jsbsim': [...]}."""
+    """Aircraft names that :func:`load` accepts.
+
+    Returns
+    -------
+    dict of str to list of str
+        {'project': [...], 'jsbsim': [...]}.
+    """
     shipped = sorted(
         p.name for p in PACKAGE_AIRCRAFT.iterdir() if (p / f"{p.name}.xml").is_file()
     )
@@ -251,28 +263,64 @@ def _alpha_limits(root: ET.Element) -> tuple[float, float] | None:
 # to an exact 6-DOF model (Navion Cm_alphadot -1.24 % -> -0.05 %, CL_q -3.9 % -> +0.65 %);
 # the attitude lag puts the Euler angles 1.25 ms behind the integral of the rates, which
 # biased the Twin Otter's Cl derivatives by -0.6 % on research-grade data. Adams-Bashforth 2
-# (JSBSim code 3) for both (tests/test_truth_recovery.py). FGPropagate::InitModel restores
+# (JSBSim code 3) for both (tests/identification/test_truth_recovery.py).
+# FGPropagate::InitModel restores
 # JSBSim's defaults, so every reset applies these again.
 INTEGRATORS = {"simulation/integrator/rate/rotational": 3,
                "simulation/integrator/position/rotational": 3}
 
 
 def set_integrators(fdm: jsbsim.FGFDMExec) -> None:
-    """Use the project's JSBSim integrators (see INTEGRATORS)."""
+    """Use the project's JSBSim integrators (see INTEGRATORS).
+
+    Parameters
+    ----------
+    fdm : jsbsim.FGFDMExec
+        The JSBSim executive; its integrator properties are set.
+    """
     for prop, code in INTEGRATORS.items():
         fdm[prop] = code
 
 
 def locate(aircraft: str) -> tuple[str, Path, str]:
-    """(name, XML path, origin) of an aircraft name, XML path or aircraft folder."""
+    """(name, XML path, origin) of an aircraft name, XML path or aircraft folder.
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft name, XML path or aircraft folder.
+
+    Returns
+    -------
+    tuple of (str, pathlib.Path, str)
+        Aircraft name, its XML file, and where it comes from ("project", "jsbsim" or
+        "file").
+    """
     return _locate(aircraft)
 
 
 def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
     """Load an aircraft by name (project aircraft/ first, then jsbsim's) or XML path.
 
-    ``rate_hz`` is JSBSim's integration rate (Hz). Engines and systems are looked up in
-    the aircraft's own ``Engines/`` and ``Systems/`` folders, then in the jsbsim package.
+    Engines and systems are looked up in the aircraft's own ``Engines/`` and ``Systems/``
+    folders, then in the jsbsim package.
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft name or XML path.
+    rate_hz : float, optional
+        JSBSim's integration rate, Hz. Default 400.
+
+    Returns
+    -------
+    Model
+        The loaded model with its reference geometry (SI), engines and alpha limits.
+
+    Raises
+    ------
+    ValueError
+        Naming the XML when JSBSim cannot load the aircraft.
     """
     name, xml, origin = _locate(aircraft)
     # the static debug level silences the banner that the constructor prints
@@ -328,5 +376,16 @@ def load(aircraft: str, *, rate_hz: float = 400.0) -> Model:
 
 
 def as_model(model_or_name: Model | str) -> Model:
-    """A Model for a Model or an aircraft name."""
+    """A Model for a Model or an aircraft name.
+
+    Parameters
+    ----------
+    model_or_name : Model or str
+        A loaded model (returned as is) or a name for :func:`load`.
+
+    Returns
+    -------
+    Model
+        The model.
+    """
     return model_or_name if isinstance(model_or_name, Model) else load(model_or_name)

@@ -108,7 +108,15 @@ def _fcs_commands(model: Model) -> list[str]:
 
 
 def apply(model: Model, trim: Trim) -> None:
-    """Put the model in the trimmed state (IC, commands, engines at steady state)."""
+    """Put the model in the trimmed state (IC, commands, engines at steady state).
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model; changed in place.
+    trim : Trim
+        The trim.
+    """
     fdm = model.fdm
     for prop, value in trim.jsbsim.items():
         if not prop.startswith("ic/"):
@@ -126,12 +134,15 @@ def apply(model: Model, trim: Trim) -> None:
 def steady_engines(model: Model) -> None:
     """Engines at steady state after the last ``run_ic`` of an initialisation.
 
-    run_ic puts a turboprop's power back to idle (JSBSim's FGTurboProp): the Twin Otter's
-    thrust then fell from 3581 N to 2024 N in the first second of a flight and its speed
-    by 0.75 m/s in 3 s, a phugoid under every maneuver (the linear models' reference
-    dynamic pressure, the record's mean, was then 3 % above the one at the maneuver).
-    At steady state again, unforced thrust and speed hold (3581 N, 61.70 m/s over 3 s);
-    the piston engines' flights are unchanged to the last bit.
+    run_ic puts a turboprop's power back to idle (JSBSim's FGTurboProp); without this call
+    the Twin Otter's thrust falls from 3581 N to 2024 N in the first second of a flight, a
+    phugoid under every maneuver. At steady state unforced thrust and speed hold (3581 N,
+    61.70 m/s over 3 s); piston engines are not affected.
+
+    Parameters
+    ----------
+    model : Model
+        The loaded JSBSim model.
     """
     model.fdm.get_propulsion().get_steady_state()
 
@@ -312,11 +323,33 @@ def _saturation(model: Model) -> str | None:
 def trim(model: Model | str, altitude_m: float | FlightCondition,
          speed_m_s: float | None = None, gamma_rad: float = 0.0, bank_rad: float = 0.0,
          flaps_rad: float = 0.0) -> Trim:
-    """Trim at altitude (m above sea level), true airspeed (m/s), flight-path angle and bank
-    (rad), or at a ``FlightCondition`` given in place of the altitude (a card's condition).
+    """Trim at an altitude, true airspeed, flight-path angle and bank, or at a FlightCondition.
 
-    Raises TrimError naming the cause: bad input, below stall, not enough power, a
-    saturated control, or JSBSim's trim failing to converge.
+    Parameters
+    ----------
+    model : Model or str
+        The loaded JSBSim model, or an aircraft name.
+    altitude_m : float or FlightCondition
+        Altitude above sea level, m; or a card's condition, which gives all the others.
+    speed_m_s : float, optional
+        True airspeed, m/s; required unless ``altitude_m`` is a FlightCondition.
+    gamma_rad : float, optional
+        Flight-path angle, rad. Default 0.
+    bank_rad : float, optional
+        Bank angle, rad. Default 0.
+    flaps_rad : float, optional
+        Flap deflection, rad. Default 0.
+
+    Returns
+    -------
+    Trim
+        The trimmed state, with JSBSim's settings.
+
+    Raises
+    ------
+    TrimError
+        Naming the cause: bad input, below stall, not enough power, a saturated control, or
+        JSBSim's trim failing to converge.
     """
     if isinstance(altitude_m, FlightCondition):
         c = altitude_m

@@ -1,52 +1,27 @@
 """Exact truth derivatives of a loaded JSBSim model at a trim point.
 
-How: JSBSim's aerodynamics are evaluated at a set state without propagating. Each
-state is written into the initial condition and ``run_ic`` runs every model once with
-the integrators suspended (dt = 0); the aerodynamic forces and moments are then read
-from the property tree. ``moments/{l,m,n}-aero-lbsft`` are about the actual CG: JSBSim
-transfers the moments from the aerodynamic reference point (AERORP) to the CG with
-M_cg = M_rp + (r_rp - r_cg) x F, so the truth includes that transfer (a model whose
-AERORP is not at the CG has moment derivatives that differ from the numbers in its
-XML by the force derivatives times the lever arm / reference length).
+JSBSim's aerodynamics are evaluated at a set state without propagating: each state is
+written into the initial condition and ``run_ic`` runs every model once with the
+integrators suspended (dt = 0). Moments are about the actual CG (JSBSim transfers them
+from the AERORP with M_cg = M_rp + (r_rp - r_cg) x F). By default the aerodynamic forces
+and moments are differentiated; ``propulsion=True`` adds the propulsive ones with the
+engines held at their trim state: the total derivatives a flight test identifies
+(Jategaonkar 2015; Morelli & Klein 2016, ch. 3).
 
-Aerodynamic or total. By default the truth differentiates the AERODYNAMIC forces and
-moments only (``forces/fb{x,y,z}-aero-lbs``, ``moments/{l,m,n}-aero-lbsft``): the numbers
-in the aircraft's XML and truth file. ``propulsion=True`` differentiates aerodynamic +
-propulsive ones (adding ``forces/fb{x,y,z}-prop-lbs``, ``moments/{l,m,n}-prop-lbsft``, i.e.
-JSBSim's total external forces and moments minus gravity and gear) with the engines held
-at their trim state: run_ic does not advance the engine and propeller rpm (dt = 0), while
-each propeller's inflow sees the perturbed state including omega x r at its location. A
-flight test identifies TOTAL derivatives (Jategaonkar; Morelli & Klein 2016
-ch. 3): without a propulsion model in the identification, the data cannot say which share
-is the propeller's. So compare an estimate from a model without (or with only a measured
-thrust along x) propulsion model with the total truth for the derivatives the engines
-change (e.g. a twin's Cn_r: each propeller at y sees u - r y, a differential thrust with
-N_r = sum y^2 dT/du, -3.3 % of the Twin Otter's Cn_r); compare with the aerodynamic truth
-when the identification model carries the propulsion terms itself, or to check a model
-against its XML. Frozen rpm is a bound: in flight the rpm follows the inflow and gives
-back part of the differential thrust at low frequency. The X-force derivatives of the
-total truth contain dT/du (thrust falls with speed), so in the total truth CD_0 ~ 0 at trim.
-
-Controls are perturbed through the pilot commands (the flight control system runs with
-the trim status on, so actuators and kinematics follow at once) and the derivative is
-taken with respect to the surface position read back (chain rule), in project signs.
-
-JSBSim computes alphadot from the accelerations of the state itself, so any state
-perturbation also changes alphadot. The alphadot derivative is measured first by
-changing only the pitch attitude (which changes the gravity component in wdot and hence
-alphadot, and nothing aerodynamic), and the alphadot contribution is subtracted from
-every other difference: dC/dx = (dC - C_alphadot * d(alphadot_hat)) / dx.
-
-Central differences at two step sizes (h and h/4); the one-sided slopes are compared:
-a kink at the trim point (a table breakpoint, |beta| terms) keeps the one-sided slopes
-apart as the step shrinks, while for a smooth term their gap shrinks with h. Kinks are
-reported as both one-sided slopes and a flag, never as the average.
+Controls are perturbed through the pilot commands and the derivative is taken with
+respect to the surface position read back, in project signs. The alphadot derivative is
+measured first (by a pitch-attitude change) and its contribution subtracted from every
+other difference: dC/dx = (dC - C_alphadot * d(alphadot_hat)) / dx. Central differences
+at two step sizes (h and h/4) find a kink at the trim point; a kink is reported as both
+one-sided slopes and a flag, never as the average.
 
 Rates are nondimensional: phat = p b/2V, qhat = q cbar/2V, rhat = r b/2V,
 alphadot_hat = alphadot cbar/2V (Morelli & Klein 2016, ch. 3). Stability axes (Etkin &
 Reid): Cl_s = Cl cos a + Cn sin a, Cn_s = Cn cos a - Cl sin a, p_s = p cos a + r sin a,
 r_s = r cos a - p sin a with a the trim alpha; lift and drag are always those of the
 local stability axes, CL = CX sin a - CZ cos a, CD = -CX cos a - CZ sin a.
+
+docs/truth.md describes the method in full.
 """
 
 from __future__ import annotations
@@ -283,10 +258,32 @@ def derivatives(model: Model | str, trim: Trim, axes: str = "body",
                 steps: dict[str, float] | None = None, propulsion: bool = False) -> Truth:
     """Truth derivatives (per rad, per unit nondimensional rate) at a trim point.
 
-    ``axes`` is "body" (CX CY CZ Cl Cm Cn, body rates) or "stability" (CL CD CY Cl Cm Cn
-    and rates rotated by the trim alpha); CL and CD are given in both. ``propulsion``
-    differentiates aerodynamic + propulsive forces and moments with the engines at their
-    trim state (the total derivatives a flight test sees); default: aerodynamic only.
+    Parameters
+    ----------
+    model : Model or str
+        The loaded JSBSim model, or an aircraft name; a copy is used.
+    trim : Trim
+        The trim point, for the same aircraft.
+    axes : str, optional
+        "body" (default; CX CY CZ Cl Cm Cn, body rates) or "stability" (CL CD CY Cl Cm Cn
+        and rates rotated by the trim alpha); CL and CD are given in both.
+    steps : dict of str to float, optional
+        Finite-difference steps by variable, overriding ``STEPS`` (rad, or nondimensional
+        rate).
+    propulsion : bool, optional
+        Differentiate aerodynamic + propulsive forces and moments with the engines at their
+        trim state (the total derivatives a flight test sees); default False (aerodynamic
+        only).
+
+    Returns
+    -------
+    Truth
+        Values by canonical name, kink flags, step spreads and the trim state (SI).
+
+    Raises
+    ------
+    ValueError
+        For unknown axes or a trim of another aircraft.
     """
     if axes not in ("body", "stability"):
         raise ValueError(f"axes must be 'body' or 'stability', got {axes!r}")
@@ -386,7 +383,20 @@ def _assemble(model: Model, trim: Trim, axes: str, base: np.ndarray,
 # -- JSBSim's own linearization --------------------------------------------------------
 
 def linearization(model: Model | str, trim: Trim) -> StateSpace:
-    """JSBSim's FGLinearization (A, B) at the trim point, in JSBSim's state units."""
+    """JSBSim's FGLinearization (A, B) at the trim point, in JSBSim's state units.
+
+    Parameters
+    ----------
+    model : Model or str
+        The loaded JSBSim model, or an aircraft name; a copy is used.
+    trim : Trim
+        The trim point.
+
+    Returns
+    -------
+    StateSpace
+        A, B and the names and units of states and inputs.
+    """
     model = as_model(model).copy()
     apply(model, trim)
     lin = jsbsim.FGLinearization(model.fdm)
@@ -398,10 +408,20 @@ def linearization(model: Model | str, trim: Trim) -> StateSpace:
 
 
 def pitch_entries(truth: Truth) -> dict[str, float]:
-    """Short-period A entries (1/s^2, 1/s) predicted from the body-axis derivatives.
+    """Short-period A entries predicted from the body-axis derivatives.
 
     qdot = M_alpha alpha + M_q q + M_alphadot alphadot (Etkin & Reid, ch. 4), with
     M_x = qbar S cbar Cm_x / Iyy and the rate derivatives scaled by cbar / 2V.
+
+    Parameters
+    ----------
+    truth : Truth
+        Body-axis truth derivatives with the trim state.
+
+    Returns
+    -------
+    dict of str to float
+        M_alpha (1/s^2), M_q and M_alphadot (1/s).
     """
     st, ref, v = truth.state, truth.reference, truth.values
     qsc = st["qbar"] * ref.area * ref.chord
@@ -420,6 +440,23 @@ def truth_file(name: str) -> dict[str, Any]:
 
     Checks the agreed format: [condition] with altitude_m, speed_m_s, axes, flaps_rad and
     [derivatives.<canonical name>] tables with a numeric ``value`` (and a ``source``).
+
+    Parameters
+    ----------
+    name : str
+        Aircraft name, or a path ending in .toml.
+
+    Returns
+    -------
+    dict
+        The file's tables; ``axes`` defaults to "stability", ``flaps_rad`` to 0.
+
+    Raises
+    ------
+    FileNotFoundError
+        When there is no truth file.
+    ValueError
+        Naming the file and table that break the format.
     """
     if name.endswith(".toml"):
         path = Path(name)
@@ -459,8 +496,21 @@ def compare_to_file(name: str, rel_tol: float = 0.02,
                     abs_tol: float = 1e-3) -> list[str]:
     """Trim at the truth file's condition and list every derivative outside tolerance.
 
-    A derivative passes when |truth - file| <= max(rel_tol |file|, abs_tol); an empty list
-    means the model reproduces its truth file.
+    A derivative passes when |truth - file| <= max(rel_tol |file|, abs_tol).
+
+    Parameters
+    ----------
+    name : str
+        Aircraft name; it needs aircraft/<name>/truth.toml.
+    rel_tol : float, optional
+        Relative tolerance, 1. Default 0.02.
+    abs_tol : float, optional
+        Absolute tolerance, in the derivative's unit. Default 1e-3.
+
+    Returns
+    -------
+    list of str
+        One line per failing derivative; empty when the model reproduces its truth file.
     """
     data = truth_file(name)
     cond = data["condition"]

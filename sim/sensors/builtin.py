@@ -40,7 +40,13 @@ TOTTER_Q = "smallest step of the Twin Otter record totter_f1_017"
 
 
 def hobby_suite() -> SensorSuite:
-    """Hobby MEMS IMU and potentiometer vanes, Telemaster / Boomerang class (Sofyan; Monash)."""
+    """Hobby MEMS IMU and potentiometer vanes, Telemaster / Boomerang class (Sofyan; Monash).
+
+    Returns
+    -------
+    SensorSuite
+        The suite, with the source of each number.
+    """
     imu = Sample(
         rate=100.0,
         source=f"{MONASH}: O-Navi Phoenix IMU, 100 Hz binary on RS-232; "
@@ -171,7 +177,13 @@ def hobby_suite() -> SensorSuite:
 
 
 def research_suite() -> SensorSuite:
-    """Research instrumentation, Twin Otter / Navion class: 50 Hz, anti-aliased, low noise."""
+    """Research instrumentation, Twin Otter / Navion class: 50 Hz, anti-aliased, low noise.
+
+    Returns
+    -------
+    SensorSuite
+        The suite, with the source of each number.
+    """
     aa = Sample(
         rate=50.0,
         antialias=10.0,
@@ -241,7 +253,18 @@ def research_suite() -> SensorSuite:
 
 
 def ideal_suite(rate: float = 100.0) -> SensorSuite:
-    """Perfect sensors sampled at ``rate`` (Hz): the truth at a recorder's rate."""
+    """Perfect sensors sampled at ``rate``: the truth at a recorder's rate.
+
+    Parameters
+    ----------
+    rate : float, optional
+        Sample and output rate, Hz. Default 100.
+
+    Returns
+    -------
+    SensorSuite
+        The suite.
+    """
     names = (
         "V",
         "alpha",
@@ -276,7 +299,23 @@ SUITES = {"hobby": hobby_suite, "research": research_suite, "ideal": ideal_suite
 
 
 def builtin_suite(name: str) -> SensorSuite:
-    """A built-in suite by name (``SUITES``)."""
+    """A built-in suite by name (``SUITES``).
+
+    Parameters
+    ----------
+    name : str
+        Suite name.
+
+    Returns
+    -------
+    SensorSuite
+        The suite.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, naming the built-in ones.
+    """
     try:
         return SUITES[name]()
     except KeyError:

@@ -90,7 +90,24 @@ def _rng(seed: int, key: str) -> np.random.Generator:
 def run_chain(
     t: np.ndarray, x: np.ndarray, chain: list[Effect], rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Apply ``chain`` in order to ``x`` on times ``t`` (s); returns the final (t, x)."""
+    """Apply ``chain`` in order to ``x`` on times ``t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    x : numpy.ndarray
+        Channel values, SI; same shape as ``t``.
+    chain : list of Effect
+        The effects, in order; a Sample effect changes the time grid.
+    rng : numpy.random.Generator
+        Random source.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The final (t, x): times (s) and values (SI).
+    """
     x = np.asarray(x, float)
     for e in chain:
         if isinstance(e, Sample):
@@ -125,6 +142,25 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
     Nyquist frequency alias correctly. Channels sampled slower than the output rate are
     held (zero-order hold, the latest sample, as a recorder logs it); unsampled channels
     are linearly interpolated. ``meta.extra['measurement']`` records how.
+
+    Parameters
+    ----------
+    truth : FlightRecord
+        The true flight, SI channels, at least two samples.
+    suite : SensorSuite
+        The sensors.
+    seed : int, optional
+        Random seed. Default 0.
+
+    Returns
+    -------
+    FlightRecord
+        The measured record.
+
+    Raises
+    ------
+    ValueError
+        When the truth lacks a channel the suite measures.
     """
     t = truth.time
     if t.size < 2:
@@ -214,11 +250,22 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
 
 
 def sensor_positions(suite: SensorSuite) -> dict[str, list[float]]:
-    """Where the suite's sensors sit, as a record's ``meta.extra['sensor_positions']``
-    (docs/record.md): ``accelerometers`` [x, y, z] m from the CG in body axes (x forward,
-    y right, z down; [0, 0, 0] without a lever arm), and ``alpha_vane`` / ``beta_vane``
-    [x, y, z] m when the flow angles come from vanes (absent: the channel is the flow
-    angle at the CG)."""
+    """Where the suite's sensors sit, as a record's ``meta.extra['sensor_positions']``.
+
+    See docs/record.md.
+
+    Parameters
+    ----------
+    suite : SensorSuite
+        The sensors.
+
+    Returns
+    -------
+    dict of str to list of float
+        ``accelerometers`` [x, y, z] m from the CG in body axes (x forward, y right, z down;
+        [0, 0, 0] without a lever arm), and ``alpha_vane`` / ``beta_vane`` [x, y, z] m when
+        the flow angles come from vanes (absent: the channel is the flow angle at the CG).
+    """
     out: dict[str, list[float]] = {"accelerometers": [0.0, 0.0, 0.0]}
     for m in suite.mounting:
         if isinstance(m, LeverArm):

@@ -18,6 +18,18 @@ def mounting_from_dict(d: dict[str, Any], context: str = "") -> Any:
     """Build a mounting effect (lever_arm, vanes, engine_vibration) from a table.
 
     The name is resolved through the effect catalogue (``SECTIONS['mounting']``).
+
+    Parameters
+    ----------
+    d : dict
+        The effect table: its name and parameters.
+    context : str, optional
+        Where the table is, prefixed to field names in messages.
+
+    Returns
+    -------
+    NamedEffect
+        The mounting effect.
     """
     return CATALOGUE.from_dict(d, "mounting", context)
 
@@ -25,10 +37,24 @@ def mounting_from_dict(d: dict[str, Any], context: str = "") -> Any:
 def suite_from_dict(d: dict[str, Any]) -> SensorSuite:
     """Build a suite from a table; ``base`` starts from a built-in suite.
 
-    Keys: name, description, base, output_rate (Hz), passthrough (list), mounting (list
-    of tables), channels (table of channel -> list of effect tables). With ``base``, a
-    listed channel replaces that channel's chain and a given ``mounting`` replaces the
-    mounting list. Errors name the field, e.g. ``channels.q[1].sigma``.
+    With ``base``, a listed channel replaces that channel's chain and a given ``mounting``
+    replaces the mounting list. Errors name the field, e.g. ``channels.q[1].sigma``.
+
+    Parameters
+    ----------
+    d : dict
+        Keys: name, description, base, output_rate (Hz), passthrough (list), mounting (list
+        of tables), channels (table of channel -> list of effect tables).
+
+    Returns
+    -------
+    SensorSuite
+        The suite.
+
+    Raises
+    ------
+    ValueError
+        Naming the field that is wrong.
     """
     if not isinstance(d, dict):
         raise ValueError(f"suite: expected a table, got {type(d).__name__}")

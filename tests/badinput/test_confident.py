@@ -11,7 +11,6 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from conftest import TWIN_OTTER
 
 from flightid.identification.compatibility.reconstruction import reconstruct
 from flightid.identification.data import time_base
@@ -25,6 +24,7 @@ from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.loopback import record_bridged
 from flightid.sim.flight.disturbed import disturbance_from_dict
 from flightid.units import DEG, FT, G0, KT, PSF, SLUG
+from tests.conftest import TWIN_OTTER
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 

@@ -107,7 +107,8 @@ NOT_YET: dict[str, str] = {
                         "envelope by a campaign's --update-aircraft (tests/test_campaign_"
                         "update.py), not by the single-record effect fit",
     "misalignment": "a mounting effect, which this contract's cards do not inject; the gap "
-                    "diagnosis fits it back from a flown record (tests/test_gap_candidates.py)",
+                    "diagnosis fits it back from a flown record "
+                    "(tests/identification/gap/test_gap_candidates.py)",
     "wind": "compatibility estimates a constant wind (wind_*) only from position outputs "
             "(north, east), which the research suite does not record",
     "gust": "a disturbance: output error treats the response as model error (docs/gap.md)",

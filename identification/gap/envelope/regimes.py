@@ -44,11 +44,11 @@ import numpy as np
 
 from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS
-from flightid.identification.gap.diagnose import GapResult, Records, _records, diagnose
+from flightid.identification.gap.diagnosis import GapResult, Records, _records, diagnose
 from flightid.identification.gap.envelope.trend import Point, Trend, trend
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.model.linearise import record_condition
-from flightid.identification.gap.rank import combine, overall
+from flightid.identification.gap.rank import combine, mean_gap
 from flightid.identification.gap.segments import segments, split
 from flightid.identification.gap.sequence import STEPS
 from flightid.identification.gap.verdict import worst
@@ -164,7 +164,7 @@ class EnvelopeResult:
 def _above(g: GapResult) -> float:
     """The gap above the null level of the model as is: mean over channels of the null
     test's input-explained share less chance (nan without a test)."""
-    return overall(g.null_before.above()) if g.null_before is not None else math.nan
+    return mean_gap(g.null_before.above()) if g.null_before is not None else math.nan
 
 
 def regime_bins(conds: list[Condition], results: list[GapResult]) -> list[dict[str, Any]]:

@@ -21,34 +21,18 @@ gives the innovations nu, and the negative log-likelihood (Jategaonkar ch. 5)
 
 Estimation (default, ``joint_noise``): Gauss-Newton on the derivatives, biases, the
 diagonal of F and the measurement-noise standard deviations sigma_<output> together, on
-the full likelihood J (Maine & Iliff 1985; the R-dependence of K and S enters the
-sensitivities through the same central differences), started twice, from output error
-and from the relaxation's end point; the lower J is kept (the likelihood over F and R
-has several minima; docs/montecarlo.md, "Filter error").
-The relaxation, ``joint_noise=False``, is Jategaonkar's two-step scheme (sec. 5.8):
-1. with R fixed, Gauss-Newton on the derivatives, biases and the diagonal of F, with the
-   Fisher information M_jl = sum_k dnu_j^T S^-1 dnu_l + N/2 tr(S^-1 dS_j S^-1 dS_l)
-   (its observed form while the residuals do not yet match S) and Levenberg-Marquardt
-   damping; the innovation sensitivities come from central differences of
-   (Phi, Gamma, C, D, K, S), propagated through the predictor exactly;
-2. R from the innovations, R = diag(1/N sum nu nu^T - C P C^T) (the measurement part of
-   the innovation covariance, Maine & Iliff's mixed formulation), kept above 1 % (in
-   standard deviation) of the output-error residual, then the F-compensation heuristic
-   (Jategaonkar eq. 5.41), which scales each F_i with the weighted change
-   sqrt(R_new / R_old) of the outputs that see state i, so that the Kalman gain of the
-   next pass starts where the last one ended. The R step is damped until it lowers J, so
-   both steps descend the same likelihood. While R still moves by more than 10 % the
-   Gauss-Newton passes are cut to a few steps.
-Both use the damped Newton step of ``engine.gauss_newton`` on the filter's likelihood.
-At the converged point the derivatives are corrected for the measured dynamic pressure
-and airspeed departing from the reference condition (``flight_condition``), and the
-bounds are the Cramer-Rao bounds sqrt(diag M^-1) (M&K eq. 6.50) or, with ``colored``
-(the method's default), the score sandwich of ``kalman_filter.robust_covariance``. With
-``joint_noise`` the information matrix holds the sigma_<output> too, so the bounds carry
-the uncertainty of the estimated R. Output error supplies the start values and decides
+the full likelihood J, started twice, from output error and from the end point of
+Jategaonkar's relaxation (sec. 5.8; ``joint_noise=False`` gives the relaxation alone);
+the lower J is kept. At the converged point the derivatives are corrected for the
+measured dynamic pressure and airspeed departing from the reference condition
+(``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1) (M&K
+eq. 6.50) or, with ``colored``, the score sandwich of
+``kalman_filter.robust_covariance``. Output error supplies the start values and decides
 which parameters the flight cannot determine; the same checks of ``identifiability`` are
 repeated on the filter's information matrix, and the fit is repeated without the
-parameters they find (``refit.refit_without_unidentifiable``).
+parameters they find (``refit.refit_without_unidentifiable``). The relaxation's two
+steps, the noise floor and the measured comparisons are in docs/methods.md ("Filter
+error").
 """
 
 from __future__ import annotations
@@ -116,28 +100,70 @@ def estimate(
 ) -> Estimate:
     """Filter-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
 
-    free: model parameters to estimate (default all). start: a priori values overriding the
-    model's (the iteration starts from an output-error fit from there). process_noise: the
-    states whose equations carry process noise, each with a free F_<state> (state units per
-    sqrt(s)); default every state except the Euler angles. process_noise_start: start
-    values of F_<state> (default: half the output-error residual standard deviation of the
-    state's channel per sqrt(s)). initial_state: 'measured' or 'zero' (the filter forgets
-    it within a few samples). Values are nondimensional derivatives, SI-unit biases and
-    F_<state>; standard errors are Cramer-Rao bounds of the filter's likelihood, or with
-    ``colored`` those of ``colored_innovation_covariance`` (the Cramer-Rao bounds are then
-    in ``fit['cramer_rao_std']``).
     Converged when a Gauss-Newton pass moved no parameter by more than ``step_tolerance``
     of its standard error (or J by less than ``cost_tolerance`` of |J|) and the R update
     changed no variance by more than ``noise_tolerance`` (relative).
-    condition_correction: subtract the first-order effect of the measured dynamic pressure
-    and airspeed departing from the reference condition (``flight_condition``; models
-    without an airspeed state, records with qbar and V channels).
-    colored: standard errors from ``colored_innovation_covariance`` (the sandwich for
-    colored innovations) instead of the Cramer-Rao bounds M^-1.
-    joint_noise: estimate the measurement-noise standard deviations sigma_<output> (output
-    units) with the other parameters, by Gauss-Newton on the full likelihood from the
-    output-error start and from the relaxation's end point, keeping the lower J (the
-    default), instead of the relaxation alone with the closed-form R update.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : LinearModel
+        The linear model.
+    free : sequence of str or None, optional
+        Model parameters to estimate (default all).
+    start : mapping of str to float or None, optional
+        A priori values overriding the model's (the iteration starts from an output-error
+        fit from there).
+    process_noise : sequence of str or None, optional
+        The states whose equations carry process noise, each with a free F_<state> (state
+        units per sqrt(s)); default every state except the Euler angles. A text
+        'beta,p,r' is split on commas.
+    process_noise_start : mapping of str to float or None, optional
+        Start values of F_<state> (default: half the output-error residual standard
+        deviation of the state's channel, per sqrt(s)).
+    initial_state : str, optional
+        'measured' (default) or 'zero' (the filter forgets it within a few samples).
+    hold : str, optional
+        Inputs between samples: 'foh' (default) or 'zoh'.
+    max_iterations : int, optional
+        Gauss-Newton iterations (per relaxation pass). Default 60.
+    max_relaxations : int, optional
+        Limit of alternating parameter / R updates. Default 20.
+    step_tolerance : float, optional
+        Step tolerance, standard errors. Default 1e-3.
+    cost_tolerance : float, optional
+        Relative cost tolerance. Default 1e-6.
+    noise_tolerance : float, optional
+        Relative change of R below which it has converged. Default 1e-3.
+    check_identifiability : bool, optional
+        Fix the parameters the flight cannot determine and refit. Default True.
+    condition_correction : bool, optional
+        Subtract the first-order effect of the measured dynamic pressure and airspeed
+        departing from the reference condition (``flight_condition``; models without an
+        airspeed state, records with qbar and V channels). Default True.
+    colored : bool, optional
+        Standard errors from ``kalman_filter.robust_covariance`` (the sandwich for colored
+        innovations) instead of the Cramer-Rao bounds M^-1, which are then in
+        ``fit['cramer_rao_std']``. Default False.
+    joint_noise : bool, optional
+        Estimate the measurement-noise standard deviations sigma_<output> (output units)
+        with the other parameters, by Gauss-Newton on the full likelihood from the
+        output-error start and from the relaxation's end point, keeping the lower J
+        (default True), instead of the relaxation alone with the closed-form R update.
+
+    Returns
+    -------
+    Estimate
+        Nondimensional derivatives, SI-unit biases, F_<state> (and sigma_<output>) with
+        their standard errors; ``fit`` holds the noise and innovation standard deviations,
+        the Kalman gain, the condition correction, the starts' costs and the convergence.
+
+    Raises
+    ------
+    ValueError
+        An invalid ``initial_state``, process noise on an unknown state or on none, or an
+        unknown ``process_noise_start`` key.
     """
     if initial_state not in ("measured", "zero"):
         raise ValueError(

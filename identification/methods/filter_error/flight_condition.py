@@ -58,11 +58,25 @@ class ConditionDeparture:
 
 def condition_departure(record: FlightRecord, time: np.ndarray,
                         model: LinearModel) -> ConditionDeparture | None:
-    """The departures of ``record``'s qbar and V channels (Pa, m/s) from ``model``'s
-    reference condition at ``time`` (s), or None when the correction does not apply: the
-    record lacks one of the channels, the model has no reference condition, it carries
-    the airspeed as a state, or its aerodynamic terms already follow the measured qbar
-    (``measured_inputs.with_dynamic_pressure``)."""
+    """The departures of ``record``'s qbar and V channels from ``model``'s reference condition.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, with channels qbar (Pa) and V (m/s).
+    time : numpy.ndarray
+        The fit's time grid, s, shape (N,); the channels are interpolated onto it.
+    model : LinearModel
+        The fitted linear model.
+
+    Returns
+    -------
+    ConditionDeparture or None
+        q / q0 - 1 and V / V0 - 1 (dimensionless, shape (N,)); None when the correction does
+        not apply: the record lacks one of the channels, the model has no reference
+        condition, it carries the airspeed as a state, or its aerodynamic terms already
+        follow the measured qbar (``measured_inputs.with_dynamic_pressure``).
+    """
     c = model.condition
     if (c is None or "V" in model.states or is_scheduled(model)
             or any(ch not in record for ch in CHANNELS)):
@@ -76,21 +90,50 @@ def condition_departure(record: FlightRecord, time: np.ndarray,
 
 
 def is_aerodynamic(name: str) -> bool:
-    """True for a nondimensional aerodynamic derivative (CY_beta, Cl_p, CL_0, ...), the
-    parameters whose terms scale with the dynamic pressure; False for biases and F_<state>."""
+    """Whether a parameter is a nondimensional aerodynamic derivative (CY_beta, Cl_p, CL_0, ...).
+
+    These are the parameters whose terms scale with the dynamic pressure.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name.
+
+    Returns
+    -------
+    bool
+        True for a derivative; False for biases and F_<state>.
+    """
     return name.startswith("C") and "_" in name
 
 
 def innovation_change(names: Sequence[str], theta: np.ndarray, ev: FilterEvaluation,
                       data: Problem, departure: ConditionDeparture) -> np.ndarray:
-    """d (N, ny): the innovations' first-order change when the aerodynamic terms follow the
-    measured condition, sample by sample, instead of the reference (the Kalman gain held).
+    """The innovations' first-order change when the aerodynamic terms follow the measured
+    condition, sample by sample, instead of the reference (the Kalman gain held).
 
     The aerodynamic part of the filter's matrices at sample k is scaled by 1 + s_k: with
     the directions dPhi = sum_j theta_j dPhi/dtheta_j over the static (or the rate)
     derivatives, and the same for Gamma, C and D, the predictor's sensitivity recursion
-    (``kalman_filter.evaluate``) is driven by s_k times its forcing. ``ev`` is the
-    filter's evaluation at ``theta`` (with sensitivities), ``data`` its record.
+    (``kalman_filter.evaluate``) is driven by s_k times its forcing.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The estimated parameters.
+    theta : numpy.ndarray
+        Their values, shape (np,).
+    ev : FilterEvaluation
+        The filter's evaluation at ``theta``, with sensitivities.
+    data : Problem
+        The fit's record (inputs, outputs, held inputs).
+    departure : ConditionDeparture
+        Relative departures of qbar and V (``condition_departure``).
+
+    Returns
+    -------
+    numpy.ndarray
+        d, shape (N, ny), in the outputs' units.
     """
     aero = np.array([is_aerodynamic(n) for n in names])
     rate = np.array([is_aerodynamic(n) and n.endswith(RATE_SUFFIXES) for n in names])
@@ -113,8 +156,24 @@ def innovation_change(names: Sequence[str], theta: np.ndarray, ev: FilterEvaluat
 
 def condition_correction(information: np.ndarray, sensitivities: np.ndarray,
                          innovation_weight: np.ndarray, scaled: np.ndarray) -> np.ndarray:
-    """The parameter error the drifting condition causes, M^-1 sum_k dnu_k^T W d_k (np,),
-    to subtract from the estimate; W = S^-1 (ny, ny), d = ``innovation_change`` (N, ny).
+    """The parameter error the drifting condition causes, M^-1 sum_k dnu_k^T W d_k.
+
+    Parameters
+    ----------
+    information : numpy.ndarray
+        The filter's information matrix M at the estimate, shape (np, np).
+    sensitivities : numpy.ndarray
+        Innovation sensitivities dnu/dtheta, shape (N, ny, np).
+    innovation_weight : numpy.ndarray
+        W = S^-1, shape (ny, ny).
+    scaled : numpy.ndarray
+        d = ``innovation_change``, shape (N, ny).
+
+    Returns
+    -------
+    numpy.ndarray
+        The correction, shape (np,), in the parameters' units, to subtract from the
+        estimate.
     """
     rhs = np.einsum("iaj,ab,ib->j", sensitivities, innovation_weight, scaled)
     return np.linalg.solve(information, rhs)

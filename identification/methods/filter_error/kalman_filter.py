@@ -33,17 +33,50 @@ RELATIVE_STEP = 1e-5
 
 
 def process_noise_name(state: str) -> str:
-    """Parameter name of the process-noise standard deviation of a state equation."""
+    """Parameter name of the process-noise standard deviation of a state equation.
+
+    Parameters
+    ----------
+    state : str
+        State name, e.g. 'beta'.
+
+    Returns
+    -------
+    str
+        'F_<state>'.
+    """
     return f"{PROCESS_NOISE_PREFIX}{state}"
 
 
 def measurement_noise_name(output: str) -> str:
-    """Parameter name of the measurement-noise standard deviation of an output."""
+    """Parameter name of the measurement-noise standard deviation of an output.
+
+    Parameters
+    ----------
+    output : str
+        Output name, e.g. 'ay'.
+
+    Returns
+    -------
+    str
+        'sigma_<output>'.
+    """
     return f"{MEASUREMENT_NOISE_PREFIX}{output}"
 
 
 def is_noise_parameter(name: str) -> bool:
-    """True for F_<state> and sigma_<output>: the noise parameters, not the model's."""
+    """Whether a parameter is a noise parameter (F_<state>, sigma_<output>), not the model's.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name.
+
+    Returns
+    -------
+    bool
+        True for F_<state> and sigma_<output>.
+    """
     return name.startswith((PROCESS_NOISE_PREFIX, MEASUREMENT_NOISE_PREFIX))
 
 
@@ -69,8 +102,22 @@ class SteadyStateFilter:
 def process_noise_covariance(A: np.ndarray, F: np.ndarray, dt: float) -> np.ndarray:
     """Q_d = int_0^dt e^{A s} F F^T e^{A^T s} ds for xdot = A x + F n, n unit white noise.
 
-    Van Loan (1978): the blocks of expm([[-A, F F^T], [0, A^T]] dt). F in state units per
-    sqrt(s) (state rate per sqrt(Hz)); Q_d in state units squared.
+    Van Loan (1978): the blocks of expm([[-A, F F^T], [0, A^T]] dt).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        Continuous-time state matrix, shape (n, n), 1/s.
+    F : numpy.ndarray
+        Process-noise matrix, shape (n, n), state units per sqrt(s) (state rate per
+        sqrt(Hz)).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Q_d, shape (n, n), state units squared; symmetric.
     """
     n = A.shape[0]
     big = np.zeros((2 * n, 2 * n))
@@ -88,7 +135,34 @@ def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarr
                         hold: str = "foh") -> SteadyStateFilter:
     """Discretise (A, B) and F, solve the discrete Riccati equation, return the filter.
 
-    Raises numpy.linalg.LinAlgError when the Riccati equation has no stabilising solution.
+    Parameters
+    ----------
+    A : numpy.ndarray
+        State matrix, shape (n, n), 1/s.
+    B : numpy.ndarray
+        Input matrix, shape (n, m + 1), the last column for the constant 1.
+    C : numpy.ndarray
+        Output matrix, shape (ny, n).
+    D : numpy.ndarray
+        Feed-through matrix, shape (ny, m + 1).
+    F : numpy.ndarray
+        Process-noise matrix, shape (n, n), state units per sqrt(s).
+    R : numpy.ndarray
+        Measurement-noise covariance, shape (ny, ny), output units squared.
+    dt : float
+        Sample interval, s.
+    hold : str, optional
+        Inputs between samples: 'foh' (default) or 'zoh'.
+
+    Returns
+    -------
+    SteadyStateFilter
+        Discrete matrices, Q_d, P, S and K.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        The Riccati equation has no stabilising solution.
     """
     n = A.shape[0]
     phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n, n)),
@@ -108,11 +182,29 @@ def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarr
 
 def innovations(flt: SteadyStateFilter, u: np.ndarray, w: np.ndarray, z: np.ndarray,
                 x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted states x~ (N, n) and innovations nu (N, ny) of the steady-state filter.
+    """Predicted states x~ and innovations nu of the steady-state filter.
 
-    u (N, m+1) inputs with the constant 1, w their per-step form (``hold_inputs``), z (N, ny)
-    measured outputs, x0 the predicted state at the first sample.
     The predictor is LTI: x~_{k+1} = Phi (I - K C) x~_k + Phi K (z_k - D u_k) + Gamma w_k.
+
+    Parameters
+    ----------
+    flt : SteadyStateFilter
+        The filter.
+    u : numpy.ndarray
+        Inputs with the constant 1, shape (N, m + 1), SI units.
+    w : numpy.ndarray
+        Their per-step form (``hold_inputs``).
+    z : numpy.ndarray
+        Measured outputs, shape (N, ny), SI units.
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+
+    Returns
+    -------
+    x : numpy.ndarray
+        Predicted states, shape (N, n).
+    nu : numpy.ndarray
+        Innovations, shape (N, ny), output units.
     """
     gain = flt.phi @ flt.K
     closed = flt.phi - gain @ flt.C
@@ -125,13 +217,41 @@ def simulate_process_noise(model: LinearModel, values: Mapping[str, float],
                            process_noise: Mapping[str, float], time: np.ndarray,
                            inputs: np.ndarray, x0: np.ndarray | None = None,
                            seed: int = 0, hold: str = "foh") -> np.ndarray:
-    """Outputs (N, ny) of ``model`` driven by inputs (N, m) and by white process noise.
+    """Outputs of ``model`` driven by inputs and by white process noise.
 
-    process_noise: {state: F_i} standard deviations of the continuous white noise entering
-    each state equation (state units per sqrt(s)); the exact discrete equivalent Q_d is
-    sampled with a fixed ``seed``. No measurement noise is added. This is the model the
-    filter-error method assumes (turbulence as white noise, e.g. a sideslip gust in the
-    beta equation).
+    The exact discrete equivalent Q_d of the process noise is sampled with a fixed
+    ``seed``. No measurement noise is added. This is the model the filter-error method
+    assumes (turbulence as white noise, e.g. a sideslip gust in the beta equation).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linear model.
+    values : mapping of str to float
+        Parameter values (missing ones take the start values).
+    process_noise : mapping of str to float
+        {state: F_i}, standard deviations of the continuous white noise entering each state
+        equation, state units per sqrt(s).
+    time : numpy.ndarray
+        Sample times, s, shape (N,).
+    inputs : numpy.ndarray
+        Inputs in the model's order, shape (N, m), SI units.
+    x0 : numpy.ndarray or None, optional
+        Initial state, shape (n,); default zero.
+    seed : int, optional
+        Seed of the noise generator. Default 0.
+    hold : str, optional
+        Inputs between samples: 'foh' (default) or 'zoh'.
+
+    Returns
+    -------
+    numpy.ndarray
+        Outputs, shape (N, ny), SI units.
+
+    Raises
+    ------
+    ValueError
+        Process noise on a state the model does not have.
     """
     time = np.asarray(time, dtype=float)
     n_states = len(model.states)
@@ -213,7 +333,20 @@ class FilterEvaluation:
 
 
 def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
-    """1/2 sum nu^T S^-1 nu + N/2 ln det S (Jategaonkar eq. 5.9, constant dropped)."""
+    """1/2 sum nu^T S^-1 nu + N/2 ln det S (Jategaonkar eq. 5.9, constant dropped).
+
+    Parameters
+    ----------
+    nu : numpy.ndarray
+        Innovations, shape (N, ny).
+    S : numpy.ndarray
+        Innovation covariance, shape (ny, ny).
+
+    Returns
+    -------
+    float
+        J; infinite when S is not positive definite.
+    """
     sign, logdet = np.linalg.slogdet(S)
     if sign <= 0:
         return float("inf")
@@ -223,6 +356,29 @@ def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
 
 def evaluate(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
               sensitivities: bool) -> FilterEvaluation:
+    """The filter's negative log-likelihood and innovations at ``theta`` (and their
+    sensitivities if asked).
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem.
+    theta : ndarray
+        The model parameters (SI units).
+    R : ndarray
+        The measurement noise covariance (output units squared).
+    x0 : ndarray
+        The initial state.
+    sensitivities : bool
+        Whether to compute the innovations' sensitivities too.
+
+    Returns
+    -------
+    FilterEvaluation
+        The cost (infinite when the filter cannot be built or the innovations are not
+        finite), the states, the innovations and the filter; with ``sensitivities``, the
+        innovations' sensitivities and what follows from them.
+    """
     d = prob.data
     try:
         flt = prob.filter(theta, R)
@@ -299,11 +455,40 @@ class FilterPass:
 
 def gauss_newton_pass(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
                   max_iterations: int, step_tol: float, cost_tol: float) -> FilterPass:
-    """Minimise J(theta) with R fixed: Gauss-Newton with Levenberg-Marquardt damping
-    (``engine.gauss_newton.damped_newton_step`` on the filter's H, M and gradient).
+    """Minimise J(theta) with R fixed.
 
+    Gauss-Newton with Levenberg-Marquardt damping
+    (``engine.gauss_newton.damped_newton_step`` on the filter's H, M and gradient).
     Converged when no parameter moved by more than ``step_tol`` of its standard error, or
     when J fell by less than ``cost_tol`` times max(|J|, 1) (relative).
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem.
+    theta : numpy.ndarray
+        Start values of the estimated parameters, shape (np,).
+    R : numpy.ndarray
+        Measurement-noise covariance, shape (ny, ny), held fixed.
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+    max_iterations : int
+        Iteration limit (>= 1).
+    step_tol : float
+        Step tolerance, standard errors.
+    cost_tol : float
+        Relative cost tolerance.
+
+    Returns
+    -------
+    FilterPass
+        Parameters, evaluation with sensitivities, convergence flag and reason, iterations
+        and the cost history.
+
+    Raises
+    ------
+    ValueError
+        ``max_iterations`` is below 1 with free parameters.
     """
     lam = 0.0
     history: list[float] = []
@@ -341,8 +526,20 @@ def gauss_newton_pass(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0:
 def measurement_noise(ev: FilterEvaluation, lower: np.ndarray) -> np.ndarray:
     """R = diag(1/N sum nu nu^T - C P C^T), the measurement part of the innovations.
 
-    Kept above ``lower`` (variances) so that R stays positive definite when the process
-    noise explains all of an output's innovation (Jategaonkar's constraint K C <= 1).
+    Kept above ``lower`` so that R stays positive definite when the process noise explains
+    all of an output's innovation (Jategaonkar's constraint K C <= 1).
+
+    Parameters
+    ----------
+    ev : FilterEvaluation
+        The filter's evaluation (innovations and filter).
+    lower : numpy.ndarray
+        Lower bound of each variance, shape (ny,), output units squared.
+
+    Returns
+    -------
+    numpy.ndarray
+        Diagonal R, shape (ny, ny), output units squared.
     """
     innovation = np.mean(ev.nu**2, axis=0)
     predicted = np.diag(ev.flt.C @ ev.flt.P @ ev.flt.C.T)
@@ -351,7 +548,7 @@ def measurement_noise(ev: FilterEvaluation, lower: np.ndarray) -> np.ndarray:
 
 def noise_step(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, R_new: np.ndarray,
                 ev: FilterEvaluation, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """(theta, R) after the R update, damped until it lowers the likelihood, or None.
+    """(theta, R) after the R update, damped until it lowers the likelihood.
 
     The closed-form R is not the exact minimiser of J over R (Maine & Iliff's mixed
     formulation neglects the dependence of P on R), and far from convergence it can
@@ -359,6 +556,26 @@ def noise_step(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, R_new: np.
     geometrically, R^(1-a) R_new^a with a = 1, 1/2, ..., 1/32, with and without the F
     compensation, and the first candidate that lowers J is kept. Both steps of the
     relaxation then lower the same likelihood, which makes the iteration monotone.
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem.
+    theta : numpy.ndarray
+        Current parameters, shape (np,).
+    R : numpy.ndarray
+        Current measurement-noise covariance, shape (ny, ny).
+    R_new : numpy.ndarray
+        Closed-form update (``measurement_noise``), shape (ny, ny).
+    ev : FilterEvaluation
+        The evaluation at (theta, R), whose cost must be lowered.
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        (theta, R) of the first candidate that lowers J; None when none does.
     """
     for a in (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125):
         R_try = np.diag(np.diag(R) ** (1 - a) * np.diag(R_new) ** a)
@@ -375,6 +592,24 @@ def compensate_process_noise(prob: FilterProblem, theta: np.ndarray, R_old: np.n
 
     If R and F F^T scale together the Riccati solution scales with them and the Kalman
     gain is unchanged; this keeps the gain roughly constant across the R update.
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem (names the F_<state> parameters).
+    theta : numpy.ndarray
+        Parameters, shape (np,).
+    R_old : numpy.ndarray
+        Measurement-noise covariance before the update, shape (ny, ny).
+    R_new : numpy.ndarray
+        After the update, shape (ny, ny).
+    C : numpy.ndarray
+        Output matrix, shape (ny, n).
+
+    Returns
+    -------
+    numpy.ndarray
+        A copy of ``theta`` with the F_<state> entries scaled.
     """
     theta = theta.copy()
     r_old, r_new = np.diag(R_old), np.diag(R_new)
@@ -393,8 +628,26 @@ def compensate_process_noise(prob: FilterProblem, theta: np.ndarray, R_old: np.n
 
 def score_contributions(sensitivities: np.ndarray, covariance_sensitivities: np.ndarray,
                         innovations: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """Per-sample gradient of J (N, np): g_k = dnu_k^T W nu_k + 1/2 tr(W dS_j)
-    - 1/2 nu_k^T W dS_j W nu_k, W = S^-1; their sum is the gradient of ``evaluate``."""
+    """Per-sample gradient of J: g_k = dnu_k^T W nu_k + 1/2 tr(W dS_j) - 1/2 nu_k^T W dS_j W nu_k.
+
+    W = S^-1; their sum is the gradient of ``evaluate``.
+
+    Parameters
+    ----------
+    sensitivities : numpy.ndarray
+        dnu/dtheta, shape (N, ny, np).
+    covariance_sensitivities : numpy.ndarray
+        dS/dtheta, shape (np, ny, ny).
+    innovations : numpy.ndarray
+        nu, shape (N, ny).
+    S : numpy.ndarray
+        Innovation covariance, shape (ny, ny).
+
+    Returns
+    -------
+    numpy.ndarray
+        g, shape (N, np).
+    """
     weight = np.linalg.inv(S)
     wnu = innovations @ weight
     g = np.einsum("iaj,ia->ij", sensitivities, wnu)
@@ -416,12 +669,31 @@ def robust_covariance(information: np.ndarray, hessian: np.ndarray,
     matrix M. When the model is right E[G] = E[H] = M and both are the Cramer-Rao bound
     M^-1 (Jategaonkar 2015 eq. 5.22). H here drops the second derivatives of nu and S
     (``evaluate``) and is noisy where S depends strongly on a parameter: on flights of the
-    filter's own model it put CY_beta's bound at 0.56-0.82 of the Cramer-Rao bound, where
+    filter's own model it puts CY_beta's bound at 0.56-0.82 of the Cramer-Rao bound, where
     M^-1 G M^-1 gives 0.97-1.03. In three-axis turbulence H^-1 G H^-1 is the larger for the
     roll derivatives. Each standard error is the larger of the two, with the correlations
-    of M^-1 G M^-1. ``sensitivities`` dnu/dtheta (N, ny, np) and ``covariance_sensitivities``
-    dS/dtheta (np, ny, ny) carry the Kalman gain's dependence on the parameters;
-    ``innovations`` (N, ny), S (ny, ny). Parameter units squared.
+    of M^-1 G M^-1.
+
+    Parameters
+    ----------
+    information : numpy.ndarray
+        Information matrix M, shape (np, np).
+    hessian : numpy.ndarray
+        Hessian H of J, shape (np, np).
+    sensitivities : numpy.ndarray
+        dnu/dtheta, shape (N, ny, np); carries the Kalman gain's dependence on the
+        parameters.
+    covariance_sensitivities : numpy.ndarray
+        dS/dtheta, shape (np, ny, ny).
+    innovations : numpy.ndarray
+        nu, shape (N, ny).
+    S : numpy.ndarray
+        Innovation covariance, shape (ny, ny).
+
+    Returns
+    -------
+    numpy.ndarray
+        Covariance, shape (np, np), parameter units squared; symmetric.
     """
     g = score_contributions(sensitivities, covariance_sensitivities, innovations, S)
     g -= g.mean(axis=0)

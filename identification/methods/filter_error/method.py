@@ -55,9 +55,26 @@ class Options(HeldOptions):
 
 def run(record: FlightRecord, model: str = "lateral", options: Options | None = None
         ) -> Estimate:
-    """Filter error with a linear-model preset ('lateral', 'longitudinal', 'short_period')
-    at the record's reference condition, a priori parameters held, with the known inputs
-    output error takes from the record (``measured_inputs.driven_by_measurements``)."""
+    """Filter error with a linear-model preset at the record's reference condition.
+
+    A priori parameters are held, and the model takes the known inputs output error takes
+    from the record (``measured_inputs.driven_by_measurements``).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : str, optional
+        A linear-model preset ('lateral' default, 'longitudinal', 'short_period').
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        The estimate (``estimation.estimate``); ``fit`` also holds the a priori values
+        ('a_priori') and the known inputs.
+    """
     options = options or Options()
     linear, free, held = a_priori.linear_model(
         model_structure.linear(model), record, options.derivatives, options.a_priori,

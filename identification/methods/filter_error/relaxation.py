@@ -54,7 +54,34 @@ def joint(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
            max_iterations: int, step_tol: float, cost_tol: float, floor: np.ndarray
            ) -> Relaxed:
     """Gauss-Newton on the derivatives, biases, F and the measurement-noise standard
-    deviations together: the likelihood's own minimum over R (Maine & Iliff 1985)."""
+    deviations together: the likelihood's own minimum over R (Maine & Iliff 1985).
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem; its names include the sigma_<output> parameters.
+    theta : numpy.ndarray
+        Start values, shape (np,).
+    R : numpy.ndarray
+        Measurement-noise covariance, shape (ny, ny); the entries of the estimated
+        sigma_<output> are taken from ``theta``.
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+    max_iterations : int
+        Gauss-Newton iteration limit.
+    step_tol : float
+        Step tolerance, standard errors.
+    cost_tol : float
+        Relative cost tolerance.
+    floor : numpy.ndarray
+        Noise floor of each output variance, shape (ny,), reported with the fit.
+
+    Returns
+    -------
+    Relaxed
+        The fit: parameters (noise standard deviations non-negative), R, evaluation,
+        information matrix, convergence and histories.
+    """
     gn = gauss_newton_pass(prob, theta, R, x0, max_iterations, step_tol, cost_tol)
     theta = gn.theta.copy()
     for j, name in enumerate(prob.names):
@@ -71,7 +98,37 @@ def two_starts(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.nda
                 max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
                 noise_tol: float, floor: np.ndarray) -> Relaxed:
     """The joint Gauss-Newton from the output-error start and from the relaxation's end
-    point (Jategaonkar 2015 sec. 5.8), the lower J kept: J has several minima in F, R."""
+    point (Jategaonkar 2015 sec. 5.8), the lower J kept: J has several minima in F, R.
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem, with the sigma_<output> parameters.
+    theta : numpy.ndarray
+        Output-error start values, shape (np,).
+    R : numpy.ndarray
+        Start measurement-noise covariance, shape (ny, ny).
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+    max_iterations : int
+        Gauss-Newton iteration limit per pass.
+    max_relaxations : int
+        Limit of relaxation steps.
+    step_tol : float
+        Step tolerance, standard errors.
+    cost_tol : float
+        Relative cost tolerance.
+    noise_tol : float
+        Relative change of R below which the relaxation has converged.
+    floor : numpy.ndarray
+        Lower bound of each output variance, shape (ny,).
+
+    Returns
+    -------
+    Relaxed
+        The fit of lower J; ``start`` names the winning start, ``start_costs`` the J of each
+        (and of the relaxation alone).
+    """
     sigma = np.array([n.startswith(MEASUREMENT_NOISE_PREFIX) for n in prob.names])
     relax_prob = FilterProblem(prob.data, [n for n, s in zip(prob.names, sigma, strict=True)
                                            if not s],
@@ -100,7 +157,37 @@ def two_starts(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.nda
 def relax(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, x0: np.ndarray,
            max_iterations: int, max_relaxations: int, step_tol: float, cost_tol: float,
            noise_tol: float, floor: np.ndarray) -> Relaxed:
-    """Alternate Gauss-Newton passes (R fixed) and R updates with F compensation."""
+    """Alternate Gauss-Newton passes (R fixed) and R updates with F compensation.
+
+    Parameters
+    ----------
+    prob : FilterProblem
+        The filter-error problem (without sigma_<output> parameters).
+    theta : numpy.ndarray
+        Start values, shape (np,).
+    R : numpy.ndarray
+        Start measurement-noise covariance, shape (ny, ny).
+    x0 : numpy.ndarray
+        Predicted state at the first sample, shape (n,).
+    max_iterations : int
+        Gauss-Newton iteration limit per pass.
+    max_relaxations : int
+        Limit of relaxation steps.
+    step_tol : float
+        Step tolerance, standard errors.
+    cost_tol : float
+        Relative cost tolerance.
+    noise_tol : float
+        Relative change of R below which it has converged.
+    floor : numpy.ndarray
+        Lower bound of each output variance, shape (ny,).
+
+    Returns
+    -------
+    Relaxed
+        The fit: parameters (F non-negative), R, evaluation, information matrix,
+        convergence and reason, passes, iterations and the cost and noise histories.
+    """
     history: list[float] = []
     noise_history = [np.diag(R).copy()]
     iterations = 0

@@ -32,22 +32,12 @@ differential thrust in yaw (each propeller sees u - r y) is not read as aerodyna
 (it replaces h_engine and L_engine). The mass is the record's time history (fuel burn),
 gravity the local effective one (``rigid_body.local_gravity``).
 
-Integration: classical RK4 at the record rate; the inputs at the half steps come from the
-4-point cubic interpolant of the samples (``controls="linear"`` takes the mean of the two
-neighbours, ``"zoh"`` holds the earlier one). Recorded signals are band-limited by the anti-
-alias filters, and a linear midpoint of a smooth signal is off by its curvature: on a 50 Hz
-Twin Otter record behind a 10 Hz 4-pole filter, linear midpoints bias Cl_p, Cl_da and
-Cl_beta by -0.85 %, cubic ones by -0.03 % (noise-free). Output sensitivities: complex step
-(Martins et al. 2003) in parallel columns, one integration carrying every parameter
-perturbation as a batch: dy/dtheta_k = Im y(theta + i h e_k) / h, exact to rounding for
-these analytic equations, so the Gauss-Newton steps are those of the exact information
-matrix. The optimiser, bounds and refit loop are those of the shared engine
-(``identification.engine``), as in output error: ``gauss_newton.maximum_likelihood``
-(Newton-Raphson with R concentrated out, Levenberg-Marquardt safeguard, R re-estimated
-every iteration); Cramer-Rao bounds sqrt(diag M^-1) (M&K eq. 6.50), optionally corrected
-for colored residuals (M&K eq. 6.54, ``bounds``); identifiability as in output error
-(unexcited controls, zero sensitivity, collinearity of the normalised information matrix)
-with ``refit.refit_without_unidentifiable``; start values from equation error.
+Integration: classical RK4 at the record rate, the inputs at the half steps from the
+4-point cubic interpolant of the samples (``controls``); output sensitivities by complex
+step (Martins et al. 2003), one batched integration carrying every parameter perturbation,
+exact to rounding. Optimiser, bounds, identifiability checks and refit loop: the shared
+engine (``identification.engine``), as in output error; start values from equation error.
+Details and measured effects: docs/methods.md ("Output error on the nonlinear 6-DOF").
 """
 
 from __future__ import annotations
@@ -94,7 +84,19 @@ def start_from_equation_error(record: FlightRecord, model: SixDofModel) -> dict[
 
     One least-squares fit per coefficient on the model's variables (record means as
     references, so the biases are the same parameters). Terms the regression cannot
-    estimate keep the model's start values.
+    estimate are left out, so they keep the model's start values.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    model : SixDofModel
+        The 6-DOF model structure.
+
+    Returns
+    -------
+    dict of str to float
+        {parameter: value}: derivatives per rad (dimensionless), biases C_0 dimensionless.
     """
     out: dict[str, float] = {}
     for coef, terms in model.structure.items():
@@ -124,14 +126,51 @@ def estimate(
 ) -> Estimate:
     """Output-error maximum-likelihood estimate of the 6-DOF model's parameters from ``record``.
 
-    model: default ``model_from_record(record)`` (body axes, no alphadot, no rotor).
-    free: parameters to estimate (default all); the others stay at their start values.
-    start: "equation_error" (default: the free parameters' start from equation error, the
-    fixed ones keep the model's), a mapping of start values, or None (model's).
-    initial_state: 'measured' (first sample) or 'estimate' (x0_<state> parameters, SI).
-    controls: 'cubic' (default) or 'linear' interpolation between samples, or 'zoh' (held).
-    Values are nondimensional derivatives, h_engine in N m s; standard errors are
-    Cramer-Rao bounds (corrected for colored residuals when ``colored``).
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : SixDofModel or None, optional
+        The model; default ``model_from_record(record)`` (body axes, no alphadot, no rotor).
+    free : sequence of str or None, optional
+        Parameters to estimate (default all); the others stay at their start values.
+    start : mapping of str to float, str or None, optional
+        "equation_error" (default: the free parameters' start from equation error, the
+        fixed ones keep the model's), a mapping of start values, or None (the model's).
+    initial_state : str, optional
+        'measured' (default: first sample) or 'estimate' (x0_<state> parameters, SI).
+    controls : str, optional
+        Controls between samples: 'cubic' (default) or 'linear' interpolation, or 'zoh'
+        (held).
+    full_noise_covariance : bool, optional
+        Estimate the full output-noise covariance. Default False.
+    colored : bool, optional
+        Cramer-Rao bounds corrected for colored residuals. Default False.
+    max_iterations : int, optional
+        Gauss-Newton iteration limit. Default 30.
+    step_tolerance : float, optional
+        Converged when no step exceeds this many standard errors. Default 1e-3.
+    cost_tolerance : float, optional
+        Or when the ML cost changes less than this (absolute). Default 1e-7.
+    check_identifiability : bool, optional
+        Fix the parameters the flight cannot determine and refit. Default True.
+    min_input_range : float, optional
+        A control spanning less than this (peak to peak, rad) is not excited.
+    singular_eigenvalue : float, optional
+        Relative eigenvalue of the information matrix below which it is singular.
+
+    Returns
+    -------
+    Estimate
+        Nondimensional derivatives and biases, h_engine in N m s, L_engine in N m, x0 in SI
+        units, with Cramer-Rao bounds; method "oe" (``run`` names the 6-DOF variant), ``fit``
+        also holding the axes, structure, references, integration and initial state.
+
+    Raises
+    ------
+    ValueError
+        An invalid ``start``, start values or free parameters not in the model, or a record
+        the model cannot use.
     """
     if model is None:
         model = model_from_record(record)
@@ -257,8 +296,27 @@ class Options(OutputErrorOptions):
 
 def run(record: FlightRecord, model: str = "6dof", options: Options | None = None
         ) -> Estimate:
-    """6-DOF output error: model '6dof' (body-axis forces) or '6dof_stability' (lift and
-    drag), the coefficients' structure and outputs from ``options``."""
+    """6-DOF output error with the coefficients' structure and outputs from ``options``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval.
+    model : str, optional
+        '6dof' (default, body-axis forces) or '6dof_stability' (lift and drag).
+    options : Options or None, optional
+        Method options; None takes the defaults.
+
+    Returns
+    -------
+    Estimate
+        The estimate (``estimate``), method ``ID``.
+
+    Raises
+    ------
+    ValueError
+        ``model`` is not a 6-DOF model.
+    """
     options = options or Options()
     if model not in MODELS:
         raise ValueError(f"6-DOF output error takes model {' or '.join(MODELS)}, got {model!r}")
@@ -303,7 +361,18 @@ def aerodynamic_parameters(model: str = "6dof", options: Options | None = None
 
 
 def channels(model: str) -> tuple[str, ...]:
-    """Channels the 6-DOF model needs: states, controls, specific forces, air data."""
+    """Channels the 6-DOF model needs: states, controls, specific forces, air data.
+
+    Parameters
+    ----------
+    model : str
+        The 6-DOF model name (the channels are the same for both).
+
+    Returns
+    -------
+    tuple of str
+        V, alpha, beta, p, q, r, phi, theta, ax, ay, az, de, da, dr, qbar.
+    """
     return ("V", "alpha", "beta", "p", "q", "r", "phi", "theta", "ax", "ay", "az", "de", "da",
             "dr", "qbar")
 

@@ -1,7 +1,7 @@
 """A record as a six-degree-of-freedom output-error problem, and its simulation: the
 rigid-body equations (``models.rigid_body``) driven by the measured controls (linear,
 cubic or held between samples) and the propulsive terms, integrated by RK4 for many
-parameter sets at once; the outputs and their central-difference sensitivities.
+parameter sets at once; the outputs and their complex-step sensitivities.
 """
 
 from __future__ import annotations
@@ -69,14 +69,45 @@ def model_from_record(
 ) -> SixDofModel:
     """The 6-DOF model at a record's mass properties, geometry and mean references.
 
-    ``structure`` {coefficient: variables} defaults to ``default_structure(force_axes,
-    alphadot)``; ``force_axes`` is inferred from the structure when not given. Outputs
-    default to those of OUTPUTS the record has. ``rotor_momentum`` adds h_engine (N m s),
-    ``engine_torque`` L_engine (N m, constant rolling moment of the engine). Gravity
-    (m/s^2) defaults to the local effective gravity at the record's mean latitude and
-    altitude (``rigid_body.local_gravity``), else G0. ``moment_axes`` "stability" makes Cl
-    and Cn stability-axis coefficients on stability-axis rates (see the module docstring).
-    ``propulsive_moments`` drives the model with the record's L_prop, M_prop, N_prop (N m).
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, with ``meta.reference`` (area m^2, span and chord m) and
+        mass properties.
+    structure : mapping of str to sequence of str or None, optional
+        {coefficient: variables}; default ``default_structure(force_axes, alphadot)``.
+    force_axes : str or None, optional
+        'body' or 'stability'; inferred from the structure when not given (stability when it
+        has CL or CD).
+    alphadot : bool, optional
+        Add Cm_alphadot to the default structure. Default False.
+    outputs : sequence of str or None, optional
+        Outputs fitted; default those of ``OUTPUTS`` the record has.
+    rotor_momentum : bool, optional
+        Add h_engine, the engine rotor's angular momentum (N m s). Default False.
+    engine_torque : bool, optional
+        Add L_engine, a constant engine rolling moment (N m). Default False.
+    start : mapping of str to float or None, optional
+        Start values overriding the typical ones.
+    gravity : float or None, optional
+        Gravity, m/s^2; default the local effective gravity at the record's mean latitude
+        and altitude (``rigid_body.local_gravity``), else G0.
+    moment_axes : str, optional
+        'body' (default) or 'stability': Cl and Cn are stability-axis coefficients on
+        stability-axis rates (see ``estimation``'s module docstring).
+    propulsive_moments : bool, optional
+        Drive the model with the record's L_prop, M_prop, N_prop (N m). Default False.
+
+    Returns
+    -------
+    SixDofModel
+        The model; references are the record means of the variables (rad, nondimensional
+        rates).
+
+    Raises
+    ------
+    ValueError
+        An invalid structure or force axes, or no reference geometry.
     """
     if structure is None:
         structure = default_structure(force_axes or "body", alphadot)
@@ -104,6 +135,23 @@ def model_from_record(
 
 
 def density(record: FlightRecord) -> np.ndarray:
+    """The air density along a record.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        A record with ``rho`` (kg/m^3), or ``qbar`` (Pa) and ``V`` (m/s).
+
+    Returns
+    -------
+    ndarray
+        The density (kg/m^3): ``rho``, else 2 qbar / V^2.
+
+    Raises
+    ------
+    ValueError
+        When the record has neither.
+    """
     if "rho" in record:
         return record["rho"]
     if "qbar" in record and "V" in record:
@@ -113,9 +161,26 @@ def density(record: FlightRecord) -> np.ndarray:
 
 
 def measured_state(record: FlightRecord, index: int = 0) -> np.ndarray:
-    """The state (u, v, w, p, q, r, phi, theta, psi) of sample ``index`` in SI units.
+    """The state (u, v, w, p, q, r, phi, theta, psi) of sample ``index``.
 
     u, v, w from their channels, else from V, alpha and beta; psi 0 when absent.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels.
+    index : int, optional
+        Sample index. Default 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        The state, shape (9,): m/s, rad/s, rad.
+
+    Raises
+    ------
+    ValueError
+        A channel needed for the state is missing.
     """
     if all(c in record for c in ("u", "v", "w")):
         uvw = [record[c][index] for c in ("u", "v", "w")]
@@ -139,7 +204,32 @@ def measured_state(record: FlightRecord, index: int = 0) -> np.ndarray:
 
 def problem_from_record(record: FlightRecord, model: SixDofModel,
                         initial_state: str = "measured", controls: str = "cubic") -> Problem:
-    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling)."""
+    """Arrange a record's inputs and outputs for ``model`` (checks channels and sampling).
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniform sample interval, at least 10 samples, with thrust
+        (N), the air density (``rho`` or ``qbar`` and ``V``) and the model's controls.
+    model : SixDofModel
+        The 6-DOF model.
+    initial_state : str, optional
+        'measured' (default) or 'estimate' (x0_<state> parameters).
+    controls : str, optional
+        Inputs at the RK4 half steps: 'cubic' (default), 'linear' or 'zoh'.
+
+    Returns
+    -------
+    Problem
+        Time (s), inputs at the samples and RK4 stage instants, measured outputs, initial
+        state, x0 parameter names and noise floor.
+
+    Raises
+    ------
+    ValueError
+        Invalid options, a non-uniform or short record, a missing or non-finite channel, or
+        a non-positive air density.
+    """
     if initial_state not in INITIAL_STATES:
         raise ValueError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got "
                          f"{initial_state!r}")
@@ -197,6 +287,16 @@ def cubic_midpoints(x: np.ndarray) -> np.ndarray:
     """Values halfway between samples (rows) by the 4-point cubic (Lagrange) interpolant.
 
     (-x[i-1] + 9 x[i] + 9 x[i+1] - x[i+2]) / 16; the end intervals use the linear mean.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Samples, shape (N, ...).
+
+    Returns
+    -------
+    numpy.ndarray
+        Midpoints, shape (N - 1, ...), in the units of ``x``.
     """
     mid = 0.5 * (x[:-1] + x[1:])
     if x.shape[0] >= 4:
@@ -210,11 +310,30 @@ def cubic_midpoints(x: np.ndarray) -> np.ndarray:
 def aero(model: SixDofModel, x, controls: tuple, thrust, rho, combine, xp=np) -> tuple:
     """Aerodynamic state of states x[9, ...] (an array, or Python floats with xp=SCALAR).
 
-    ``controls`` are (de, da, dr) minus their references (rad), thrust (N) and rho
-    (kg/m^3), broadcast against x[0]; ``combine(rows)`` maps the regressor rows (alpha,
-    beta, phat, qhat, rhat, de, da, dr as perturbations) to the six coefficients, without
-    the alphadot terms. Returns body forces fx, fy, fz (N, thrust included), the
-    coefficients, qbar S (N), V (m/s), alpha and beta (rad), and 1/(2V) (s/m).
+    Parameters
+    ----------
+    model : SixDofModel
+        The model (reference geometry, references, axes).
+    x : numpy.ndarray or list
+        States, shape (9, ...), SI units.
+    controls : tuple
+        (de, da, dr) minus their references, rad, broadcast against x[0].
+    thrust : float or numpy.ndarray
+        Thrust along body x, N.
+    rho : float or numpy.ndarray
+        Air density, kg/m^3.
+    combine : callable
+        ``combine(rows)`` maps the regressor rows (alpha, beta, phat, qhat, rhat, de, da, dr
+        as perturbations) to the six coefficients, without the alphadot terms
+        (``batch_combination``, ``scalar_combination``).
+    xp : module or namespace, optional
+        numpy (default) or ``rigid_body.SCALAR``.
+
+    Returns
+    -------
+    tuple
+        Body forces fx, fy, fz (N, thrust included), the six coefficients, qbar S (N),
+        V (m/s), alpha and beta (rad), and 1/(2V) (s/m).
     """
     ref, refs = model.reference, model.references
     u, v, w = x[0], x[1], x[2]
@@ -248,7 +367,22 @@ def aero(model: SixDofModel, x, controls: tuple, thrust, rho, combine, xp=np) ->
 
 
 def batch_combination(model: SixDofModel, theta: np.ndarray, shape: tuple[int, ...]):
-    """combine(rows) for arrays: one einsum of theta (6, 10, K) with the regressors."""
+    """combine(rows) for arrays: one einsum of theta (6, 10, K) with the regressors.
+
+    Parameters
+    ----------
+    model : SixDofModel
+        The model (its alphadot reference).
+    theta : numpy.ndarray
+        Coefficient tensors, shape (6, 10, K), real or complex.
+    shape : tuple of int
+        Trailing shape of the states, ending in K.
+
+    Returns
+    -------
+    callable
+        ``combine(rows)`` returning the six coefficients, shape (6, *shape).
+    """
     reg = np.empty((1 + len(VARIABLES), *shape), dtype=theta.dtype)
     reg[0] = 1.0
     reg[9] = -model.references.get("alphadot", 0.0)
@@ -262,7 +396,20 @@ def batch_combination(model: SixDofModel, theta: np.ndarray, shape: tuple[int, .
 
 
 def scalar_combination(model: SixDofModel, theta: np.ndarray):
-    """combine(rows) for Python floats: sums over the nonzero terms of theta (6, 10, 1)."""
+    """combine(rows) for Python floats: sums over the nonzero terms of theta (6, 10, 1).
+
+    Parameters
+    ----------
+    model : SixDofModel
+        The model (its alphadot reference).
+    theta : numpy.ndarray
+        Coefficient tensor, shape (6, 10, 1), real.
+
+    Returns
+    -------
+    callable
+        ``combine(rows)`` returning the six coefficients as a list of float.
+    """
     t = theta[..., 0].tolist()
     adot_ref = model.references.get("alphadot", 0.0)
     const = [t[j][0] - t[j][9] * adot_ref for j in range(6)]
@@ -282,10 +429,25 @@ def scalar_combination(model: SixDofModel, theta: np.ndarray):
 
 def integrate(problem: Problem, theta: np.ndarray, engine: np.ndarray, x0: np.ndarray
                ) -> np.ndarray:
-    """States (N, 9, K) for a batch of K coefficient tensors theta (6, 10, K).
+    """States for a batch of K coefficient tensors, by RK4 at the record rate.
 
-    engine (2, K): rotor angular momentum (N m s) and engine rolling moment (N m); x0 (9, K).
     One real trajectory (K = 1) runs on Python floats, a batch on numpy arrays.
+
+    Parameters
+    ----------
+    problem : Problem
+        The 6-DOF problem.
+    theta : numpy.ndarray
+        Coefficient tensors, shape (6, 10, K).
+    engine : numpy.ndarray
+        Rotor angular momentum (N m s) and engine rolling moment (N m), shape (2, K).
+    x0 : numpy.ndarray
+        Initial states, shape (9, K), SI units.
+
+    Returns
+    -------
+    numpy.ndarray
+        States, shape (N, 9, K): m/s, rad/s, rad.
     """
     model = problem.model
     ref, mp = model.reference, model.mass
@@ -326,7 +488,22 @@ def integrate(problem: Problem, theta: np.ndarray, engine: np.ndarray, x0: np.nd
 
 
 def outputs_of_states(problem: Problem, states: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Outputs (N, K, ny) of states (N, 9, K)."""
+    """The model outputs of integrated states.
+
+    Parameters
+    ----------
+    problem : Problem
+        The 6-DOF problem (inputs and output names).
+    states : numpy.ndarray
+        States, shape (N, 9, K).
+    theta : numpy.ndarray
+        Coefficient tensors, shape (6, 10, K).
+
+    Returns
+    -------
+    numpy.ndarray
+        Outputs, shape (N, K, ny), SI units (ax, ay, az specific forces, m/s^2).
+    """
     model = problem.model
     x = states.transpose(1, 0, 2)
     inp = problem.inputs.T[:, :, None]  # (9, N, 1)
@@ -344,9 +521,29 @@ def outputs_of_states(problem: Problem, states: np.ndarray, theta: np.ndarray) -
 def batch_outputs(problem: Problem, values: Mapping[str, float],
            columns: Mapping[str, np.ndarray], k: int, dtype: type
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Coefficient tensors (6, 10, k), engine terms (2, k) and initial states (9, k).
+    """Coefficient tensors, engine terms and initial states of a batch of parameter sets.
 
-    ``values`` are scalars common to the batch, ``columns`` arrays (k,) that override them.
+    Parameters
+    ----------
+    problem : Problem
+        The 6-DOF problem.
+    values : mapping of str to float
+        Parameter values common to the batch (the others at the model's start values).
+    columns : mapping of str to numpy.ndarray
+        Arrays (k,) that override ``values`` per batch member.
+    k : int
+        Batch size.
+    dtype : type
+        float, or complex for the complex step.
+
+    Returns
+    -------
+    theta : numpy.ndarray
+        Coefficient tensors, shape (6, 10, k).
+    engine : numpy.ndarray
+        h_engine (N m s) and L_engine (N m), shape (2, k).
+    x0 : numpy.ndarray
+        Initial states, shape (9, k).
     """
     model = problem.model
     index = model.index()
@@ -366,10 +563,22 @@ def batch_outputs(problem: Problem, values: Mapping[str, float],
 
 
 def outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
-    """Model outputs (N, ny) at parameter values (the others at their fixed/start values).
+    """Model outputs at parameter values (the others at their fixed or start values).
 
     A trajectory that leaves the domain of the equations (a trial step of the optimiser
     that makes the model diverge) gives NaN outputs, which the optimiser rejects.
+
+    Parameters
+    ----------
+    problem : Problem
+        The 6-DOF problem.
+    values : mapping of str to float
+        Parameter values.
+
+    Returns
+    -------
+    numpy.ndarray
+        Outputs, shape (N, ny), SI units.
     """
     theta, engine, x0 = batch_outputs(problem, {**problem.fixed, **values}, {}, 1, float)
     try:
@@ -382,7 +591,24 @@ def outputs(problem: Problem, values: Mapping[str, float]) -> np.ndarray:
 
 def outputs_and_sensitivities(problem: Problem, values: Mapping[str, float],
                                names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    """Outputs (N, ny) and complex-step sensitivities (N, ny, len(names)), one batched run."""
+    """Outputs and complex-step sensitivities, one batched run.
+
+    Parameters
+    ----------
+    problem : Problem
+        The 6-DOF problem.
+    values : mapping of str to float
+        Parameter values.
+    names : sequence of str
+        Parameters to differentiate with respect to.
+
+    Returns
+    -------
+    y : numpy.ndarray
+        Outputs, shape (N, ny).
+    sensitivities : numpy.ndarray
+        dy/dtheta, shape (N, ny, len(names)).
+    """
     if not names:
         return outputs(problem, values), np.zeros((problem.z.shape[0], problem.z.shape[1], 0))
     base = {**problem.fixed, **values}
@@ -403,11 +629,27 @@ def outputs_and_sensitivities(problem: Problem, values: Mapping[str, float],
 def simulate(record: FlightRecord, model: SixDofModel, values: Mapping[str, float] | None = None,
              controls: str = "cubic", x0: Mapping[str, float] | None = None
              ) -> dict[str, np.ndarray]:
-    """Model outputs {output: time history (SI)} for a record's inputs at parameter ``values``.
+    """Model outputs for a record's inputs at parameter ``values``.
 
-    Parameters not in ``values`` take the model's start values; the initial state is the
-    record's first sample, with any ``x0`` {"x0_<state>": value} applied. Use it to predict
-    a maneuver not used in the fit.
+    Use it to predict a maneuver not used in the fit.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight whose inputs drive the model, SI channels.
+    model : SixDofModel
+        The 6-DOF model.
+    values : mapping of str to float or None, optional
+        Parameter values; those not given take the model's start values.
+    controls : str, optional
+        Inputs at the RK4 half steps: 'cubic' (default), 'linear' or 'zoh'.
+    x0 : mapping of str to float or None, optional
+        {"x0_<state>": value} applied to the record's first sample, SI units.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        {output: time history}, SI units.
     """
     problem = problem_from_record(record, model, "estimate" if x0 else "measured", controls)
     problem.fixed = dict(x0 or {})

@@ -80,7 +80,22 @@ class DesignSettings:
 def make_design(kind: str, settings: DesignSettings = DesignSettings(),
                 start: float = START_S) -> InputDesign:
     """The input design ``kind`` (one of DESIGNS) at the settings' peak amplitude, on the
-    settings' surface and then on each of ``settings.then`` in turn (a Maneuvers)."""
+    settings' surface and then on each of ``settings.then`` in turn (a Maneuvers).
+
+    Parameters
+    ----------
+    kind : str
+        Design kind, one of ``DESIGNS``.
+    settings : DesignSettings, optional
+        Surface, amplitude (rad) and the other settings.
+    start : float, optional
+        Start time, s.
+
+    Returns
+    -------
+    InputDesign
+        The design (a ``Maneuvers`` with ``settings.then``).
+    """
     if settings.then:
         parts = [make_design(kind, replace(settings, then=()), start)]
         for surface in settings.then:
@@ -106,19 +121,58 @@ def make_design(kind: str, settings: DesignSettings = DesignSettings(),
 
 
 def time_grid(design: InputDesign, rate: float) -> np.ndarray:
-    """Sample times (s) from 0 to the end of ``design`` plus SETTLE_S at ``rate`` (Hz)."""
+    """Sample times (s) from 0 to the end of ``design`` plus SETTLE_S at ``rate`` (Hz).
+
+    Parameters
+    ----------
+    design : InputDesign
+        The input design.
+    rate : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    numpy.ndarray
+        Sample times, s.
+    """
     duration = design.end + SETTLE_S
     return np.arange(int(round(duration * rate)) + 1) / rate
 
 
 def input_energy(design: InputDesign, rate: float) -> float:
-    """Integral of u^2 dt over the flight (rad^2 s), summed over the design's surfaces."""
+    """Integral of u^2 dt over the flight (rad^2 s), summed over the design's surfaces.
+
+    Parameters
+    ----------
+    design : InputDesign
+        The input design.
+    rate : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    float
+        Input energy, rad^2 s.
+    """
     t = time_grid(design, rate)
     return float(sum(energy(t, u) for u in design.signals(t).values()))
 
 
 def peak(design: InputDesign, rate: float) -> float:
-    """The largest |u| of the design (rad)."""
+    """The largest |u| of the design (rad).
+
+    Parameters
+    ----------
+    design : InputDesign
+        The input design.
+    rate : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    float
+        Peak |u| over its surfaces, rad.
+    """
     t = time_grid(design, rate)
     return float(max(np.abs(u).max() for u in design.signals(t).values()))
 
@@ -130,7 +184,28 @@ def equalized_designs(kinds: Sequence[str], settings: DesignSettings, equal: str
     ``Maneuvers`` for several surfaces at once) at equal peak amplitude (an own design
     scaled so that its largest |u| over its surfaces is the settings' amplitude), or all
     scaled to the input energy of ``reference`` (a built-in or own name) at that
-    amplitude."""
+    amplitude.
+
+    Parameters
+    ----------
+    kinds : Sequence[str]
+        Built-in design kinds (``DESIGNS``).
+    settings : DesignSettings
+        Surface, amplitude (rad) and the other settings.
+    equal : str
+        ``"amplitude"`` or ``"energy"``.
+    rate : float
+        Sample rate, Hz.
+    reference : str, optional
+        Design whose energy the others get with ``equal="energy"``.
+    own : Mapping[str, InputDesign] or None, optional
+        The user's designs by name.
+
+    Returns
+    -------
+    dict[str, InputDesign]
+        Name -> scaled design, built-in ones first.
+    """
     if equal not in EQUAL:
         raise ValueError(f"equal must be one of {', '.join(EQUAL)}, got {equal!r}")
     designs = {k: make_design(k, settings) for k in kinds}
@@ -151,7 +226,18 @@ def equalized_designs(kinds: Sequence[str], settings: DesignSettings, equal: str
 
 
 def toml_value(v: Any) -> str:
-    """A plain value (str, number, bool, list, dict) as an inline TOML value."""
+    """A plain value (str, number, bool, list, dict) as an inline TOML value.
+
+    Parameters
+    ----------
+    v : Any
+        The value.
+
+    Returns
+    -------
+    str
+        Inline TOML text.
+    """
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int | np.integer):
@@ -171,14 +257,42 @@ def toml_value(v: Any) -> str:
 
 
 def card_text(data: Mapping[str, Any]) -> str:
-    """A flight card (plain dict) as TOML text, one key per line with inline tables."""
+    """A flight card (plain dict) as TOML text, one key per line with inline tables.
+
+    Parameters
+    ----------
+    data : Mapping[str, Any]
+        The card's data.
+
+    Returns
+    -------
+    str
+        TOML text.
+    """
     return "".join(f"{json.dumps(str(k))} = {toml_value(v)}\n" for k, v in data.items())
 
 
 def design_card(base: Mapping[str, Any], kind: str, design: InputDesign,
                 rate: float) -> dict[str, Any]:
     """The base card's data with its maneuvers replaced by ``design`` and its duration
-    set to the input plus SETTLE_S."""
+    set to the input plus SETTLE_S.
+
+    Parameters
+    ----------
+    base : Mapping[str, Any]
+        The base card's data.
+    kind : str
+        Design name, for the card's name.
+    design : InputDesign
+        The design flown.
+    rate : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    dict[str, Any]
+        The new card's data.
+    """
     data = {k: v for k, v in base.items() if k != "maneuver"}
     data["name"] = f"{base.get('name', 'card')}-{kind}"
     data["description"] = f"design-compare: {kind} on {', '.join(design.surfaces())}"
@@ -188,14 +302,31 @@ def design_card(base: Mapping[str, Any], kind: str, design: InputDesign,
 
 
 def maneuver_dicts(design: InputDesign) -> list[dict[str, Any]]:
-    """The card's ``[[maneuver]]`` tables of a design (one per part of a Maneuvers)."""
+    """The card's ``[[maneuver]]`` tables of a design (one per part of a Maneuvers).
+
+    Parameters
+    ----------
+    design : InputDesign
+        The design.
+
+    Returns
+    -------
+    list[dict[str, Any]]
+        One table per part.
+    """
     parts = design.parts if isinstance(design, Maneuvers) else (design,)
     return [d.to_dict() for d in parts]
 
 
 def check_own(own: Mapping[str, InputDesign]) -> None:
     """Raise ValueError unless every own design's name is a usable folder name that is
-    not a built-in design's."""
+    not a built-in design's.
+
+    Parameters
+    ----------
+    own : Mapping[str, InputDesign]
+        The user's designs by name.
+    """
     for name in own:
         if name in DESIGNS:
             raise ValueError(f"design name {name!r} is a built-in design's; name it "
@@ -238,18 +369,20 @@ class Comparison:
     reference: str
     settings: DesignSettings
     results: list[DesignResult] = field(default_factory=list)
-    _errors: dict[str, pd.DataFrame] = field(default_factory=dict, repr=False, compare=False)
+    _errors: dict[tuple[str, str], pd.DataFrame] = field(default_factory=dict, repr=False,
+                                                         compare=False)
 
-    def errors(self, kind: str) -> pd.DataFrame:
-        """Design ``kind``'s estimated errors (estimate - truth), realization index (rows)
-        by derivative (columns), from its study's stored rows."""
-        if kind not in self._errors:
+    def errors(self, kind: str, column: str = "error") -> pd.DataFrame:
+        """Design ``kind``'s estimated errors (estimate - truth; ``column="std"``: the
+        reported standard errors), realization index (rows) by derivative (columns), from
+        its study's stored rows."""
+        if (kind, column) not in self._errors:
             study = next(r.study_dir for r in self.results if r.kind == kind)
-            rows = load(study, ["index", "name", "error", "status"])
+            rows = load(study, ["index", "name", column, "status"])
             rows = rows[rows["status"] == "estimated"]
-            self._errors[kind] = rows.pivot_table(index="index", columns="name",
-                                                  values="error", observed=True)
-        return self._errors[kind]
+            self._errors[kind, column] = rows.pivot_table(index="index", columns="name",
+                                                          values=column, observed=True)
+        return self._errors[kind, column]
 
     def paired_interval(self, a: str, b: str, name: str, level: float = LEVEL
                         ) -> tuple[float, float, int]:
@@ -285,24 +418,32 @@ class Comparison:
         wide = df.pivot(index="derivative", columns="design", values=column)
         return wide[[r.kind for r in self.results if r.kind in wide.columns]]
 
-    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL
-                              ) -> dict[str, Any]:
+    def mean_relative_scatter(self, a: str, b: str, level: float = LEVEL,
+                              column: str = "error") -> dict[str, Any]:
         """Design ``a`` against ``b`` over every derivative with a non-zero truth that both
         estimated in every shared realization: the ratio of their mean scatter / |truth|
         and its paired-bootstrap ``level`` interval (``intervals.
         paired_mean_relative_interval``), the derivatives and realizations used, and the
-        winner ("" when the interval contains 1)."""
+        winner ("" when the interval contains 1). ``column="std"``: the same for the
+        mean reported bound / |truth| (``mean_relative_bound``)."""
         truth = self.frame().drop_duplicates("derivative").set_index("derivative")["truth"]
-        ea, eb = self.errors(a), self.errors(b)
+        ea, eb = self.errors(a, column), self.errors(b, column)
         names = [n for n in ea.columns if n in eb.columns and truth.get(n, 0.0) != 0.0]
         both = pd.concat([ea[names], eb[names]], axis=1, keys=["a", "b"],
                          join="inner").dropna()
         xa, xb = both["a"].to_numpy(), both["b"].to_numpy()
         ratio, low, high = paired_mean_relative_interval(
-            xa, xb, truth[names].to_numpy(float), level)
+            xa, xb, truth[names].to_numpy(float), level,
+            statistic="mean" if column == "std" else "scatter")
         return {"ratio": ratio, "low": low, "high": high, "level": level,
                 "derivatives": names, "realizations": len(both),
                 "winner": a if high < 1 else b if low > 1 else ""}
+
+    def mean_relative_bound(self, a: str, b: str, level: float = LEVEL) -> dict[str, Any]:
+        """``mean_relative_scatter`` of the reported bounds: the ratio of design ``a``'s
+        mean over the derivatives of mean bound / |truth| to ``b``'s, with its
+        paired-bootstrap interval over the realizations."""
+        return self.mean_relative_scatter(a, b, level, column="std")
 
     def scatter_ratios(self, a: str, b: str, level: float = LEVEL) -> pd.DataFrame:
         """Per derivative estimated (twice or more) by both designs ``a`` and ``b``: the
@@ -396,7 +537,47 @@ def compare(card: str | Path = "navion-demo", n: int = 50, method: str = "oe",
     a maneuver table) on ``card``'s aircraft, condition, sensors and disturbances (its
     maneuvers are replaced), ``n`` realizations each with the same seeds, identify with
     ``method`` and ``model``, and return the Comparison.
-    ``progress(design, done, total)`` after each realization."""
+    ``progress(design, done, total)`` after each realization.
+
+    Parameters
+    ----------
+    card : str or Path, optional
+        Base flight card, path or library name.
+    n : int, optional
+        Realizations per design.
+    method : str, optional
+        Identification method id.
+    model : str, optional
+        Model of the method.
+    study_dir : str or Path, optional
+        Output folder: one study per design, their cards in ``CARDS``.
+    designs : Sequence[str], optional
+        Built-in designs (``DESIGNS``).
+    equal : str, optional
+        ``"amplitude"`` or ``"energy"``, as in :func:`equalized_designs`.
+    settings : DesignSettings, optional
+        Surface, amplitude (rad) and the other settings.
+    reference : str, optional
+        Energy reference design.
+    workers : int or None, optional
+        Local worker processes; None uses one per CPU.
+    dask_address : str or None, optional
+        Dask scheduler address; None runs locally.
+    seed : int or None, optional
+        Base seed; None uses the card's.
+    options : Mapping[str, Any] or None, optional
+        The method's options.
+    progress : callable or None, optional
+        ``progress(design, done, total)``.
+    own : Mapping[str, InputDesign] or None, optional
+        The user's designs by name.
+
+    Returns
+    -------
+    Comparison
+        Every design's result (flight and input time, s; energy, rad^2 s; peak, rad; the
+        study summary).
+    """
     own = dict(own or {})
     check_own(own)
     unknown = [d for d in designs if d not in DESIGNS]

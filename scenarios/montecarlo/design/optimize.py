@@ -7,7 +7,10 @@ condition, sensors and turbulence, seed of the card) gives the trim condition, t
 truth and the residual spectrum. Every built-in design is applied to each surface in
 turn (the next ``design.GAP_S`` s after the previous input ends), all scaled to the energy of
 the ``reference`` built-in; the multisine gets that energy and the reference's input
-time, so it flies as long as the reference does.
+time, so it flies as long as the reference does. With ``equal_duration`` every built-in
+is also stretched or compressed in time (its base, sweep duration or multisine period) to
+the reference's input time, so that all designs carry the same energy over the same
+duration.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from flightid.scenarios.input_optimization import (
     predicted_bounds,
     problem_from_flight,
 )
-from flightid.scenarios.inputs import scale_to_energy
+from flightid.scenarios.inputs import Maneuvers, scale_to_energy
 from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     SETTLE_S,
@@ -50,14 +53,79 @@ QUIET_S = 60.0  # s of the flight without inputs that measures the residual spec
 
 def sequenced(kind: str, surfaces: Sequence[str], settings: DesignSettings) -> InputDesign:
     """Built-in design ``kind`` on each of ``surfaces`` in turn from START_S (``make_design``
-    with ``then``)."""
+    with ``then``).
+
+    Parameters
+    ----------
+    kind : str
+        Built-in design kind (``DESIGNS``).
+    surfaces : Sequence[str]
+        Surfaces, in flying order; at least one.
+    settings : DesignSettings
+        Amplitude (rad) and the other settings.
+
+    Returns
+    -------
+    InputDesign
+        The design (a ``Maneuvers`` for several surfaces).
+    """
     return make_design(kind, dataclasses.replace(settings, surface=surfaces[0],
                                                  then=tuple(surfaces[1:])))
 
 
+def stretched(kind: str, surfaces: Sequence[str], settings: DesignSettings, span: float
+              ) -> InputDesign:
+    """Built-in design ``kind`` on each of ``surfaces`` in turn (``sequenced``) with its
+    time parameter (multi-step base, sweep duration or multisine period, s) scaled so that
+    its input time, the first input's start to the last one's end, is ``span`` (s).
+
+    Parameters
+    ----------
+    kind : str
+        Built-in design kind (``DESIGNS``).
+    surfaces : Sequence[str]
+        Surfaces, in flying order.
+    settings : DesignSettings
+        Amplitude (rad) and the other settings.
+    span : float
+        Input time wanted, s.
+
+    Returns
+    -------
+    InputDesign
+        The stretched design.
+    """
+    own = sequenced(kind, surfaces, settings)
+    first = own.parts[0] if isinstance(own, Maneuvers) else own
+    length = first.end - first.start
+    each = (span - (own.end - own.start - len(surfaces) * length)) / len(surfaces)
+    if not each > 0:
+        raise ValueError(f"an input time of {span:g} s leaves no time for {kind!r} on "
+                         f"{len(surfaces)} surfaces")
+    c = each / length
+    return sequenced(kind, surfaces, dataclasses.replace(
+        settings, base=settings.base * c, sweep_duration=settings.sweep_duration * c,
+        multisine_period=settings.multisine_period * c))
+
+
 def card_problem(card: str, model: str = "lat", derivatives: Sequence[str] | None = None
                  ) -> Problem:
-    """The design problem of ``card``: a QUIET_S s flight of it without inputs."""
+    """The design problem of ``card``: a QUIET_S s flight of it without inputs.
+
+    Parameters
+    ----------
+    card : str
+        Library card name or card file.
+    model : str, optional
+        Linear model preset. Default ``"lat"``.
+    derivatives : Sequence[str] or None, optional
+        Derivatives whose bounds count; None uses the model's.
+
+    Returns
+    -------
+    Problem
+        The design problem.
+    """
     base = load_card(card)
     data = {k: v for k, v in base.data.items() if k != "maneuver"}
     data["duration"] = QUIET_S
@@ -99,11 +167,41 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
              settings: DesignSettings | None = None,
              derivatives: Sequence[str] | None = None,
-             problem: Problem | None = None) -> Optimized:
+             problem: Problem | None = None, equal_duration: bool = False) -> Optimized:
     """Optimise a multisine on ``surfaces`` for ``criterion`` at the energy and input time
     of the built-in ``reference`` flown on each surface in turn at the settings'
     amplitude (default 4 deg, as the library cards' lateral inputs); predict every
-    built-in's bounds at that energy too."""
+    built-in's bounds at that energy too, each at its own input time or, with
+    ``equal_duration``, at the reference's (``stretched``).
+
+    Parameters
+    ----------
+    card : str, optional
+        Library card name or card file. Default ``"navion-demo"``.
+    model : str, optional
+        Linear model preset. Default ``"lat"``.
+    surfaces : Sequence[str], optional
+        Surfaces the inputs move. Default the lateral ones.
+    criterion : str, optional
+        ``"A"`` (default), ``"D"`` or ``"mean"``.
+    band : tuple[float, float], optional
+        Multisine frequency band, Hz. Default (0.1, 2.0).
+    reference : str, optional
+        Built-in design that sets the energy and input time. Default ``"3211"``.
+    settings : DesignSettings or None, optional
+        Amplitude (rad) and the other settings; None uses 4 deg.
+    derivatives : Sequence[str] or None, optional
+        Derivatives whose bounds count; None uses the model's.
+    problem : Problem or None, optional
+        The design problem; None flies ``card`` without inputs (:func:`card_problem`).
+    equal_duration : bool, optional
+        Stretch every built-in to the reference's input time. Default False.
+
+    Returns
+    -------
+    Optimized
+        The optimised multisine and every design's predicted bounds.
+    """
     settings = settings or DesignSettings(amplitude=np.deg2rad(4.0))
     if reference not in DESIGNS:
         raise ValueError(f"unknown reference design {reference!r}; designs: "
@@ -113,10 +211,11 @@ def optimize(card: str = "navion-demo", model: str = "lat",
     ref = sequenced(reference, surfaces, settings)
     energy = input_energy(ref, rate)
     designs: dict[str, InputDesign] = {}
-    for kind in DESIGNS:
-        d = sequenced(kind, surfaces, settings)
-        designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     span = ref.end - ref.start
+    for kind in DESIGNS:
+        d = (stretched(kind, surfaces, settings, span) if equal_duration
+             else sequenced(kind, surfaces, settings))
+        designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
                             start=START_S, settle=SETTLE_S)
     designs["optimized"] = ms.design()
@@ -144,7 +243,20 @@ class Envelope:
 def envelope_excursions(card: str, design: InputDesign) -> dict[str, float]:
     """Fly ``design`` on ``card`` (its condition, turbulence and seed) in JSBSim for the
     input and SETTLE_S s after: the largest |bank| and alpha (rad) and relative airspeed
-    change (fraction) of the true flight. Raises DepartureError if it departs."""
+    change (fraction) of the true flight. Raises DepartureError if it departs.
+
+    Parameters
+    ----------
+    card : str
+        Library card name or card file.
+    design : InputDesign
+        The design flown.
+
+    Returns
+    -------
+    dict[str, float]
+        ``"bank"`` and ``"alpha"``, rad; ``"speed"``, fraction.
+    """
     base = load_card(card)
     data = design_card(base.to_dict(), "optimized", design, base.rate)
     _, truth = fly_card(card_from_dict(data, base.path), base.seed)
@@ -155,7 +267,20 @@ def envelope_excursions(card: str, design: InputDesign) -> dict[str, float]:
 
 
 def envelope_violations(excursions: dict[str, float], limits: Envelope) -> list[str]:
-    """The limits an excursion exceeds, each as a sentence naming it."""
+    """The limits an excursion exceeds, each as a sentence naming it.
+
+    Parameters
+    ----------
+    excursions : dict[str, float]
+        As returned by :func:`envelope_excursions`.
+    limits : Envelope
+        The limits.
+
+    Returns
+    -------
+    list[str]
+        One sentence per exceeded limit; empty if none.
+    """
     out = []
     if excursions["bank"] > limits.bank:
         out.append(f"bank {np.rad2deg(excursions['bank']):.1f} deg exceeds "

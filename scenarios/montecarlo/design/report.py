@@ -15,7 +15,7 @@ from flightid.derivatives import unit
 from flightid.identification.evaluation.embed import png_img
 from flightid.scenarios.montecarlo.design.experiment import Comparison, compare
 from flightid.scenarios.montecarlo.exports import write_tables
-from flightid.scenarios.montecarlo.intervals import LEVEL, scatter_interval
+from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text, scatter_interval
 
 PNG = "design-compare.png"
 HTML = "design-compare.html"
@@ -28,7 +28,20 @@ def figure(comparison: Comparison, level: float = LEVEL) -> Figure:
     """Bars: each derivative's scatter by design in the derivative's own units (1/rad or
     dimensionless, ``derivatives.unit``; log scale), so a derivative whose truth is 0
     keeps its bars; whiskers: the scatter's ``level`` interval (chi-square,
-    ``intervals.scatter_interval``); dashes: the mean reported bound."""
+    ``intervals.scatter_interval``); dashes: the mean reported bound.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The design comparison.
+    level : float, optional
+        Confidence level of the whiskers, 0..1.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     scatter, bound = comparison.table("scatter"), comparison.table("mean_bound")
     count = comparison.table("estimated")
     names = list(scatter.index)
@@ -66,7 +79,18 @@ def _cell(v: object) -> str:
 
 def costs_rows(comparison: Comparison) -> list[list[object]]:
     """[design, flight time s, input time s, energy rad^2 s, peak deg, realizations,
-    failures] per design."""
+    failures] per design.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The design comparison.
+
+    Returns
+    -------
+    list[list[object]]
+        One row per design.
+    """
     return [[r.kind, r.flight_time, r.input_time, r.energy, math.degrees(r.peak),
              r.summary.realizations, r.summary.failures] for r in comparison.results]
 
@@ -78,7 +102,18 @@ COST_HEAD = ["design", "flight time (s)", "input time (s)", "input energy (rad²
 def markdown(comparison: Comparison) -> str:
     """Markdown tables: the designs' costs, then scatter (bias, mean bound) by derivative
     (bold: smaller than every other design's, the ratio's interval below 1), then the
-    3211 / doublet scatter ratios with their intervals."""
+    3211 / doublet scatter ratios with their intervals.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The design comparison.
+
+    Returns
+    -------
+    str
+        Markdown text.
+    """
     lines = ["| " + " | ".join(COST_HEAD) + " |", "|" + "---|" * len(COST_HEAD)]
     for row in costs_rows(comparison):
         lines.append("| " + " | ".join(
@@ -112,10 +147,21 @@ RATIO_HEAD = ["derivative", "3211 / doublet", "interval", "n 3211", "n doublet",
 def ratio_rows(comparison: Comparison) -> list[list[str]]:
     """The 3211 / doublet scatter ratio per derivative both estimated, as text: ratio, its
     interval, the realizations of each and the smaller ("not clear" when the interval
-    contains 1); [] without both designs."""
+    contains 1); [] without both designs.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The design comparison.
+
+    Returns
+    -------
+    list[list[str]]
+        One row per derivative: name, ratio, interval, n_a, n_b, the smaller.
+    """
     if comparison.verdict("3211", "doublet") is None:
         return []
-    return [[str(name), f"{r['ratio']:.3g}", f"{r['low']:.3g} - {r['high']:.3g}",
+    return [[str(name), f"{r['ratio']:.3g}", interval_text(r['low'], r['high']),
              str(r["n_a"]), str(r["n_b"]), r["winner"] or "not clear"]
             for name, r in comparison.scatter_ratios("3211", "doublet").iterrows()]
 
@@ -123,7 +169,20 @@ def ratio_rows(comparison: Comparison) -> list[list[str]]:
 def write(comparison: Comparison, folder: str | Path) -> tuple[Path, Path]:
     """Write FOLDER/design-compare.png, FOLDER/design-compare.html and beside them
     FOLDER/design-compare.csv, .md and .tex (``Comparison.frame``); return the PNG and
-    HTML paths."""
+    HTML paths.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The design comparison.
+    folder : str or Path
+        Output folder FOLDER; created if missing.
+
+    Returns
+    -------
+    tuple[Path, Path]
+        (PNG path, HTML path).
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     comparison.frame().to_csv(folder / CSV, index=False)

@@ -36,6 +36,7 @@ from flightid.importers.dataflash_formats import (
     FORMATS,
     MULTS,
     RCOU_OUTPUTS,
+    SERVO_DEFLECTION_SIGN,
     SERVO_FUNCTIONS,
     UNITS,
     LogFormat,
@@ -106,7 +107,8 @@ def _header(servos: ServoMapping) -> list[bytes]:
     for name, servo in servos.surfaces.items():
         params += [(f"SERVO{servo.channel}_FUNCTION", SERVO_FUNCTIONS[name]),
                    (f"SERVO{servo.channel}_TRIM", servo.trim),
-                   (f"SERVO{servo.channel}_REVERSED", 1.0 if servo.throw < 0 else 0.0)]
+                   (f"SERVO{servo.channel}_REVERSED",
+                    1.0 if servo.throw * SERVO_DEFLECTION_SIGN[name] < 0 else 0.0)]
     if servos.throttle is not None:
         c = servos.throttle.channel
         params += [(f"SERVO{c}_FUNCTION", SERVO_FUNCTIONS["throttle"]),
@@ -117,15 +119,44 @@ def _header(servos: ServoMapping) -> list[bytes]:
 
 
 def message_times(record: FlightRecord, rate: float) -> np.ndarray:
-    """Times (s) of a message sent at ``rate`` (Hz) over the record, from its start."""
+    """Times of a message sent at ``rate`` over the record, from its start.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; its first and last time bound the messages.
+    rate : float
+        Message rate, Hz.
+
+    Returns
+    -------
+    numpy.ndarray
+        Send times, s.
+    """
     t0, t1 = float(record.time[0]), float(record.time[-1])
     return t0 + np.arange(int(math.floor((t1 - t0) * rate + 1e-6)) + 1) / rate
 
 
 def sampled(record: FlightRecord, t: np.ndarray, name: str, default: float = math.nan
             ) -> np.ndarray:
-    """Channel ``name`` at times ``t`` (s; linear interpolation), or ``default`` when the
-    record lacks it."""
+    """Channel ``name`` at times ``t`` (linear interpolation), or ``default`` when absent.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight.
+    t : numpy.ndarray
+        Times, s.
+    name : str
+        Channel name.
+    default : float, optional
+        Value when the record lacks the channel. Default NaN.
+
+    Returns
+    -------
+    numpy.ndarray
+        Channel values in its SI unit; same shape as ``t``.
+    """
     if name not in record:
         return np.full(t.size, default)
     return np.interp(t, record.time, record[name])
@@ -218,8 +249,9 @@ def write_dataflash(record: FlightRecord, path: str | Path, *,
         throttle = np.round(100 * sampled(record, t, "throttle", 0.0)).astype(int)
         rudder = np.zeros(t.size, dtype=int)
         if "dr" in servos.surfaces:
-            rudder = np.round(4500 * sampled(record, t, "dr", 0.0) /
-                              servos.surfaces["dr"].throw).astype(int)
+            # ArduPilot's scaled rudder (+-4500) is a yaw demand, nose right positive
+            rudder = np.round(-4500 * sampled(record, t, "dr", 0.0) /
+                              abs(servos.surfaces["dr"].throw)).astype(int)
         speed = eas(t)
         return [_pack(BY_NAME["CTUN"], us[k], roll[k], roll[k], pitch[k], pitch[k],
                       throttle[k], rudder[k], throttle[k], speed[k]) for k in range(t.size)]

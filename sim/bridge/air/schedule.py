@@ -94,7 +94,13 @@ def _rates(**rates: float) -> tuple[MessageRate, ...]:
 
 
 def single_stream() -> tuple[StreamSpec, ...]:
-    """One autopilot-like stream on the simulation clock with every telemetry message."""
+    """One autopilot-like stream on the simulation clock with every telemetry message.
+
+    Returns
+    -------
+    tuple of StreamSpec
+        The single stream.
+    """
     return (
         StreamSpec(
             "autopilot",
@@ -111,11 +117,27 @@ def boomerang(
     input_offset: float = 0.84, input_drift: float = 150e-6,
     secondary_offset: float = 2.31, secondary_drift: float = -80e-6,
 ) -> tuple[StreamSpec, ...]:
-    """The three recorders of the Monash Boomerang 60 UAV (c. 2008): IMU logger (reference
-    clock), FMA Co-Pilot servo recorder, Eagle Tree secondary recorder, each with its own
-    clock (s, fraction).
+    """The three recorders of the Monash Boomerang 60 UAV (c. 2008), each with its own clock.
 
-    The clock numbers are illustrative, not from the paper (it says nothing about clocks).
+    IMU logger (reference clock), FMA Co-Pilot servo recorder, Eagle Tree secondary
+    recorder. The clock numbers are illustrative, not from the paper (it says nothing about
+    clocks).
+
+    Parameters
+    ----------
+    input_offset : float, optional
+        Servo recorder's clock offset, s. Default 0.84.
+    input_drift : float, optional
+        Servo recorder's clock drift, fraction (s/s). Default 150e-6.
+    secondary_offset : float, optional
+        Secondary recorder's clock offset, s. Default 2.31.
+    secondary_drift : float, optional
+        Secondary recorder's clock drift, fraction (s/s). Default -80e-6.
+
+    Returns
+    -------
+    tuple of StreamSpec
+        The IMU, input and secondary recorder streams.
     """
     return (
         StreamSpec(
@@ -226,12 +248,34 @@ def plan_schedule(
     streams: tuple[StreamSpec, ...], source_rate: float, baud: int | None,
     utilization: float = 0.85, signed: bool = False,
 ) -> Schedule:
-    """Fit the streams' requested rates into the link (baud: bits/s, None = unlimited).
+    """Fit the streams' requested rates into the link.
 
-    ``source_rate`` (Hz) is the rate of the samples the bridge gets; a message can go at
-    source_rate / k for integer k. Importance-0 messages are kept at their rate; the others
-    are reduced least important first, the largest byte rate first within a class.
-    ``signed``: every frame carries the 13-byte MAVLink 2 signature.
+    A message can go at source_rate / k for integer k. Importance-0 messages are kept at
+    their rate; the others are reduced least important first, the largest byte rate first
+    within a class.
+
+    Parameters
+    ----------
+    streams : tuple of StreamSpec
+        The streams and their requested message rates.
+    source_rate : float
+        Rate of the samples the bridge gets, Hz.
+    baud : int or None
+        Link capacity, bits/s; None = unlimited.
+    utilization : float, optional
+        Fraction of the link capacity to use, in (0, 1]. Default 0.85.
+    signed : bool, optional
+        Every frame carries the 13-byte MAVLink 2 signature. Default False.
+
+    Returns
+    -------
+    Schedule
+        The granted rates, load and notes on what was changed.
+
+    Raises
+    ------
+    ValueError
+        For a source rate, baud or utilization out of range.
     """
     if source_rate <= 0:
         raise ValueError(f"source rate must be > 0 Hz, got {source_rate}")
@@ -283,7 +327,20 @@ def plan_schedule(
 
 
 def with_rates(stream: StreamSpec, **rates: float) -> StreamSpec:
-    """A copy of a stream with some message rates changed (Hz), e.g. ``highres_imu=50``."""
+    """A copy of a stream with some message rates changed, e.g. ``highres_imu=50``.
+
+    Parameters
+    ----------
+    stream : StreamSpec
+        The stream to copy.
+    **rates : float
+        Message name (any case) to rate, Hz; a message not in the stream is added.
+
+    Returns
+    -------
+    StreamSpec
+        The changed copy.
+    """
     by_name = {n.upper(): r for n, r in rates.items()}
     msgs = tuple(replace(m, rate=by_name.pop(m.name, m.rate)) for m in stream.messages)
     msgs += tuple(MessageRate(n, r) for n, r in by_name.items())

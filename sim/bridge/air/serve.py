@@ -191,7 +191,23 @@ class AirSide:
 
 
 def source_rate_of(record: FlightRecord) -> float:
-    """Sample rate (Hz) of a uniformly sampled record; raises if it is not uniform."""
+    """Sample rate of a uniformly sampled record.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight; at least two samples.
+
+    Returns
+    -------
+    float
+        Sample rate, Hz.
+
+    Raises
+    ------
+    ValueError
+        If the record has fewer than two samples or is not uniformly sampled.
+    """
     if len(record) < 2:
         raise ValueError("a record needs at least two samples to be streamed")
     dt = np.diff(record.time)
@@ -205,7 +221,25 @@ def source_rate_of(record: FlightRecord) -> float:
 
 def serve_record(record: FlightRecord, link: Link, config: BridgeConfig | None = None,
                  keep_fates: bool = True) -> BridgeReport:
-    """Stream a uniformly sampled record over ``link``; real time if ``config.realtime``."""
+    """Stream a uniformly sampled record over ``link``; real time if ``config.realtime``.
+
+    Parameters
+    ----------
+    record : FlightRecord
+        The flight, SI channels, uniformly sampled.
+    link : Link
+        The link to send on.
+    config : BridgeConfig, optional
+        Bridge settings; default ``BridgeConfig()``.
+    keep_fates : bool, optional
+        Keep each packet's fate (sent, dropped, corrupted...) in the transmit report.
+        Default True.
+
+    Returns
+    -------
+    BridgeReport
+        Schedule, per-source packet counts and the faults applied.
+    """
     config = config or BridgeConfig()
     air = AirSide(config, source_rate_of(record), link, keep_fates)
     names = list(record.channels)
@@ -233,7 +267,21 @@ CONTROL_MESSAGES = (
 
 
 def controls_from_message(msg, servo_map: ServoMap) -> dict[str, float] | None:
-    """Canonical controls (rad, throttle 0..1) from a control message, None if not one."""
+    """Canonical controls from a control message, None if it is not one.
+
+    Parameters
+    ----------
+    msg : pymavlink message
+        HIL_ACTUATOR_CONTROLS, SET_ACTUATOR_CONTROL_TARGET (group 0), MANUAL_CONTROL or
+        RC_CHANNELS_OVERRIDE.
+    servo_map : ServoMap
+        Surface limits and PWM mapping.
+
+    Returns
+    -------
+    dict of str to float or None
+        Surface deflections (rad) and throttle (0..1) by channel name.
+    """
     kind = msg.get_type()
     m = servo_map
     if kind in ("HIL_ACTUATOR_CONTROLS", "SET_ACTUATOR_CONTROL_TARGET"):
@@ -354,16 +402,43 @@ def serve_simulation(
 ) -> tuple[BridgeReport, list[dict[str, float]]]:
     """Fly ``sim`` with controls received over ``link``, telemetry going back the same way.
 
-    ``initial`` holds the channels at the start (time 0); ``controls`` the control values
-    held until the first control message. The flight starts when the ground station first
-    speaks (a HEARTBEAT, as MAVLink ground stations send at 1 Hz); until then the bridge
-    sends heartbeats. Lock-step: after each telemetry sample the
-    bridge waits (at most ``timeout`` s) for one control message, applies it for exactly
-    one step and sends the next sample: the control answering the sample at t_k is the
-    surface position at t_(k+1) (the flight core's ``step`` semantics), so a ground station
-    sends u(t_k + dt). Real time: the simulation steps on the wall clock
-    and uses the latest control received. Lock-step needs a loss-free downlink, so link
-    faults that lose packets are refused. Returns the report and the channel history.
+    The flight starts when the ground station first speaks (a HEARTBEAT, as MAVLink ground
+    stations send at 1 Hz); until then the bridge sends heartbeats. Lock-step: after each
+    telemetry sample the bridge waits for one control message, applies it for exactly one
+    step and sends the next sample: the control answering the sample at t_k is the surface
+    position at t_(k+1) (the flight core's ``step`` semantics), so a ground station sends
+    u(t_k + dt). Real time: the simulation steps on the wall clock and uses the latest control
+    received. Lock-step needs a loss-free downlink, so link faults that lose packets are
+    refused.
+
+    Parameters
+    ----------
+    sim : SteppingSimulation
+        The simulation to fly; its step ``dt`` (s) sets the telemetry rate.
+    initial : dict of str to float
+        The channels at the start (time 0), SI.
+    link : Link
+        The link to the ground station.
+    config : BridgeConfig, optional
+        Bridge settings; default ``BridgeConfig()``.
+    steps : int
+        Number of simulation steps.
+    lockstep : bool, optional
+        Lock-step (default) or real time.
+    timeout : float, optional
+        Longest wait for a control message in lock-step, s. Default 5.
+    controls : dict of str to float, optional
+        Control values (rad, throttle 0..1) held until the first control message.
+
+    Returns
+    -------
+    tuple of (BridgeReport, list of dict)
+        The report and the channel history (one dict of SI channels per step).
+
+    Raises
+    ------
+    ValueError
+        For lock-step with packet-losing faults, or a step that is not > 0 s.
     """
     config = config or BridgeConfig()
     if lockstep and config.faults.damaging:

@@ -45,15 +45,40 @@ REASONS = ("other sender", "unsigned", "bad signature", "replayed", "stale", "no
 
 
 def state_path(key_path: str | Path) -> Path:
-    """The file beside a key holding the last accepted timestamp of every stream:
-    ``<key>.timestamps.json``."""
+    """The file beside a key holding the last accepted timestamp of every stream.
+
+    Parameters
+    ----------
+    key_path : str or pathlib.Path
+        The signing key file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``<key>.timestamps.json``.
+    """
     key_path = Path(key_path)
     return key_path.with_name(key_path.name + ".timestamps.json")
 
 
 def read_state(path: str | Path) -> dict[tuple[int, int, int], int]:
-    """{(link id, system, component): last accepted timestamp (10 us units)} from a state
-    file; empty if the file does not exist. A damaged file raises ValueError naming it."""
+    """Last accepted signing timestamps from a state file; empty if it does not exist.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The state file.
+
+    Returns
+    -------
+    dict
+        {(link id, system, component): last accepted timestamp (10 us units)}.
+
+    Raises
+    ------
+    ValueError
+        Naming the file when it is damaged.
+    """
     path = Path(path)
     if not path.exists():
         return {}
@@ -68,7 +93,15 @@ def read_state(path: str | Path) -> dict[tuple[int, int, int], int]:
 
 
 def write_state(path: str | Path, streams: dict[tuple[int, int, int], int]) -> None:
-    """Write the last accepted timestamps (atomically)."""
+    """Write the last accepted timestamps (atomically).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The state file.
+    streams : dict
+        {(link id, system, component): last accepted timestamp (10 us units)}.
+    """
     text = json.dumps({"format": "flightid signing timestamps 1",
                        "streams": {"/".join(map(str, k)): v for k, v in sorted(streams.items())}},
                       indent=1)
@@ -76,8 +109,25 @@ def write_state(path: str | Path, streams: dict[tuple[int, int, int], int]) -> N
 
 
 def read_key(path: str | Path) -> bytes:
-    """A 32-byte signing key from a file: 32 raw bytes, or 64 hexadecimal digits (text,
-    white space ignored). Raises FileNotFoundError or ValueError."""
+    """A 32-byte signing key from a file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The key file: 32 raw bytes, or 64 hexadecimal digits (text, white space ignored).
+
+    Returns
+    -------
+    bytes
+        The 32-byte key.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    ValueError
+        Naming the file when it holds neither form.
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such key file")
@@ -92,13 +142,34 @@ def read_key(path: str | Path) -> bytes:
 
 
 def signing_timestamp(unix_time: float | None = None) -> int:
-    """The signing timestamp (10 us units since 2015-01-01 UTC) of a unix time (s)."""
+    """The signing timestamp of a unix time.
+
+    Parameters
+    ----------
+    unix_time : float, optional
+        Unix time, s; default now.
+
+    Returns
+    -------
+    int
+        Timestamp in 10 us units since 2015-01-01 UTC (0 before it).
+    """
     now = time.time() if unix_time is None else unix_time
     return int(max(now - SIGNING_EPOCH_UNIX, 0.0) * 100_000)
 
 
 def setup_outgoing(mav, key: bytes, link_id: int = 0) -> None:
-    """Sign every packet a pymavlink ``MAVLink`` encoder packs from now on."""
+    """Sign every packet a pymavlink ``MAVLink`` encoder packs from now on.
+
+    Parameters
+    ----------
+    mav : pymavlink.dialects.v20.ardupilotmega.MAVLink
+        The encoder.
+    key : bytes
+        The 32-byte signing key.
+    link_id : int, optional
+        MAVLink 2 signing link id. Default 0.
+    """
     mav.signing.secret_key = key
     mav.signing.sign_outgoing = True
     mav.signing.link_id = link_id
@@ -106,7 +177,20 @@ def setup_outgoing(mav, key: bytes, link_id: int = 0) -> None:
 
 
 def signature_valid(raw: bytes, key: bytes) -> bool:
-    """Whether a signed MAVLink 2 frame's signature matches ``key``."""
+    """Whether a signed MAVLink 2 frame's signature matches ``key``.
+
+    Parameters
+    ----------
+    raw : bytes
+        The whole frame, signature included.
+    key : bytes
+        The 32-byte signing key.
+
+    Returns
+    -------
+    bool
+        False also for a frame that is too short or not signed.
+    """
     if len(raw) < 12 + SIGNATURE_BYTES or not raw[2] & _SIGNED_FLAG:
         return False
     digest = hashlib.sha256(key + bytes(raw[:-6])).digest()[:6]

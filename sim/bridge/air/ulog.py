@@ -7,7 +7,8 @@ since boot. pyulog (not this writer) is what reads the files back.
 Rates (Hz), chosen here for a fixed-wing identification log (PX4's logger profiles vary):
 sensor_combined and vehicle_angular_velocity 100, vehicle_attitude 50, actuator_outputs
 50, airspeed, differential_pressure, airflow_aoa, airflow_slip and vehicle_air_data 20,
-vehicle_global_position 10.
+vehicle_global_position 10; actuator_servos (PX4's values behind the PWM of the servo
+outputs) only when given a rate.
 
 What the logging does to the values: every float field is float32 (24 bits of mantissa;
 the attitude goes through a float32 quaternion), the servo outputs are whole
@@ -24,10 +25,13 @@ import numpy as np
 from flightid.atmosphere import isa, isa_density
 from flightid.files import atomic_path
 from flightid.importers.servos import HALF_RANGE_US, ServoMapping
+from flightid.importers.ulog import servo_index
 from flightid.importers.ulog_topics import (
+    PX4_DEFAULT_TORQUE,
     PX4_MOTOR_FUNCTION,
+    PX4_RIGHT_AILERON,
     PX4_SERVO_FUNCTION,
-    PX4_SURFACE_TYPES,
+    PX4_TORQUE_AXIS,
     TOPICS,
 )
 from flightid.record import FlightRecord
@@ -40,7 +44,7 @@ RATES: dict[str, float] = {
     "sensor_combined": 100.0, "vehicle_angular_velocity": 100.0, "vehicle_attitude": 50.0,
     "actuator_outputs": 50.0, "airspeed": 20.0, "differential_pressure": 20.0,
     "airflow_aoa": 20.0, "airflow_slip": 20.0, "vehicle_air_data": 20.0,
-    "vehicle_global_position": 10.0,
+    "vehicle_global_position": 10.0, "actuator_servos": 0.0,
 }
 _CODES = {"uint64_t": "Q", "int64_t": "q", "uint32_t": "I", "int32_t": "i", "uint16_t": "H",
           "int16_t": "h", "uint8_t": "B", "int8_t": "b", "float": "f", "double": "d",
@@ -60,8 +64,20 @@ def _layout(topic: str) -> struct.Struct:
 
 
 def quaternion_from_euler(phi: np.ndarray, theta: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    """Unit quaternions (w, x, y, z), N x 4, of ZYX Euler angles (rad), rotating body axes
-    to NED (Stevens, Lewis & Johnson 2016, sec. 1.8)."""
+    """Unit quaternions of ZYX Euler angles, rotating body axes to NED.
+
+    Stevens, Lewis & Johnson 2016, sec. 1.8.
+
+    Parameters
+    ----------
+    phi, theta, psi : numpy.ndarray
+        Roll, pitch and yaw angles, rad; each shape (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Quaternions (w, x, y, z); shape (n, 4).
+    """
     cr, sr = np.cos(phi / 2), np.sin(phi / 2)
     cp, sp = np.cos(theta / 2), np.sin(theta / 2)
     cy, sy = np.cos(psi / 2), np.sin(psi / 2)
@@ -69,22 +85,41 @@ def quaternion_from_euler(phi: np.ndarray, theta: np.ndarray, psi: np.ndarray) -
                             cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
 
 
-def px4_params(servos: ServoMapping) -> dict[str, int | float]:
-    """PX4's output parameters for ``servos`` (``ulog_topics``): each surface a control
-    surface of its type on its output, over 1000-2000 us, its trim as CA_SV_CS{i}_TRIM, a
-    negative throw as a reversed output; the throttle as motor 1 over its low and high.
-    (The throws themselves are in no PX4 parameter.)"""
-    types = {name: kind for kind, name in PX4_SURFACE_TYPES.items()}
+def px4_params(servos: ServoMapping, *, right_aileron: bool = False) -> dict[str, int | float]:
+    """PX4's output parameters for ``servos`` (``ulog_topics``).
+
+    Parameters
+    ----------
+    servos : surfaces and throttle to outputs.
+    right_aileron : log the aileron's output as a right aileron (CA_SV_CS type 2) rather
+        than a left one (type 1).
+
+    Returns
+    -------
+    Parameter name -> value: each surface a control surface of its type on its output,
+    over 1000-2000 us, with its type's torque (CA_SV_CS{i}_TRQ_R/P/Y) and its trim as
+    CA_SV_CS{i}_TRIM; an output is reversed where the servo's throw has the sign opposite
+    to flightid's deflection for a positive actuator value (``ulog_topics``); the throttle
+    is motor 1 over its low and high. (The throws themselves are in no PX4 parameter.)
+    """
+    types = {"da": PX4_RIGHT_AILERON if right_aileron else 1, "de": 3, "dr": 4}
     params: dict[str, int | float] = {}
     reversed_mask = 0
-    surfaces = sorted(servos.surfaces.items(), key=lambda item: item[1].channel)
-    for index, (name, servo) in enumerate(surfaces):
+    # a surface's second servo (ServoMapping.partners): the right aileron
+    surfaces = sorted([*((name, servo, types.get(name, 0)) for name, servo in
+                         servos.surfaces.items()),
+                       *((name, servo, PX4_RIGHT_AILERON) for name, servo in
+                         servos.partners.items())], key=lambda item: item[1].channel)
+    for index, (name, servo, kind) in enumerate(surfaces):
         n = servo.channel
-        params[f"CA_SV_CS{index}_TYPE"] = types.get(name, 0)
+        params[f"CA_SV_CS{index}_TYPE"] = kind
         params[f"CA_SV_CS{index}_TRIM"] = (servo.trim - 1500.0) / HALF_RANGE_US
         params[f"PWM_MAIN_FUNC{n}"] = PX4_SERVO_FUNCTION + index
         params[f"PWM_MAIN_MIN{n}"], params[f"PWM_MAIN_MAX{n}"] = 1000, 2000
-        reversed_mask |= (servo.throw < 0) << (n - 1)
+        if kind in PX4_DEFAULT_TORQUE:
+            torque = PX4_DEFAULT_TORQUE[kind]
+            params[f"CA_SV_CS{index}_TRQ_{PX4_TORQUE_AXIS[name]}"] = torque
+            reversed_mask |= (servo.throw * torque > 0) << (n - 1)
     params["CA_SV_CS_COUNT"] = len(surfaces)
     if servos.throttle is not None:
         n, low, high = servos.throttle.channel, servos.throttle.low, servos.throttle.high
@@ -103,7 +138,7 @@ def _parameter(key: str, value: int | float) -> bytes:
 
 
 def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping | None = None,
-               rates: dict[str, float] | None = None) -> Path:
+               rates: dict[str, float] | None = None, right_aileron: bool = False) -> Path:
     """Write ``record`` (SI, canonical channels) as a PX4 ULog file.
 
     Parameters
@@ -116,6 +151,7 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
     path : the ``.ulg`` file (written atomically).
     servos : surfaces and throttle to actuator outputs (1-based).
     rates : topic -> rate (Hz) over :data:`RATES`; a topic at rate 0 is left out.
+    right_aileron : the aileron's output is set up as a right aileron (:func:`px4_params`).
 
     Returns
     -------
@@ -133,6 +169,8 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
                 "vehicle_global_position": "latitude"}
     topics = [k for k in RATES if rates.get(k, 0) > 0 and
               (k not in optional or optional[k] in record)]
+
+    params = px4_params(servos, right_aileron=right_aileron)
 
     def rows(topic: str, t: np.ndarray) -> list[tuple]:
         v = {name: sampled(record, t, name) for name in
@@ -168,9 +206,17 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
             lat = sampled(record, t, "latitude") / DEG
             lon = sampled(record, t, "longitude", 0.0) / DEG
             return [(0, lat[k], lon[k], h[k]) for k in range(n)]
+        if topic == "actuator_servos":  # PX4's values behind the PWM (servo_pwm's inverse)
+            control = np.zeros((n, 8))
+            for name, servo in [*servos.surfaces.items(), *servos.partners.items()]:
+                c = servo.channel
+                sign = -1.0 if int(params["PWM_MAIN_REV"]) >> (c - 1) & 1 else 1.0
+                control[:, servo_index(params, c)] = sign * (
+                    servo.pwm(sampled(record, t, name), whole=False) - 1500.0) / HALF_RANGE_US
+            return [(0, *control[k]) for k in range(n)]
         # actuator_outputs: whole-microsecond PWM
         pwm = np.zeros((n, 16))
-        for name, servo in servos.surfaces.items():
+        for name, servo in [*servos.surfaces.items(), *servos.partners.items()]:
             pwm[:, servo.channel - 1] = servo.pwm(sampled(record, t, name))
         if servos.throttle is not None:
             pwm[:, servos.throttle.channel - 1] = servos.throttle.pwm(
@@ -185,6 +231,7 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
         for k, values in enumerate(rows(topic, t)):
             fields = list(values)
             if topic in ("vehicle_angular_velocity", "vehicle_attitude", "airspeed",
+                         "actuator_servos",
                          "differential_pressure", "vehicle_air_data",
                          "vehicle_global_position"):
                 fields[0] = int(us[k])  # timestamp_sample
@@ -201,7 +248,7 @@ def write_ulog(record: FlightRecord, path: str | Path, *, servos: ServoMapping |
         for key, value in (("sys_name", "flightid bridge"), ("ver_hw", "JSBSIM")):
             name = f"char[{len(value)}] {key}".encode()
             fh.write(_message("I", bytes([len(name)]) + name + value.encode()))
-        for key, value in px4_params(servos).items():
+        for key, value in params.items():
             fh.write(_parameter(key, value))
         for msg_id, topic in enumerate(topics):
             fh.write(_message("A", struct.pack("<BH", 0, msg_id) + topic.encode()))

@@ -64,7 +64,25 @@ def timesync_map(
     src_common: np.ndarray, src_local: np.ndarray,
     ref_common: np.ndarray, ref_local: np.ndarray,
 ) -> ClockMap:
-    """Clock map from (common time, local time) pairs (s) of a source and the reference."""
+    """Clock map from (common time, local time) pairs of a source and the reference.
+
+    Parameters
+    ----------
+    src_common, src_local : numpy.ndarray
+        The source's time-sync pairs: common (unix) time and local clock time, s.
+    ref_common, ref_local : numpy.ndarray
+        The reference's time-sync pairs, s.
+
+    Returns
+    -------
+    ClockMap
+        t_src = offset + (1 + drift) t_ref, with the offset's standard error (s).
+
+    Raises
+    ------
+    ValueError
+        When a stream has fewer than two pairs or unequal lengths.
+    """
     for name, c, loc in (("source", src_common, src_local), ("reference", ref_common, ref_local)):
         if len(c) < 2 or np.ptp(c) <= 0:
             raise ValueError(f"time sync: the {name} stream has fewer than two time-sync pairs")
@@ -117,12 +135,33 @@ def xcorr_map(
     ref_t: np.ndarray, ref_v: np.ndarray, src_t: np.ndarray, src_v: np.ndarray,
     *, max_offset: float = 10.0, via: str = "",
 ) -> ClockMap:
-    """Clock map from one signal both recorders measured (times on their own clocks, s).
+    """Clock map from one signal both recorders measured.
 
     The source signal is ref(t_ref) seen at t_src = offset + (1 + drift) t_ref (plus a
     constant sensor bias); the offset is searched within +-max_offset s by correlating
     first differences on a 200 Hz grid, then offset, drift and bias are refined by least
     squares on the source samples against the linearly interpolated reference.
+
+    Parameters
+    ----------
+    ref_t, ref_v : numpy.ndarray
+        Reference times (s, its own clock) and values.
+    src_t, src_v : numpy.ndarray
+        Source times (s, its own clock) and values, same unit as ``ref_v``.
+    max_offset : float, optional
+        Largest offset searched, s. Default 10.
+    via : str, optional
+        Names the common signal in the map and in messages.
+
+    Returns
+    -------
+    ClockMap
+        Offset (s), drift (fraction) and the offset's standard error (s).
+
+    Raises
+    ------
+    ValueError
+        With fewer than 16 samples in a stream or no clear correlation peak.
     """
     ref_t, ref_v, src_t, src_v = (np.asarray(a, dtype=float) for a in (ref_t, ref_v, src_t, src_v))
     what = f"cross-correlation{' of ' + via if via else ''}"

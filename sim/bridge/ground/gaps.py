@@ -10,9 +10,22 @@ import numpy as np
 
 
 def nominal_interval(t: np.ndarray) -> float:
-    """The interval (s) a series was sent at: its most frequent time step (to 0.1 ms; the
-    smallest of equally frequent ones). With independent losses a step of k intervals
-    has probability (1 - p) p^(k-1), largest at k = 1 whatever the loss rate p."""
+    """The interval a series was sent at: its most frequent time step.
+
+    Steps are rounded to 0.1 ms; the smallest of equally frequent ones wins. With independent
+    losses a step of k intervals has probability (1 - p) p^(k-1), largest at k = 1 whatever
+    the loss rate p.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+
+    Returns
+    -------
+    float
+        The interval, s; inf with no positive step.
+    """
     steps = np.round(np.diff(t), 4)
     steps = steps[steps > 0]
     if not steps.size:
@@ -22,8 +35,20 @@ def nominal_interval(t: np.ndarray) -> float:
 
 
 def grid_rate(times: list[np.ndarray], intervals: list[float]) -> float:
-    """Rate (Hz, to 1 mHz) of the most densely sampled series (times on the reference clock,
-    their nominal intervals in s)."""
+    """Rate of the most densely sampled series, to 1 mHz.
+
+    Parameters
+    ----------
+    times : list of numpy.ndarray
+        Each series' times on the reference clock, s.
+    intervals : list of float
+        Their nominal intervals, s.
+
+    Returns
+    -------
+    float
+        Rate, Hz; 0 when no series has two samples and a finite interval.
+    """
     usable = [i for i in range(len(times)) if len(times[i]) >= 2 and np.isfinite(intervals[i])]
     if not usable:
         return 0.0
@@ -54,8 +79,25 @@ MIN_RECORD_SAMPLES = 10  # an output rate must give a record at least this long 
 
 def long_gaps(chosen: dict[str, np.ndarray], intervals: dict[str, float], start: float,
               end: float, max_gap: int) -> list[Gap]:
-    """Gaps of more than ``max_gap`` missing samples (of each channel's nominal interval,
-    s) in the channels' times ``chosen`` (s), including the ends of the span [start, end]."""
+    """Gaps of more than ``max_gap`` missing samples, including the ends of the span.
+
+    Parameters
+    ----------
+    chosen : dict of str to numpy.ndarray
+        Each channel's sample times, s.
+    intervals : dict of str to float
+        Each channel's nominal interval, s.
+    start, end : float
+        The span, s.
+    max_gap : int
+        Most missing samples (of the channel's own interval) allowed.
+
+    Returns
+    -------
+    list of Gap
+        The gaps; a channel with fewer than two samples is one gap over the span
+        (``missing`` -1).
+    """
     out = []
     for ch, t in sorted(chosen.items()):
         dt = intervals[ch]
@@ -73,7 +115,20 @@ def long_gaps(chosen: dict[str, np.ndarray], intervals: dict[str, float], start:
 
 
 def longest_stretch(start: float, end: float, gaps: list[Gap]) -> tuple[float, float]:
-    """The longest part of [start, end] (s) that no gap overlaps."""
+    """The longest part of [start, end] that no gap overlaps.
+
+    Parameters
+    ----------
+    start, end : float
+        The span, s.
+    gaps : list of Gap
+        The gaps.
+
+    Returns
+    -------
+    tuple of float
+        (start, end) of the stretch, s.
+    """
     best, lo = (start, start), start
     for g in sorted(gaps, key=lambda g: g.start):
         if g.start > lo and g.start - lo > best[1] - best[0]:

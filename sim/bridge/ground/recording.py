@@ -51,14 +51,41 @@ def record_stream(
     idle_timeout: float = 5.0, first_timeout: float = 30.0, on_frame=None,
     stop: threading.Event | None = None,
 ) -> RecordingReport:
-    """Record intact packets from ``link`` into a .tlog until ``duration`` s have passed,
-    the stream ends, nothing arrives for ``idle_timeout`` s (``first_timeout`` s before
-    the first byte), or ``stop`` is set and nothing is pending. Writes ``<tlog>.json``.
+    """Record intact packets from ``link`` into a .tlog; writes ``<tlog>.json`` too.
 
-    The tlog is written to a temporary file beside ``tlog_path`` and moved there when the
-    recording ends (also when it is interrupted: the packets recorded so far are kept); an
-    error leaves no partial tlog and an existing file untouched. A recording without a
-    single intact packet raises TimeoutError and writes nothing."""
+    Recording ends when ``duration`` s have passed, the stream ends, nothing arrives for
+    ``idle_timeout`` s (``first_timeout`` s before the first byte), or ``stop`` is set and
+    nothing is pending. The tlog is written to a temporary file beside ``tlog_path`` and moved
+    there when the recording ends (also when it is interrupted: the packets recorded so far
+    are kept); an error leaves no partial tlog and an existing file untouched.
+
+    Parameters
+    ----------
+    link : Link
+        The link to read.
+    tlog_path : str or pathlib.Path
+        The .tlog file to write.
+    duration : float, optional
+        Longest recording, s; None = no limit.
+    idle_timeout : float, optional
+        Silence that ends the recording, s. Default 5.
+    first_timeout : float, optional
+        Wait for the first byte, s. Default 30.
+    on_frame : callable, optional
+        Called with each intact frame as it is recorded.
+    stop : threading.Event, optional
+        Ends the recording once nothing is pending.
+
+    Returns
+    -------
+    RecordingReport
+        What was recorded and how the recording ended.
+
+    Raises
+    ------
+    TimeoutError
+        When not a single intact packet arrived (nothing is written).
+    """
     tlog_path = Path(tlog_path)
     with atomic_path(tlog_path) as tmp:
         report = _record_into(link, tlog_path, tmp, duration, idle_timeout, first_timeout,

@@ -15,7 +15,18 @@ Source = tuple[int, int]
 
 
 def source_name(src: Source) -> str:
-    """'sysid/compid'."""
+    """'sysid/compid' of a source.
+
+    Parameters
+    ----------
+    src : tuple of (int, int)
+        (system id, component id).
+
+    Returns
+    -------
+    str
+        'sysid/compid'.
+    """
     return f"{src[0]}/{src[1]}"
 
 
@@ -37,9 +48,19 @@ class SourceLoss:
 def sequence_losses(packets: list[tuple[Source, int, float | None]]) -> dict[Source, SourceLoss]:
     """Per source, packets lost between the first and last received (seq gaps).
 
-    ``packets``: (source, seq, message time or None) in arrival order. Between two
-    received packets that carry time stamps, the number of 256-packet wraps is the one
-    that brings the sequence advance closest to (mean packet rate) * (time between them).
+    Between two received packets that carry time stamps, the number of 256-packet wraps is
+    the one that brings the sequence advance closest to (mean packet rate) * (time between
+    them).
+
+    Parameters
+    ----------
+    packets : list of tuple
+        (source, seq, message time in s or None) in arrival order.
+
+    Returns
+    -------
+    dict of Source to SourceLoss
+        Packets received, lost and wraps found, by source.
     """
     by_src: dict[Source, list[tuple[int, float]]] = {}
     for src, seq, t in packets:
@@ -74,6 +95,17 @@ def sequence_losses(packets: list[tuple[Source, int, float | None]]) -> dict[Sou
 
 
 def loss_dict(losses: dict[Source, SourceLoss]) -> dict[str, dict]:
-    """Per source name: packets received and lost, the loss rate and the wraps."""
+    """Per source name: packets received and lost, the loss rate and the wraps.
+
+    Parameters
+    ----------
+    losses : dict of Source to SourceLoss
+        Losses by source.
+
+    Returns
+    -------
+    dict of str to dict
+        By 'sysid/compid': received, lost, loss_rate (fraction), wraps.
+    """
     return {source_name(s): {"received": v.received, "lost": v.lost, "loss_rate": v.loss_rate,
                              "wraps": v.wraps} for s, v in sorted(losses.items())}

@@ -89,11 +89,23 @@ UNTIMED_WINDOW = 0.5
 
 
 def cadence_times(brackets: list[tuple[float, float, object]]) -> list[float]:
-    """Times (s) of messages without a time field, each known to lie in [t_prev, t_next]
-    (its neighbouring time-stamped messages): t_prev where the bracket is closed; else the
-    end of the bracket that keeps the message's own cadence (whole intervals from the last
-    closed bracket before it, the interval being the shortest step between consecutive
-    closed brackets), t_prev when neither does or the cadence is unknown."""
+    """Times of messages without a time field, each known to lie in [t_prev, t_next].
+
+    The bracket is given by its neighbouring time-stamped messages. t_prev where the bracket
+    is closed; else the end of the bracket that keeps the message's own cadence (whole
+    intervals from the last closed bracket before it, the interval being the shortest step
+    between consecutive closed brackets), t_prev when neither does or the cadence is unknown.
+
+    Parameters
+    ----------
+    brackets : list of tuple
+        (t_prev, t_next, payload) per message, s.
+
+    Returns
+    -------
+    list of float
+        One time per message, s.
+    """
     exact = [i for i, (a, b, _) in enumerate(brackets) if b - a <= REVERSAL_TOLERANCE]
     times = [a for a, _, _ in brackets]
     steps = [brackets[j][0] - brackets[i][0] for i, j in zip(exact[:-1], exact[1:],
@@ -126,6 +138,20 @@ def decode_tlog(path: str | Path, servo_map: ServoMap | None = None,
     ``untimed_window`` s apart (a gap in the stream) is left out and counted. A message
     type whose time goes back (a tlog holding two recordings, a reset clock) is listed in
     ``reversals``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .tlog file.
+    servo_map : ServoMap, optional
+        Maps servo PWM to surface deflections; default ``ServoMap()``.
+    untimed_window : float, optional
+        Widest bracket for a message without a time field, s. Default ``UNTIMED_WINDOW``.
+
+    Returns
+    -------
+    TlogData
+        Per-source series (SI), time-sync pairs, losses and read problems.
     """
     servo_map = servo_map or ServoMap()
     tr = read_tlog(path)
@@ -245,8 +271,27 @@ def align_sources(
 ) -> dict[Source, ClockMap]:
     """Clock map of every source onto the reference source's clock.
 
-    method: 'timesync' (SYSTEM_TIME), 'xcorr' (a channel both streams carry), 'auto'
-    (time sync where both streams have it, else cross-correlation), 'none'.
+    Parameters
+    ----------
+    data : TlogData
+        The decoded tlog.
+    reference : Source
+        (system id, component id) of the reference clock.
+    method : str, optional
+        'timesync' (SYSTEM_TIME), 'xcorr' (a channel both streams carry), 'auto' (default:
+        time sync where both streams have it, else cross-correlation), 'none'.
+    max_offset : float, optional
+        Largest clock offset searched by cross-correlation, s. Default 10.
+
+    Returns
+    -------
+    dict of Source to ClockMap
+        The map of each source.
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, or a source that cannot be aligned.
     """
     if method not in ("auto", "timesync", "xcorr", "none"):
         raise ValueError(f"unknown alignment method {method!r}; use auto, timesync, xcorr, none")
@@ -313,15 +358,46 @@ def convert_tlog(
 ) -> FlightRecord:
     """A tlog as a FlightRecord: canonical SI channels, clocks aligned, uniform time base.
 
-    reference: 'sysid/compid' of the clock to use (default: the source sending
-    HIGHRES_IMU, else the busiest); rate: output rate in Hz (default: the fastest
-    channel's). Each channel comes from the source and message that carried it most often.
+    Each channel comes from the source and message that carried it most often. A record is
+    never interpolated across more than ``max_gap`` missing samples of a channel (its own
+    sample interval; the record's ends count too): such a gap is refused with
+    ``segment='all'``, and ``segment='longest'`` keeps the longest stretch without one. A tlog
+    whose time stamps go back (two recordings in one file, a reset clock) is refused.
 
-    A record is never interpolated across more than ``max_gap`` missing samples of a
-    channel (its own sample interval; the record's ends count too): such a gap is refused
-    with ``segment='all'``, and ``segment='longest'`` keeps the longest stretch without
-    one. A tlog whose time stamps go back (two recordings in one file, a reset clock) is
-    refused. Raises ValueError (bad file) or FileNotFoundError.
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The .tlog file.
+    servo_map : ServoMap, optional
+        Maps servo PWM to surface deflections.
+    align : str, optional
+        Clock alignment method (see :func:`align_sources`). Default 'auto'.
+    reference : str, optional
+        'sysid/compid' of the clock to use; default the source sending HIGHRES_IMU, else
+        the busiest.
+    rate : float, optional
+        Output rate, Hz; default the fastest channel's.
+    aircraft : str, optional
+        Aircraft name (JSBSim model) for the record's metadata; its mass properties and
+        reference geometry are added as a-priori values (MAVLink carries none).
+    max_offset : float, optional
+        Largest clock offset searched, s. Default 10.
+    max_gap : int, optional
+        Most missing samples interpolated across. Default ``MAX_GAP_SAMPLES``.
+    segment : str, optional
+        'all' (default) or 'longest'.
+
+    Returns
+    -------
+    FlightRecord
+        The flight, SI channels on a uniform time base.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file is missing.
+    ValueError
+        For a bad file, option or a gap/time reversal that is refused.
     """
     if segment not in SEGMENTS:
         raise ValueError(f"segment {segment!r}: use one of {', '.join(SEGMENTS)}")
