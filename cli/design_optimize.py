@@ -31,6 +31,7 @@ from flightid.scenarios.montecarlo.design.optimize import (
     optimize,
 )
 from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text
+from flightid.scenarios.peak_limit import PeakLimitError
 from flightid.units import DEG
 
 
@@ -95,7 +96,8 @@ def design_optimize_command(
     amplitude_deg: Annotated[float, typer.Option(
         help="peak amplitude (deg) of the reference on each surface")] = 4.0,
     max_amplitude_deg: Annotated[float, typer.Option(
-        help="limit of the optimised design's peak deflection on any surface (deg)")] = 10.0,
+        help="limit of the optimised design's peak deflection on any surface (deg), a "
+             "constraint of the optimisation")] = 10.0,
     max_bank_deg: Annotated[float, typer.Option(help="bank limit (deg)")] = 30.0,
     max_alpha_deg: Annotated[float, typer.Option(help="angle-of-attack limit (deg)")] = 15.0,
     max_speed_change: Annotated[float, typer.Option(
@@ -140,8 +142,18 @@ def design_optimize_command(
         outputs.append(Output("--study", study, folder=True))
     check_paths({"--card": card}, outputs)
     settings = DesignSettings(amplitude=amplitude_deg * DEG)
-    result = optimize(card, model, surfaces, criterion, tuple(band), reference, settings,
-                      equal_duration=equal_duration)
+    try:
+        result = optimize(card, model, surfaces, criterion, tuple(band), reference, settings,
+                          equal_duration=equal_duration, max_amplitude=max_amplitude_deg * DEG)
+    except PeakLimitError as e:
+        typer.echo(f"error: --max-amplitude-deg {max_amplitude_deg:g}: no multisine at the "
+                   f"energy of the {reference} at --amplitude-deg {amplitude_deg:g} "
+                   f"({e.energy:.5f} rad²s) keeps every surface within "
+                   f"{max_amplitude_deg:g} deg: the smallest peak found at that energy is "
+                   f"{e.peak / DEG:.2f} deg, and at most {e.fits:.5f} rad²s fits under "
+                   f"the limit; lower --amplitude-deg or raise the limit (nothing written)",
+                   err=True)
+        raise typer.Exit(3) from None
     excursions = envelope_excursions(card, result.designs["optimized"])
     violations = envelope_violations(excursions, Envelope(
         max_bank_deg * DEG, max_alpha_deg * DEG, max_speed_change))

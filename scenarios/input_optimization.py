@@ -25,7 +25,7 @@ information of the whole flight (trim, input, free response), which includes tra
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -423,14 +423,58 @@ def _criterion_weight(problem: Problem, cov: np.ndarray, criterion: str) -> np.n
     return W
 
 
+def amplitude_cost(problem: Problem, info: np.ndarray, middle: np.ndarray,
+                   criterion: str) -> Callable[[np.ndarray], tuple[float, np.ndarray]]:
+    """The criterion of the predicted covariance M^-1 V M^-1 as a function of the
+    amplitudes c of K - 1 input components (component 0 the constant bias input, fixed at
+    1), M = sum c_a c_b info[a, b], V = sum c_a c_b middle[a, b]: c -> (value, gradient).
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    info : numpy.ndarray
+        Information of each component pair; shape (K, K, P, P).
+    middle : numpy.ndarray
+        The sandwich's middle term of each component pair; shape (K, K, P, P).
+    criterion : str
+        ``"A"``, ``"D"`` or ``"mean"``.
+
+    Returns
+    -------
+    Callable
+        c (rad, shape (K - 1,)) -> (criterion value, its gradient in c).
+    """
+
+    def cost(c: np.ndarray) -> tuple[float, np.ndarray]:
+        ext = np.concatenate([[1.0], c])
+        M = np.einsum("a,b,abij->ij", ext, ext, info)
+        V = np.einsum("a,b,abij->ij", ext, ext, middle)
+        try:
+            Minv = np.linalg.inv(M)
+        except np.linalg.LinAlgError:
+            return math.inf, np.zeros_like(c)
+        cov = Minv @ V @ Minv
+        value = criterion_value(problem, cov, criterion)
+        W = _criterion_weight(problem, cov, criterion)
+        g1 = -(cov @ W @ Minv + Minv @ W @ cov)
+        g2 = Minv @ W @ Minv
+        tm = np.einsum("b,kbij->kij", ext, info[1:])
+        tv = np.einsum("b,kbij->kij", ext, middle[1:])
+        g = (np.einsum("kij,ji->k", tm + tm.transpose(0, 2, 1), g1)
+             + np.einsum("kij,ji->k", tv + tv.transpose(0, 2, 1), g2))
+        return value, g
+
+    return cost
+
+
 def optimal_amplitudes(problem: Problem, info: np.ndarray, middle: np.ndarray,
                        gram: np.ndarray, energy: float, criterion: str,
                        start: np.ndarray) -> np.ndarray:
-    """Amplitudes c of K input components (component 0 the constant bias input, fixed at
-    1) that minimise the criterion of the predicted covariance M^-1 V M^-1,
-    M = sum c_a c_b info[a, b], V = sum c_a c_b middle[a, b], at input energy
-    c^T gram c = ``energy`` (rad^2 s; gram over components 1..K-1): c = x sqrt(energy /
-    x^T gram x), quasi-Newton (L-BFGS-B) on x with the analytic gradient from ``start``.
+    """Amplitudes c of K input components that minimise the criterion
+    (``amplitude_cost``) at input energy c^T gram c = ``energy`` (rad^2 s; gram over
+    components 1..K-1): c = x sqrt(energy / x^T gram x), quasi-Newton (L-BFGS-B) on x
+    with the analytic gradient from ``start``.
 
     Parameters
     ----------
@@ -454,26 +498,14 @@ def optimal_amplitudes(problem: Problem, info: np.ndarray, middle: np.ndarray,
     numpy.ndarray
         Amplitudes of components 1..K-1, rad; shape (K - 1,).
     """
+    of_c = amplitude_cost(problem, info, middle, criterion)
 
     def cost(x: np.ndarray) -> tuple[float, np.ndarray]:
         q = float(x @ gram @ x)
         scale = math.sqrt(energy / q)
-        ext = np.concatenate([[1.0], x * scale])
-        M = np.einsum("a,b,abij->ij", ext, ext, info)
-        V = np.einsum("a,b,abij->ij", ext, ext, middle)
-        try:
-            Minv = np.linalg.inv(M)
-        except np.linalg.LinAlgError:
-            return math.inf, np.zeros_like(x)
-        cov = Minv @ V @ Minv
-        value = criterion_value(problem, cov, criterion)
-        W = _criterion_weight(problem, cov, criterion)
-        g1 = -(cov @ W @ Minv + Minv @ W @ cov)
-        g2 = Minv @ W @ Minv
-        tm = np.einsum("b,kbij->kij", ext, info[1:])
-        tv = np.einsum("b,kbij->kij", ext, middle[1:])
-        g = (np.einsum("kij,ji->k", tm + tm.transpose(0, 2, 1), g1)
-             + np.einsum("kij,ji->k", tv + tv.transpose(0, 2, 1), g2))
+        value, g = of_c(x * scale)
+        if not math.isfinite(value):
+            return value, np.zeros_like(x)
         grad = scale * g - scale * np.dot(x, g) * (gram @ x) / q
         return value, grad
 
@@ -511,10 +543,32 @@ def _unit_parts(comps: list[tuple[str, float, float]], period: float,
                       period=period, start=start) for s, f, ph in comps]
 
 
-def _amplitude_round(problem: Problem, comps: list[tuple[str, float, float]],
-                     period: float, start: float, duration: float, energy: float,
-                     criterion: str, guess: np.ndarray | None) -> np.ndarray:
-    """Optimal amplitudes of unit components (surface, Hz, phase) flown from ``start``."""
+def component_forms(problem: Problem, comps: list[tuple[str, float, float]], period: float,
+                    start: float, duration: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The quadratic forms (info, middle: ``_forms``, the constant bias input first) and
+    the Gram matrix (rad^2 s per unit amplitude^2) of unit multisine components
+    (surface, Hz, phase in rad) of ``period`` (s) flown once from ``start`` (s) in a
+    flight of ``duration`` (s).
+
+    Parameters
+    ----------
+    problem : Problem
+        The design problem.
+    comps : list[tuple[str, float, float]]
+        Unit components (surface, Hz, phase in rad), K - 1 of them.
+    period : float
+        Multisine period, s.
+    start : float
+        Start of the input, s.
+    duration : float
+        Flight time, s.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray, numpy.ndarray]
+        info and middle, shape (K, K, P, P), and gram, shape (K - 1, K - 1).
+    """
     t = np.arange(int(round(duration * problem.rate)) + 1) / problem.rate
     parts = _unit_parts(comps, period, start)
     u = np.stack([np.zeros((t.size, len(problem.model.inputs) + 1))]
@@ -523,9 +577,16 @@ def _amplitude_round(problem: Problem, comps: list[tuple[str, float, float]],
     u[1:, :, -1] = 0.0
     info, middle = _forms(problem, _propagate(problem, u))
     flat = u[1:, :, :-1].reshape(len(parts), -1)
-    gram = flat @ flat.T / problem.rate
+    return info, middle, flat @ flat.T / problem.rate
+
+
+def _amplitude_round(problem: Problem, comps: list[tuple[str, float, float]],
+                     period: float, start: float, duration: float, energy: float,
+                     criterion: str, guess: np.ndarray | None) -> np.ndarray:
+    """Optimal amplitudes of unit components (surface, Hz, phase) flown from ``start``."""
+    info, middle, gram = component_forms(problem, comps, period, start, duration)
     return optimal_amplitudes(problem, info, middle, gram, energy, criterion,
-                              np.ones(len(parts)) if guess is None else guess)
+                              np.ones(len(comps)) if guess is None else guess)
 
 
 def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[float, float],
@@ -544,7 +605,8 @@ def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[fl
     3. each surface's phases optimised for the smallest relative peak factor and shifted to
        start at zero (``multisine.optimize_phases``, ``start_at_zero``), amplitudes
        optimised once more with those phases (and the start shifted to a zero again).
-    The criterion's value is that of the final design.
+    The criterion's value is that of the final design; ``peak_limit.limit_peak`` holds
+    its peak under a limit.
 
     Parameters
     ----------
@@ -618,3 +680,4 @@ def optimize_multisine(problem: Problem, surfaces: Sequence[str], band: tuple[fl
     result.value = criterion_value(problem, covariance(problem, result.design(), duration),
                                    criterion)
     return result
+

@@ -127,7 +127,24 @@ def relative_peak_factor(u: np.ndarray) -> float:
     return float((u.max() - u.min()) / (2 * np.sqrt(2) * rms))
 
 
-def _grid(freqs: np.ndarray, period: float, per_cycle: int = 16) -> np.ndarray:
+def period_grid(freqs: np.ndarray, period: float, per_cycle: int = 16) -> np.ndarray:
+    """Equally spaced times (s) over one ``period`` (s): ``per_cycle`` per cycle of the
+    highest of ``freqs`` (Hz), at least 1024.
+
+    Parameters
+    ----------
+    freqs : numpy.ndarray
+        The multisine's frequencies (Hz).
+    period : float
+        Its period (s).
+    per_cycle : int
+        Samples per cycle of the highest frequency.
+
+    Returns
+    -------
+    numpy.ndarray
+        Times from 0 (included) to ``period`` (excluded), s.
+    """
     n = max(1024, int(per_cycle * freqs.max() * period))
     return np.arange(n) * (period / n)
 
@@ -151,7 +168,7 @@ def optimize_phases(comp: Components, period: float) -> Components:
     Components
         The same frequencies and amplitudes with the optimised phases, rad.
     """
-    t = _grid(comp.freqs, period)
+    t = period_grid(comp.freqs, period)
     theta = 2 * np.pi * np.outer(comp.freqs, t)
     a = comp.amps[:, None]
 
@@ -202,7 +219,7 @@ def start_at_zero(comp: Components, period: float) -> Components:
     Components
         Components with shifted phases, rad; ``comp`` itself if there is no upward crossing.
     """
-    t = _grid(comp.freqs, period, 64)
+    t = period_grid(comp.freqs, period, 64)
     u = comp(t)
     up = np.nonzero((u[:-1] <= 0) & (u[1:] > 0))[0]
     if up.size == 0:
@@ -239,7 +256,7 @@ def design_components(k: np.ndarray, period: float, peak: float, optimized: bool
     if optimized and freqs.size > 1:
         comp = optimize_phases(comp, period)
     comp = start_at_zero(comp, period)
-    u = comp(_grid(freqs, period, 64))
+    u = comp(period_grid(freqs, period, 64))
     return Components(freqs, amps * peak / np.abs(u).max(), comp.phases)
 
 

@@ -47,6 +47,7 @@ from flightid.scenarios.montecarlo.design.experiment import (
     peak,
     time_grid,
 )
+from flightid.scenarios.peak_limit import limit_peak
 
 QUIET_S = 60.0  # s of the flight without inputs that measures the residual spectrum
 
@@ -167,12 +168,15 @@ def optimize(card: str = "navion-demo", model: str = "lat",
              band: tuple[float, float] = (0.1, 2.0), reference: str = "3211",
              settings: DesignSettings | None = None,
              derivatives: Sequence[str] | None = None,
-             problem: Problem | None = None, equal_duration: bool = False) -> Optimized:
+             problem: Problem | None = None, equal_duration: bool = False,
+             max_amplitude: float | None = None) -> Optimized:
     """Optimise a multisine on ``surfaces`` for ``criterion`` at the energy and input time
     of the built-in ``reference`` flown on each surface in turn at the settings'
     amplitude (default 4 deg, as the library cards' lateral inputs); predict every
     built-in's bounds at that energy too, each at its own input time or, with
-    ``equal_duration``, at the reference's (``stretched``).
+    ``equal_duration``, at the reference's (``stretched``). With ``max_amplitude`` (rad)
+    the multisine's peak on every surface is held at or below it (``limit_peak``; raises
+    ``PeakLimitError`` if no design found at that energy fits).
 
     Parameters
     ----------
@@ -196,6 +200,8 @@ def optimize(card: str = "navion-demo", model: str = "lat",
         The design problem; None flies ``card`` without inputs (:func:`card_problem`).
     equal_duration : bool, optional
         Stretch every built-in to the reference's input time. Default False.
+    max_amplitude : float or None, optional
+        Limit of the multisine's peak deflection on every surface (rad); None: none.
 
     Returns
     -------
@@ -218,6 +224,8 @@ def optimize(card: str = "navion-demo", model: str = "lat",
         designs[kind] = scale_to_energy(d, time_grid(d, rate), energy)
     ms = optimize_multisine(pb, tuple(surfaces), band, span, energy, criterion,
                             start=START_S, settle=SETTLE_S)
+    if max_amplitude is not None:
+        ms = limit_peak(pb, ms, energy, max_amplitude, START_S + span + SETTLE_S)
     designs["optimized"] = ms.design()
     out = Optimized(pb, ms, designs)
     for name, d in designs.items():
