@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from flightid.scenarios.cards import load_card
+from flightid.scenarios.equal_energy import energy, scale_amplitude, scale_to_energy
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import (
     Doublet,
@@ -34,9 +35,6 @@ from flightid.scenarios.inputs import (
     Sweep,
     ThreeTwoOneOne,
     TwoOneOne,
-    energy,
-    scale_amplitude,
-    scale_to_energy,
 )
 from flightid.scenarios.montecarlo import load
 from flightid.scenarios.montecarlo import run as run_study

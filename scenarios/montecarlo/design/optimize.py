@@ -24,6 +24,7 @@ import numpy as np
 
 from flightid.channels import LATERAL_INPUTS
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
+from flightid.scenarios.equal_energy import scale_to_energy
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.input_information import (
     Problem,
@@ -32,7 +33,7 @@ from flightid.scenarios.input_information import (
     problem_from_flight,
 )
 from flightid.scenarios.input_optimization import OptimizedMultisine, optimize_multisine
-from flightid.scenarios.inputs import Maneuvers, scale_to_energy
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     SETTLE_S,

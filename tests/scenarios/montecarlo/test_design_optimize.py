@@ -21,7 +21,8 @@ from flightid.identification.models.reference_condition import ReferenceConditio
 from flightid.scenarios import input_information as ii
 from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
-from flightid.scenarios.inputs import Maneuvers, scale_amplitude
+from flightid.scenarios.equal_energy import scale_amplitude
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design.optimize import sequenced, stretched
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
