@@ -32,7 +32,8 @@ from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import diagnose
 from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
-from flightid.identification.gap.rank import Folds, Ranker, mean_gap, pooled_fractions
+from flightid.identification.gap.rank import Folds, Ranker
+from flightid.identification.gap.ranked import mean_gap, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.record import FlightRecord
 from flightid.scenarios.cards import AUGMENT_CACHE, Card, card_from_dict, fly_card, sub_seed

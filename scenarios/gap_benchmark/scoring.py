@@ -14,7 +14,7 @@ import numpy as np
 
 from flightid.files import json_safe
 from flightid.identification.gap import GapResult
-from flightid.identification.gap.rank import Ranked, mean_gap
+from flightid.identification.gap.ranked import Ranked, mean_gap
 from flightid.identification.gap.trim_level import TrimOffset
 from flightid.scenarios.gap_benchmark import classes
 from flightid.scenarios.gap_benchmark.cases import (
