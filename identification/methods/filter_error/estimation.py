@@ -62,6 +62,7 @@ from flightid.identification.methods.filter_error.kalman_filter import (
     robust_covariance,
 )
 from flightid.identification.methods.filter_error.relaxation import Relaxed, relax, two_starts
+from flightid.identification.methods.output_error_problem import problem_from_record
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
@@ -188,7 +189,7 @@ def estimate(
     # output error first: start values, measurement noise and identifiability
     oe_fit = oe.estimate(record, model, free=names, initial_state=initial_state, hold=hold,
                          check_identifiability=check_identifiability)
-    data = oe.problem_from_record(record, model, initial_state, hold)
+    data = problem_from_record(record, model, initial_state, hold)
     unidentifiable = dict(oe_fit.unidentifiable)
     R = np.diag([oe_fit.fit["noise_std"][o] ** 2 for o in model.outputs])
     f_start = {}

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.linalg
 
 from flightid.identification.engine.gauss_newton import damped_newton_step
-from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.output_error_problem import Problem
 from flightid.identification.models.discrete import (
     discretize,
     hold_inputs,
@@ -281,7 +281,7 @@ def simulate_process_noise(model: LinearModel, values: Mapping[str, float],
 
 @dataclass
 class FilterProblem:
-    data: oe.Problem
+    data: Problem
     names: list[str]  # estimated: model parameters then F_<state>
     fixed: dict[str, float]  # model parameters not estimated
     noise_states: tuple[str, ...]  # states with an F parameter (free or fixed)
