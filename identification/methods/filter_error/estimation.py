@@ -27,7 +27,7 @@ the lower J is kept. At the converged point the derivatives are corrected for th
 measured dynamic pressure and airspeed departing from the reference condition
 (``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1) (M&K
 eq. 6.50) or, with ``colored``, the score sandwich of
-``kalman_filter.robust_covariance``. Output error supplies the start values and decides
+``iteration.robust_covariance``. Output error supplies the start values and decides
 which parameters the flight cannot determine; the same checks of ``identifiability`` are
 repeated on the filter's information matrix, and the fit is repeated without the
 parameters they find (``refit.refit_without_unidentifiable``). The relaxation's two
@@ -54,12 +54,12 @@ from flightid.identification.methods.filter_error.flight_condition import (
     condition_departure,
     innovation_change,
 )
+from flightid.identification.methods.filter_error.iteration import robust_covariance
 from flightid.identification.methods.filter_error.kalman_filter import (
     FilterProblem,
     is_noise_parameter,
     measurement_noise_name,
     process_noise_name,
-    robust_covariance,
 )
 from flightid.identification.methods.filter_error.relaxation import Relaxed, relax, two_starts
 from flightid.identification.methods.output_error_problem import problem_from_record
@@ -144,7 +144,7 @@ def estimate(
         departing from the reference condition (``flight_condition``; models without an
         airspeed state, records with qbar and V channels). Default True.
     colored : bool, optional
-        Standard errors from ``kalman_filter.robust_covariance`` (the sandwich for colored
+        Standard errors from ``iteration.robust_covariance`` (the sandwich for colored
         innovations) instead of the Cramer-Rao bounds M^-1, which are then in
         ``fit['cramer_rao_std']``. Default False.
     joint_noise : bool, optional
