@@ -37,10 +37,26 @@ from math import ceil, floor
 
 import numpy as np
 
-from flightid.identification.data.coefficients import HINGE, differentiated, hinge_name
+from flightid.identification.data.coefficients import (
+    HINGE,
+    channel_values,
+    differentiated,
+    hinge_name,
+)
 from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
+from flightid.identification.methods.equation_error.estimation import COLLINEAR_R, VIF_LIMIT
+from flightid.identification.methods.equation_error.least_squares import least_squares
+from flightid.identification.methods.equation_error.terms import (
+    Term,
+    bias_name,
+    derivative_name,
+    parse_term,
+    reference_values,
+    regressor_matrix,
+    smooth_columns,
+)
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
@@ -49,7 +65,7 @@ ID = "mof"
 # an orthogonalised candidate with less than this share of its squared norm left is
 # (nearly) a linear combination of the functions in: R_j^2 > 0.99^2, the threshold of the
 # equation-error estimate's identifiability check (VIF above 1/(1 - 0.99^2))
-DEPENDENT = 1.0 - ee.COLLINEAR_R**2
+DEPENDENT = 1.0 - COLLINEAR_R**2
 # the functions are generated again with the chosen candidates first at most this often
 REGENERATIONS = 10
 
@@ -117,7 +133,7 @@ def spline_terms(records: Sequence[FlightRecord], spacing_deg: float, order: int
         raise ValueError(f"the spline spacing must be positive (deg) or 0, got {spacing_deg}")
     if spacing_deg == 0 or not records:
         return []
-    values = np.degrees(np.concatenate([ee.channel_values(r, channel) for r in records]))
+    values = np.degrees(np.concatenate([channel_values(r, channel) for r in records]))
     lo, hi = float(np.min(values)), float(np.max(values))
     knots = [k * spacing_deg for k in range(ceil(lo / spacing_deg), floor(hi / spacing_deg) + 1)
              if lo < k * spacing_deg < hi]
@@ -291,7 +307,7 @@ def _separable(x: np.ndarray, columns: list[int]) -> bool:
         vif = np.diag(np.linalg.inv(c))
     except np.linalg.LinAlgError:
         return False
-    return bool(np.all(np.isfinite(vif)) and np.max(vif) <= ee.VIF_LIMIT)
+    return bool(np.all(np.isfinite(vif)) and np.max(vif) <= VIF_LIMIT)
 
 
 def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
@@ -340,7 +356,7 @@ def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
     recs = [records] if isinstance(records, FlightRecord) else list(records)
     if not recs:
         raise ValueError("mof needs at least one record")
-    terms = [ee.parse_term(t) for t in candidates]
+    terms = [parse_term(t) for t in candidates]
     y, x, refs = _stacked(recs, coefficient, terms, reference, consistent_smoothing)
     chosen, steps = select(y, x, [t.text for t in terms], max_terms, backward)
     selected = [terms[i].text for i in sorted(chosen)]
@@ -358,7 +374,7 @@ def estimate(records: FlightRecord | Sequence[FlightRecord], coefficient: str,
     return est
 
 
-def _stacked(records: Sequence[FlightRecord], coefficient: str, terms: Sequence[ee.Term],
+def _stacked(records: Sequence[FlightRecord], coefficient: str, terms: Sequence[Term],
              reference: str, consistent_smoothing: bool
              ) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
     """The coefficient (N) and the candidates' regressors (N x terms) of the records one
@@ -366,27 +382,27 @@ def _stacked(records: Sequence[FlightRecord], coefficient: str, terms: Sequence[
     if reference == "mean":
         # a spline factor's origin is its knot
         pooled = {ch: 0.0 if HINGE.match(ch) else
-                  float(np.mean(np.concatenate([ee.channel_values(r, ch) for r in records])))
+                  float(np.mean(np.concatenate([channel_values(r, ch) for r in records])))
                   for ch in dict.fromkeys(c for t in terms for c, _ in t.factors)}
         refs = pooled
     else:
-        refs = ee.reference_values(records[0], terms, reference)
+        refs = reference_values(records[0], terms, reference)
     ys, xs = [], []
     for record in records:
-        x = ee.regressor_matrix(record, terms, refs)
+        x = regressor_matrix(record, terms, refs)
         if consistent_smoothing and differentiated(record, coefficient):
-            x = ee.smooth_columns(x, terms, record.dt)
-        ys.append(ee.channel_values(record, coefficient))
+            x = smooth_columns(x, terms, record.dt)
+        ys.append(channel_values(record, coefficient))
         xs.append(x)
     return np.concatenate(ys), np.vstack(xs), refs
 
 
-def _pooled_fit(coefficient: str, terms: Sequence[ee.Term], y: np.ndarray, x: np.ndarray,
+def _pooled_fit(coefficient: str, terms: Sequence[Term], y: np.ndarray, x: np.ndarray,
                 refs: dict[str, float], colored: bool, smoothed_x: bool) -> Estimate:
     """Least squares of the chosen terms and a bias over pooled records (the fit
     ``equation_error.predict`` reads)."""
-    result = ee.least_squares(np.column_stack([x, np.ones(len(y))]), y, colored=colored)
-    names = [*(ee.derivative_name(coefficient, t) for t in terms), ee.bias_name(coefficient)]
+    result = least_squares(np.column_stack([x, np.ones(len(y))]), y, colored=colored)
+    names = [*(derivative_name(coefficient, t) for t in terms), bias_name(coefficient)]
     fit = {"coefficient": coefficient, "regressors": [t.text for t in terms],
            "reference": "pooled", "reference_values": refs, "bias": True,
            "consistent_smoothing": smoothed_x, "fixed": {}, **result.statistics}

@@ -8,10 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.evaluation.validation import r_squared, theil_inequality
-from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods import mof, registry
+from flightid.identification.methods.equation_error.terms import parse_term, regressor_matrix
 from flightid.identification.methods.mof import candidate_terms, select
 from flightid.record import FlightRecord, RecordMeta
 from flightid.scenarios.cards import card_from_dict, fly_card
@@ -119,7 +120,7 @@ def _assert_the_target(est, flights) -> None:
     for flight in flights:
         test, _ = _c172p_flight(*flight)
         for c in ("CL", "CD", "Cm", "CY", "Cl", "Cn"):
-            y, model = ee.channel_values(test, c), mof.predict(est, test, c)
+            y, model = channel_values(test, c), mof.predict(est, test, c)
             assert r_squared(y, model) >= 0.95, (flight[:2], c)
             assert theil_inequality(y, model) <= 0.1, (flight[:2], c)
 
@@ -235,7 +236,7 @@ def test_spline_knots_follow_the_rule_not_the_data():
     with pytest.raises(ValueError, match="spline"):
         mof.Options(spline=-4.0)
     # the factor is max(alpha - knot, 0) in rad, its own origin (no reference subtracted)
-    x = ee.regressor_matrix(rec, [ee.parse_term("(alpha+2deg)+^2")], {})
+    x = regressor_matrix(rec, [parse_term("(alpha+2deg)+^2")], {})
     assert np.allclose(x[:, 0], np.maximum(rec["alpha"] + np.radians(2.0), 0.0) ** 2)
 
 
