@@ -13,7 +13,8 @@ from flightid.identification.data.reduction import reduce_record
 from flightid.identification.evaluation.validation import r_squared, theil_inequality
 from flightid.identification.methods import mof, registry
 from flightid.identification.methods.equation_error.terms import parse_term, regressor_matrix
-from flightid.identification.methods.mof import candidate_terms, select
+from flightid.identification.methods.mof import candidate_terms
+from flightid.identification.methods.mof_selection import _search, _sse, select
 from flightid.record import FlightRecord, RecordMeta
 from flightid.scenarios.cards import card_from_dict, fly_card
 
@@ -169,13 +170,13 @@ def test_the_chosen_functions_expand_into_the_chosen_terms():
     # too, and the path's R^2 is the least-squares fit's of the chosen terms.
     y, x = _collinear_case()
     z, c = y - y.mean(), x - x.mean(axis=0)
-    one_search = mof._search(z, c, x, [0, 1, 2], 3)
+    one_search = _search(z, c, x, [0, 1, 2], 3)
     assert one_search == [2]
-    assert 1.0 - mof._sse(z, c[:, one_search]) / (z @ z) < 0.5  # d alone: R^2 0.3
+    assert 1.0 - _sse(z, c[:, one_search]) / (z @ z) < 0.5  # d alone: R^2 0.3
     chosen, steps = select(y, x, ["a", "q", "d"])
     # q and d are in (a too, measured: with d first, a's function carries part of q's)
     assert {1, 2} <= set(chosen)
-    r2 = 1.0 - mof._sse(z, c[:, chosen]) / (z @ z)
+    r2 = 1.0 - _sse(z, c[:, chosen]) / (z @ z)
     # noise 0.01 on a signal of std 1.5: R^2 1 - (0.01 / 1.5)^2
     assert r2 > 0.9999
     assert steps[-2]["R2"] == pytest.approx(100.0 * r2, abs=1e-9)
