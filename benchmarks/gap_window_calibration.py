@@ -37,6 +37,7 @@ from flightid.identification.gap.model.linearise import linearise
 from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.rank import Folds, Ranker
 from flightid.identification.gap.segments import segments, split
+from flightid.identification.gap.window import regressors as window
 from flightid.scenarios.gap_benchmark.cases import draw
 from flightid.scenarios.gap_benchmark.run import fly_case, truths
 
@@ -225,9 +226,9 @@ def surrogate_rows(fits, chans, inputs, b: int = 100, min_shift_s: float = 1.5, 
     ``min_shift_s`` from the residual."""
     labels = [k for k in fits if k in chans]
     dts = {k: float(np.median(np.diff(fits[k].time))) for k in labels}
-    xs = [verdict.highpass(verdict.regressors(fits[k], chans[k], inputs), dts[k])
+    xs = [window.highpass(window.regressors(fits[k], chans[k], inputs), dts[k])
           for k in labels]
-    xh = [verdict.fast_regressors(fits[k], chans[k], inputs) for k in labels]
+    xh = [window.fast_regressors(fits[k], chans[k], inputs) for k in labels]
     rng = np.random.default_rng(seed)
     shifts = []
     for _ in range(b):
@@ -242,7 +243,7 @@ def surrogate_rows(fits, chans, inputs, b: int = 100, min_shift_s: float = 1.5, 
         return np.vstack([np.roll(x, s, axis=0) for x, s in zip(blocks, row, strict=True)])
 
     base = verdict.null_test(fits, chans, inputs)
-    xf = np.vstack([verdict.highpass(verdict.regressors(fits[k], chans[k], inputs, 1), dts[k])
+    xf = np.vstack([window.highpass(window.regressors(fits[k], chans[k], inputs, 1), dts[k])
                     for k in labels])  # the seed-5 rules' focused test (one filter an input)
     out = {}
     for ch, t in base.channels.items():
@@ -251,12 +252,12 @@ def surrogate_rows(fits, chans, inputs, b: int = 100, min_shift_s: float = 1.5, 
         r = {"slow": t.slow, "gap": t.gap, "high": (hp, t.high.explained),
              "high_w": t.high.statistic, "high_dof": t.high.dof, "high_ws": []}
         if hp < high_below:
-            hb = sum(verdict.band_energy(fits[k].measured[ch], dts[k], verdict.HIGH_HZ)
+            hb = sum(window.band_energy(fits[k].measured[ch], dts[k], verdict.HIGH_HZ)
                      for k in labels)
             r["high_ws"] = [verdict.channel_test(np.concatenate(raw), rolled(xh, row), hb,
                                                  ch).statistic for row in shifts]
         if not t.slow:
-            v = np.concatenate([verdict.highpass(x, dts[k]) for x, k in
+            v = np.concatenate([window.highpass(x, dts[k]) for x, k in
                                 zip(raw, labels, strict=True)])
             spread = sum(float(np.sum((fits[k].measured[ch] - np.mean(fits[k].measured[ch]))
                                       ** 2)) for k in labels)

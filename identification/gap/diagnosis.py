@@ -40,13 +40,12 @@ from flightid.identification.gap.nonlinearity import (
 )
 from flightid.identification.gap.rank import (
     Folds,
-    Ranked,
     Ranker,
-    mean_gap,
     rank,
     rank_key,
     ranked_pairs,
 )
+from flightid.identification.gap.ranked import Ranked, mean_gap
 from flightid.identification.gap.residual_map import GapMap, gap_map, heat_map
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following, shrinkage
@@ -86,7 +85,7 @@ class GapResult:
     windows: dict[str, list[str]] = field(default_factory=dict)  # fit / held out
     # each diagnosed axis's own result when the records excite both (else empty)
     by_axis: dict[str, GapResult] = field(default_factory=dict)
-    # per channel: the white-noise part of the held-out gap (``rank.pooled_noise``)
+    # per channel: the white-noise part of the held-out gap (``ranked.pooled_noise``)
     floor: dict[str, float] = field(default_factory=dict)
     # the top named airframe effect refitted with the JSBSim aircraft (``refine``), or None
     refined: Refined | None = None

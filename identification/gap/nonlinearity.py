@@ -30,7 +30,7 @@ The statistic is the partial Wald test of the structure's coefficients given the
 set (both regressed on the known set first: Frisch-Waugh-Lovell), with the colored-residual
 covariance of ``verdict.channel_test`` (Morelli & Klein 2016 eq. 6.54, the leverage
 correction of ``engine.bounds``), on the signals through the main test's high-pass
-(``verdict.highpass``, which also takes off the biases). A structure is found when its
+(``window.regressors.highpass``, which also takes off the biases). A structure is found when its
 p-value and its share (the energy it explains beyond the known set, less chance, over what
 the known set leaves of the target) pass its ``LEVELS``: the exact JSBSim aircraft is
 itself nonlinear (its aerodynamic tables), so the levels are set above what null flights
@@ -47,11 +47,8 @@ from typing import Any
 import numpy as np
 
 from flightid.identification.gap.fit import WindowFit
-from flightid.identification.gap.verdict import (
-    ChannelTest,
-    channel_test,
-    highpass,
-)
+from flightid.identification.gap.verdict import ChannelTest, channel_test
+from flightid.identification.gap.window.regressors import highpass
 from flightid.record import FlightRecord
 from flightid.units import DEG
 
@@ -91,8 +88,7 @@ class Structure:
     @property
     def found(self) -> bool:
         """Significant and material beyond the known regressors (``LEVELS``)."""
-        alpha, material = LEVELS[self.name]
-        return bool(self.test.p_value < alpha and self.test.share >= material)
+        return self.test.passes(*LEVELS[self.name])
 
     def to_json(self) -> dict:
         return {"structure": self.name, "channel": self.channel,
@@ -142,7 +138,7 @@ def named_sensor(test: NonlinearTest, named: Sequence[Any]) -> list[Structure]:
     test : NonlinearTest
         The nonlinear-structure test of the model as is.
     named : sequence of Ranked
-        The named effects (``rank.Ranked``).
+        The named effects (``ranked.Ranked``).
 
     Returns
     -------
@@ -159,8 +155,7 @@ def named_sensor(test: NonlinearTest, named: Sequence[Any]) -> list[Structure]:
     out = []
     for s in test.structures:
         if s.channel in vanes and s.name in SENSOR_LEVELS and not s.found:
-            alpha, material = SENSOR_LEVELS[s.name]
-            if s.test.p_value < alpha and s.test.share >= material:
+            if s.test.passes(*SENSOR_LEVELS[s.name]):
                 out.append(s)
     return out
 

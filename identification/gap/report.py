@@ -17,7 +17,7 @@ from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.evaluation.embed import png_img
 from flightid.identification.gap.diagnosis import GapResult
 from flightid.identification.gap.fit import held
-from flightid.identification.gap.rank import Ranked
+from flightid.identification.gap.ranked import Ranked
 from flightid.identification.gap.segments import Segment, segments
 from flightid.identification.gap.sequence import fixed, shrink_text
 from flightid.record import FlightRecord, read

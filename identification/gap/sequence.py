@@ -19,7 +19,8 @@ from collections.abc import Callable, Sequence
 from flightid.identification.gap.candidates.build import Candidate, catalogue_candidates
 from flightid.identification.gap.candidates.linkage import is_linkage
 from flightid.identification.gap.model.linearise import Linearised
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, mean_gap, rank
+from flightid.identification.gap.rank import Folds, Ranker, rank
+from flightid.identification.gap.ranked import Ranked, mean_gap
 
 STEPS = 3  # effects named at most
 

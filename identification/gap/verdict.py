@@ -6,19 +6,19 @@ sec. 16.6): a right model leaves a residual uncorrelated with the inputs, whatev
 colour of the disturbance (turbulence, sensor noise, filters), while a model error leaves
 a residual that the inputs explain. For each output, the residual v (the model as is,
 only its nuisance biases and initial state fitted on each window) is regressed on
-input-driven regressors (``regressors``: each input, ``LAGUERRE`` orthonormal Laguerre
+input-driven regressors (``window.regressors``: each input, Laguerre orthonormal
 filters of it, Wahlberg 1991, and every output of the model as simulated from the measured
 inputs), all functions of the measured inputs only, so under the null (open-loop inputs)
 uncorrelated with the turbulence response and the noise. Beside them, and not tested, go
-the other outputs' residuals of the axis and ``PARTIAL_LAGUERRE`` Laguerre filters of each
-(``other_outputs``): one gust drives every output of an axis, so they take most of this
-one's turbulence response out, and the input regressors' coefficients stay zero-mean (a
-partial regression). Those coefficients are tested with the Wald statistic
+the other outputs' residuals of the axis and Laguerre filters of each
+(``window.regressors.other_outputs``): one gust drives every output of an axis, so they
+take most of this one's turbulence response out, and the input regressors' coefficients
+stay zero-mean (a partial regression). Those coefficients are tested with the Wald statistic
 W = theta^T C^-1 theta, chi-square with k degrees of freedom, C corrected for the colored
 residual (Morelli & Klein 2016 eq. 6.54 with the leverage correction of ``engine.bounds``).
 Where the chi-square p says a channel is a gap, p is calibrated on the record
-(``calibrated_p``: ``SURROGATES`` circularly shifted surrogates, Theiler et al. 1992, and a
-scaled chi-square, Satterthwaite 1946).
+(``calibrated_p``: circularly shifted surrogates, ``window.surrogates``, Theiler et al.
+1992, and a scaled chi-square, Satterthwaite 1946).
 
 A gap is significant (p below ``ALPHA`` on a channel) *and* material: the input-explained
 energy, less what the regression explains by chance (trace(M C)), is at least ``MATERIAL``
@@ -27,7 +27,7 @@ leaves a small input-correlated misfit that a long record makes significant. The
 without the other outputs (``ChannelTest.plain``) is kept beside it at ``PLAIN_ALPHA`` and
 ``PLAIN_MATERIAL``; its share (``ChannelTest.level``) is the gap above the null level
 (``NullTest.above``). A second test per output looks at the high band (a structural mode,
-a fast sensor or actuator effect): ``FAST_LAGUERRE`` Laguerre filters of the inputs,
+a fast sensor or actuator effect): fast Laguerre filters of the inputs,
 significant at ``HIGH_ALPHA`` and material at ``HIGH_MATERIAL`` of the channel's measured
 energy above ``HIGH_HZ``.
 
@@ -44,10 +44,26 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import linalg, signal, stats
+from scipy import stats
 
 from flightid.identification.engine.bounds import colored_residual_covariance
 from flightid.identification.gap.fit import WindowFit
+from flightid.identification.gap.window.regressors import (
+    PARTIAL_LAGUERRE,
+    band_energy,
+    fast_regressors,
+    highpass,
+    independent_columns,
+    nuisance_blocks,
+    other_outputs,
+    regressors,
+    unit_columns,
+)
+from flightid.identification.gap.window.surrogates import (
+    rolled,
+    scaled_chi2_p,
+    surrogate_shifts,
+)
 from flightid.record import FlightRecord
 
 NO_GAP, EXPLAINED, PARTLY, UNEXPLAINED = ("no_gap", "explained", "partly_unexplained",
@@ -74,40 +90,11 @@ MATERIAL = 0.02
 # null flights it adds 2 false alarms (16 in all with the high band's 8)
 PLAIN_ALPHA, PLAIN_MATERIAL = 1e-6, 0.005
 # the high band (a structural mode, a fast sensor or actuator effect): fast Laguerre
-# filters of the inputs, tested on their own against the channel's energy above HIGH_HZ
-FAST_LAGUERRE, FAST_TAU_S = 4, 0.08
+# filters of the inputs (``window.regressors.fast_regressors``), tested on their own
+# against the channel's energy above HIGH_HZ
 HIGH_HZ = 1.0
 HIGH_ALPHA = 1e-6  # stricter: a turbulent record's high band is where gusts and noise live
 HIGH_MATERIAL = 0.05  # input-explained share of the measured energy above HIGH_HZ
-LAGUERRE = 4  # Laguerre filters per input
-# the main test's nuisance regressors (``other_outputs``): each other output's high-passed
-# residual and this many Laguerre filters of it (time constant LAGUERRE_TAU_S). Turbulence
-# drives every output of an axis at once; under the null the other outputs' residuals are
-# independent of the inputs as this one's is, so fitting them beside the input regressors
-# keeps the test's null and takes most of the turbulence response out of its noise: on the
-# blind check's development flights the chance term of the share fell from 0.02-0.2 to
-# 0.001-0.01 (docs/gap_benchmark.md, the rules for the seed-7 run)
-PARTIAL_LAGUERRE = 2
-# the main test's null calibrated per record (the rules for the seed-6 run): where the
-# chi-square p says a channel is a gap, W is recomputed on SURROGATES surrogates, each
-# window's regressors circularly shifted against its residual by at least
-# SURROGATE_SHIFT_S (longer than the residual's correlation time after the high-pass), and
-# p is taken from the scaled chi-square matched to them (``calibrated_p``). Measured on the
-# blind check's null flights of seeds 0-5 (light turbulence; docs/gap_benchmark.md, the
-# rules for the seed-6 run): false alarms 56 -> 27 of 568 (seed 0: 7 -> 3, seed 5: 13 -> 7;
-# the focused test dropped too), no right answer of the seed-5 rules lost by the
-# calibration; added CPU: 0.4-0.8 s per null test where a lateral channel is flagged
-SURROGATES = 100
-SURROGATE_SHIFT_S = 1.5
-SURROGATE_SEED = 0
-LAGUERRE_TAU_S = 0.7  # their time constant (s): the band of the short period and Dutch roll
-# the main test's band: residual and regressors through the same 2nd-order Butterworth
-# high-pass at this corner (rad/s) before the Wald test, per window. A linear filter applied
-# to both keeps the null's uncorrelatedness (inputs against turbulence and noise) and takes
-# off the few-cycle phugoid and slow turbulence response (V, theta over a 10 s window) that
-# correlates by chance with the slow regressors; the maneuvers' 0.6-3 rad/s are kept
-# (docs/gap_benchmark.md, the rules for the seed-3 run)
-HIGHPASS_RAD_S = 0.6
 # outputs left out of the main test (the high band still tests them, and their residuals
 # are nuisance regressors of the others): the attitudes integrate the rates (the residual
 # of theta, phi is the integral of q's, p's, dominated by the slow turbulence response)
@@ -142,15 +129,20 @@ class ChannelTest:
     # regressed on the regressors alone (no other outputs' residuals), / measured energy
     level: float = 0.0
 
+    def passes(self, alpha: float, material: float, explained: bool = False) -> bool:
+        """Significant and material: the p-value below ``alpha`` and the share (chance
+        removed; ``explained``: the explained share with chance, the high band's) at or
+        above ``material`` (fractions of the channel's measured energy)."""
+        share = self.explained if explained else self.share
+        return bool(self.p_value < alpha and share >= material)
+
     @property
     def gap(self) -> bool:
         """Significant and material in the main test, in the plain one's, or in the high
         band's."""
-        return bool(self.p_value < ALPHA and self.share >= MATERIAL) or bool(
-            self.plain is not None and self.plain.p_value < PLAIN_ALPHA
-            and self.plain.share >= PLAIN_MATERIAL) or bool(
-            self.high is not None and self.high.p_value < HIGH_ALPHA
-            and self.high.explained >= HIGH_MATERIAL)
+        return self.passes(ALPHA, MATERIAL) or bool(
+            self.plain is not None and self.plain.passes(PLAIN_ALPHA, PLAIN_MATERIAL)) or bool(
+            self.high is not None and self.high.passes(HIGH_ALPHA, HIGH_MATERIAL, True))
 
     def to_json(self) -> dict:
         out = {"statistic": self.statistic, "dof": self.dof, "p_value": self.p_value,
@@ -194,76 +186,6 @@ class NullTest:
         return {"gap": self.gap, "channels": {c: t.to_json() for c, t in self.channels.items()}}
 
 
-def laguerre(u: np.ndarray, dt: float, n: int = LAGUERRE,
-             tau: float = LAGUERRE_TAU_S) -> list[np.ndarray]:
-    """``u`` through the first ``n`` discrete Laguerre filters with pole exp(-dt/tau).
-
-    L_1 = sqrt(1 - a^2) / (1 - a q^-1), L_(k+1) = L_k (q^-1 - a) / (1 - a q^-1)
-    (Wahlberg 1991).
-
-    Parameters
-    ----------
-    u : numpy.ndarray
-        The signal, any unit; shape (N,).
-    dt : float
-        Sample interval, s.
-    n : int, optional
-        Number of filters. Default ``LAGUERRE``.
-    tau : float, optional
-        The filters' time constant, s. Default ``LAGUERRE_TAU_S``.
-
-    Returns
-    -------
-    list of numpy.ndarray
-        The n filtered signals, unit of ``u``; shape (N,) each.
-    """
-    a = math.exp(-dt / tau)
-    x = signal.lfilter([math.sqrt(1.0 - a * a)], [1.0, -a], u)
-    out = [x]
-    for _ in range(n - 1):
-        x = signal.lfilter([-a, 1.0], [1.0, -a], x)
-        out.append(x)
-    return out
-
-
-def regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str],
-               n: int = LAGUERRE) -> np.ndarray:
-    """The input-driven regressors of one window (module docstring).
-
-    Each input's change from the window's first sample and ``n`` Laguerre filters of it, then
-    every output of the model as simulated.
-
-    Parameters
-    ----------
-    fit : WindowFit
-        The model's fit on the window.
-    record : FlightRecord
-        The window's record, for the inputs (interpolated to the fit's times).
-    inputs : sequence of str
-        The axis's inputs (those the record lacks are skipped).
-    n : int, optional
-        Laguerre filters per input. Default ``LAGUERRE``.
-
-    Returns
-    -------
-    numpy.ndarray
-        The regressors, means removed, SI units; shape (N, k).
-    """
-    t = fit.time
-    dt = float(np.median(np.diff(t)))
-    cols: list[np.ndarray] = []
-    for s in inputs:
-        if s not in record:
-            continue
-        u = np.interp(t, record.time, record[s])
-        u = u - u[0]
-        cols += [u, *laguerre(u, dt, n)]
-    for m in fit.model.values():
-        cols.append(m - np.mean(m))
-    x = np.column_stack(cols)
-    return x - x.mean(axis=0)
-
-
 def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: str,
                  nuisance: np.ndarray | None = None) -> ChannelTest:
     """The Wald test of ``residual`` on the regressors ``x``, p from chi-square with k degrees
@@ -294,11 +216,12 @@ def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: st
     """
     v = residual - np.mean(residual)
     # drop regressors that add nothing (a constant input, collinear model outputs)
-    x = _independent(_unit(x))
+    x = independent_columns(unit_columns(x))
     k = x.shape[1]
     if k == 0 or spread <= 0:
         return ChannelTest(channel, 0.0, 0, 1.0, 0.0)
-    full = x if nuisance is None else _independent(np.hstack([x, _unit(nuisance)]), first=k)
+    full = x if nuisance is None else independent_columns(
+        np.hstack([x, unit_columns(nuisance)]), first=k)
     m = full.T @ full
     theta_all = np.linalg.solve(m, full.T @ v)
     cov_all = colored_residual_covariance(full[:, None, :], (v - full @ theta_all)[:, None],
@@ -313,37 +236,6 @@ def channel_test(residual: np.ndarray, x: np.ndarray, spread: float, channel: st
     chance = float(np.trace(mx @ cov))
     return ChannelTest(channel, w, k, float(stats.chi2.sf(w, k)),
                        (explained - chance) / spread, explained / spread)
-
-
-def surrogate_shifts(lengths: Sequence[int], dts: Sequence[float], b: int = SURROGATES,
-                     least_s: float = SURROGATE_SHIFT_S) -> np.ndarray:
-    """Circular shifts of each window's regressors against its residual.
-
-    Drawn uniformly at least ``least_s`` seconds from either end of the window (a fixed
-    stream: the same shifts for every record); half the window when it is too short.
-
-    Parameters
-    ----------
-    lengths : sequence of int
-        The windows' sample counts.
-    dts : sequence of float
-        The windows' sample intervals, s.
-    b : int, optional
-        Number of surrogates. Default ``SURROGATES``.
-    least_s : float, optional
-        The smallest shift, s. Default ``SURROGATE_SHIFT_S``.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shifts, samples; shape (b, windows).
-    """
-    rng = np.random.default_rng(SURROGATE_SEED)
-    out = np.empty((b, len(lengths)), dtype=int)
-    for j, (n, dt) in enumerate(zip(lengths, dts, strict=True)):
-        m = int(round(least_s / dt))
-        out[:, j] = rng.integers(m, n - m, size=b) if n > 2 * m else n // 2
-    return out
 
 
 def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.ndarray],
@@ -376,187 +268,9 @@ def calibrated_p(test: ChannelTest, residual: np.ndarray, blocks: Sequence[np.nd
     float
         The calibrated p, never below the chi-square p.
     """
-    ws = np.array([channel_test(residual, np.vstack([np.roll(x, int(s), axis=0)
-                                                     for x, s in zip(blocks, row,
-                                                                     strict=True)]),
-                                spread, test.channel, nuisance).statistic for row in shifts])
-    mean, var = float(np.mean(ws)), float(np.var(ws, ddof=1))
-    if not (mean > 0 and var > 0):
-        return test.p_value
-    c, nu = var / (2.0 * mean), 2.0 * mean * mean / var
-    return max(test.p_value, float(stats.chi2.sf(test.statistic / c, nu)))
-
-
-def _unit(x: np.ndarray) -> np.ndarray:
-    """The columns of ``x`` scaled to unit norm, those that are (numerically) zero dropped."""
-    scale = np.sqrt(np.sum(x * x, axis=0))
-    keep = scale > 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)
-    return x[:, keep] / scale[keep]
-
-
-def _independent(x: np.ndarray, first: int = 0) -> np.ndarray:
-    """The columns of ``x`` that are linearly independent (rank-revealing QR), in their
-    order; the ``first`` columns (independent themselves) always kept."""
-    if first:
-        q, _ = np.linalg.qr(x[:, :first])
-        tail = x[:, first:]
-        rest = tail - q @ (q.T @ tail)  # what the first columns do not span
-        live = np.sqrt(np.sum(rest**2, axis=0)) > 1e-6 * np.sqrt(np.sum(tail**2, axis=0))
-        tail, rest = tail[:, live], rest[:, live]
-        return np.hstack([x[:, :first], tail[:, _independent_index(rest)]]) if rest.size \
-            else x[:, :first]
-    return x[:, _independent_index(x)]
-
-
-def _independent_index(x: np.ndarray) -> np.ndarray:
-    """Indices of the linearly independent columns of ``x`` (rank-revealing QR), sorted."""
-    _, r, piv = linalg.qr(x, mode="economic", pivoting=True)
-    d = np.abs(np.diag(r))
-    rank = int(np.sum(d > 1e-8 * d[0])) if d.size else 0
-    return np.sort(piv[:rank])
-
-
-def highpass(x: np.ndarray, dt: float, corner: float = HIGHPASS_RAD_S) -> np.ndarray:
-    """``x``, means removed, through a causal 2nd-order Butterworth high-pass.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        The signal(s), time along the first axis; shape (N,) or (N, k).
-    dt : float
-        Sample interval, s.
-    corner : float, optional
-        The corner, rad/s. Default ``HIGHPASS_RAD_S``.
-
-    Returns
-    -------
-    numpy.ndarray
-        The filtered signal(s), unit of ``x``; shape of ``x``.
-    """
-    b, a = signal.butter(2, corner * dt / math.pi, "high")
-    return signal.lfilter(b, a, x - np.mean(x, axis=0), axis=0)
-
-
-def band_energy(x: np.ndarray, dt: float, low_hz: float) -> float:
-    """Energy of ``x`` (mean removed) above ``low_hz``, by Parseval.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        The signal, any unit; shape (N,).
-    dt : float
-        Sample interval, s.
-    low_hz : float
-        The band's lower edge, Hz.
-
-    Returns
-    -------
-    float
-        The energy, unit of ``x`` squared (summed over samples).
-    """
-    f = np.fft.rfftfreq(x.size, dt)
-    e = np.abs(np.fft.rfft(x - np.mean(x))) ** 2
-    w = np.full(f.size, 2.0)
-    w[0] = 1.0
-    if x.size % 2 == 0:
-        w[-1] = 1.0
-    return float(np.sum((w * e)[f >= low_hz]) / x.size)
-
-
-def fast_regressors(fit: WindowFit, record: FlightRecord, inputs: Sequence[str]) -> np.ndarray:
-    """The high band's regressors of one window.
-
-    ``FAST_LAGUERRE`` Laguerre filters of each input with time constant ``FAST_TAU_S`` (a few
-    tenths of a second of memory).
-
-    Parameters
-    ----------
-    fit : WindowFit
-        The model's fit on the window (its times).
-    record : FlightRecord
-        The window's record, for the inputs.
-    inputs : sequence of str
-        The axis's inputs (those the record lacks are skipped).
-
-    Returns
-    -------
-    numpy.ndarray
-        The regressors, means removed, SI units; shape (N, k).
-    """
-    t = fit.time
-    dt = float(np.median(np.diff(t)))
-    cols: list[np.ndarray] = []
-    for s in inputs:
-        if s in record:
-            u = np.interp(t, record.time, record[s])
-            cols += laguerre(u - u[0], dt, FAST_LAGUERRE, FAST_TAU_S)
-    x = np.column_stack(cols)
-    return x - x.mean(axis=0)
-
-
-def nuisance_blocks(high_passed: Mapping[str, Sequence[np.ndarray]],
-                    dts: Sequence[float]) -> dict[str, list[np.ndarray]]:
-    """Each output's nuisance columns for the other outputs' tests, window by window.
-
-    Each output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it; a
-    channel non-finite on any window is left out (each column then holds one channel
-    throughout).
-
-    Parameters
-    ----------
-    high_passed : mapping of str to sequence of numpy.ndarray
-        {channel: one high-passed residual per window}, SI units.
-    dts : sequence of float
-        The windows' sample intervals, s.
-
-    Returns
-    -------
-    dict of str to list of numpy.ndarray
-        {channel: one (n_j, 1 + ``PARTIAL_LAGUERRE``) block per window}.
-    """
-    return {c: [np.column_stack([v, *laguerre(v, dt, PARTIAL_LAGUERRE)])
-                for v, dt in zip(vs, dts, strict=True)]
-            for c, vs in high_passed.items() if all(np.all(np.isfinite(v)) for v in vs)}
-
-
-def other_outputs(high_passed: Mapping[str, Sequence[np.ndarray]], channel: str,
-                  dts: Sequence[float],
-                  blocks: Mapping[str, Sequence[np.ndarray]] | None = None
-                  ) -> np.ndarray | None:
-    """The main test's nuisance regressors of ``channel``.
-
-    Every other output's high-passed residual and ``PARTIAL_LAGUERRE`` Laguerre filters of it,
-    window by window, stacked.
-
-    Parameters
-    ----------
-    high_passed : mapping of str to sequence of numpy.ndarray
-        {channel: one high-passed residual per window}, SI units.
-    channel : str
-        The channel tested (left out).
-    dts : sequence of float
-        The windows' sample intervals, s.
-    blocks : mapping of str to sequence of numpy.ndarray, optional
-        Those of ``nuisance_blocks``, computed once for every channel. Default: computed here.
-
-    Returns
-    -------
-    numpy.ndarray or None
-        The regressors, means removed per window; shape (N, m). None when
-        ``PARTIAL_LAGUERRE`` is negative (no nuisance) or no other output is finite.
-    """
-    if PARTIAL_LAGUERRE < 0:
-        return None
-    if blocks is None:
-        blocks = nuisance_blocks(high_passed, dts)
-    others = [c for c in blocks if c != channel]
-    if not others:
-        return None
-    out = []
-    for j in range(len(dts)):
-        z = np.column_stack([blocks[c][j] for c in others])
-        out.append(z - z.mean(axis=0))
-    return np.vstack(out)
+    ws = [channel_test(residual, rolled(blocks, row), spread, test.channel,
+                       nuisance).statistic for row in shifts]
+    return scaled_chi2_p(test.statistic, ws, test.p_value)
 
 
 def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord],
@@ -608,18 +322,18 @@ def null_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord]
         else:
             z = other_outputs(high_passed, ch, dt_list, nuisance)
             test = channel_test(v, x, spread, ch, z)
-            if test.p_value < ALPHA and test.share >= MATERIAL:  # a gap by chi-square
+            if test.passes(ALPHA, MATERIAL):  # a gap by chi-square
                 flagged.append((test, v, xs, spread, ALPHA, z))
             if z is not None:
                 test.plain = channel_test(v, x, spread, ch)
                 test.level = test.plain.share
-                if test.plain.p_value < PLAIN_ALPHA and test.plain.share >= PLAIN_MATERIAL:
+                if test.plain.passes(PLAIN_ALPHA, PLAIN_MATERIAL):
                     flagged.append((test.plain, v, xs, spread, PLAIN_ALPHA, None))
             else:
                 test.level = test.share
         high = sum(band_energy(fits[k].measured[ch], dts[k], HIGH_HZ) for k in labels)
         test.high = channel_test(np.concatenate(raw), np.vstack(xh), high, ch)
-        if test.high.p_value < HIGH_ALPHA and test.high.explained >= HIGH_MATERIAL:
+        if test.high.passes(HIGH_ALPHA, HIGH_MATERIAL, explained=True):
             flagged.append((test.high, np.concatenate(raw), xh, high, HIGH_ALPHA, None))
         out.channels[ch] = test
     # the chi-square gaps calibrated, the strongest first, until one stands: the axis is

@@ -34,7 +34,8 @@ from flightid.identification.data.axes import AXIS_INPUTS
 from flightid.identification.gap import GapResult, diagnose
 from flightid.identification.gap.model.linearise import AXIS_FRAME, linearise
 from flightid.identification.gap.model.surfaces import SURFACES_KEY
-from flightid.identification.gap.rank import Folds, Ranked, Ranker, mean_gap, pooled_fractions
+from flightid.identification.gap.rank import Folds, Ranker
+from flightid.identification.gap.ranked import Ranked, mean_gap, pooled_fractions
 from flightid.identification.gap.segments import segments
 from flightid.identification.gap.trim_level import TrimOffset
 from flightid.record import FlightRecord

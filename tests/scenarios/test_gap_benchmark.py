@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 from flightid.cli.app import app
 from flightid.cli.gap_benchmark import COLUMNS, kind_table
 from flightid.identification.gap.candidates.build import Candidate, pair
-from flightid.identification.gap.rank import Ranked
+from flightid.identification.gap.ranked import Ranked
 from flightid.scenarios.gap_benchmark import (
     KINDS,
     Case,

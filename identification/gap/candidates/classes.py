@@ -46,7 +46,7 @@ def prefer_model_terms(ranked: list[Any], margin: float) -> None:
     """Unconfirm a confirmed member of a class (``CLASS_OF``) when a confirmed derivative
     delta of its class leaves a held-out gap within ``margin`` (relative) of its own: the
     data cannot tell them apart, and the delta is the model's own term. ``ranked``: the
-    ``rank.Ranked`` of one ranking.
+    ``ranked.Ranked`` of one ranking.
 
     Parameters
     ----------

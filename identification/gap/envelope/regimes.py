@@ -48,7 +48,7 @@ from flightid.identification.gap.diagnosis import GapResult, Records, _records, 
 from flightid.identification.gap.envelope.trend import Point, Trend, trend
 from flightid.identification.gap.fit import fit
 from flightid.identification.gap.model.linearise import record_condition
-from flightid.identification.gap.rank import combine, mean_gap
+from flightid.identification.gap.ranked import combine, mean_gap
 from flightid.identification.gap.segments import segments, split
 from flightid.identification.gap.sequence import STEPS
 from flightid.identification.gap.verdict import worst

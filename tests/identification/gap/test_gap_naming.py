@@ -11,7 +11,8 @@ import pytest
 
 from flightid.identification.gap import diagnose
 from flightid.identification.gap.model.edits import Candidate, identity
-from flightid.identification.gap.rank import Ranked, simplest, tied
+from flightid.identification.gap.rank import simplest, tied
+from flightid.identification.gap.ranked import Ranked
 from flightid.scenarios.gap_benchmark.cases import OUT, SINGLE, Case, Effect
 from flightid.scenarios.gap_benchmark.classes import same
 from flightid.scenarios.gap_benchmark.run import fly_case

@@ -18,10 +18,9 @@ from flightid.identification.gap.model.edits import Candidate
 from flightid.identification.gap.rank import (
     MIN_EXCESS_SHRINK,
     MIN_SHRINK,
-    Ranked,
-    mean_gap,
     rank_key,
 )
+from flightid.identification.gap.ranked import Ranked, mean_gap
 from flightid.identification.gap.sequence import shrink_text
 from flightid.identification.gap.verdict import (
     ALPHA,
@@ -29,10 +28,10 @@ from flightid.identification.gap.verdict import (
     NO_GAP,
     calibrated_p,
     channel_test,
-    other_outputs,
-    surrogate_shifts,
     worst,
 )
+from flightid.identification.gap.window.regressors import other_outputs
+from flightid.identification.gap.window.surrogates import surrogate_shifts
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
 from flightid.scenarios.gap_benchmark.cases import Case, Effect
 from flightid.scenarios.gap_benchmark.classes import same

@@ -1,0 +1,92 @@
+"""How visible each catalogue entry of the blind check is, measured without the diagnosis:
+per aircraft and entry, the energy the effect adds to its axis's outputs on the exact JSBSim
+aircraft (the case flown in calm air, less the plain aircraft flown in calm air with the
+same seed: the same sensor noise), against the energy light turbulence adds (the plain
+aircraft in light turbulence less calm), both over the card's 64 s with the means removed,
+averaged over the axis's outputs (beta, p, r, ay / alpha, q, az) (docs/gap_benchmark.md,
+the rules for the seed-8 run).
+
+    .venv/bin/python benchmarks/gap_visibility.py --k 1.0 -o study/visibility.jsonl
+
+Each entry is flown at ``k`` times its drawn base (``cases.K_RANGE`` pinned to k, derivative
+deltas at the middle of ``cases.DELTA_FRACTION``), every option of its row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from flightid.scenarios.gap_benchmark import cases as drawn
+from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, KINDS, Case, _effect
+from flightid.scenarios.gap_benchmark.run import fly_case, truths
+
+OUTPUTS = {"lateral": ("beta", "p", "r", "ay"), "longitudinal": ("alpha", "q", "az")}
+
+
+def energy(a, b, channel: str) -> float:
+    """Energy (mean removed) of ``a - b`` on ``channel``, on ``a``'s time base."""
+    d = np.asarray(a[channel]) - np.interp(a.time, b.time, b[channel])
+    return float(np.sum((d - d.mean()) ** 2))
+
+
+def visibility(case: Case, axis: str, calm, light, truth) -> float:
+    """Mean over the axis's outputs of the effect's energy over the turbulence's."""
+    rec = fly_case(case, "calm", truth)
+    ratios = [energy(rec, calm, c) / energy(light, calm, c) for c in OUTPUTS[axis]
+              if c in rec and c in calm]
+    return float(np.mean(ratios))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--k", type=float, default=1.0)
+    ap.add_argument("--entries", default="")
+    ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("-o", "--output", type=Path, required=True)
+    a = ap.parse_args()
+    drawn.K_RANGE = (a.k, a.k)
+    mid = 0.5 * sum(drawn.DELTA_FRACTION)
+    drawn.DELTA_FRACTION = (mid, mid)
+    t = truths()
+    want = set(a.entries.split(",")) - {""}
+    with threadpool_limits(1), open(a.output, "a") as f:
+        for name in AIRCRAFT:
+            plain = Case(0, a.seed, name, "null")
+            calm, light = fly_case(plain, "calm", t[name]), fly_case(plain, "light", t[name])
+            for kind in KINDS:
+                if want and kind.entry not in want:
+                    continue
+                options = [dict(zip(kind.choices, vals, strict=True)) for vals in
+                           np.array(np.meshgrid(*kind.choices.values())).T.reshape(
+                               -1, len(kind.choices))] if kind.choices else [{}]
+                for opts in options:
+                    for which in (kind.sized if kind.one_of else (None,)):
+                        rng = np.random.default_rng(0)
+                        e = _effect(kind, rng, name, t[name])
+                        e.options.update({k: str(v) for k, v in opts.items()})
+                        if which is not None:
+                            base = drawn.SIZED_BASE.get(kind.entry)
+                            e.magnitude.clear()
+                            e.magnitude[which] = drawn._scaled(kind.entry, which, a.k, base)
+                        case = Case(1, a.seed, name, "single", (e,))
+                        axes = ("lateral", "longitudinal") if kind.axis == "both" \
+                            else (kind.axis,)
+                        t0 = time.process_time()
+                        try:
+                            vis = {ax: visibility(case, ax, calm, light, t[name]) for ax in axes}
+                        except Exception as exc:  # noqa: BLE001  (a departure: listed)
+                            vis = {"error": f"{type(exc).__name__}: {exc}"}
+                        f.write(json.dumps({"aircraft": name, "kind": kind.name,
+                                            "label": e.label, "k": a.k, "visibility": vis,
+                                            "cpu": time.process_time() - t0}) + "\n")
+                        f.flush()
+
+
+if __name__ == "__main__":
+    main()

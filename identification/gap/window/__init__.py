@@ -1,0 +1,1 @@
+"""The gap diagnosis's window test: its regressors and the surrogate calibration."""
