@@ -16,12 +16,12 @@ import numpy as np
 
 from flightid.record import FlightRecord
 from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
+from flightid.sim.bridge.decoding import message_time
 from flightid.sim.bridge.frames import read_tlog
 from flightid.sim.bridge.ground.recording import record_stream
 from flightid.sim.bridge.ground.tlog import convert_tlog
 from flightid.sim.bridge.link import LinkFaults, UdpLink
 from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.messages import message_time
 
 OUT = Path(__file__).parent / "results" / "bridge_timing.json"
 

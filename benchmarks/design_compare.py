@@ -20,6 +20,7 @@ from pathlib import Path
 
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design import report as design_report
+from flightid.scenarios.montecarlo.design.comparison import compare
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -37,8 +38,8 @@ def main() -> None:
     study = Path(args.study or
                  Path(tempfile.gettempdir()) / f"flightid-design-compare-{args.equal}")
     t0 = time.perf_counter()
-    comparison = experiment.compare(args.card, args.n, args.method, args.model, study,
-                                equal=args.equal, workers=args.workers)
+    comparison = compare(args.card, args.n, args.method, args.model, study,
+                         equal=args.equal, workers=args.workers)
     wall = time.perf_counter() - t0
     stem = f"design_compare-{args.equal}"
     RESULTS.mkdir(exist_ok=True)

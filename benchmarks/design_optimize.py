@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from flightid.scenarios.montecarlo.design import experiment, optimize
+from flightid.scenarios.montecarlo.design.comparison import compare
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -74,9 +75,9 @@ def main() -> None:
         own.update({f"{k}-da-dr-{span:g}s": opt.designs[k] for k in experiment.DESIGNS
                     if k != "3211"})
     t1 = time.perf_counter()
-    comparison = experiment.compare("navion-demo", args.n, "oe", "lat", study, designs=(),
-                                equal="energy", reference="3211-da-dr",
-                                workers=args.workers, own=own)
+    comparison = compare("navion-demo", args.n, "oe", "lat", study, designs=(),
+                         equal="energy", reference="3211-da-dr",
+                         workers=args.workers, own=own)
     t_mc = time.perf_counter() - t1
     rows = {"n": args.n, "mc_wall_s": t_mc, "optimisation_wall_s": t_opt,
             "gain_predicted": opt.gain(), "best_builtin_predicted": opt.best_builtin(),

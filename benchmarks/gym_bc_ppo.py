@@ -12,7 +12,7 @@ The policy. Its input is the scaled observation (``observation="scaled"``, 16 ch
 and ``HARMONICS`` pairs of time features sin, cos(2 pi k t / ``PERIOD``), k = 1..H, of
 the observed elapsed time t; its action mean is linear in them (SB3 ``MlpPolicy`` with no
 hidden policy layer; the value function has two hidden layers of 64). The multisine
-baselines are sums of those harmonics (``baselines.multisine``), so a linear map of the
+baselines are sums of those harmonics (``policies.multisine``), so a linear map of the
 time features reproduces them exactly, and the state weights let fine-tuning add feedback.
 The action [-1, 1] is times the travel limit: ``--limit 0.2`` (the baselines' 0.2 of
 travel on every surface) or ``--limit ce`` (the peaks of the CE search without a travel
@@ -71,23 +71,20 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from flightid.scenarios.gym import ENV_ID, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
-    AMPLITUDE,
     HEADER,
     OTHER_REWARDS,
-    POLICIES,
     Result,
-    closed_loop,
     evaluate,
-    multisine,
     per_target,
     plot,
 )
+from flightid.scenarios.gym.policies import AMPLITUDE, POLICIES, closed_loop, multisine
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from gym_ppo import CE_02, CE_TUNED, N_ENVS, TRAIN_SEED, CpuBudget, Curve, travel_limit  # noqa: E402
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_bc_ppo.txt"
-PERIOD = 20.0  # s, the multisines' period (baselines.multisine)
+PERIOD = 20.0  # s, the multisines' period (policies.multisine)
 HARMONICS = 30  # time features up to 30 / PERIOD = 1.5 Hz
 EVAL_SETS = {"held-out seeds 0-3": tuple(range(4)),
              "held-out seeds 1000-1015": tuple(range(1000, 1016))}

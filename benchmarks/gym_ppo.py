@@ -11,7 +11,7 @@ build of torch first).
 Training: PPO with an MLP policy on 4 environments stepped in one process
 (``DummyVecEnv``, one torch thread), scaled observations (``observation="scaled"``),
 returns normalised (``VecNormalize``, rewards only), the agent's action times 0.2 (the
-baselines' travel limit, ``baselines.AMPLITUDE``), episodes seeded from ``TRAIN_SEED``
+baselines' travel limit, ``policies.AMPLITUDE``), episodes seeded from ``TRAIN_SEED``
 (100, 101, ...: the environments' own seed sequence, disjoint from the held-out 0-3).
 ``--config`` picks the training reward and PPO's settings (``CONFIGS``):
 ``information`` trains on the default reward (``valid-information``); ``accuracy`` on
@@ -50,18 +50,15 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from flightid.scenarios.gym import ENV_ID, ExcitationEnv
 from flightid.scenarios.gym.baselines import (
-    AMPLITUDE,
     HEADER,
     HELD_OUT_SEEDS,
     OTHER_REWARDS,
-    POLICIES,
-    closed_loop,
     evaluate,
-    multisine,
     per_target,
     plot,
     run_episode,
 )
+from flightid.scenarios.gym.policies import AMPLITUDE, POLICIES, closed_loop, multisine
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_ppo.txt"
 TRAIN_SEED = 100

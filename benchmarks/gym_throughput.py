@@ -37,7 +37,7 @@ import jsbsim
 import numpy as np
 
 from flightid.scenarios.gym import ENV_ID, ExcitationEnv
-from flightid.scenarios.gym.baselines import doublet
+from flightid.scenarios.gym.policies import doublet
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_throughput.txt"
 

@@ -53,7 +53,7 @@ import numpy as np
 from gymnasium import spaces
 
 from flightid.scenarios.gym import OBS_CHANNELS, DecisionChunks, ExcitationEnv
-from flightid.scenarios.gym.baselines import three211
+from flightid.scenarios.gym.policies import three211
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "gym_vector.txt"
 TICK = os.sysconf("SC_CLK_TCK")

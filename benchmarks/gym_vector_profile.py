@@ -61,7 +61,7 @@ import gymnasium
 import numpy as np
 
 from flightid.scenarios.gym import DecisionChunks, ExcitationEnv
-from flightid.scenarios.gym.baselines import three211
+from flightid.scenarios.gym.policies import three211
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling script, from anywhere
 from gym_vector import chunk_rows, cpu_seconds, machine_busy  # noqa: E402

@@ -34,13 +34,9 @@ from flightid.cli.checks import (
 from flightid.files import write_text
 from flightid.record import FlightRecord
 from flightid.scenarios import cards
+from flightid.sim.bridge.air.closed_loop import FlightCoreAdapter, serve_simulation
 from flightid.sim.bridge.air.schedule import PROFILES
-from flightid.sim.bridge.air.serve import (
-    BridgeConfig,
-    FlightCoreAdapter,
-    serve_record,
-    serve_simulation,
-)
+from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
 from flightid.sim.bridge.air.signing import SenderFilter, read_key, state_path
 from flightid.sim.bridge.ground.gaps import MAX_GAP_SAMPLES
 from flightid.sim.bridge.ground.recording import record_stream

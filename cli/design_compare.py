@@ -33,10 +33,10 @@ from flightid.scenarios.cards import load_maneuvers
 from flightid.scenarios.input_design import InputDesign
 from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.card_file import card_with_overrides
+from flightid.scenarios.montecarlo.design.comparison import Comparison
 from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     EQUAL,
-    Comparison,
     DesignSettings,
     check_own,
     make_design,

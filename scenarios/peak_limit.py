@@ -24,12 +24,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.optimize import minimize
 
+from flightid.scenarios.input_information import Problem, covariance
 from flightid.scenarios.input_optimization import (
     OptimizedMultisine,
-    Problem,
     amplitude_cost,
     component_forms,
-    covariance,
     criterion_value,
 )
 from flightid.scenarios.multisine import (

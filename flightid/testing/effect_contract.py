@@ -32,9 +32,9 @@ from flightid.record import FlightRecord
 from flightid.sim.augment import augment
 from flightid.sim.bridge.air.schedule import single_stream
 from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
+from flightid.sim.bridge.decoding import message_time
 from flightid.sim.bridge.frames import FrameScanner
 from flightid.sim.bridge.link import Link
-from flightid.sim.bridge.messages import message_time
 from flightid.sim.effects.base import ExternalImplementation
 from flightid.sim.effects.catalogue import (
     ARRIVAL_TIMES,

@@ -15,7 +15,13 @@ import numpy as np
 
 from flightid.identification.estimate import StdKind
 
-MAX_LEVERAGE = 0.95  # cap of a frequency bin's removed share (no bin of the studies reached it)
+MAX_LEVERAGE = 0.95  # cap of a frequency bin's removed share
+HC3_POWER = 2.0  # (1 - H_f)^2: the jackknife form (MacKinnon & White 1985)
+# the power of (1 - H_f) for output error's lateral model, between HC2 (1) and HC3 (2):
+# measured on development flights of two cards, one in calm air and one in turbulence
+# (docs/validation.md, "Choosing the leverage correction"); the longitudinal models keep
+# HC3, which the same measurement found not too large for them
+LATERAL_LEVERAGE_POWER = 1.5
 
 
 def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
@@ -36,7 +42,7 @@ def cramer_rao_covariance(information: np.ndarray) -> np.ndarray:
 
 def colored_residual_covariance(
     sens: np.ndarray, residuals: np.ndarray, weight: np.ndarray, information: np.ndarray,
-    leverage: bool = True,
+    leverage: bool = True, power: float = HC3_POWER,
 ) -> np.ndarray:
     """Parameter covariance corrected for colored residuals (M&K eq. 6.54, SIDPAC m_colores),
     with each frequency's residual power restored for what the fit took out of it.
@@ -53,10 +59,13 @@ def colored_residual_covariance(
     low band (a flight in turbulence) the sample spectrum is depleted exactly where the bound
     needs it: the plain eq. 6.54 bounds of output error on the Navion demo card in light
     turbulence are 1.3-2.1 times too small (coverage of the 95 % intervals 57-87 %). With
-    ``leverage`` each bin's whitened residual is therefore divided by (I - H_f), H_f capped at
-    ``MAX_LEVERAGE``: the frequency-domain form of the HC3 sandwich correction (MacKinnon &
-    White 1985; recommended for small samples by Long & Ervin 2000), which brings those bounds
-    to 0.73-1.14 of the scatter (docs/montecarlo.md).
+    ``leverage`` each bin's whitened residual power is therefore divided by
+    (I - H_f)^``power``, H_f capped at ``MAX_LEVERAGE``: the frequency-domain form of the
+    sandwich corrections of MacKinnon & White (1985), HC2 for ``power`` 1 (unbiased when the
+    residual is white across the bins a parameter mixes) and HC3 for 2 (the jackknife form,
+    recommended for small samples by Long & Ervin 2000, conservative for white errors). The
+    default is HC3; output error's lateral model uses ``LATERAL_LEVERAGE_POWER``
+    (``leverage_power``; docs/validation.md, "Choosing the leverage correction").
 
     Parameters
     ----------
@@ -69,7 +78,10 @@ def colored_residual_covariance(
     information : numpy.ndarray
         The information matrix M; shape (np, np).
     leverage : bool, optional
-        Restore each bin's residual power for the fit's share (HC3). Default True.
+        Restore each bin's residual power for the fit's share. Default True.
+    power : float, optional
+        The power of (I - H_f) dividing each bin's residual power, dimensionless, >= 0;
+        unused without ``leverage``. Default HC3's 2.
 
     Returns
     -------
@@ -85,7 +97,7 @@ def colored_residual_covariance(
     if leverage:
         h = (fa @ inv) @ np.conj(np.swapaxes(fa, 1, 2)) / n  # (F, ny, ny), Hermitian
         vals, vecs = np.linalg.eigh(h)
-        keep = 1.0 / (1.0 - np.clip(vals, 0.0, MAX_LEVERAGE))
+        keep = (1.0 - np.clip(vals, 0.0, MAX_LEVERAGE)) ** (-0.5 * power)
         fe = vecs @ (keep[:, :, None] * (np.conj(np.swapaxes(vecs, 1, 2)) @ fe))
     w = (np.conj(np.swapaxes(fe, 1, 2)) @ fa)[:, 0, :]  # (F, p): e_f^H A_f
     # rfft keeps f = 0 .. L/2: every other bin stands for itself and its mirror image
@@ -98,9 +110,29 @@ def colored_residual_covariance(
     return 0.5 * (cov + cov.T)
 
 
+def leverage_power(model: str) -> float:
+    """The power of (1 - H_f) in ``colored_residual_covariance`` for an output-error fit.
+
+    ``LATERAL_LEVERAGE_POWER`` for the linear lateral model (where it was measured), HC3's 2
+    for every other.
+
+    Parameters
+    ----------
+    model : str
+        The model's name (``Model.name``, e.g. "lateral").
+
+    Returns
+    -------
+    float
+        The power, dimensionless.
+    """
+    return LATERAL_LEVERAGE_POWER if model == "lateral" else HC3_POWER
+
+
 def output_error_covariance(information: np.ndarray, sens: np.ndarray,
                             residuals: np.ndarray, noise: np.ndarray,
-                            colored: bool) -> tuple[np.ndarray, StdKind]:
+                            colored: bool, power: float = HC3_POWER,
+                            ) -> tuple[np.ndarray, StdKind]:
     """(covariance, std_kind) of an output-error fit.
 
     M^-1, or the colored-residual correction (M&K eq. 6.54) when ``colored``; an empty matrix
@@ -118,6 +150,8 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
         The noise covariance R, output units squared; shape (ny, ny).
     colored : bool
         Correct for colored residuals.
+    power : float, optional
+        The leverage correction's power (``colored_residual_covariance``). Default HC3's 2.
 
     Returns
     -------
@@ -129,7 +163,8 @@ def output_error_covariance(information: np.ndarray, sens: np.ndarray,
         return np.zeros((0, 0)), StdKind.NONE
     if colored:
         weight = np.linalg.inv(noise)
-        return (colored_residual_covariance(sens, residuals, weight, information),
+        return (colored_residual_covariance(sens, residuals, weight, information,
+                                            power=power),
                 StdKind.CRAMER_RAO_COLORED)
     return cramer_rao_covariance(information), StdKind.CRAMER_RAO
 

@@ -14,7 +14,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from flightid.identification.engine import identifiability as ident
-from flightid.identification.engine.bounds import output_error_covariance, standard_errors
+from flightid.identification.engine.bounds import (
+    HC3_POWER,
+    output_error_covariance,
+    standard_errors,
+)
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.metrics import r_squared_by_output
 from flightid.identification.estimate import Estimate
@@ -24,6 +28,7 @@ def estimate_from_fit(
     fit: MaximumLikelihoodFit, *, method: str, model: str, time: np.ndarray,
     measured: np.ndarray, output_names: Sequence[str], fixed: Mapping[str, float],
     unidentifiable: Mapping[str, str], colored: bool, full_noise_covariance: bool,
+    leverage_power: float = HC3_POWER,
 ) -> Estimate:
     """The estimate of a finished fit.
 
@@ -49,6 +54,9 @@ def estimate_from_fit(
         Correct the bounds for colored residuals.
     full_noise_covariance : bool
         Whether R had off-diagonal terms (reported).
+    leverage_power : float, optional
+        The colored-residual bounds' power of (1 - H_f), dimensionless (``bounds``).
+        Default HC3's 2.
 
     Returns
     -------
@@ -57,7 +65,7 @@ def estimate_from_fit(
     """
     names = fit.names
     cov, std_kind = output_error_covariance(fit.information, fit.sens, fit.residuals,
-                                            fit.noise, colored)
+                                            fit.noise, colored, leverage_power)
     std = standard_errors(cov)
     outputs = {
         name: {"measured": measured[:, j], "model": fit.y[:, j],

@@ -31,6 +31,7 @@ from flightid.identification.engine import problem as problem_skeleton
 from flightid.identification.engine.bounds import (
     colored_residual_covariance as colored_residual_covariance,  # public here too
 )
+from flightid.identification.engine.bounds import leverage_power
 from flightid.identification.engine.gauss_newton import MaximumLikelihoodFit
 from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
@@ -180,7 +181,8 @@ def estimate(
         final, method=ID, model=problem.model.name, time=problem.time, measured=problem.z,
         output_names=problem.output_names, fixed=problem.fixed,
         unidentifiable=unidentifiable, colored=colored,
-        full_noise_covariance=full_noise_covariance)
+        full_noise_covariance=full_noise_covariance,
+        leverage_power=leverage_power(problem.model.name))
 
 
 # ----------------------------------------------------------------------------- protocol

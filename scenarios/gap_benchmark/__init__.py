@@ -4,12 +4,13 @@ per kind.
 
 ``cases`` (what is drawn), ``outside`` (the effects the catalogue cannot express),
 ``classes`` (effects the data cannot tell apart), ``run`` (fly, diagnose, score one case),
-``summary`` (the figures, overall and per kind), ``study`` (many cases on the Monte Carlo
-executors, resumable).
+``scoring`` (one case's diagnosis scored), ``summary`` (the figures, overall and per kind),
+``study`` (many cases on the Monte Carlo executors, resumable).
 """
 
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, KINDS, Case, Effect, draw
-from flightid.scenarios.gap_benchmark.run import CaseResult, fly_case, run_case
+from flightid.scenarios.gap_benchmark.run import fly_case, run_case
+from flightid.scenarios.gap_benchmark.scoring import CaseResult
 from flightid.scenarios.gap_benchmark.study import Benchmark, benchmark, check
 from flightid.scenarios.gap_benchmark.summary import TARGETS, summary
 

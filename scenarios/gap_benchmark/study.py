@@ -23,7 +23,8 @@ from flightid.scenarios.gap_benchmark.cases import (
     draw,
     fingerprint,
 )
-from flightid.scenarios.gap_benchmark.run import CaseResult, run_case, truths
+from flightid.scenarios.gap_benchmark.run import run_case, truths
+from flightid.scenarios.gap_benchmark.scoring import CaseResult
 from flightid.scenarios.gap_benchmark.summary import summary
 from flightid.scenarios.montecarlo.executors import dask_client, run_dask, run_local
 from flightid.sim.flight.simulation import DepartureError

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from flightid.scenarios.gap_benchmark.cases import NULL, OUT, PAIR, SINGLE
-from flightid.scenarios.gap_benchmark.run import CaseResult
+from flightid.scenarios.gap_benchmark.scoring import CaseResult
 
 # figure -> (target, whether higher is better)
 TARGETS = {"right_first": (0.90, True), "magnitude_error": (0.05, False),

@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from flightid.scenarios.montecarlo import load
-from flightid.scenarios.montecarlo.design.experiment import Comparison, DesignResult, DesignSettings
+from flightid.scenarios.montecarlo.design.comparison import Comparison, DesignResult
+from flightid.scenarios.montecarlo.design.experiment import DesignSettings
 from flightid.scenarios.montecarlo.store import SUMMARY_COLUMNS, read_description
 from flightid.scenarios.montecarlo.summary import summarize
 

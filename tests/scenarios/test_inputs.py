@@ -8,17 +8,15 @@ import numpy as np
 import pytest
 from scipy.signal import hilbert
 
+from flightid.scenarios.equal_energy import energy, scale_to_energy, spectrum
 from flightid.scenarios.input_design import EDGE_TOL, rate_limit
 from flightid.scenarios.inputs import (
     INPUT_KINDS,
     Doublet,
     Sweep,
     ThreeTwoOneOne,
-    energy,
     input_from_dict,
     inputs_from_list,
-    scale_to_energy,
-    spectrum,
     total_signals,
 )
 from flightid.scenarios.multisine import (

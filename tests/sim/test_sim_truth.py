@@ -13,13 +13,8 @@ import pytest
 from flightid import aircraft
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import trim
-from flightid.sim.jsbsim.truth import (
-    compare_to_file,
-    derivatives,
-    linearization,
-    pitch_entries,
-    truth_file,
-)
+from flightid.sim.jsbsim.truth import derivatives, linearization, pitch_entries
+from flightid.sim.jsbsim.truth_files import compare_to_file, truth_file
 
 HERE = Path(__file__).parents[1] / "aircraft" / "linear_test"
 LINEAR = HERE / "linear_test.xml"

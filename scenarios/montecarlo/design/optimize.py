@@ -1,6 +1,6 @@
 """``design-optimize``: a multisine optimised for the predicted bounds of a card's
 derivatives, against the built-in designs flown one surface after another as the cards
-do (``input_optimization`` for the prediction and the optimiser).
+do (``input_information`` for the prediction, ``input_optimization`` for the optimiser).
 
 The problem is measured on the card itself: a flight without inputs (the card's
 condition, sensors and turbulence, seed of the card) gives the trim condition, the JSBSim
@@ -24,16 +24,16 @@ import numpy as np
 
 from flightid.channels import LATERAL_INPUTS
 from flightid.scenarios.cards import card_from_dict, fly_card, load_card
+from flightid.scenarios.equal_energy import scale_to_energy
 from flightid.scenarios.input_design import InputDesign
-from flightid.scenarios.input_optimization import (
-    OptimizedMultisine,
+from flightid.scenarios.input_information import (
     Problem,
     mean_relative_bound,
-    optimize_multisine,
     predicted_bounds,
     problem_from_flight,
 )
-from flightid.scenarios.inputs import Maneuvers, scale_to_energy
+from flightid.scenarios.input_optimization import OptimizedMultisine, optimize_multisine
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.design.experiment import (
     DESIGNS,
     SETTLE_S,

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from flightid.derivatives import unit
 from flightid.identification.evaluation.embed import png_img
-from flightid.scenarios.montecarlo.design.experiment import Comparison, compare
+from flightid.scenarios.montecarlo.design.comparison import Comparison, compare
 from flightid.scenarios.montecarlo.exports import write_tables
 from flightid.scenarios.montecarlo.intervals import LEVEL, interval_text, scatter_interval
 

@@ -12,10 +12,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from flightid.files import atomic_path, write_text
+from flightid.sim.bridge.decoding import message_time
 from flightid.sim.bridge.frames import Frame, FrameScanner, TlogWriter
 from flightid.sim.bridge.ground.sources import Source, loss_dict, sequence_losses
 from flightid.sim.bridge.link import Link
-from flightid.sim.bridge.messages import message_time
 
 
 @dataclass

@@ -13,22 +13,18 @@ from gymnasium.utils.env_checker import check_env
 
 from flightid.identification.identify import identify
 from flightid.scenarios.gym import ENV_ID, OBS_CHANNELS, DecisionChunks, ExcitationEnv
-from flightid.scenarios.gym.baselines import (
+from flightid.scenarios.gym.baselines import cross_entropy, evaluate, per_target, plot, run_episode
+from flightid.scenarios.gym.information import Information
+from flightid.scenarios.gym.options import LINEAR_RANGE, OBSERVATIONS, REWARDS, SIGMA
+from flightid.scenarios.gym.policies import (
     AMPLITUDE,
     closed_loop,
-    cross_entropy,
     doublet,
-    evaluate,
     full_rudder,
     multisine,
-    per_target,
-    plot,
-    run_episode,
     three211,
     zero,
 )
-from flightid.scenarios.gym.information import Information
-from flightid.scenarios.gym.options import LINEAR_RANGE, OBSERVATIONS, REWARDS, SIGMA
 
 SEEDS = (0, 1)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flightid.scenarios.gym import ExcitationEnv
-from flightid.scenarios.gym.baselines import doublet
+from flightid.scenarios.gym.policies import doublet
 
 BAD_OPTIONS = [
     ({"aircraft": "sideways"}, r"unknown aircraft 'sideways'"),

@@ -15,13 +15,8 @@ torch = pytest.importorskip("torch")
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 
 from flightid.scenarios.gym import ENV_ID, ExcitationEnv  # noqa: E402
-from flightid.scenarios.gym.baselines import (  # noqa: E402
-    AMPLITUDE,
-    closed_loop,
-    evaluate,
-    multisine,
-    run_episode,
-)
+from flightid.scenarios.gym.baselines import evaluate, run_episode  # noqa: E402
+from flightid.scenarios.gym.policies import AMPLITUDE, closed_loop, multisine  # noqa: E402
 
 
 def _travel(env: gymnasium.Env) -> gymnasium.Env:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from flightid.scenarios.gym import DecisionChunks, ExcitationEnv
-from flightid.scenarios.gym.baselines import three211
+from flightid.scenarios.gym.policies import three211
 from tests import benchmark_scripts
 
 vector_bench = benchmark_scripts.load("gym_vector")

@@ -23,7 +23,7 @@ from flightid.scenarios import montecarlo
 from flightid.scenarios.cards import CardError, card_from_dict, load_card, load_maneuvers
 from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo import store
-from flightid.scenarios.montecarlo.design import experiment
+from flightid.scenarios.montecarlo.design import comparison, experiment
 from flightid.scenarios.montecarlo.design import report as design_report
 from flightid.scenarios.montecarlo.intervals import interval_text
 from flightid.scenarios.montecarlo.summary import summarize
@@ -166,14 +166,14 @@ def test_command_line_refuses_bad_settings_with_exit_2(tmp_path):
 
 
 def _comparison_of(scatters: dict[str, dict[str, float | None]], n: int = 20
-                   ) -> experiment.Comparison:
+                   ) -> comparison.Comparison:
     """A Comparison of designs whose rows have exactly the given scatters (None: the
     derivative found unidentifiable by that design), from errors z * scatter with z
     fixed-seed normal draws standardized to sample standard deviation 1."""
     truth = {"Cm_alpha": -0.683, "CY_r": 0.0, "Cn_r": -0.125}
     z = np.random.default_rng(7).normal(size=n)
     z = (z - z.mean()) / z.std(ddof=1)
-    out = experiment.Comparison("navion-demo", "navion", "oe", "lat", n, "amplitude", "3211",
+    out = comparison.Comparison("navion-demo", "navion", "oe", "lat", n, "amplitude", "3211",
                             experiment.DesignSettings())
     for kind, by_name in scatters.items():
         rows = []
@@ -186,7 +186,7 @@ def _comparison_of(scatters: dict[str, dict[str, float | None]], n: int = 20
                              "status": "estimated" if s else "unidentifiable",
                              "reason": ""})
         summary = summarize(store.frame(rows))
-        out.results.append(experiment.DesignResult(kind, 12.0, 2.8, 0.007, 3 * DEG, summary,
+        out.results.append(comparison.DesignResult(kind, 12.0, 2.8, 0.007, 3 * DEG, summary,
                                                kind))
     return out
 

@@ -18,9 +18,11 @@ from typer.testing import CliRunner
 from flightid.cli.app import app
 from flightid.identification.models.linear import lateral
 from flightid.identification.models.reference_condition import ReferenceCondition
+from flightid.scenarios import input_information as ii
 from flightid.scenarios import input_optimization as io
 from flightid.scenarios.cards import load_maneuvers
-from flightid.scenarios.inputs import Maneuvers, scale_amplitude
+from flightid.scenarios.equal_energy import scale_amplitude
+from flightid.scenarios.inputs import Maneuvers
 from flightid.scenarios.montecarlo.design import experiment
 from flightid.scenarios.montecarlo.design.optimize import sequenced, stretched
 from flightid.scenarios.montecarlo.intervals import paired_ratio_interval, scatter_ratio_interval
@@ -37,14 +39,14 @@ TRUTH = {"CY_beta": -0.564, "CY_r": 0.0, "CY_dr": 0.157, "Cl_beta": -0.074, "Cl_
          "Cn_r": -0.125, "Cn_da": 0.0035, "Cn_dr": -0.072}
 
 
-def white_problem() -> io.Problem:
+def white_problem() -> ii.Problem:
     """The lateral model with white residuals of the research sensors' size."""
     model = lateral(NAVION)
     values = {p: TRUTH.get(p, 0.0) for p in model.parameters}
     variance = {"beta": 7e-5, "p": 2e-4, "r": 3e-4, "phi": 4e-5, "ay": 0.013}
     freqs = np.linspace(0.0, 25.0, 64)
     density = np.tile([variance[o] for o in model.outputs], (freqs.size, 1))
-    return io.Problem(model, values, tuple(p for p in model.parameters
+    return ii.Problem(model, values, tuple(p for p in model.parameters
                                            if not p.startswith("bias_")),
                       50.0, variance, freqs, density)
 
@@ -53,17 +55,17 @@ def test_white_residual_covariance_is_the_inverse_information_and_scales_with_en
     pb = white_problem()
     d = sequenced("3211", ("da", "dr"), experiment.DesignSettings(amplitude=4 * DEG))
     duration = d.end + experiment.SETTLE_S
-    sens = io.sensitivities(pb, d, duration)
+    sens = ii.sensitivities(pb, d, duration)
     r = np.array([pb.variance[o] for o in pb.model.outputs])
     info = np.einsum("tok,tol->kl", sens / r[None, :, None], sens)
-    cov = io.covariance(pb, d, duration)
+    cov = ii.covariance(pb, d, duration)
     # white residuals: the sandwich M^-1 (S^H R^-1 Phi R^-1 S) M^-1 is M^-1 (Parseval)
     np.testing.assert_allclose(cov, np.linalg.inv(info), rtol=1e-6,
                                atol=1e-12 * np.abs(np.linalg.inv(info)).max())
     # twice the amplitude, four times the information on the derivatives: half the bound
     # (the biases' own information does not depend on the input: Schur complement)
-    b1 = io.predicted_bounds(pb, d, duration)
-    b2 = io.predicted_bounds(pb, scale_amplitude(d, 2.0), duration)
+    b1 = ii.predicted_bounds(pb, d, duration)
+    b2 = ii.predicted_bounds(pb, scale_amplitude(d, 2.0), duration)
     for n in pb.names:
         assert b2[n] == pytest.approx(b1[n] / 2, rel=1e-6), n
 
@@ -199,7 +201,7 @@ def test_design_optimize_under_a_peak_limit_writes_a_design_within_it(tmp_path):
                                                             rel=1e-6)
 
 
-def _limited(pb: io.Problem, energy: float, limit: float | None) -> io.OptimizedMultisine:
+def _limited(pb: ii.Problem, energy: float, limit: float | None) -> io.OptimizedMultisine:
     ms = io.optimize_multisine(pb, ("da", "dr"), (0.1, 2.0), PERIOD, energy, "A",
                                start=experiment.START_S, settle=experiment.SETTLE_S)
     if limit is None:

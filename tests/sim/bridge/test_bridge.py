@@ -24,11 +24,13 @@ from flightid.sim.bridge.air.schedule import (
     single_stream,
 )
 from flightid.sim.bridge.air.serve import BridgeConfig, serve_record
+from flightid.sim.bridge.decoding import resolution
 from flightid.sim.bridge.frames import read_tlog
-from flightid.sim.bridge.ground.tlog import convert_tlog, decode_tlog
+from flightid.sim.bridge.ground.tlog import convert_tlog
+from flightid.sim.bridge.ground.tlog_decode import decode_tlog
 from flightid.sim.bridge.link import FdLink, LinkFaults, Transmitter, UdpLink, parse_hostport
 from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.messages import ServoMap, resolution
+from flightid.sim.bridge.messages import ServoMap
 from flightid.units import DEG
 
 BIN = Path(sys.executable).parent

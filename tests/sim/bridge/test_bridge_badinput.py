@@ -20,12 +20,13 @@ from flightid.cli.app import app
 from flightid.record import read
 from flightid.scenarios.cards import fly_card, load_card
 from flightid.sim.bridge.air.serve import BridgeConfig
+from flightid.sim.bridge.decoding import message_time
 from flightid.sim.bridge.frames import TlogWriter, read_tlog
 from flightid.sim.bridge.ground.gaps import nominal_interval
-from flightid.sim.bridge.ground.tlog import convert_tlog, decode_tlog
+from flightid.sim.bridge.ground.tlog import convert_tlog
+from flightid.sim.bridge.ground.tlog_decode import decode_tlog
 from flightid.sim.bridge.link import LinkFaults, UdpLink
 from flightid.sim.bridge.loopback import record_bridged
-from flightid.sim.bridge.messages import message_time
 
 RUNNER = CliRunner()
 

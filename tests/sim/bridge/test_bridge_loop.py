@@ -13,7 +13,8 @@ import sys
 import numpy as np
 import pytest
 
-from flightid.sim.bridge.air.serve import BridgeConfig, FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.air.closed_loop import FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.link import open_pty_pair
 from flightid.sim.flight.simulation import Simulation, fly
 from flightid.sim.jsbsim.trim import trim

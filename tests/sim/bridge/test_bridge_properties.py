@@ -16,7 +16,8 @@ from flightid.record import FlightRecord, RecordMeta
 from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.frames import read_tlog
 from flightid.sim.bridge.ground.gaps import MAX_GAP_SAMPLES, nominal_interval
-from flightid.sim.bridge.ground.tlog import convert_tlog, decode_tlog
+from flightid.sim.bridge.ground.tlog import convert_tlog
+from flightid.sim.bridge.ground.tlog_decode import decode_tlog
 from flightid.sim.bridge.loopback import record_bridged
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True, database=None)

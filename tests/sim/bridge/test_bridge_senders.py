@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from flightid.sim.bridge.air.serve import BridgeConfig, FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.air.closed_loop import FlightCoreAdapter, serve_simulation
+from flightid.sim.bridge.air.serve import BridgeConfig
 from flightid.sim.bridge.air.signing import (
     SenderFilter,
     read_key,
