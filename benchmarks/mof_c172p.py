@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.estimate import Estimate
 from flightid.identification.evaluation.validation import r_squared, theil_inequality
@@ -161,7 +162,7 @@ def main() -> None:
                   "  Theil  backward R2  Theil  " + "  ".join(
                       f"spline {s:g} R2  Theil" for s in SPLINES) + "  terms"]
         for c in est.fit["coefficients"]:
-            y = ee.channel_values(test, c)
+            y = channel_values(test, c)
             m, lpart = ee.predict(part(est, c), test), ee.predict(part(lin, c), test)
             fpart = ee.predict(part(four, c), test)
             bpart = ee.predict(part(back, c), test)

@@ -17,9 +17,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.stats import chi2
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.engine.metrics import j_rms, paired, r_squared, theil_inequality
 from flightid.identification.estimate import Estimate
-from flightid.identification.methods.equation_error import channel_values
 from flightid.identification.methods.equation_error import predict as ee_predict
 from flightid.record import FlightRecord
 

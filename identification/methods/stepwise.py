@@ -35,9 +35,17 @@ from itertools import combinations_with_replacement
 
 import numpy as np
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.engine.metrics import determination
 from flightid.identification.estimate import Estimate, merge
 from flightid.identification.methods import equation_error as ee
+from flightid.identification.methods.equation_error.estimation import identifiability
+from flightid.identification.methods.equation_error.terms import (
+    derivative_name,
+    parse_term,
+    reference_values,
+    regressor_matrix,
+)
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
@@ -257,12 +265,12 @@ def estimate(
         Invalid thresholds, an unknown coefficient or a malformed term.
     """
     check_thresholds(f_in, f_out)
-    terms = [ee.parse_term(t) for t in candidates]
-    y = ee.channel_values(record, coefficient)
-    refs = ee.reference_values(record, terms, reference)
-    x = ee.regressor_matrix(record, terms, refs)
-    names = [ee.derivative_name(coefficient, t) for t in terms]
-    unident = ee.identifiability(x, names, terms, record)
+    terms = [parse_term(t) for t in candidates]
+    y = channel_values(record, coefficient)
+    refs = reference_values(record, terms, reference)
+    x = regressor_matrix(record, terms, refs)
+    names = [derivative_name(coefficient, t) for t in terms]
+    unident = identifiability(x, names, terms, record)
     usable = [j for j, nm in enumerate(names) if nm not in unident]
     chosen, steps = select(
         y, x[:, usable], [terms[j].text for j in usable],

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.engine.metrics import r_squared, theil_inequality
 from flightid.identification.estimate import Estimate
-from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods import mof, registry
 from flightid.record import FlightRecord
 from flightid.scenarios.campaign.card import Campaign
@@ -133,7 +133,7 @@ def validate(campaign: Campaign, est: Estimate) -> dict[str, Any]:
         "points": [{"altitude": p.altitude, "speed": p.speed} for p in campaign.held_out],
         "coefficients": {}}
     for c in est.fit.get("coefficients", {}):
-        pairs = [(ee.channel_values(r, c), predict(est, r, c)) for r in records]
+        pairs = [(channel_values(r, c), predict(est, r, c)) for r in records]
         y, m = (np.concatenate(v) for v in zip(*pairs, strict=True))
         out["coefficients"][c] = {
             "R2": float(r_squared(y, m)), "Theil": float(theil_inequality(y, m)),

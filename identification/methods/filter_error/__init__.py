@@ -4,8 +4,8 @@ Kalman filter inside.
 ``estimation`` (the estimate and its result), ``relaxation`` (the relaxation between
 the Gauss-Newton passes and the noise step, the joint noise fit from two starts),
 ``method`` (the options, the preset entry point and the registry entry),
-``kalman_filter`` (the steady-state filter, its likelihood, one Gauss-Newton pass, the
-noise step and the robust bounds),
+``kalman_filter`` (the steady-state filter and its likelihood), ``iteration`` (one
+Gauss-Newton pass, the noise step and the robust bounds),
 ``flight_condition`` (the derivatives corrected for the measured dynamic pressure and
 airspeed leaving the reference condition). The package exports
 the method's API.

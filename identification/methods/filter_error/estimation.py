@@ -27,7 +27,7 @@ the lower J is kept. At the converged point the derivatives are corrected for th
 measured dynamic pressure and airspeed departing from the reference condition
 (``flight_condition``), and the bounds are the Cramer-Rao bounds sqrt(diag M^-1) (M&K
 eq. 6.50) or, with ``colored``, the score sandwich of
-``kalman_filter.robust_covariance``. Output error supplies the start values and decides
+``iteration.robust_covariance``. Output error supplies the start values and decides
 which parameters the flight cannot determine; the same checks of ``identifiability`` are
 repeated on the filter's information matrix, and the fit is repeated without the
 parameters they find (``refit.refit_without_unidentifiable``). The relaxation's two
@@ -54,14 +54,15 @@ from flightid.identification.methods.filter_error.flight_condition import (
     condition_departure,
     innovation_change,
 )
+from flightid.identification.methods.filter_error.iteration import robust_covariance
 from flightid.identification.methods.filter_error.kalman_filter import (
     FilterProblem,
     is_noise_parameter,
     measurement_noise_name,
     process_noise_name,
-    robust_covariance,
 )
 from flightid.identification.methods.filter_error.relaxation import Relaxed, relax, two_starts
+from flightid.identification.methods.output_error_problem import problem_from_record
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
@@ -143,7 +144,7 @@ def estimate(
         departing from the reference condition (``flight_condition``; models without an
         airspeed state, records with qbar and V channels). Default True.
     colored : bool, optional
-        Standard errors from ``kalman_filter.robust_covariance`` (the sandwich for colored
+        Standard errors from ``iteration.robust_covariance`` (the sandwich for colored
         innovations) instead of the Cramer-Rao bounds M^-1, which are then in
         ``fit['cramer_rao_std']``. Default False.
     joint_noise : bool, optional
@@ -188,7 +189,7 @@ def estimate(
     # output error first: start values, measurement noise and identifiability
     oe_fit = oe.estimate(record, model, free=names, initial_state=initial_state, hold=hold,
                          check_identifiability=check_identifiability)
-    data = oe.problem_from_record(record, model, initial_state, hold)
+    data = problem_from_record(record, model, initial_state, hold)
     unidentifiable = dict(oe_fit.unidentifiable)
     R = np.diag([oe_fit.fit["noise_std"][o] ** 2 for o in model.outputs])
     f_start = {}

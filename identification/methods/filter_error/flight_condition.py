@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.identification.methods.filter_error.kalman_filter import FilterEvaluation
-from flightid.identification.methods.output_error import Problem
+from flightid.identification.methods.output_error_problem import Problem
 from flightid.identification.models.discrete import propagate
 from flightid.identification.models.linear import LinearModel
 from flightid.identification.models.measured_inputs import is_scheduled

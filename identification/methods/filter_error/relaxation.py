@@ -9,16 +9,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flightid.identification.methods.filter_error.iteration import (
+    gauss_newton_pass,
+    measurement_noise,
+    noise_step,
+)
 from flightid.identification.methods.filter_error.kalman_filter import (
     MEASUREMENT_NOISE_PREFIX,
     PROCESS_NOISE_PREFIX,
     FilterEvaluation,
     FilterProblem,
     evaluate,
-    gauss_newton_pass,
     is_noise_parameter,
-    measurement_noise,
-    noise_step,
 )
 
 # relaxation: Gauss-Newton passes of EARLY_ITERATIONS steps while R still changes by more

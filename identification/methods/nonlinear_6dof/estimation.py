@@ -54,12 +54,14 @@ from flightid.identification.engine.refit import refit_iterated
 from flightid.identification.engine.results import estimate_from_fit
 from flightid.identification.estimate import Estimate
 from flightid.identification.methods import equation_error
-from flightid.identification.methods.nonlinear_6dof.simulation import (
+from flightid.identification.methods.nonlinear_6dof.problem import (
     Problem,
     model_from_record,
+    problem_from_record,
+)
+from flightid.identification.methods.nonlinear_6dof.simulation import (
     outputs,
     outputs_and_sensitivities,
-    problem_from_record,
 )
 from flightid.identification.methods.protocol import Method, OutputErrorOptions, option
 from flightid.identification.models import rigid_body as rb

@@ -19,6 +19,7 @@ from flightid.identification.identify import identify
 from flightid.identification.methods import filter_error as fe
 from flightid.identification.methods import output_error as oe
 from flightid.identification.methods.filter_error import kalman_filter as kf
+from flightid.identification.methods.output_error_problem import problem_from_record
 from flightid.identification.models import linear as lm
 from flightid.identification.models.reference_condition import condition_from_record
 from flightid.record import FlightRecord, RecordMeta, Reference, read
@@ -101,7 +102,7 @@ def test_steady_state_gain_is_the_limit_of_the_time_varying_filter():
 
 def test_likelihood_gradient_equals_finite_differences():
     model, truth, rec = turbulent_flight("navion", 5, PROCESS_NOISE, duration=6.0)
-    data = oe.problem_from_record(rec, model)
+    data = problem_from_record(rec, model)
     names = ["Cl_p", "Cn_beta", "CY_dr", "bias_ay", "F_beta", "F_p"]
     prob = kf.FilterProblem(data, names, {}, ("beta", "p", "r"), {"F_r": 0.01})
     theta = np.array([truth["Cl_p"] * 1.1, truth["Cn_beta"] * 0.9, truth["CY_dr"], 0.02,

@@ -8,11 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.data.reduction import reduce_record
 from flightid.identification.evaluation.validation import r_squared, theil_inequality
-from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods import mof, registry
-from flightid.identification.methods.mof import candidate_terms, select
+from flightid.identification.methods.equation_error.terms import parse_term, regressor_matrix
+from flightid.identification.methods.mof import candidate_terms
+from flightid.identification.methods.mof_selection import _search, _sse, select
 from flightid.record import FlightRecord, RecordMeta
 from flightid.scenarios.cards import card_from_dict, fly_card
 
@@ -119,7 +121,7 @@ def _assert_the_target(est, flights) -> None:
     for flight in flights:
         test, _ = _c172p_flight(*flight)
         for c in ("CL", "CD", "Cm", "CY", "Cl", "Cn"):
-            y, model = ee.channel_values(test, c), mof.predict(est, test, c)
+            y, model = channel_values(test, c), mof.predict(est, test, c)
             assert r_squared(y, model) >= 0.95, (flight[:2], c)
             assert theil_inequality(y, model) <= 0.1, (flight[:2], c)
 
@@ -168,13 +170,13 @@ def test_the_chosen_functions_expand_into_the_chosen_terms():
     # too, and the path's R^2 is the least-squares fit's of the chosen terms.
     y, x = _collinear_case()
     z, c = y - y.mean(), x - x.mean(axis=0)
-    one_search = mof._search(z, c, x, [0, 1, 2], 3)
+    one_search = _search(z, c, x, [0, 1, 2], 3)
     assert one_search == [2]
-    assert 1.0 - mof._sse(z, c[:, one_search]) / (z @ z) < 0.5  # d alone: R^2 0.3
+    assert 1.0 - _sse(z, c[:, one_search]) / (z @ z) < 0.5  # d alone: R^2 0.3
     chosen, steps = select(y, x, ["a", "q", "d"])
     # q and d are in (a too, measured: with d first, a's function carries part of q's)
     assert {1, 2} <= set(chosen)
-    r2 = 1.0 - mof._sse(z, c[:, chosen]) / (z @ z)
+    r2 = 1.0 - _sse(z, c[:, chosen]) / (z @ z)
     # noise 0.01 on a signal of std 1.5: R^2 1 - (0.01 / 1.5)^2
     assert r2 > 0.9999
     assert steps[-2]["R2"] == pytest.approx(100.0 * r2, abs=1e-9)
@@ -235,7 +237,7 @@ def test_spline_knots_follow_the_rule_not_the_data():
     with pytest.raises(ValueError, match="spline"):
         mof.Options(spline=-4.0)
     # the factor is max(alpha - knot, 0) in rad, its own origin (no reference subtracted)
-    x = ee.regressor_matrix(rec, [ee.parse_term("(alpha+2deg)+^2")], {})
+    x = regressor_matrix(rec, [parse_term("(alpha+2deg)+^2")], {})
     assert np.allclose(x[:, 0], np.maximum(rec["alpha"] + np.radians(2.0), 0.0) ** 2)
 
 

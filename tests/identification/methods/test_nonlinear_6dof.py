@@ -19,6 +19,7 @@ from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import nonlinear_6dof as n6
 from flightid.identification.methods.nonlinear_6dof import simulation as sim6
+from flightid.identification.methods.nonlinear_6dof.problem import cubic_midpoints
 from flightid.identification.models import rigid_body as rb
 from flightid.identification.models import six_dof
 from flightid.scenarios.inputs import Doublet, ThreeTwoOneOne, TwoOneOne, total_signals
@@ -238,7 +239,7 @@ def test_propulsive_moments_close_the_twin_otter_moment_budget(twin_otter):
 def test_cubic_midpoints_exact_for_cubics():
     t = np.linspace(0.0, 1.0, 11)
     x = np.column_stack([1 + 2 * t - 3 * t**2 + 4 * t**3, np.sin(t)])
-    mid = sim6.cubic_midpoints(x)
+    mid = cubic_midpoints(x)
     tm = 0.5 * (t[1:] + t[:-1])
     exact = 1 + 2 * tm - 3 * tm**2 + 4 * tm**3
     assert np.allclose(mid[1:-1, 0], exact[1:-1], atol=1e-12)

@@ -15,6 +15,11 @@ import pytest
 from flightid.identification.estimate import StdKind
 from flightid.identification.identify import identify
 from flightid.identification.methods import output_error as oe
+from flightid.identification.methods.output_error_problem import (
+    _outputs,
+    _outputs_and_sensitivities,
+    problem_from_record,
+)
 from flightid.identification.models import linear as lm
 from flightid.identification.models.discrete import simulate
 from flightid.identification.models.longitudinal import (
@@ -343,13 +348,13 @@ def test_parameter_without_effect_has_zero_sensitivity():
 
 def test_sensitivities_equal_finite_differences():
     model, truth, rec = _lateral_flight("navion", seed=1)
-    problem = oe.problem_from_record(rec, model)
+    problem = problem_from_record(rec, model)
     names = list(model.parameters)
-    y, sens = oe._outputs_and_sensitivities(problem, truth, names)
+    y, sens = _outputs_and_sensitivities(problem, truth, names)
     for k, name in enumerate(names):
         h = 1e-6 * max(1.0, abs(truth[name]))
-        up = oe._outputs(problem, {**truth, name: truth[name] + h})
-        down = oe._outputs(problem, {**truth, name: truth[name] - h})
+        up = _outputs(problem, {**truth, name: truth[name] + h})
+        down = _outputs(problem, {**truth, name: truth[name] - h})
         fd = (up - down) / (2 * h)
         scale = np.max(np.abs(fd)) + 1e-12
         assert np.max(np.abs(sens[:, :, k] - fd)) < 1e-5 * scale, name

@@ -15,8 +15,8 @@ import pandas as pd
 import pytest
 from dask import distributed
 
+from flightid.identification.data.coefficients import channel_values
 from flightid.identification.engine.metrics import r_squared
-from flightid.identification.methods import equation_error as ee
 from flightid.identification.methods import mof
 from flightid.scenarios import campaign
 from flightid.scenarios.campaign import neighbour
@@ -192,7 +192,7 @@ def test_a_mof_campaign_fits_one_global_model_over_its_points(tmp_path):
             assert point["R2"] >= 0.95, (coefficient, point)
             assert point["Theil"] <= 0.1, (coefficient, point)
             # each point's score is the prediction of that point's own record
-            y = ee.channel_values(record, coefficient)
+            y = channel_values(record, coefficient)
             assert point["R2"] == pytest.approx(
                 r_squared(y, mof.predict(direct, record, coefficient)), abs=1e-9)
 

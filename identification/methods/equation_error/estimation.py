@@ -25,262 +25,40 @@ estimated: they go to ``Estimate.unidentifiable`` with the reason.
 
 from __future__ import annotations
 
-import math
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import fftconvolve
 
-from flightid.identification.data.coefficients import (
-    HINGE,
-    channel_values,
-    differentiated,
-    smoothed,
-)
-from flightid.identification.engine.metrics import determination
+from flightid.identification.data.coefficients import channel_values, differentiated
 from flightid.identification.estimate import Estimate, merge
+from flightid.identification.methods.equation_error.least_squares import least_squares
+from flightid.identification.methods.equation_error.terms import (
+    FACTOR_CHANNEL,
+    Term,
+    _letter,
+    bias_name,
+    derivative_name,
+    parse_term,
+    reference_values,
+    regressor_matrix,
+    smooth_columns,
+)
 from flightid.identification.methods.protocol import Method, RegressionOptions, option
 from flightid.identification.models import a_priori
 from flightid.identification.models import structure as model_structure
 from flightid.record import FlightRecord
 
 ID = "ee"
-# coefficient channel -> letter of its derivative names (flightid.derivatives)
-COEF_LETTER = {"CX": "X", "CY": "Y", "CZ": "Z", "CL": "L", "CD": "D", "Cl": "l", "Cm": "m",
-               "Cn": "n"}
-# term factor -> record channel; derivative variables map to their nondimensional channel
-FACTOR_CHANNEL = {"p": "phat", "q": "qhat", "r": "rhat", "dt": "throttle", "alphadot":
-                  "alphadot_hat"}
-# channel -> derivative variable of flightid.derivatives
-CHANNEL_VARIABLE = {"phat": "p", "qhat": "q", "rhat": "r", "throttle": "dt",
-                    "alphadot_hat": "alphadot"}
-DERIVED_CHANNELS = ("phat", "qhat", "rhat", "alphadot_hat")
-DERIVED_BY_DIFFERENTIATION = ("alphadot_hat",)
 COLLINEAR_R = 0.99  # pairwise |correlation| above which two regressors are inseparable
 # VIF above which a regressor is (nearly) a linear combination of the others; the same
 # threshold as the pairwise one: R_j^2 > 0.99^2
 VIF_LIMIT = 1.0 / (1.0 - COLLINEAR_R**2)
-REFERENCES = ("mean", "initial", "none")
 # A control that moves less than this (peak to peak, SI unit) carries no excitation: below
 # the resolution of control-position sensors (about 0.1 deg = 1.7e-3 rad) and far below
 # any test input; the same limit as identification/engine/identifiability.py MIN_INPUT_RANGE.
 MIN_CONTROL_RANGE = {"de": 1e-3, "da": 1e-3, "dr": 1e-3, "df": 1e-3, "throttle": 1e-3}
 CONTROL_CHANNELS = tuple(MIN_CONTROL_RANGE)
-# a term: a channel or a spline factor (``HINGE``, its anchors stripped), to a power
-_TERM = re.compile(rf"^([A-Za-z_][A-Za-z0-9_]*|{HINGE.pattern[1:-1]})(\^[1-9])?$")
-
-
-@dataclass(frozen=True)
-class Term:
-    """A regressor: a product of channels raised to powers, e.g. alpha^2 or alpha*de."""
-
-    text: str
-    factors: tuple[tuple[str, int], ...]  # (channel, power)
-
-    @property
-    def is_linear(self) -> bool:
-        return len(self.factors) == 1 and self.factors[0][1] == 1
-
-
-def parse_term(text: str) -> Term:
-    """A Term from text such as 'beta', 'p', 'alpha^2', 'alpha*de'.
-
-    Parameters
-    ----------
-    text : str
-        Channels joined by '*', each with an optional power '^k' (k 1-9), or a spline
-        factor such as '(alpha-8deg)+'; 'p', 'q', 'r', 'dt', 'alphadot' name their
-        nondimensional channels (``FACTOR_CHANNEL``).
-
-    Returns
-    -------
-    Term
-        The term, its factors as (channel, power).
-
-    Raises
-    ------
-    ValueError
-        The text is empty or a factor is malformed.
-    """
-    text = text.strip()
-    if not text:
-        raise ValueError("empty regressor name")
-    factors = []
-    for part in text.split("*"):
-        part = part.strip()
-        if not _TERM.match(part):
-            raise ValueError(
-                f"regressor {text!r}: cannot read factor {part!r}; write channels joined by "
-                "'*' with optional powers, e.g. 'alpha', 'alpha^2', 'alpha*de', "
-                "'(alpha-8deg)+^2' (a spline: max(alpha - 8 deg, 0)^2)"
-            )
-        name, _, power = part.partition("^")
-        factors.append((FACTOR_CHANNEL.get(name, name), int(power) if power else 1))
-    return Term(text, tuple(factors))
-
-
-def derivative_name(coefficient: str, term: Term) -> str:
-    """Name of the parameter of ``term`` in the model of ``coefficient`` (Cl, beta -> Cl_beta).
-
-    Parameters
-    ----------
-    coefficient : str
-        Coefficient channel, a key of ``COEF_LETTER`` (e.g. 'Cl').
-    term : Term
-        The regressor.
-
-    Returns
-    -------
-    str
-        Canonical derivative name for a linear term (Cl_p), else ``C<letter>_<term>``
-        (Cm_alpha^2).
-
-    Raises
-    ------
-    ValueError
-        ``coefficient`` is unknown.
-    """
-    letter = _letter(coefficient)
-    if term.is_linear:
-        channel = term.factors[0][0]
-        return f"C{letter}_{CHANNEL_VARIABLE.get(channel, channel)}"
-    parts = []
-    for channel, power in term.factors:
-        var = CHANNEL_VARIABLE.get(channel, channel)
-        parts.append(var if power == 1 else f"{var}^{power}")
-    return f"C{letter}_{'*'.join(parts)}"
-
-
-def bias_name(coefficient: str) -> str:
-    """Name of the bias parameter of a coefficient model (Cl -> Cl_0).
-
-    Parameters
-    ----------
-    coefficient : str
-        Coefficient channel, a key of ``COEF_LETTER``.
-
-    Returns
-    -------
-    str
-        ``C<letter>_0``.
-
-    Raises
-    ------
-    ValueError
-        ``coefficient`` is unknown.
-    """
-    return f"C{_letter(coefficient)}_0"
-
-
-def reference_values(
-    record: FlightRecord, terms: Sequence[Term], reference: str = "mean"
-) -> dict[str, float]:
-    """Reference value of each factor channel of the terms, for perturbations.
-
-    Parameters
-    ----------
-    record : FlightRecord
-        The flight, SI channels.
-    terms : sequence of Term
-        The regressors.
-    reference : str, optional
-        'mean' (default: the record mean), 'initial' (the first sample) or 'none' (0).
-        A spline factor's reference is always 0 (its origin is its knot).
-
-    Returns
-    -------
-    dict of str to float
-        {channel: reference value}, in the channel's SI unit.
-
-    Raises
-    ------
-    ValueError
-        ``reference`` is not in ``REFERENCES``.
-    """
-    if reference not in REFERENCES:
-        raise ValueError(f"reference must be one of {REFERENCES}, got {reference!r}")
-    out: dict[str, float] = {}
-    for term in terms:
-        for channel, _ in term.factors:
-            if channel in out:
-                continue
-            x = channel_values(record, channel)  # a spline factor's origin is its knot
-            out[channel] = (
-                0.0 if HINGE.match(channel) or reference == "none"
-                else float(np.mean(x)) if reference == "mean" else float(x[0]))
-    return out
-
-
-def regressor_matrix(
-    record: FlightRecord, terms: Sequence[Term], references: dict[str, float]
-) -> np.ndarray:
-    """Each term evaluated on the perturbations channel - reference.
-
-    Parameters
-    ----------
-    record : FlightRecord
-        The flight, SI channels.
-    terms : sequence of Term
-        The regressors.
-    references : dict of str to float
-        {channel: reference value} (``reference_values``); a missing channel takes 0.
-
-    Returns
-    -------
-    numpy.ndarray
-        Regressor matrix, shape (N, len(terms)), in the terms' units.
-
-    Raises
-    ------
-    ValueError
-        A regressor is not finite; the message names the sample and time.
-    """
-    columns = []
-    cache: dict[str, np.ndarray] = {}
-    for term in terms:
-        col = np.ones(len(record))
-        for channel, power in term.factors:
-            if channel not in cache:
-                cache[channel] = channel_values(record, channel) - references.get(channel, 0.0)
-            col = col * cache[channel] ** power
-        if not np.all(np.isfinite(col)):
-            i = int(np.argmax(~np.isfinite(col)))
-            raise ValueError(f"regressor {term.text!r} is not finite at sample {i} "
-                             f"(t = {record.time[i]} s)")
-        columns.append(col)
-    return np.column_stack(columns) if columns else np.empty((len(record), 0))
-
-
-def colored_residual_covariance(x: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """Parameter covariance corrected for colored residuals (Morelli & Klein 2016, ch. 5).
-
-    The residual autocorrelation is the biased estimate over all lags.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Regressor matrix, shape (N, p).
-    residual : numpy.ndarray
-        Equation-error residuals, shape (N,).
-
-    Returns
-    -------
-    numpy.ndarray
-        Covariance, shape (p, p), in the parameters' units squared; symmetric.
-    """
-    n = residual.size
-    rvv = np.correlate(residual, residual, mode="full")[n - 1:] / n if n < 4096 else (
-        fftconvolve(residual, residual[::-1], mode="full")[n - 1:] / n
-    )
-    kernel = np.concatenate([rvv[:0:-1], rvv])  # R(|k|), k = -(n-1) .. n-1
-    # (T x)(i) = sum_j R(|i - j|) x(j): a convolution with the symmetric kernel
-    tx = fftconvolve(kernel[:, None], x, mode="full", axes=0)[n - 1: 2 * n - 1]
-    xtx_inv = np.linalg.inv(x.T @ x)
-    middle = x.T @ tx
-    cov = xtx_inv @ middle @ xtx_inv
-    return 0.5 * (cov + cov.T)
 
 
 def identifiability(
@@ -473,42 +251,6 @@ def estimate(
     )
 
 
-@dataclass
-class LeastSquares:
-    """Result of one least-squares fit: parameters, covariance and statistics."""
-
-    theta: np.ndarray
-    std: np.ndarray
-    covariance: np.ndarray
-    model: np.ndarray
-    statistics: dict
-
-
-def smooth_columns(x: np.ndarray, terms: Sequence[Term], dt: float) -> np.ndarray:
-    """Regressor columns through ``coefficients.smoothed``.
-
-    A column that is itself a smoothed derivative (alphadot_hat) already carries the
-    filter and is left as is.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Regressor matrix, shape (N, p).
-    terms : sequence of Term
-        The term of each column.
-    dt : float
-        Sample interval, s.
-
-    Returns
-    -------
-    numpy.ndarray
-        Smoothed regressor matrix, shape (N, p).
-    """
-    cols = [col if any(c in DERIVED_BY_DIFFERENTIATION for c, _ in term.factors)
-            else smoothed(col, dt) for col, term in zip(x.T, terms, strict=True)]
-    return np.column_stack(cols) if cols else x
-
-
 def _held_terms(coefficient: str, a_priori: Mapping[str, float]) -> dict[str, float]:
     """{regressor channel: value} of the a priori derivatives of ``coefficient``."""
     letter = _letter(coefficient)
@@ -518,76 +260,6 @@ def _held_terms(coefficient: str, a_priori: Mapping[str, float]) -> dict[str, fl
         if coef == f"C{letter}" and variable:
             out[FACTOR_CHANNEL.get(variable, variable)] = value
     return out
-
-
-def least_squares(x: np.ndarray, y: np.ndarray, colored: bool = True) -> LeastSquares:
-    """OLS of y on the columns of x with Cramer-Rao bounds, optionally colored-corrected.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Regressor matrix, shape (N, p).
-    y : numpy.ndarray
-        Dependent variable, shape (N,).
-    colored : bool, optional
-        Covariance corrected for colored residuals (default) or plain OLS s^2 (X'X)^-1.
-
-    Returns
-    -------
-    LeastSquares
-        theta (p,), std (p,), covariance (p, p), model (N,) and statistics: R2 (about the
-        mean), s2 = SSE/(N - p), F, PSE (Morelli & Klein 5.4), N, n_parameters,
-        condition_number, std_kind, std_ols.
-
-    Raises
-    ------
-    ValueError
-        N <= p.
-    """
-    n, p = x.shape
-    if n <= p:
-        raise ValueError(f"{n} samples cannot determine {p} parameters")
-    theta, *_ = np.linalg.lstsq(x, y, rcond=None)
-    model = x @ theta
-    v = y - model
-    sse = float(v @ v)
-    s2 = sse / (n - p)
-    xtx_inv = np.linalg.inv(x.T @ x)
-    cov_ols = s2 * xtx_inv
-    std_ols = np.sqrt(np.diag(cov_ols))
-    if colored:
-        cov = colored_residual_covariance(x, v)
-        kind = "corrected"
-    else:
-        cov = cov_ols
-        kind = "OLS"
-    sst = float(np.sum((y - y.mean()) ** 2))
-    r2 = determination(sse, sst)
-    sigma_max2 = sst / n
-    # count the regressors other than a constant column for the F statistic
-    has_const = np.any(np.all(np.isclose(x, x[:1]), axis=0))
-    k = p - 1 if has_const else p
-    f_stat = ((sst - sse) / k) / s2 if k > 0 and s2 > 0 else math.nan
-    col_norm = np.linalg.norm(x, axis=0)
-    col_norm[col_norm == 0] = 1.0
-    cond = float(np.linalg.cond(x / col_norm))
-    return LeastSquares(
-        theta=theta,
-        std=np.sqrt(np.diag(cov)),
-        covariance=cov,
-        model=model,
-        statistics={
-            "R2": r2,
-            "s2": s2,
-            "F": f_stat,
-            "PSE": sse / n + sigma_max2 * p / n,
-            "N": n,
-            "n_parameters": p,
-            "condition_number": cond,
-            "std_kind": kind,
-            "std_ols": std_ols,
-        },
-    )
 
 
 def estimate_model(
@@ -642,15 +314,6 @@ def predict(est: Estimate, record: FlightRecord) -> np.ndarray:
     if est.fit.get("bias", True):
         y = y + est[bias_name(coefficient)]
     return y
-
-
-def _letter(coefficient: str) -> str:
-    try:
-        return COEF_LETTER[coefficient]
-    except KeyError:
-        raise ValueError(
-            f"unknown coefficient {coefficient!r}; expected one of {', '.join(COEF_LETTER)}"
-        ) from None
 
 
 def _term_unit(record: FlightRecord, term: Term) -> str:
