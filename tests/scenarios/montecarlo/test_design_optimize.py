@@ -128,7 +128,11 @@ def test_design_optimize_beats_the_built_ins_and_writes_a_maneuver_table(tmp_pat
                                 "--quiet"], env={"COLUMNS": "80"})
     assert table.exit_code == 0, table.output
     text = table.stdout
-    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    # the output path is printed whole on its own line ("wrote PATH"), never cut, so that it
+    # can be copied; every other line fits in 80 columns
+    assert "…" not in text
+    assert max(len(line) for line in text.splitlines() if not line.startswith("wrote ")) <= 80
+    assert f"wrote {out}" in text.splitlines()
     cells = [c.strip() for line in text.splitlines() for c in re.split("[│┃]", line)]
     for r in data["rows"]:
         assert f"{r['mean_relative_bound']:.4f}" in cells and r["design"] in cells
