@@ -179,14 +179,10 @@ def lateral(
     ValueError
         An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
-    _check_names(derivatives, LATERAL_DERIVATIVES, "lateral")
-    _check_names(biases, LATERAL_BIASES, "lateral")
+    parameters, start_values = parameter_starts(
+        "lateral", derivatives, LATERAL_DERIVATIVES, biases, LATERAL_BIASES, LATERAL_TYPICAL,
+        start)
     c = condition
-    parameters = tuple(derivatives) + tuple(biases)
-    start_values = {p: 0.0 for p in parameters}
-    start_values.update(_typical_start(derivatives, LATERAL_TYPICAL))
-    if start:
-        start_values.update(_checked(start, parameters, "lateral"))
     gamma = c.Ixx * c.Izz - c.Ixz**2
     k_y = c.qbar * c.area / (c.mass * c.V)  # betadot per unit CY
     k_ay = c.qbar * c.area / c.mass  # ay per unit CY
@@ -280,6 +276,58 @@ def without_outputs(model: LinearModel, drop: Sequence[str]) -> LinearModel:
                        tuple(model.outputs[i] for i in keep), model.parameters,
                        dict(model.start), build, model.condition, model.description,
                        dict(model.state_channels))
+
+
+def parameter_starts(model: str, derivatives: Sequence[str], allowed: Sequence[str],
+                     biases: Sequence[str], allowed_biases: Sequence[str],
+                     typical: Mapping[str, float], start: Mapping[str, float] | None = None,
+                     trim: Mapping[str, float] | None = None,
+                     ) -> tuple[tuple[str, ...], dict[str, float]]:
+    """A linear model's parameters and their start values, the names checked.
+
+    Each parameter starts at 0, then at its typical value, then at its trim value, then at
+    the caller's start value (each later one overriding the earlier).
+
+    Parameters
+    ----------
+    model : str
+        The model's name, for the error messages.
+    derivatives : sequence of str
+        The nondimensional derivatives estimated (per rad).
+    allowed : sequence of str
+        The derivatives the model has.
+    biases : sequence of str
+        The bias parameters estimated (SI units).
+    allowed_biases : sequence of str
+        The biases the model has.
+    typical : mapping of str to float
+        Typical start values of derivatives (per rad).
+    start : mapping of str to float or None, optional
+        The caller's start values; every name must be a parameter.
+    trim : mapping of str to float or None, optional
+        Start values from the trim (only those naming a parameter are used).
+
+    Returns
+    -------
+    parameters : tuple of str
+        The derivatives, then the biases.
+    start_values : dict of str to float
+        Start value per parameter, in the order of ``parameters``.
+
+    Raises
+    ------
+    ValueError
+        An unknown or duplicate derivative or bias, or a start value for a non-parameter.
+    """
+    _check_names(derivatives, allowed, model)
+    _check_names(biases, allowed_biases, model)
+    parameters = tuple(derivatives) + tuple(biases)
+    start_values = {p: 0.0 for p in parameters}
+    start_values.update(_typical_start(derivatives, typical))
+    start_values.update({k: v for k, v in (trim or {}).items() if k in parameters})
+    if start:
+        start_values.update(_checked(start, parameters, model))
+    return parameters, start_values
 
 
 def _check_names(names: Sequence[str], allowed: Sequence[str], model: str) -> None:

@@ -14,9 +14,7 @@ import numpy as np
 from flightid.identification.models.linear import (
     LinearModel,
     Matrices,
-    _check_names,
-    _checked,
-    _typical_start,
+    parameter_starts,
 )
 from flightid.identification.models.reference_condition import ReferenceCondition
 
@@ -85,14 +83,10 @@ def short_period(
     ValueError
         An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
-    _check_names(derivatives, SHORT_PERIOD_DERIVATIVES, "short_period")
-    _check_names(biases, SHORT_PERIOD_BIASES, "short_period")
+    parameters, start_values = parameter_starts(
+        "short_period", derivatives, SHORT_PERIOD_DERIVATIVES, biases, SHORT_PERIOD_BIASES,
+        LONGITUDINAL_TYPICAL, start)
     c = condition
-    parameters = tuple(derivatives) + tuple(biases)
-    start_values = {p: 0.0 for p in parameters}
-    start_values.update(_typical_start(derivatives, LONGITUDINAL_TYPICAL))
-    if start:
-        start_values.update(_checked(start, parameters, "short_period"))
     k_z = c.qbar * c.area / (c.mass * c.V)
     k_az = c.qbar * c.area / c.mass
     k_m = c.qbar * c.area * c.chord / c.Iyy
@@ -196,21 +190,19 @@ def longitudinal(
     ValueError
         An unknown or duplicate derivative or bias, or a start value for a non-parameter.
     """
-    _check_names(derivatives, LONGITUDINAL_DERIVATIVES, "longitudinal")
-    _check_names(biases, LONGITUDINAL_BIASES, "longitudinal")
     c = condition
-    parameters = tuple(derivatives) + tuple(biases)
-    start_values = {p: 0.0 for p in parameters}
-    start_values.update(_typical_start(derivatives, LONGITUDINAL_TYPICAL))
     gamma0 = c.theta - c.alpha
     # trim force balance in stability axes, thrust along body x
     weight, qs = c.mass * c.g, c.qbar * c.area
-    if "CL_0" in parameters:
-        start_values["CL_0"] = (weight * np.cos(gamma0) - c.thrust * np.sin(c.alpha)) / qs
-    if "CD_0" in parameters:
-        start_values["CD_0"] = (c.thrust * np.cos(c.alpha) - weight * np.sin(gamma0)) / qs
-    if start:
-        start_values.update(_checked(start, parameters, "longitudinal"))
+    named = (*derivatives, *biases)
+    trim = {}
+    if "CL_0" in named:
+        trim["CL_0"] = (weight * np.cos(gamma0) - c.thrust * np.sin(c.alpha)) / qs
+    if "CD_0" in named:
+        trim["CD_0"] = (c.thrust * np.cos(c.alpha) - weight * np.sin(gamma0)) / qs
+    parameters, start_values = parameter_starts(
+        "longitudinal", derivatives, LONGITUDINAL_DERIVATIVES, biases, LONGITUDINAL_BIASES,
+        LONGITUDINAL_TYPICAL, start, trim)
     k_f = c.qbar * c.area / c.mass
     k_m = c.qbar * c.area * c.chord / c.Iyy
     rate = c.chord / (2 * c.V)
