@@ -25,6 +25,7 @@ from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_axes
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.candidates.classes import class_text
 from flightid.identification.gap.candidates.compatibility import (
     as_candidate,
     sensor_lag,
@@ -419,6 +420,8 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         for effect in named:
             corrected = fixed(corrected, effect)
         after = tested(corrected)
+    for effect in named:
+        effect.equivalent = class_text(effect, lin.model.start)
     verdict = axis_verdict(before, bool(named), after)
     if found is not None and verdict == NO_GAP:  # named from the relation alone
         verdict = EXPLAINED
