@@ -16,7 +16,8 @@ The horizontal tail's effectiveness (``TAIL_CLASS``): on a record whose elevator
 a doublet and a 3211 of one amplitude, an elevator effectiveness factor, a Cm_de delta,
 tail ice and an elevator play are not told apart (the blind check's development seeds:
 docs/gap_benchmark.md, "The rules for the seed-9 run"): a named member is reported as the
-class, "horizontal-tail effectiveness -20 %" (``class_text``).
+class, "horizontal-tail effectiveness -20 %" (``class_text``); likewise a surface's
+actuator lag and rate limit on a record of commands.
 """
 
 from __future__ import annotations
@@ -87,7 +88,8 @@ TAIL_MEMBERS = ("elevator effectiveness", "Cm_de", "tail ice", "elevator play")
 
 def class_text(ranked: Any, start: dict[str, float]) -> str:
     """A named effect of ``TAIL_CLASS`` in the class's words, with the change of the tail's
-    effectiveness in percent where the member gives one ("" for any other effect).
+    effectiveness in percent where the member gives one, or a surface's lag or rate limit
+    as its class ("" for any other effect).
 
     Parameters
     ----------
@@ -113,6 +115,9 @@ def class_text(ranked: Any, start: dict[str, float]) -> str:
         change = value["delta"] / base if base else math.nan
     elif c.entry == "tail_ice":
         change = value["elevator"] - 1.0
+    elif c.entry in ("actuator_lag", "rate_limit"):
+        return (f"actuator lag or rate limit of {c.options.get('surface')} (one class on "
+                "these maneuvers)")
     elif c.entry == "backlash" and c.options.get("surface") == "de":
         return (f"{TAIL_CLASS} or elevator play {math.degrees(value['width']):.2f} deg "
                 f"{members}")
