@@ -9,7 +9,16 @@ the rules for the seed-8 run).
     .venv/bin/python benchmarks/gap_visibility.py --k 1.0 -o study/visibility.jsonl
 
 Each entry is flown at ``k`` times its drawn base (``cases.K_RANGE`` pinned to k, derivative
-deltas at the middle of ``cases.DELTA_FRACTION``), every option of its row.
+deltas at the middle of ``cases.DELTA_FRACTION``), every option of its row; the base is the
+one the draw uses, sizing by visibility included (``cases.size_multiple``), or with
+``--unsized`` the bases it starts from (the files of seeds 11 and 12 it was measured on).
+The check of that sizing, on a seed it was not measured on, at k = 1 and at the largest
+draw (k = 1.5: a departure or a failed trim is listed as an error):
+
+    E=backlash,cg_offset,control_effectiveness,deadband,delay,engine_vibration,\
+inertia_scale,lag,misalignment,scale,tail_ice,thrust_moment
+    .venv/bin/python benchmarks/gap_visibility.py --seed 13 --k 1.0 --entries $E \
+        -o benchmarks/results/gap_visibility/k1_seed13_sized.jsonl
 """
 
 from __future__ import annotations
@@ -48,8 +57,12 @@ def main() -> None:
     ap.add_argument("--k", type=float, default=1.0)
     ap.add_argument("--entries", default="")
     ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--unsized", action="store_true",
+                    help="the bases before sizing by visibility (cases.VISIBILITY emptied)")
     ap.add_argument("-o", "--output", type=Path, required=True)
     a = ap.parse_args()
+    if a.unsized:
+        drawn.VISIBILITY = {}
     drawn.K_RANGE = (a.k, a.k)
     mid = 0.5 * sum(drawn.DELTA_FRACTION)
     drawn.DELTA_FRACTION = (mid, mid)
@@ -73,7 +86,8 @@ def main() -> None:
                         if which is not None:
                             base = drawn.SIZED_BASE.get(kind.entry)
                             e.magnitude.clear()
-                            e.magnitude[which] = drawn._scaled(kind.entry, which, a.k, base)
+                            k = a.k * drawn.size_multiple(kind.name, name)
+                            e.magnitude[which] = drawn._scaled(kind.entry, which, k, base)
                         case = Case(1, a.seed, name, "single", (e,))
                         axes = ("lateral", "longitudinal") if kind.axis == "both" \
                             else (kind.axis,)
