@@ -52,6 +52,16 @@ def visibility(case: Case, axis: str, calm, light, truth) -> float:
     return float(np.mean(ratios))
 
 
+def turbulence_share(calm, light) -> dict[str, dict[str, float]]:
+    """Per axis and output, the energy light turbulence adds (light less calm) over the light
+    flight's own energy, means removed: how much of a measured record is turbulence."""
+    def own(c: str) -> float:
+        x = np.asarray(light[c])
+        return float(np.sum((x - x.mean()) ** 2))
+    return {ax: {c: energy(light, calm, c) / own(c) for c in chans}
+            for ax, chans in OUTPUTS.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--k", type=float, default=1.0)
@@ -59,6 +69,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--unsized", action="store_true",
                     help="the bases before sizing by visibility (cases.VISIBILITY emptied)")
+    ap.add_argument("--shares", action="store_true",
+                    help="only the plain aircraft's turbulence share of the measured energy")
     ap.add_argument("-o", "--output", type=Path, required=True)
     a = ap.parse_args()
     if a.unsized:
@@ -72,6 +84,10 @@ def main() -> None:
         for name in AIRCRAFT:
             plain = Case(0, a.seed, name, "null")
             calm, light = fly_case(plain, "calm", t[name]), fly_case(plain, "light", t[name])
+            if a.shares:
+                f.write(json.dumps({"aircraft": name, "seed": a.seed,
+                                    "turbulence_share": turbulence_share(calm, light)}) + "\n")
+                continue
             for kind in KINDS:
                 if want and kind.entry not in want:
                     continue

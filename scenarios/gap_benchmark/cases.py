@@ -140,9 +140,9 @@ SIZED_BASE = {"delay": 0.1, "lag": 0.1, "actuator_lag": 0.1, "inertia_scale": 1.
 # gap_visibility/k1_seed11.jsonl, k1_seed12.jsonl); a small effect's energy grows as the
 # square of its offset from neutral. SPREAD: one 64 s flight's turbulence energy is 0.62-1.44
 # times another seed's (the same rows, seeds 12 and 11), so the aim is 1.5 times the fraction.
-# Listed: the rows under the aim. Not re-sized: the trim-level entries (bias, actuator bias,
-# mass scale: V = 0, named against the trim), derivative deltas (DELTA_FRACTION of the
-# aircraft's own value) and rate limits (neutral at infinity: no offset to scale).
+# Listed: the rows under the aim. Not re-sized: the trim-level entries, named against the
+# trim (bias, actuator bias: V = 0; mass scale 0.0009-0.002), derivative deltas
+# (DELTA_FRACTION of the aircraft's own value) and rate limits (neutral at infinity).
 VISIBLE_FRACTION = 0.02
 SPREAD = 1.5
 VISIBILITY = {
