@@ -274,6 +274,8 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
                       f"{s['overall']['after']:.3f} ({shrink_text(s['overall']['shrink'])} "
                       "shrink)")
     for r in g.named:
+        if r.note:
+            console.print(f"{r.candidate.label}: {r.note}")
         if r.equivalent:
             console.print(f"{r.candidate.label}: {r.equivalent}")
         if r.alternatives:

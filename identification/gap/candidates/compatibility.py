@@ -163,8 +163,11 @@ def _delay(shifted: dict, target: str) -> SensorLag | None:
     test = channel_test(y, x[:, None], float(y @ y), target)
     pairs = {k: (shifted[k][0], shifted[k][best([o for o in labels if o != k])])
              for k in (labels if len(labels) > 1 else ())}
-    w = test.statistic
-    return SensorLag(target, "delay", tau, step / math.sqrt(w) if w > 0 else math.inf, test,
+    # the standard error from the windows' own delays (their spread over sqrt(n)): the
+    # colored residual makes a bound from the cost's curvature too small
+    own = [float(DELAY_GRID_S[best([k])]) for k in labels]
+    std = float(np.std(own, ddof=1)) / math.sqrt(len(own)) if len(own) > 1 else step
+    return SensorLag(target, "delay", tau, max(std, step / math.sqrt(12)), test,
                      *_gains(pairs))
 
 
