@@ -9,7 +9,16 @@ the rules for the seed-8 run).
     .venv/bin/python benchmarks/gap_visibility.py --k 1.0 -o study/visibility.jsonl
 
 Each entry is flown at ``k`` times its drawn base (``cases.K_RANGE`` pinned to k, derivative
-deltas at the middle of ``cases.DELTA_FRACTION``), every option of its row.
+deltas at the middle of ``cases.DELTA_FRACTION``), every option of its row; the base is the
+one the draw uses, sizing by visibility included (``cases.size_multiple``), or with
+``--unsized`` the bases it starts from (the files of seeds 11 and 12 it was measured on).
+The check of that sizing, on a seed it was not measured on, at k = 1 and at the largest
+draw (k = 1.5: a departure or a failed trim is listed as an error):
+
+    E=backlash,cg_offset,control_effectiveness,deadband,delay,engine_vibration,\
+inertia_scale,lag,misalignment,scale,tail_ice,thrust_moment
+    .venv/bin/python benchmarks/gap_visibility.py --seed 13 --k 1.0 --entries $E \
+        -o benchmarks/results/gap_visibility/k1_seed13_sized.jsonl
 """
 
 from __future__ import annotations
@@ -43,13 +52,29 @@ def visibility(case: Case, axis: str, calm, light, truth) -> float:
     return float(np.mean(ratios))
 
 
+def turbulence_share(calm, light) -> dict[str, dict[str, float]]:
+    """Per axis and output, the energy light turbulence adds (light less calm) over the light
+    flight's own energy, means removed: how much of a measured record is turbulence."""
+    def own(c: str) -> float:
+        x = np.asarray(light[c])
+        return float(np.sum((x - x.mean()) ** 2))
+    return {ax: {c: energy(light, calm, c) / own(c) for c in chans}
+            for ax, chans in OUTPUTS.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--k", type=float, default=1.0)
     ap.add_argument("--entries", default="")
     ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--unsized", action="store_true",
+                    help="the bases before sizing by visibility (cases.VISIBILITY emptied)")
+    ap.add_argument("--shares", action="store_true",
+                    help="only the plain aircraft's turbulence share of the measured energy")
     ap.add_argument("-o", "--output", type=Path, required=True)
     a = ap.parse_args()
+    if a.unsized:
+        drawn.VISIBILITY = {}
     drawn.K_RANGE = (a.k, a.k)
     mid = 0.5 * sum(drawn.DELTA_FRACTION)
     drawn.DELTA_FRACTION = (mid, mid)
@@ -59,6 +84,10 @@ def main() -> None:
         for name in AIRCRAFT:
             plain = Case(0, a.seed, name, "null")
             calm, light = fly_case(plain, "calm", t[name]), fly_case(plain, "light", t[name])
+            if a.shares:
+                f.write(json.dumps({"aircraft": name, "seed": a.seed,
+                                    "turbulence_share": turbulence_share(calm, light)}) + "\n")
+                continue
             for kind in KINDS:
                 if want and kind.entry not in want:
                     continue
@@ -73,7 +102,8 @@ def main() -> None:
                         if which is not None:
                             base = drawn.SIZED_BASE.get(kind.entry)
                             e.magnitude.clear()
-                            e.magnitude[which] = drawn._scaled(kind.entry, which, a.k, base)
+                            k = a.k * drawn.size_multiple(kind.name, name)
+                            e.magnitude[which] = drawn._scaled(kind.entry, which, k, base)
                         case = Case(1, a.seed, name, "single", (e,))
                         axes = ("lateral", "longitudinal") if kind.axis == "both" \
                             else (kind.axis,)

@@ -5,9 +5,11 @@ Every entry the gap diagnosis has (or is getting) a candidate for is a row of ``
 its axis, how it is injected and how its magnitude is drawn. Magnitudes are 0.5-1.5 times
 the entry's catalogue default (measured from the neutral value: a factor of default 0.8
 is drawn in 0.7-0.9), except where the default is not what the maneuvers show; those rows
-say why in ``SIZED``. The draw is fixed by the seed and stratified in blocks of
-``BLOCK`` cases (``PATTERN``: 12 single effects, 4 pairs, 4 outside the catalogue; each
-aircraft equally often), so the shares hold for any n that is a multiple of 20 and nearly
+say why in ``SIZED``; per aircraft, rows the maneuvers show under 1.5 times
+``VISIBLE_FRACTION`` of light turbulence's energy have their base enlarged
+(``size_multiple``). The draw is fixed by the seed and stratified in blocks of ``BLOCK``
+cases (``PATTERN``: 12 single effects, 4 pairs, 4 outside the catalogue; each aircraft
+equally often), so the shares hold for any n that is a multiple of 20 and nearly
 so for the rest; the null cases
 (nothing injected) are drawn on their own stream, so ``--nulls`` does not move the other
 cases and n does not move the nulls.
@@ -129,6 +131,82 @@ THRUST_ARM_M = 0.25
 CG_CHORDS = 0.05
 # the sized rows' base magnitudes (drawn 0.5-1.5 times, measured from neutral)
 SIZED_BASE = {"delay": 0.1, "lag": 0.1, "actuator_lag": 0.1, "inertia_scale": 1.2}
+
+# Sizing by visibility (the seed-9 rules; docs/gap_benchmark.md "Sizing by visibility"): per
+# row and aircraft, the base above is multiplied by sqrt(SPREAD x VISIBLE_FRACTION / V), V the
+# energy the row adds to its axis's outputs at that base (k = 1) over the energy light
+# turbulence adds, the median over the row's options (the larger axis for a row on both),
+# calm air, the mean of seeds 11 and 12 (benchmarks/gap_visibility.py; benchmarks/results/
+# gap_visibility/k1_seed11.jsonl, k1_seed12.jsonl); a small effect's energy grows as the
+# square of its offset from neutral. SPREAD: one 64 s flight's turbulence energy is 0.62-1.44
+# times another seed's (the same rows, seeds 12 and 11), so the aim is 1.5 times the fraction.
+# Listed: the rows under the aim. Not re-sized: the trim-level entries, named against the
+# trim (bias, actuator bias: V = 0; mass scale 0.0009-0.002), derivative deltas
+# (DELTA_FRACTION of the aircraft's own value) and rate limits (neutral at infinity).
+VISIBLE_FRACTION = 0.02
+SPREAD = 1.5
+VISIBILITY = {
+    "backlash/longitudinal": {"c172p": 0.025, "telemaster": 0.020},
+    "cg_offset/longitudinal": {"c172p": 0.0044, "navion": 0.026, "telemaster": 0.0038,
+                               "twinotter": 0.010},
+    "control_effectiveness/longitudinal": {"c172p": 0.017, "telemaster": 0.0090},
+    "deadband/lateral": {"c172p": 0.010, "navion": 0.016, "twinotter": 0.025},
+    "delay/lateral": {"c172p": 0.023},
+    "delay/longitudinal": {"c172p": 0.021, "navion": 0.013, "telemaster": 0.022,
+                           "twinotter": 0.021},
+    "engine_vibration/both": {"c172p": 0.0069, "navion": 0.0063, "twinotter": 0.019},
+    "inertia_scale/lateral": {"telemaster": 0.020},
+    "inertia_scale/longitudinal": {"c172p": 0.0045, "navion": 0.012, "telemaster": 0.0042,
+                                   "twinotter": 0.014},
+    "lag/lateral": {"c172p": 0.019},
+    "lag/longitudinal": {"c172p": 0.017, "navion": 0.011, "telemaster": 0.015,
+                         "twinotter": 0.017},
+    "misalignment/both": {"c172p": 0.00058, "navion": 0.00092, "telemaster": 0.0016,
+                          "twinotter": 0.0023},
+    "scale/lateral": {"c172p": 0.014, "telemaster": 0.019},
+    "scale/longitudinal": {"c172p": 0.0059, "navion": 0.0071, "telemaster": 0.0032,
+                           "twinotter": 0.0085},
+    "tail_ice/longitudinal": {"c172p": 0.0034, "navion": 0.0087, "telemaster": 0.0026,
+                              "twinotter": 0.0097},
+    "thrust_moment/longitudinal": {"c172p": 0.00026, "navion": 0.0038, "telemaster": 0.028,
+                                   "twinotter": 0.00022},
+}
+# the largest multiple per entry: the physical range its largest draw (1.5 x the base) keeps
+SIZE_CAP = {
+    "backlash": 2.0,  # base <= 1 deg of play: draws <= 1.5 deg (a worn linkage)
+    "cg_offset": 2.0,  # base <= 10 % of the chord: draws <= 15 %, a CG envelope's width
+    "control_effectiveness": 1.65,  # factor drawn >= 0.505: at most half the surface lost
+    "deadband": 2.0,  # base <= 1 deg: draws <= 1.5 deg
+    "delay": 1.5, "lag": 1.5,  # base <= 0.15 s, the longest of autopilot and RC pipelines
+    "engine_vibration": 3.0,  # draws <= 13.5 m/s^2 (1.4 g) and 9 deg/s on an IMU
+    "inertia_scale": 1.5,  # base <= 1.3: a component breakdown's 10-30 %
+    "misalignment": 1.745,  # base <= 0.0349 rad (2 deg): draws <= 3 deg
+    "scale": 1.65,  # factor drawn <= 1.5
+    "tail_ice": 2.0,  # elevator drawn >= 0.55, stability and damping >= 0.7
+    "thrust_moment": 2.0,  # base <= 0.5 m: draws <= 0.75 m, inside the catalogue's 1 m
+}
+
+
+def size_multiple(kind: str, aircraft: str) -> float:
+    """The factor sizing by visibility puts on a row's base magnitude for one aircraft.
+
+    Parameters
+    ----------
+    kind : str
+        The row's name, entry/axis (``Kind.name``).
+    aircraft : str
+        A name of ``AIRCRAFT``.
+
+    Returns
+    -------
+    float
+        sqrt(``SPREAD`` x ``VISIBLE_FRACTION`` / V) capped at the entry's ``SIZE_CAP``; 1 for
+        a row and aircraft not in ``VISIBILITY`` (at or above the aim, or not re-sized).
+    """
+    v = VISIBILITY.get(kind, {}).get(aircraft)
+    if v is None:
+        return 1.0
+    return min(math.sqrt(SPREAD * VISIBLE_FRACTION / v), SIZE_CAP[kind.split("/")[0]])
 
 
 @dataclass(frozen=True)
@@ -261,7 +339,8 @@ class Case:
 
 def fingerprint() -> str:
     """A hash of everything the draw draws from (kinds, outside kinds, pattern, ranges,
-    the aircraft's flights): a stored study continues only under the same draw.
+    the sizing by visibility, the aircraft's flights): a stored study continues only under
+    the same draw.
 
     Returns
     -------
@@ -270,7 +349,8 @@ def fingerprint() -> str:
     """
     text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
                        DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
-                       THRUST_ARM_M, SIZED_BASE, {a: asdict(f) for a, f in AIRCRAFT.items()}],
+                       THRUST_ARM_M, SIZED_BASE, VISIBLE_FRACTION, SPREAD, VISIBILITY, SIZE_CAP,
+                       {a: asdict(f) for a, f in AIRCRAFT.items()}],
                       sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -352,7 +432,7 @@ def _scaled(entry: str, name: str, k: float, base: float | None = None) -> float
 def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
             truth: dict[str, float]) -> Effect:
     options = {o: str(rng.choice(c)) for o, c in kind.choices.items()}
-    k = float(rng.uniform(*K_RANGE))
+    k = float(rng.uniform(*K_RANGE)) * size_multiple(kind.name, aircraft)
     sign = float(rng.choice([-1.0, 1.0]))
     if kind.entry == "derivative_delta":
         d = options["derivative"]

@@ -24,6 +24,7 @@ from flightid.scenarios.gap_benchmark import (
     Case,
     Effect,
     benchmark,
+    cases,
     classes,
     draw,
     fly_case,
@@ -42,9 +43,14 @@ from flightid.scenarios.gap_benchmark.cases import (
     OUTSIDE,
     PAIR,
     SINGLE,
+    SIZE_CAP,
     SIZED_BASE,
+    SPREAD,
     STABLE_SIGN,
     THRUST_ARM_M,
+    VISIBILITY,
+    VISIBLE_FRACTION,
+    size_multiple,
 )
 from flightid.scenarios.gap_benchmark.run import KEPT, truths
 from flightid.scenarios.gap_benchmark.study import CASES_FILE
@@ -123,7 +129,76 @@ def test_magnitudes_in_their_ranges(t, big):
                     k = abs(value - p.zero) / abs(p.default - p.zero)
                 else:  # a rate limit: neutral at infinity, drawn as a multiple of the default
                     k = value / p.default
+                k /= size_multiple(e.kind, c.aircraft)  # sizing by visibility
                 assert lo - 1e-9 <= k <= hi + 1e-9, (c.label, name, k)
+
+
+# the physical ranges the re-sized rows' draws keep (SIZE_CAP; docs/gap_benchmark.md,
+# "Sizing by visibility"): parameter -> (least, largest) drawn offset from neutral, with
+# the chord's fraction for a CG offset
+RESIZED_RANGE = {"x": (0.025, 0.15), "factor": (0.0, 0.5), "width": (0.0, 1.5 * math.pi / 180),
+                 "tau": (0.0, 0.225), "ixx": (0.0, 0.45), "iyy": (0.0, 0.45), "izz": (0.0, 0.45),
+                 "angle": (0.0, 3 * math.pi / 180),
+                 "elevator": (0.0, 0.45), "stability": (0.0, 0.3), "damping": (0.0, 0.3),
+                 "arm": (0.0, 0.75), "ax": (0.0, 13.5), "ay": (0.0, 13.5), "az": (0.0, 13.5),
+                 "p": (0.0, 9 * math.pi / 180), "q": (0.0, 9 * math.pi / 180),
+                 "r": (0.0, 4.5 * math.pi / 180)}
+
+
+def test_sizing_by_visibility_reaches_the_fraction_inside_the_physical_ranges(big):
+    """Each row under 1.5 times the fraction is enlarged by sqrt(1.5 fraction / visibility)
+    (the energy of a small effect grows as its size squared), unless its physical cap
+    binds; its draws stay inside that cap and the catalogue's range."""
+    for kind, per_aircraft in VISIBILITY.items():
+        entry = kind.split("/")[0]
+        for aircraft, v in per_aircraft.items():
+            m = size_multiple(kind, aircraft)
+            assert 1.0 < m <= SIZE_CAP[entry]
+            assert m * m * v == pytest.approx(SPREAD * VISIBLE_FRACTION) \
+                or m == SIZE_CAP[entry]
+    assert size_multiple("rate_limit/lateral", "navion") == 1.0
+    assert size_multiple("tail_ice/longitudinal", "twinotter") == pytest.approx(
+        math.sqrt(1.5 * 0.02 / 0.0097))
+    seen = Counter()
+    for c in big:
+        for e in c.effects:
+            if e.kind not in VISIBILITY or c.aircraft not in VISIBILITY[e.kind]:
+                continue
+            seen[e.kind] += 1
+            CATALOGUE[e.entry].check(e.magnitude)
+            for name, value in e.magnitude.items():
+                offset = abs(value - _neutral(e.entry, name))
+                if e.entry == "cg_offset":
+                    offset /= AIRCRAFT[c.aircraft].chord_m
+                low, high = RESIZED_RANGE[name]
+                assert low - 1e-12 <= offset <= high + 1e-12, (c.label, name)
+    assert set(seen) == set(VISIBILITY)
+
+
+def test_sizing_moves_only_the_resized_magnitudes(t, big, monkeypatch):
+    """The draw stays fixed by the seed: without the sizing the same cases come out (the
+    same aircraft, categories, entries, options and flight seeds), and only the listed rows'
+    magnitudes differ, by their multiple; the fingerprint covers the sizing."""
+    multiple = {(k, a): size_multiple(k, a) for k, per in VISIBILITY.items() for a in per}
+    sized_print = cases.fingerprint()
+    monkeypatch.setattr(cases, "VISIBILITY", {})
+    assert cases.fingerprint() != sized_print
+    before = draw(400, 0, t, nulls=100)
+    changed = 0
+    for a, b in zip(before, big, strict=True):
+        assert (a.index, a.seed, a.aircraft, a.category) == (b.index, b.seed, b.aircraft,
+                                                            b.category)
+        for ea, eb in zip(a.effects, b.effects, strict=True):
+            assert (ea.entry, ea.axis, ea.options) == (eb.entry, eb.axis, eb.options)
+            m = multiple.get((eb.kind, b.aircraft), 1.0)
+            if m == 1.0:
+                assert ea.magnitude == eb.magnitude, b.label
+                continue
+            changed += 1
+            for name, va in ea.magnitude.items():
+                zero = _neutral(ea.entry, name)
+                assert eb.magnitude[name] - zero == pytest.approx(m * (va - zero)), b.label
+    assert changed > 20
 
 
 def test_near_zero_stability_derivatives_stay_stable(t, big):
