@@ -237,7 +237,7 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
             console.print(f"named at trim level: {o.text()}")
     if g.trim_note:
         console.print(f"trim-level check: {g.trim_note}")
-    if g.verdict == "no_gap" or not g.null_before or not g.null_before.gap:
+    if g.verdict == "no_gap" or not g.named and (not g.null_before or not g.null_before.gap):
         return
     named = {r.candidate.label: k for k, r in enumerate(g.named, start=1)}
     e = Table(title=f"effects ({g.evidence}; named first, then by delta BIC; parameters "
@@ -274,6 +274,10 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
                       f"{s['overall']['after']:.3f} ({shrink_text(s['overall']['shrink'])} "
                       "shrink)")
     for r in g.named:
+        if r.note:
+            console.print(f"{r.candidate.label}: {r.note}")
+        if r.equivalent:
+            console.print(f"{r.candidate.label}: {r.equivalent}")
         if r.alternatives:
             console.print(f"{r.candidate.label}: not told apart on held-out data from "
                           + ", ".join(a.candidate.label for a in r.alternatives))

@@ -25,6 +25,12 @@ from flightid.files import json_safe
 from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_axes
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.candidates.classes import class_text
+from flightid.identification.gap.candidates.compatibility import (
+    as_candidate,
+    sensor_lag,
+    undone,
+)
 from flightid.identification.gap.candidates.identifiable import not_identifiable
 from flightid.identification.gap.candidates.linkage import is_linkage, transformed
 from flightid.identification.gap.fit import fit
@@ -364,17 +370,29 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     before = null_test(ranker.base, _by_label(fit_windows), inputs)
-    structure = nonlinear_test(ranker.base, _by_label(fit_windows), inputs, axis)
+    # an accelerometer lag or delay, seen in the relation between measured channels (the
+    # output-error fit loses it in the gusts): named first, the other tests on the record
+    # with it undone
+    found = sensor_lag(ranker.base, _by_label(fit_windows), inputs, axis)
+    found = found if found is not None and found.found else None
+    structure = nonlinear_test(undone(ranker.base, found) if found else ranker.base,
+                               _by_label(fit_windows), inputs, axis)
     unseen = not_identifiable(lin.model, records, surfaces=lin.surfaces)
-    if not before.gap:  # at the null level of the linear test: nothing to name
+    if not before.gap and found is None:  # at the null level of the linear test
         return GapResult(str(aircraft), lin, where, [], [], [], windows, floor=ranker.floor,
                          verdict=UNEXPLAINED if structure.gap else NO_GAP,
                          null_before=before, evidence=evidence, not_identifiable=unseen,
                          structure=structure)
     ranker.above = before.above()
-    ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
-    both = ranked_pairs(ranker, ranked) if try_pairs else []
     named: list[Ranked] = []
+    if found is not None:
+        samples = sum(f.samples for f in ranker.base.values())
+        ranked = [ranker.held_at(*as_candidate(found),
+                                 -found.test.statistic + math.log(max(samples, 2)))]
+        ranked[0].confirmed, ranked[0].note, both = True, found.note, []
+    else:
+        ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
+        both = ranked_pairs(ranker, ranked) if try_pairs else []
     if both and both[0].confirmed:
         named = [both[0]]
     elif ranked and ranked[0].confirmed:
@@ -402,7 +420,11 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
         for effect in named:
             corrected = fixed(corrected, effect)
         after = tested(corrected)
+    for effect in named:
+        effect.equivalent = class_text(effect, lin.model.start)
     verdict = axis_verdict(before, bool(named), after)
+    if found is not None and verdict == NO_GAP:  # named from the relation alone
+        verdict = EXPLAINED
     structure.sensor = named_sensor(structure, named)
     if structure.gap or structure.sensor:  # a structure no catalogue effect expresses
         verdict = PARTLY if named else UNEXPLAINED

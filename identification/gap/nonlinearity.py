@@ -212,10 +212,27 @@ LINEAR = {"lateral": ("beta", "p", "r", "phi", "V"),
           "longitudinal": ("alpha", "q", "theta", "V", "thrust")}
 
 
-def _signals(fit: WindowFit, record: FlightRecord, axis: str,
-             inputs: Sequence[str]) -> dict[str, np.ndarray]:
+def signals(fit: WindowFit, record: FlightRecord, axis: str,
+            inputs: Sequence[str]) -> dict[str, np.ndarray]:
     """The window's measured channels on the fit's time (outputs, inputs, airspeed,
-    thrust) and the pitch acceleration ``qdot`` (rad/s^2, differentiated q)."""
+    thrust) and the pitch acceleration ``qdot`` (rad/s^2, differentiated q).
+
+    Parameters
+    ----------
+    fit : WindowFit
+        The model's fit of the window (its time, s, and measured outputs).
+    record : FlightRecord
+        The window's record (inputs, airspeed, thrust).
+    axis : str
+        "lateral" or "longitudinal".
+    inputs : sequence of str
+        The axis's surfaces.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Channel -> its samples on the fit's time, SI.
+    """
     t = fit.time
     out = {c: np.asarray(v, float) for c, v in fit.measured.items()}
     for c in (*LINEAR[axis], *inputs):
@@ -331,7 +348,7 @@ def nonlinear_test(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRe
     if not labels or axis not in EQUATIONS:
         return out
     dts = {k: float(np.median(np.diff(fits[k].time))) for k in labels}
-    sigs = {k: _signals(fits[k], records[k], axis, inputs) for k in labels}
+    sigs = {k: signals(fits[k], records[k], axis, inputs) for k in labels}
     for target, vane, names in EQUATIONS[axis]:
         if not all(target in s and vane in s for s in sigs.values()):
             continue

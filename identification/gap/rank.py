@@ -205,6 +205,33 @@ class Ranker:
         r.confirmed = bool(r.delta_bic < 0 and dheld < 0 and gain >= MIN_GAIN
                            and gain >= level)
 
+    def held_at(self, cand: Candidate, values: dict[str, float], std: dict[str, float],
+                delta_bic: float) -> Ranked:
+        """``cand`` held at ``values`` estimated elsewhere (``candidates.compatibility``): its
+        held-out figures on the held-out windows (``judge``), not confirmed here.
+
+        Parameters
+        ----------
+        cand : Candidate
+            A candidate of the linear model.
+        values, std : dict of str to float
+            Its freed parameters' values and standard errors (the model's units).
+        delta_bic : float
+            The evidence of the estimate (negative favours the effect).
+
+        Returns
+        -------
+        Ranked
+            The candidate with its held-out figures; ``confirmed`` left to the caller.
+        """
+        model = cand.wrap(self.lin.model)
+        r = Ranked(cand, values, std, cand.parameters(values, std, self.lin.model),
+                   delta_bic, 0.0)
+        self.judge(r, *self.held_out(lambda train: values,
+                                     lambda part, record: held(model, part, record)))
+        r.confirmed = False
+        return r
+
     def evaluate_linkage(self, cand: Candidate) -> Ranked | None:
         """A nonlinear actuator candidate (``candidates.linkage``): the model as is on the
         windows with the surface passed through the entry, its value found on the entry's

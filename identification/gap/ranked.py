@@ -98,6 +98,8 @@ class Ranked:
     heldout_changes: dict[str, float] = field(default_factory=dict)
     # confirmed effects the held-out data cannot tell apart from this one (``simplest``)
     alternatives: list[Ranked] = field(default_factory=list)
+    # a named effect's equivalence class in words (``candidates.classes.class_text``)
+    equivalent: str = ""
 
     @property
     def shrink(self) -> float:
@@ -115,7 +117,8 @@ class Ranked:
                              "heldout_windows": self.heldout_windows},
                 "heldout_before": self.heldout_before, "heldout_after": self.heldout_after,
                 "note": self.note, "family": self.family or None,
-                "not_told_apart_from": [a.candidate.label for a in self.alternatives]}
+                "not_told_apart_from": [a.candidate.label for a in self.alternatives],
+                "class": self.equivalent or None}
 
 
 def combine(fits: list[WindowFit], names: tuple[str, ...]

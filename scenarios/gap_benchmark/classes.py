@@ -9,6 +9,14 @@ the held-out seed is run).
   their sum is identified from such data; Morelli & Klein 2016 ch. 6);
 - aileron, rudder, elevator power: the surface's effectiveness factor, the delta of its
   main moment derivative (Cl_da, Cn_dr, Cm_de: the other terms of the surface are small);
+  the elevator's is the horizontal-tail effectiveness class, with tail ice and an elevator
+  play (seed-9 rules): on the card's elevator doublet and 3211 the held-out cost tells
+  them apart no better than it differs between them on null flights
+  (docs/gap_benchmark.md, "The rules for the seed-9 run");
+- lag or rate limit of one surface (seed-9 rules): on the card's two maneuvers per surface,
+  of one amplitude, both slow the surface's edges; the held-out cost favours the injected
+  one in 12 of 19 flights of seeds 0, 7, 8 where both are fitted, the wrong one by 1-280
+  where the right one wins by 26-1178 (docs/gap_benchmark.md);
 - lag or delay on one channel: 1/(tau s + 1) and exp(-tau s) agree to first order in
   tau s, and at the maneuvers' 0.3-3 rad/s a 0.05 s tau leaves 1 % between them;
 - an inertia about one axis and a scaling of every moment term about it: I x = M x
@@ -56,7 +64,12 @@ CLASSES: dict[str, tuple[Member, ...]] = {
     "pitch damping": (_delta("Cm_q"), _delta("Cm_alphadot")),
     "aileron power": (Member("control_effectiveness", {"surface": "da"}), _delta("Cl_da")),
     "rudder power": (Member("control_effectiveness", {"surface": "dr"}), _delta("Cn_dr")),
-    "elevator power": (Member("control_effectiveness", {"surface": "de"}), _delta("Cm_de")),
+    "horizontal-tail effectiveness": (Member("control_effectiveness", {"surface": "de"}),
+                                      _delta("Cm_de"), Member("tail_ice"),
+                                      Member("backlash", {"surface": "de"})),
+    **{f"lag or rate limit of {s}": (Member("actuator_lag", {"surface": s}),
+                                      Member("rate_limit", {"surface": s}))
+       for s in ("da", "dr", "de")},
     **{f"lag or delay on {c}": (Member("delay", {"channel": c}), Member("lag", {"channel": c}))
        for c in dict.fromkeys(c for cs in CHANNELS.values() for c in cs)},
     "roll inertia": (Member("inertia_scale", parameter="ixx"),

@@ -238,6 +238,16 @@ def test_classes_accept_what_the_data_cannot_tell_apart():
     assert not classes.same(izz, _named("inertia_scale", {}, {"ixx": {"value": 1.1},
                                                               "izz": {"value": 1.0}}))
     assert classes.class_of(cg) == "pitch stiffness"
+    # seed-9 rules: the tail's effectiveness and a surface's lag or rate limit (measured
+    # not told apart on the card's maneuvers, docs/gap_benchmark.md)
+    ice = Effect("tail_ice", "longitudinal", "card", {}, {"elevator": 0.8})
+    assert classes.class_of(ice) == "horizontal-tail effectiveness"
+    for entry in ("control_effectiveness", "backlash"):
+        assert classes.same(ice, _named(entry, {"surface": "de"}))
+    assert not classes.same(ice, _named("control_effectiveness", {"surface": "da"}))
+    limit = Effect("rate_limit", "lateral", "card", {"surface": "da"}, {"rate": 0.3})
+    assert classes.same(limit, _named("actuator_lag", {"surface": "da"}))
+    assert not classes.same(limit, _named("actuator_lag", {"surface": "dr"}))
 
 
 def test_blinded_record_shows_commands_and_the_sheet_not_the_effect():
