@@ -167,10 +167,15 @@ def bias_budget(est: Estimate, record: FlightRecord, preset: str) -> list[BiasTe
                                                            strict=True)}
     if preset not in MODELS or not any(n.startswith(BIAS_PREFIX) for n in fitted):
         return []
-    derivatives = [n for n in preset_derivatives(preset) if n in fitted] or None
+    # the parameters the fit held (a priori, or unidentifiable and kept at their start) are
+    # part of the fitted model: without them a held CL_0 (2 CL_0 dV/V with the measured,
+    # absolute V) would be read as an excess of the alphadot and az biases
+    held = {n: float(v) for n, v in est.fit.get("fixed", {}).items()}
+    derivatives = [n for n in preset_derivatives(preset) if n in fitted or n in held] or None
     model = model_for_record(preset, record, **({"derivatives": derivatives}
                                                 if derivatives else {}))
-    values = {n: v for n, (v, _) in fitted.items() if n in model.parameters}
+    values = {n: v for n, v in {**held, **{n: v for n, (v, _) in fitted.items()}}.items()
+              if n in model.parameters}
     a, b, c, d = model.matrices(values)
     missing = [ch for ch in (*model.inputs, *model.state_channels.values(), *model.outputs)
                if ch not in record]

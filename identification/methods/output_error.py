@@ -194,7 +194,8 @@ class Options(HeldOptions, OutputErrorOptions):
     start: dict[str, float] | str | None = option(
         "equation_error", "start values, or 'equation_error' for the free parameters")
     initial_state: str = option("estimate", "'estimate' (x0 parameters), 'measured' or 'zero'")
-    hold: str = option("foh", "inputs between samples: 'foh' (linear) or 'zoh' (held)")
+    hold: str = option("foh", "inputs between samples: 'foh' (linear), 'zoh' (held) or "
+                                    "'cubic' (Catmull-Rom through four samples)")
     colored: bool = option(True, "Cramer-Rao bounds corrected for colored residuals "
                                  "(Morelli & Klein 2016 eq. 6.54)")
     full_noise_covariance: bool = option(False, "estimate the full output-noise covariance")

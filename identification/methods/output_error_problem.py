@@ -36,7 +36,7 @@ class Problem(problem_skeleton.Problem):
     model: LinearModel
     u: np.ndarray  # (N, m + 1): inputs and the constant 1
     w: np.ndarray  # per-step input of the discrete model (see hold_inputs)
-    hold: str  # 'foh' or 'zoh'
+    hold: str  # 'foh', 'zoh' or 'cubic' (models.discrete.HOLDS)
     x0: np.ndarray  # (n,) initial state when it is not estimated
     # multistep inputs estimated as levels and edges (multistep_input): channel -> start
     multistep: dict[str, MultistepParameters] = field(default_factory=dict)

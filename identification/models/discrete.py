@@ -1,6 +1,7 @@
-"""The discrete-time simulation of a linear model (``models.linear``): the zero- or
-first-order-hold discretisation with its exact parameter derivatives (Van Loan 1978), the
-per-step input vector, and the blocked propagation of the states and their sensitivities.
+"""The discrete-time simulation of a linear model (``models.linear``): the zero-order,
+first-order or cubic (Catmull-Rom) hold discretisation with its exact parameter
+derivatives (Van Loan 1978), the per-step input vector, and the blocked propagation of the
+states and their sensitivities.
 """
 
 from __future__ import annotations
@@ -12,7 +13,16 @@ import scipy.linalg
 
 from flightid.identification.models.linear import LinearModel
 
-HOLDS = ("foh", "zoh")
+HOLDS = ("foh", "zoh", "cubic")
+# number of polynomial terms of each hold's input between two samples (1, tau, tau^2, ...)
+_ORDER = {"zoh": 1, "foh": 2, "cubic": 4}
+# Catmull-Rom: the cubic through u_{i-1}, u_i, u_{i+1}, u_{i+2} with the central-difference
+# slopes at u_i and u_{i+1} (Catmull & Rom 1974), u(tau) = sum_j c_j tau^j, c = CUBIC @ w_i;
+# the columns of the expm chain are int e^{A(dt-s)} B tau^j / j! ds, hence the factorials
+_CUBIC = np.array([[0.0, 1.0, 0.0, 0.0],
+                   [-0.5, 0.0, 0.5, 0.0],
+                   [1.0, -2.5, 2.0, -0.5],
+                   [-0.5, 1.5, -1.5, 0.5]]) * np.array([[1.0], [1.0], [2.0], [6.0]])
 
 
 def discretize(
@@ -21,13 +31,16 @@ def discretize(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Phi, Gamma and their parameter derivatives dPhi, dGamma (stacked on axis 0).
 
-    x_{i+1} = Phi x_i + Gamma w_i with w_i = u_i ('zoh', input held over the sample) or
-    w_i = [u_i; u_{i+1}] ('foh', input interpolated linearly between samples). One batched
-    matrix exponential per parameter k of the block matrix (Van Loan 1978)
+    x_{i+1} = Phi x_i + Gamma w_i with w_i = u_i ('zoh', input held over the sample),
+    w_i = [u_i; u_{i+1}] ('foh', input interpolated linearly between samples) or
+    w_i = [u_{i-1}; u_i; u_{i+1}; u_{i+2}] ('cubic', the Catmull-Rom cubic between u_i and
+    u_{i+1}). One batched matrix exponential per parameter k of the block matrix
+    (Van Loan 1978)
         [[A, 0, B, 0], [A_k, A, B_k, 0], [0, 0, 0, I/dt], [0, 0, 0, 0]] dt
-    (without the last block row and column for 'zoh'); its blocks are Phi, dPhi/dk and
-    the input matrices with their derivatives. The sensitivities are thus the exact
-    derivatives of the discrete model that is simulated.
+    (without the last block row and column for 'zoh'; with two more links of the I/dt
+    chain for 'cubic'); its blocks are Phi, dPhi/dk and the input matrices with their
+    derivatives. The sensitivities are thus the exact derivatives of the discrete model
+    that is simulated.
 
     Parameters
     ----------
@@ -42,18 +55,18 @@ def discretize(
     dB : numpy.ndarray
         dB/dk, shape (npar, n, m).
     hold : str, optional
-        'foh' (default) or 'zoh'.
+        'foh' (default), 'zoh' or 'cubic'.
 
     Returns
     -------
     phi : numpy.ndarray
         Transition matrix, shape (n, n).
     gamma : numpy.ndarray
-        Input matrix of w_i, shape (n, m) ('zoh') or (n, 2 m) ('foh').
+        Input matrix of w_i, shape (n, m) ('zoh'), (n, 2 m) ('foh') or (n, 4 m) ('cubic').
     dphi : numpy.ndarray
         dPhi/dk, shape (npar, n, n).
     dgamma : numpy.ndarray
-        dGamma/dk, shape (npar, n, m) or (npar, n, 2 m).
+        dGamma/dk, shape (npar, n, m), (npar, n, 2 m) or (npar, n, 4 m).
 
     Raises
     ------
@@ -64,9 +77,9 @@ def discretize(
         raise ValueError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
     n, m = B.shape
     npar = dA.shape[0]
-    foh = hold == "foh"
+    order = _ORDER[hold]
     batch = max(npar, 1)
-    size = 2 * n + (2 * m if foh else m)
+    size = 2 * n + order * m
     big = np.zeros((batch, size, size))
     big[:, :n, :n] = A * dt
     big[:, n:2 * n, n:2 * n] = A * dt
@@ -74,37 +87,49 @@ def discretize(
     if npar:
         big[:, n:2 * n, :n] = dA * dt
         big[:, n:2 * n, 2 * n:2 * n + m] = dB * dt
-    if foh:
-        big[:, 2 * n:2 * n + m, 2 * n + m:] = np.eye(m)
+    for j in range(order - 1):  # the chain I/dt: tau^(j+1) / (j+1)!
+        rows = slice(2 * n + j * m, 2 * n + (j + 1) * m)
+        big[:, rows, 2 * n + (j + 1) * m:2 * n + (j + 2) * m] = np.eye(m)
     e = scipy.linalg.expm(big)
     phi = e[0, :n, :n]
     dphi = e[:npar, n:2 * n, :n]
-    if not foh:
-        return phi, e[0, :n, 2 * n:], dphi, e[:npar, n:2 * n, 2 * n:]
-    # x_{i+1} = Phi x_i + G0 u_i + G1 (u_{i+1} - u_i)
-    g0, g1 = e[:, :, 2 * n:2 * n + m], e[:, :, 2 * n + m:]
-    gam = np.concatenate([g0 - g1, g1], axis=2)
+    g = [e[:, :, 2 * n + j * m:2 * n + (j + 1) * m] for j in range(order)]
+    if hold == "zoh":
+        gam = g[0]
+    elif hold == "foh":  # x_{i+1} = Phi x_i + G0 u_i + G1 (u_{i+1} - u_i)
+        gam = np.concatenate([g[0] - g[1], g[1]], axis=2)
+    else:  # sum_j G_j c_j with c = _CUBIC @ [u_{i-1}, u_i, u_{i+1}, u_{i+2}]
+        gam = np.concatenate([sum(_CUBIC[j, k] * g[j] for j in range(4)) for k in range(4)],
+                             axis=2)
     return phi, gam[0, :n], dphi, gam[:npar, n:2 * n]
 
 
 def hold_inputs(u: np.ndarray, hold: str) -> np.ndarray:
-    """The per-step input vector w_i of ``discretize``: u_i ('zoh') or [u_i, u_{i+1}] ('foh').
+    """The per-step input vector w_i of ``discretize``: u_i ('zoh'), [u_i, u_{i+1}] ('foh')
+    or [u_{i-1}, u_i, u_{i+1}, u_{i+2}] ('cubic').
 
     Parameters
     ----------
     u : numpy.ndarray
         Inputs per sample, shape (N, m), SI units.
     hold : str
-        'zoh' or 'foh'.
+        'zoh', 'foh' or 'cubic'.
 
     Returns
     -------
     numpy.ndarray
-        w, shape (N, m) ('zoh') or (N, 2 m) ('foh'; the last sample repeats u_{N-1}).
+        w, shape (N, m) ('zoh'), (N, 2 m) ('foh'; the last sample repeats u_{N-1}) or
+        (N, 4 m) ('cubic'; the samples before the first and after the last extrapolated
+        linearly, so that the end intervals are linear).
     """
     if hold == "zoh":
         return u
-    return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
+    if hold == "foh":
+        return np.concatenate([u, np.vstack([u[1:], u[-1:]])], axis=1)
+    if len(u) < 2:
+        return np.concatenate([u, u, u, u], axis=1)
+    ext = np.vstack([2 * u[:1] - u[1:2], u, 2 * u[-1:] - u[-2:-1], 2 * u[-1:] - u[-2:-1]])
+    return np.concatenate([ext[:-3], ext[1:-2], ext[2:-1], ext[3:]], axis=1)
 
 
 def propagate(phi: np.ndarray, forcing: np.ndarray, x0: np.ndarray) -> np.ndarray:
