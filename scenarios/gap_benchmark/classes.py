@@ -40,6 +40,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from flightid.identification.gap.candidates.classes import TAIL_CLASS
 from flightid.scenarios.gap_benchmark.cases import CHANNELS, Effect
 
 
@@ -64,9 +65,8 @@ CLASSES: dict[str, tuple[Member, ...]] = {
     "pitch damping": (_delta("Cm_q"), _delta("Cm_alphadot")),
     "aileron power": (Member("control_effectiveness", {"surface": "da"}), _delta("Cl_da")),
     "rudder power": (Member("control_effectiveness", {"surface": "dr"}), _delta("Cn_dr")),
-    "horizontal-tail effectiveness": (Member("control_effectiveness", {"surface": "de"}),
-                                      _delta("Cm_de"), Member("tail_ice"),
-                                      Member("backlash", {"surface": "de"})),
+    TAIL_CLASS: (Member("control_effectiveness", {"surface": "de"}), _delta("Cm_de"),
+                 Member("tail_ice"), Member("backlash", {"surface": "de"})),
     **{f"lag or rate limit of {s}": (Member("actuator_lag", {"surface": s}),
                                       Member("rate_limit", {"surface": s}))
        for s in ("da", "dr", "de")},
