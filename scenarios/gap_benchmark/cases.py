@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from flightid.channels import LATERAL_INPUTS, LONGITUDINAL_INPUTS
+from flightid.identification.gap.candidates.ranges import INERTIAL, INERTIAL_SCALE
 from flightid.sim.effects.catalogue import CATALOGUE
 
 LATERAL, LONGITUDINAL, BOTH = "lateral", "longitudinal", "both"
@@ -181,10 +182,17 @@ SIZE_CAP = {
     "engine_vibration": 3.0,  # draws <= 13.5 m/s^2 (1.4 g) and 9 deg/s on an IMU
     "inertia_scale": 1.5,  # base <= 1.3: a component breakdown's 10-30 %
     "misalignment": 1.745,  # base <= 0.0349 rad (2 deg): draws <= 3 deg
-    "scale": 1.65,  # factor drawn <= 1.5
+    "scale": 1.65,  # factor drawn <= 1.5 (a flow angle's; an inertial channel's below)
     "tail_ice": 2.0,  # elevator drawn >= 0.55, stability and damping >= 0.7
     "thrust_moment": 2.0,  # base <= 0.5 m: draws <= 0.75 m, inside the catalogue's 1 m
 }
+# an inertial channel's scale (rates, accelerations) is drawn inside the diagnosis's range
+# of a calibrated inertial sensor (``candidates.ranges.INERTIAL_SCALE``, 0.75-1.33; seed-10
+# rules): at most 1.27, the range's top less the 0.035-0.056 that seeds 0 and 9's fits lay
+# above the injected; its multiple of the 0.2 base is capped so (0.9: drawn 1.09-1.27)
+SCALE_BASE = 0.2
+INERTIAL_SCALE_TOP = 1.27
+INERTIAL_SCALE_MULTIPLE = (INERTIAL_SCALE_TOP - 1.0) / (K_RANGE[1] * SCALE_BASE)
 
 
 def size_multiple(kind: str, aircraft: str) -> float:
@@ -350,6 +358,7 @@ def fingerprint() -> str:
     text = json.dumps([[asdict(k) for k in KINDS], OUTSIDE, PATTERN, BLOCK, DERIVATIVES,
                        DELTA_FRACTION, DELTA_SCALE, STABLE_SIGN, K_RANGE, CG_CHORDS,
                        THRUST_ARM_M, SIZED_BASE, VISIBLE_FRACTION, SPREAD, VISIBILITY, SIZE_CAP,
+                       INERTIAL, INERTIAL_SCALE, INERTIAL_SCALE_TOP,
                        {a: asdict(f) for a, f in AIRCRAFT.items()}],
                       sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -432,7 +441,10 @@ def _scaled(entry: str, name: str, k: float, base: float | None = None) -> float
 def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
             truth: dict[str, float]) -> Effect:
     options = {o: str(rng.choice(c)) for o, c in kind.choices.items()}
-    k = float(rng.uniform(*K_RANGE)) * size_multiple(kind.name, aircraft)
+    multiple = size_multiple(kind.name, aircraft)
+    if kind.entry == "scale" and options["channel"] in INERTIAL:
+        multiple = min(multiple, INERTIAL_SCALE_MULTIPLE)
+    k = float(rng.uniform(*K_RANGE)) * multiple
     sign = float(rng.choice([-1.0, 1.0]))
     if kind.entry == "derivative_delta":
         d = options["derivative"]
@@ -447,7 +459,7 @@ def _effect(kind: Kind, rng: np.random.Generator, aircraft: str,
     elif kind.entry == "thrust_moment":
         mag = {"arm": sign * k * THRUST_ARM_M}
     elif kind.entry == "scale":
-        mag = {"factor": 1.0 + k * 0.2}
+        mag = {"factor": 1.0 + k * SCALE_BASE}
     elif kind.one_of:
         which = str(rng.choice(kind.sized))
         mag = {which: _scaled(kind.entry, which, k, SIZED_BASE.get(kind.entry))}

@@ -270,11 +270,12 @@ CATALOGUE = Catalogue((
           (_p("factor", "1", "mass scale factor", 1.1, 0.5, 2.0, neutral=1.0),),
           MassScale, ("alpha", "de")),
     Entry("inertia_scale", ActsOn.AIRFRAME, "moments of inertia scaled (Ixz by sqrt(ixx izz))",
-          # [0.5, 2]: inertias estimated from radii of gyration are good to some 20-30 %;
-          # a factor of two is no inertia error (a judgement)
-          (_p("ixx", "1", "Ixx scale factor", 1.1, 0.5, 2.0, neutral=1.0),
-           _p("iyy", "1", "Iyy scale factor", 1.1, 0.5, 2.0, neutral=1.0),
-           _p("izz", "1", "Izz scale factor", 1.1, 0.5, 2.0, neutral=1.0)),
+          # [0.7, 1.45]: inertias estimated from radii of gyration or a component breakdown
+          # are good to some 10-30 % (a swing test to about 5 %); beyond, a fitted factor is
+          # the moment derivatives' scale, not an inertia error
+          (_p("ixx", "1", "Ixx scale factor", 1.1, 0.7, 1.45, neutral=1.0),
+           _p("iyy", "1", "Iyy scale factor", 1.1, 0.7, 1.45, neutral=1.0),
+           _p("izz", "1", "Izz scale factor", 1.1, 0.7, 1.45, neutral=1.0)),
           InertiaScale, ("q", "p")),
     Entry("thrust_moment", ActsOn.AIRFRAME, "pitching moment proportional to thrust (thrust "
           "line, propwash)",

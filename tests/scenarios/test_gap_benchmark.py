@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 from flightid.cli.app import app
 from flightid.cli.gap_benchmark import COLUMNS, kind_table
 from flightid.identification.gap.candidates.build import Candidate, pair
+from flightid.identification.gap.candidates.ranges import INERTIAL, INERTIAL_SCALE
 from flightid.identification.gap.ranked import Ranked
 from flightid.scenarios.gap_benchmark import (
     KINDS,
@@ -36,6 +37,8 @@ from flightid.scenarios.gap_benchmark.cases import (
     CG_CHORDS,
     DELTA_FRACTION,
     DELTA_SCALE,
+    INERTIAL_SCALE_MULTIPLE,
+    INERTIAL_SCALE_TOP,
     K_RANGE,
     NULL,
     NULL_INDEX,
@@ -129,8 +132,31 @@ def test_magnitudes_in_their_ranges(t, big):
                     k = abs(value - p.zero) / abs(p.default - p.zero)
                 else:  # a rate limit: neutral at infinity, drawn as a multiple of the default
                     k = value / p.default
-                k /= size_multiple(e.kind, c.aircraft)  # sizing by visibility
+                k /= _multiple(e, c.aircraft)  # sizing by visibility
                 assert lo - 1e-9 <= k <= hi + 1e-9, (c.label, name, k)
+
+
+def _multiple(e, aircraft: str) -> float:
+    """The sizing's multiple of an effect's base: an inertial channel's scale capped."""
+    m = size_multiple(e.kind, aircraft)
+    if e.entry == "scale" and e.options["channel"] in INERTIAL:
+        return min(m, INERTIAL_SCALE_MULTIPLE)
+    return m
+
+
+def test_inertial_scales_drawn_inside_the_diagnosis_range(big):
+    """The rates' and accelerations' scales are drawn 1.09-1.27, inside the diagnosis's range
+    of a calibrated inertial sensor (0.75-1.33, with the fits' 0.035-0.056 above the
+    injected to spare: seed 9 drew q and az scales up to 1.44, outside it); the flow
+    angles' up to 1.5."""
+    inertial = [e.magnitude["factor"] for c in big for e in c.effects
+                if e.entry == "scale" and e.options["channel"] in INERTIAL]
+    flow = [e.magnitude["factor"] for c in big for e in c.effects
+            if e.entry == "scale" and e.options["channel"] not in INERTIAL]
+    assert len(inertial) > 20 and len(flow) > 5
+    assert INERTIAL_SCALE_TOP < INERTIAL_SCALE[1]
+    assert all(1.09 <= f <= INERTIAL_SCALE_TOP for f in inertial)
+    assert max(flow) > INERTIAL_SCALE[1]
 
 
 # the physical ranges the re-sized rows' draws keep (SIZE_CAP; docs/gap_benchmark.md,
@@ -191,6 +217,8 @@ def test_sizing_moves_only_the_resized_magnitudes(t, big, monkeypatch):
         for ea, eb in zip(a.effects, b.effects, strict=True):
             assert (ea.entry, ea.axis, ea.options) == (eb.entry, eb.axis, eb.options)
             m = multiple.get((eb.kind, b.aircraft), 1.0)
+            if eb.entry == "scale" and eb.options["channel"] in INERTIAL:
+                m = min(m, INERTIAL_SCALE_MULTIPLE)
             if m == 1.0:
                 assert ea.magnitude == eb.magnitude, b.label
                 continue

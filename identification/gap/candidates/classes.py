@@ -124,3 +124,33 @@ def class_text(ranked: Any, start: dict[str, float]) -> str:
     else:
         return ""
     return f"{TAIL_CLASS} {100 * change:+.0f} % {members}"
+
+
+def surface_before_inertia(first: Any, group: list[Any]) -> Any:
+    """The effect named among ``group`` (confirmed effects the held-out data cannot tell
+    apart, ``rank.tied``), given the one chosen by fewest parameters, ``first``: when that is
+    an inertia scale and a surface's effect (an entry with a ``surface`` option: its
+    effectiveness, lag, rate limit, play, ...) of as many parameters is in the group, the
+    surface's. An inertia k divides every moment derivative about its axis, so it slows the
+    response as a surface's lag does and takes the surface's power with the rest; the
+    surface's effect is the narrower explanation (on seed 9 of the blind check the inertia
+    scale was tied with and named before an elevator lag and an elevator effectiveness:
+    docs/gap_benchmark.md, "The rules for the seed-10 run").
+
+    Parameters
+    ----------
+    first : Ranked
+        The effect chosen so far.
+    group : list of Ranked
+        The tied confirmed effects, ``first`` among them, in ranking order.
+
+    Returns
+    -------
+    Ranked
+        ``first``, or the first surface effect of the group with as many free parameters.
+    """
+    if first.candidate.entry != "inertia_scale":
+        return first
+    n = len(first.candidate.free)
+    return next((r for r in group if "surface" in r.candidate.options
+                 and len(r.candidate.free) == n), first)

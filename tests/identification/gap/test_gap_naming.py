@@ -62,6 +62,23 @@ def test_simplest_names_the_fewer_parameters_and_lists_the_rest():
     assert out[0] is rate and rate.alternatives == []
 
 
+def test_simplest_names_the_surface_before_a_tied_inertia_scale():
+    """An inertia scale ranked first and tied with a confirmed surface effect of one
+    parameter (seed 9's case 0: a Telemaster elevator lag) gives way to the surface's; a
+    surface effect it is not tied with, or one of more parameters, does not."""
+    inertia = _ranked("inertia_scale", {}, ("iyy",), {"w1": -100.0, "w2": -80.0})
+    lag = _ranked("actuator_lag", {"surface": "de"}, ("tau_de",), {"w1": -90.0, "w2": -82.0})
+    out = simplest([inertia, lag])
+    assert out[0] is lag and lag.alternatives == [inertia]
+    assert "surface" in lag.note
+    inertia.alternatives = []
+    far = _ranked("actuator_lag", {"surface": "de"}, ("tau_de",), {"w1": -10.0, "w2": -12.0})
+    assert simplest([inertia, far])[0] is inertia
+    two = _ranked("control_effectiveness", {"surface": "de"}, ("factor_de", "bias_de"),
+                  {"w1": -90.0, "w2": -82.0})
+    assert simplest([inertia, two])[0] is inertia
+
+
 def test_c172p_elevator_lag_is_named_a_lag_with_the_rate_limit_listed():
     """Seed 0's case 105: a c172p elevator actuator lag of 0.080 s on a record of commands,
     light turbulence. The seed-6 rules named ``rate_limit(de)`` (its held-out cost a little
