@@ -188,7 +188,7 @@ SIZE_CAP = {
 }
 # an inertial channel's scale (rates, accelerations) is drawn inside the diagnosis's range
 # of a calibrated inertial sensor (``candidates.ranges.INERTIAL_SCALE``, 0.75-1.33; seed-10
-# rules): at most 1.27, the range's top less the 0.035-0.056 that seeds 0 and 9's fits lay
+# rules): at most 1.27, the range's top less the 0.034-0.055 that seeds 0 and 9's fits lay
 # above the injected; its multiple of the 0.2 base is capped so (0.9: drawn 1.09-1.27)
 SCALE_BASE = 0.2
 INERTIAL_SCALE_TOP = 1.27

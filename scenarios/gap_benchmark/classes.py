@@ -32,7 +32,11 @@ the held-out seed is run).
   lift offset CL_trim = W / (qbar S), so it is in the alpha class; a thrust-line offset
   (``thrust_moment``: arm x the trim thrust) and a CG offset along x (a Cm offset
   CL dx / cbar at trim) are pitching-moment offsets, so they are in the elevator class
-  (the CG offset is in the pitch stiffness class too).
+  (the CG offset is in the pitch stiffness class too). A deadband of width w around zero
+  (seed-10 rules) passes a command c as c - sign(c) w/2: a surface trimmed off zero sits
+  w/2 from its command, a rigging bias at trim, so the aileron's and rudder's deadbands
+  are in their surface's class (seed 0: a c172p aileron deadband of 0.0226 rad measured at
+  trim as a bias of 0.0109, a Navion rudder one of 0.0110 rad as 0.0057).
 """
 
 from __future__ import annotations
@@ -85,9 +89,9 @@ CLASSES: dict[str, tuple[Member, ...]] = {
                                        _delta("Cm_0"), Member("thrust_moment"),
                                        Member("cg_offset")),
     "aileron bias or Cl_0 mismatch": (Member("actuator_bias", {"surface": "da"}),
-                                      _delta("Cl_0")),
+                                      _delta("Cl_0"), Member("deadband", {"surface": "da"})),
     "rudder bias or Cn_0 mismatch": (Member("actuator_bias", {"surface": "dr"}),
-                                     _delta("Cn_0")),
+                                     _delta("Cn_0"), Member("deadband", {"surface": "dr"})),
 }
 
 

@@ -97,3 +97,8 @@ def test_trim_classes_hold_what_the_trim_cannot_tell_apart():
     assert classes_of(mass) == ["alpha bias or CL_0 mismatch"]
     assert classes_of(cg) == ["pitch stiffness", "elevator bias or Cm_0 mismatch"]
     assert classes_of(rudder) == ["rudder bias or Cn_0 mismatch"]
+    # a deadband offsets a surface trimmed off zero by half its width (seed-10 rules)
+    for surface, name in (("da", "aileron bias or Cl_0 mismatch"),
+                          ("dr", "rudder bias or Cn_0 mismatch")):
+        band = Effect("deadband", "lateral", "card", {"surface": surface}, {"width": 0.02})
+        assert classes_of(band) == [name]
