@@ -126,7 +126,8 @@ def estimate(
     initial_state : str, optional
         'measured' (default) or 'zero' (the filter forgets it within a few samples).
     hold : str, optional
-        Inputs between samples: 'foh' (default) or 'zoh'.
+        Inputs between samples: 'foh' (default here), 'zoh' or 'cubic' (the default of
+        ``--method fem``, ``method.Options``).
     max_iterations : int, optional
         Gauss-Newton iterations (per relaxation pass). Default 60.
     max_relaxations : int, optional
@@ -262,7 +263,7 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
             innovations = ev.nu + scaled  # those of the model that follows the condition
         crb = cramer_rao_covariance(fit.information)
         crb = 0.5 * (crb + crb.T)
-        cov = robust_covariance(fit.information, ev.hessian, ev.sensitivities,
+        cov = robust_covariance(fit.information, ev.sensitivities,
                                 ev.covariance_sensitivities, innovations,
                                 ev.flt.S) if colored else crb
         kind = StdKind.CRAMER_RAO_COLORED if colored else StdKind.CRAMER_RAO

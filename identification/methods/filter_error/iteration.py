@@ -233,29 +233,28 @@ def score_contributions(sensitivities: np.ndarray, covariance_sensitivities: np.
 
 
 
-def robust_covariance(information: np.ndarray, hessian: np.ndarray,
-                      sensitivities: np.ndarray, covariance_sensitivities: np.ndarray,
-                      innovations: np.ndarray, S: np.ndarray) -> np.ndarray:
+def robust_covariance(information: np.ndarray, sensitivities: np.ndarray,
+                      covariance_sensitivities: np.ndarray, innovations: np.ndarray,
+                      S: np.ndarray) -> np.ndarray:
     """Parameter covariance of the filter-error estimate when the filter's noise model is
     not the flight's, from the spread of the per-sample scores g_k.
 
-    Two sandwiches with the middle G = sum_k g_k g_k^T (``score_contributions``, centred):
-    H^-1 G H^-1 with H the Hessian of J (Huber 1967; White, "Maximum likelihood estimation
-    of misspecified models", Econometrica 50, 1982) and M^-1 G M^-1 with the information
-    matrix M. When the model is right E[G] = E[H] = M and both are the Cramer-Rao bound
-    M^-1 (Jategaonkar 2015 eq. 5.22). H here drops the second derivatives of nu and S
-    (``evaluate``) and is noisy where S depends strongly on a parameter: on flights of the
-    filter's own model it puts CY_beta's bound at 0.56-0.82 of the Cramer-Rao bound, where
-    M^-1 G M^-1 gives 0.97-1.03. In three-axis turbulence H^-1 G H^-1 is the larger for the
-    roll derivatives. Each standard error is the larger of the two, with the correlations
-    of M^-1 G M^-1.
+    The sandwich M^-1 G M^-1 with the information matrix M and the middle
+    G = sum_k g_k g_k^T (``score_contributions``, centred) (Huber 1967; White, "Maximum
+    likelihood estimation of misspecified models", Econometrica 50, 1982, with M for the
+    Hessian as in Morelli & Klein 2016 eq. 6.54). When the model is right E[G] = M and it
+    is the Cramer-Rao bound M^-1 (Jategaonkar 2015 eq. 5.22). The sandwich with the
+    Hessian H of J in place of M is not used: H here drops the second derivatives of nu
+    and S, and on flights where a noise parameter is nearly unidentifiable (the vane's
+    sigma_beta estimated near 0) it is nearly singular; on the Navion demo card in light
+    turbulence it put one flight's bounds in 29 at 15-180 times the others' (a heavy tail
+    of bounds that does not follow the errors: docs/montecarlo.md, "Filter error: the
+    bounds' heavy tail").
 
     Parameters
     ----------
     information : numpy.ndarray
         Information matrix M, shape (np, np).
-    hessian : numpy.ndarray
-        Hessian H of J, shape (np, np).
     sensitivities : numpy.ndarray
         dnu/dtheta, shape (N, ny, np); carries the Kalman gain's dependence on the
         parameters.
@@ -273,12 +272,6 @@ def robust_covariance(information: np.ndarray, hessian: np.ndarray,
     """
     g = score_contributions(sensitivities, covariance_sensitivities, innovations, S)
     g -= g.mean(axis=0)
-    middle = g.T @ g
     m_inv = np.linalg.inv(information)
-    outer = m_inv @ middle @ m_inv
-    h_inv = np.linalg.pinv(hessian)
-    white = h_inv @ middle @ h_inv
-    std = np.sqrt(np.maximum(np.diag(outer), np.clip(np.diag(white), 0.0, None)))
-    scale = std / np.sqrt(np.diag(outer))
-    cov = outer * np.outer(scale, scale)
+    cov = m_inv @ (g.T @ g) @ m_inv
     return 0.5 * (cov + cov.T)

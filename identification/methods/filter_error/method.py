@@ -25,8 +25,8 @@ class Options(HeldOptions):
     process_noise_start: dict[str, float] | None = option(
         None, "start values of F_<state> (state units per sqrt(s))")
     initial_state: str = option("measured", "'measured' or 'zero' (the filter forgets it)")
-    hold: str = option("foh", "inputs between samples: 'foh' (linear), 'zoh' (held) or "
-                                    "'cubic' (Catmull-Rom through four samples)")
+    hold: str = option("cubic", "inputs between samples: 'cubic' (Catmull-Rom through four "
+                                "samples), 'foh' (linear) or 'zoh' (held)")
     max_iterations: int = option(60, "Gauss-Newton iterations (per relaxation without "
                                      "joint_noise)")
     max_relaxations: int = option(20, "limit of alternating parameter / R updates")

@@ -383,7 +383,7 @@ def test_bounds_hold_in_three_axis_turbulence(demo_flights):
 
 def test_robust_bounds_are_the_cramer_rao_bounds_when_the_model_is_right():
     """On flights of the filter's own model (white process and measurement noise) the
-    sandwich H^-1 sum g g^T H^-1 estimates the same covariance as M^-1: each derivative's
+    sandwich M^-1 sum g g^T M^-1 estimates the same covariance as M^-1: each derivative's
     two bounds agree within the sampling error of a variance summed over 800 samples
     (about 5 % relative in the standard error; 0.8-1.25 allows for the tails)."""
     model, _, rec = turbulent_flight("navion", 1, PROCESS_NOISE)

@@ -21,7 +21,10 @@ SEED = 2371788484  # sub_seed(34001, "montecarlo:29")
 # the constant-condition lateral model these measurements were made with (the default
 # before filter error took output error's known inputs, qbar(t) among them, and the
 # first-order flight-condition correction instead)
-CONSTANT_CONDITION = {"dynamic_pressure": False, "propulsive_moments": False}
+# and the linear input hold they were made with (the cubic one, filter error's default
+# since, moves this constant-condition fit's Cl_da from 2.55 to 3.06 bounds: the
+# constant-condition model's own error, -1.3 % to -1.5 % of Cl_da, is not the hold's)
+CONSTANT_CONDITION = {"dynamic_pressure": False, "propulsive_moments": False, "hold": "foh"}
 # the derivatives the collapsed R_p biased together (too large in magnitude)
 ROLL = ("Cl_beta", "Cl_da", "Cl_p")
 
@@ -65,8 +68,9 @@ def test_roll_derivatives_within_their_bounds_with_the_joint_noise(fits):
     z_joint = {n: (joint[n] - truth[n]) / joint.std_of(n) for n in ROLL}
     z_relaxed = {n: (relaxed[n] - truth[n]) / relaxed.std_of(n) for n in ROLL}
     # each within 3 of its bounds (3 at once: a miss beyond 3 has 0.8 % probability with
-    # right bounds); measured +0.2, +1.6, +0.7. (Cl_r, -3.7 on this flight, and Cl_dr,
-    # +4.6, keep the misses of docs/montecarlo.md)
+    # right bounds); measured +0.2, +2.6, +1.2 with the information sandwich (+0.2, +1.6,
+    # +0.7 with the larger of it and the Hessian one). (Cl_r, -4.2 on this flight, and
+    # Cl_dr, +5.2, keep the misses of docs/montecarlo.md)
     assert max(abs(v) for v in z_joint.values()) < 3.0, z_joint
     # the relaxation's estimates of the same flight were outside: measured -4.4, -3.2, -4.2
     assert max(abs(v) for v in z_relaxed.values()) > 3.0, z_relaxed
