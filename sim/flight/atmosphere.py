@@ -116,3 +116,41 @@ def fill_calm(raw: dict[str, np.ndarray], gust_fps: np.ndarray,
         if not (actual == filled or (math.isnan(actual) and math.isnan(filled))):
             raise RuntimeError(f"{p} is {actual!r} in JSBSim but {filled!r} as filled in "
                                "with its turbulence off: JSBSim's wind model changed")
+
+
+def substep_gusts(gust_fps: np.ndarray, substeps: int
+                  ) -> list[tuple[tuple[tuple[float, float, float], ...],
+                                  tuple[float, float, float]] | None]:
+    """Per record interval k, the gusts to write before each JSBSim substep, or None.
+
+    The gust schedule is a continuous wind sampled on the record grid: before the s-th of
+    the ``substeps`` runs of interval k (s = 1..S) the value at t_{k-1} + s h is written,
+    linear between samples k - 1 and k. JSBSim's ``run()`` propagates, then evaluates the
+    forces with the gust written, so the forces at t_k use exactly sample k: the gust a
+    record books at t_k is the one acting there, with no half-step lag of a held value.
+
+    Parameters
+    ----------
+    gust_fps : numpy.ndarray
+        Gust velocities on the record grid, NED, ft/s; shape (n, 3).
+    substeps : int
+        JSBSim runs per record interval (S >= 1).
+
+    Returns
+    -------
+    list
+        Per sample k, None where the gust equals sample k - 1's (nothing to write: the
+        last value written holds), else (the S - 1 leading (north, east, down) triples,
+        the last triple = sample k exactly).
+    """
+    gust_fps = np.asarray(gust_fps, dtype=float)
+    out: list = [None] * len(gust_fps)
+    changed = np.flatnonzero(np.any(gust_fps[1:] != gust_fps[:-1], axis=1)) + 1
+    if not len(changed):
+        return out
+    f = (np.arange(1, substeps + 1) / substeps)[None, :, None]
+    # (1 - f) a + f b: f = 1 gives b exactly
+    ramp = (1.0 - f) * gust_fps[changed - 1][:, None, :] + f * gust_fps[changed][:, None, :]
+    for k, rows in zip(changed.tolist(), ramp.tolist(), strict=True):
+        out[k] = (tuple(map(tuple, rows[:-1])), tuple(rows[-1]))
+    return out
