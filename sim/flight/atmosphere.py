@@ -119,9 +119,8 @@ def fill_calm(raw: dict[str, np.ndarray], gust_fps: np.ndarray,
 
 
 def substep_gusts(gust_fps: np.ndarray, substeps: int
-                  ) -> list[tuple[tuple[tuple[float, float, float], ...],
-                                  tuple[float, float, float]] | None]:
-    """Per record interval k, the gusts to write before each JSBSim substep, or None.
+                  ) -> tuple[list[bool], list[float], list[float], list[float]]:
+    """The gusts to write before each JSBSim substep: a continuous wind between samples.
 
     The gust schedule is a continuous wind sampled on the record grid: before the s-th of
     the ``substeps`` runs of interval k (s = 1..S) the value at t_{k-1} + s h is written,
@@ -138,19 +137,18 @@ def substep_gusts(gust_fps: np.ndarray, substeps: int
 
     Returns
     -------
-    list
-        Per sample k, None where the gust equals sample k - 1's (nothing to write: the
-        last value written holds), else (the S - 1 leading (north, east, down) triples,
-        the last triple = sample k exactly).
+    tuple
+        (changed, north, east, down): ``changed[k]`` whether sample k differs from sample
+        k - 1 (where it does not, nothing is written: the last value holds); the three
+        flat lists hold, for each changed interval in order, its S values (ft/s), the last
+        one sample k exactly.
     """
     gust_fps = np.asarray(gust_fps, dtype=float)
-    out: list = [None] * len(gust_fps)
-    changed = np.flatnonzero(np.any(gust_fps[1:] != gust_fps[:-1], axis=1)) + 1
-    if not len(changed):
-        return out
+    changed = np.zeros(len(gust_fps), dtype=bool)
+    changed[1:] = np.any(gust_fps[1:] != gust_fps[:-1], axis=1)
+    at = np.flatnonzero(changed)
     f = (np.arange(1, substeps + 1) / substeps)[None, :, None]
     # (1 - f) a + f b: f = 1 gives b exactly
-    ramp = (1.0 - f) * gust_fps[changed - 1][:, None, :] + f * gust_fps[changed][:, None, :]
-    for k, rows in zip(changed.tolist(), ramp.tolist(), strict=True):
-        out[k] = (tuple(map(tuple, rows[:-1])), tuple(rows[-1]))
-    return out
+    ramp = (1.0 - f) * gust_fps[at - 1][:, None, :] + f * gust_fps[at][:, None, :]
+    north, east, down = (ramp[:, :, i].ravel().tolist() for i in range(3))
+    return changed.tolist(), north, east, down

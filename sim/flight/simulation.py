@@ -213,7 +213,8 @@ class Simulation(SimulationBase):
             self._cmd_setters, self._maps, self._trim_cmd, self._trim_pos, self._trim_throttle,
             self._throttle_setters, inputs, n), n)
         # gusts: a continuous wind, written at each substep where it changes
-        ramps = substep_gusts(gust_fps, self.substeps)
+        changed, *ramps = substep_gusts(gust_fps, self.substeps)
+        next_n, next_e, next_d = (iter(ramp).__next__ for ramp in ramps)
         set_n, set_e, set_d = self._gust_setters
         if np.any(extra[0]):  # (reset left the gusts at zero)
             for set_gust, value in zip(self._gust_setters, gust_fps[0].tolist(), strict=True):
@@ -237,20 +238,18 @@ class Simulation(SimulationBase):
         every = max(1, int(round(rate_hz)))
         k = 1
         while departure is None and k < n:
-            ramp = ramps[k]
-            if ramp is None:
+            if changed[k]:
+                for _ in substeps:
+                    set_n(next_n())
+                    set_e(next_e())
+                    set_d(next_d())
+                    run()
+                set_n(next_n())
+                set_e(next_e())
+                set_d(next_d())
+            else:
                 for _ in substeps:
                     run()
-            else:
-                leading, (g_n, g_e, g_d) = ramp
-                for s_n, s_e, s_d in leading:
-                    set_n(s_n)
-                    set_e(s_e)
-                    set_d(s_d)
-                    run()
-                set_n(g_n)
-                set_e(g_e)
-                set_d(g_d)
             for set_cmd, value in commands[k]:
                 set_cmd(value)
             run()
