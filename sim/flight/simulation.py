@@ -14,15 +14,10 @@ its models in the order propagate -> FCS -> ... -> aerodynamics -> accelerations
 after each ``run()`` every property belongs to the new state. ``step(controls)`` sets
 the controls before the last substep of the interval: the returned sample at t_k holds
 the state at t_k, the surfaces at ``controls`` and the forces they produce, and those
-controls act from t_k on (held for one interval). A record therefore pairs each state
-with the surface positions acting at that instant, with no hidden delay; a controller
-driving ``step`` sees a one-sample transport delay, like a digital flight computer.
-Gust and turbulence schedules are samples of a continuous wind: before each substep of
-the interval (t_{k-1}, t_k] the gust is written linearly interpolated between samples k - 1
-and k at the substep's end time (``atmosphere.substep_gusts``), so the forces at t_k use
-exactly sample k and the gust a record books at t_k is the one acting at t_k. (A value
-held over the interval would act half a record step late against the record: the
-response over (t_{k-1}, t_k] driven by sample k, booked at t_k.)
+controls act from t_k on (held for one interval): a record pairs each state with the
+surfaces acting then, and a controller driving ``step`` sees a one-sample delay. Gusts
+are written before each substep, linear between the record's samples
+(``atmosphere.substep_gusts``): the forces at t_k use sample k, the gust booked at t_k.
 
 Controls are increments on the trim values: de, da, dr in rad (project signs,
 flightid/channels.py), throttle as a fraction. Surface increments are mapped to JSBSim's
@@ -37,8 +32,7 @@ value interpolated at ``hold_center`` (a held value otherwise lags the surface b
 (substeps - 1) / 2 internal steps: 2 % of the Twin Otter's pitch-rate peak in a 3211).
 
 Speed. Per sample the loop steps JSBSim, writes only the pilot commands and gusts that
-changed (``controls.command_schedule`` maps a whole flight's commands before it; gusts at
-each substep of an interval where they change), reads
+changed (``controls.command_schedule`` maps a whole flight's commands before it), reads
 the raw properties through cached property nodes into one buffer of doubles and converts
 them to SI channels once, vectorised, after the flight (with JSBSim's turbulence off, the
 winds are filled in: ``atmosphere.fill_calm``). ``step`` converts its one sample by the same
