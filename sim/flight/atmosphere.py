@@ -116,3 +116,39 @@ def fill_calm(raw: dict[str, np.ndarray], gust_fps: np.ndarray,
         if not (actual == filled or (math.isnan(actual) and math.isnan(filled))):
             raise RuntimeError(f"{p} is {actual!r} in JSBSim but {filled!r} as filled in "
                                "with its turbulence off: JSBSim's wind model changed")
+
+
+def substep_gusts(gust_fps: np.ndarray, substeps: int
+                  ) -> tuple[list[bool], list[float], list[float], list[float]]:
+    """The gusts to write before each JSBSim substep: a continuous wind between samples.
+
+    The gust schedule is a continuous wind sampled on the record grid: before the s-th of
+    the ``substeps`` runs of interval k (s = 1..S) the value at t_{k-1} + s h is written,
+    linear between samples k - 1 and k. JSBSim's ``run()`` propagates, then evaluates the
+    forces with the gust written, so the forces at t_k use exactly sample k: the gust a
+    record books at t_k is the one acting there, with no half-step lag of a held value.
+
+    Parameters
+    ----------
+    gust_fps : numpy.ndarray
+        Gust velocities on the record grid, NED, ft/s; shape (n, 3).
+    substeps : int
+        JSBSim runs per record interval (S >= 1).
+
+    Returns
+    -------
+    tuple
+        (changed, north, east, down): ``changed[k]`` whether sample k differs from sample
+        k - 1 (where it does not, nothing is written: the last value holds); the three
+        flat lists hold, for each changed interval in order, its S values (ft/s), the last
+        one sample k exactly.
+    """
+    gust_fps = np.asarray(gust_fps, dtype=float)
+    changed = np.zeros(len(gust_fps), dtype=bool)
+    changed[1:] = np.any(gust_fps[1:] != gust_fps[:-1], axis=1)
+    at = np.flatnonzero(changed)
+    f = (np.arange(1, substeps + 1) / substeps)[None, :, None]
+    # (1 - f) a + f b: f = 1 gives b exactly
+    ramp = (1.0 - f) * gust_fps[at - 1][:, None, :] + f * gust_fps[at][:, None, :]
+    north, east, down = (ramp[:, :, i].ravel().tolist() for i in range(3))
+    return changed.tolist(), north, east, down

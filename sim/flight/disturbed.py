@@ -10,7 +10,7 @@ JSBSim (this module):
 - ``wind``: steady NED wind through the flight core's ``Atmosphere`` (the aircraft keeps
   its trimmed airspeed; the ground speed changes).
 - ``gust``: a 1-cosine gust (MIL-F-8785C 3.7.5; the profile of JSBSim's cosine gust:
-  rise, hold, fall) written each record step into JSBSim's ``atmosphere/gust-*-fps``.
+  rise, hold, fall) written into JSBSim's ``atmosphere/gust-*-fps``.
 - ``turbulence``: continuous turbulence with Dryden or von Karman spectra (MIL-F-8785C
   3.7.2-3.7.4; von Karman by the rational fits of MIL-HDBK-1797), intensity by
   probability of exceedance (light, moderate, severe) or by sigma, scale lengths from
@@ -27,7 +27,9 @@ JSBSim (this module):
   list; it acts on the IMU inside ``sim.sensors.suites.measure``, so it joins the suite's
   mounting effects and leaves the truth alone.
 
-Time series are generated on the record grid and held over the JSBSim substeps.
+Time series are generated on the record grid as samples of a continuous wind; the flight
+core writes them at each JSBSim substep, linear between the record's samples, so the gust
+booked at t_k is the one acting at t_k.
 ``fly_disturbed`` flies them through the flight core's one loop (``sim.flight.simulation.fly`` with
 its ``wind`` and ``turbulence`` schedules); the truth channels ``turb_u/v/w`` carry all
 turbulence (JSBSim's and ours, body axes) and ``wind_north/east/down`` the steady wind
@@ -214,8 +216,10 @@ def fly_disturbed(model: Model, trim: Trim, controls: Mapping[str, np.ndarray],
                   progress: Callable[[int, int], None] | None = None) -> FlightRecord:
     """Fly from trim through the flight core's loop with wind schedules.
 
-    The loop is ``sim.flight.simulation.fly``. ``wind`` and ``turbulence`` are written into
-    JSBSim's gust properties before each record step and held over its substeps.
+    The loop is ``sim.flight.simulation.fly``. ``wind`` and ``turbulence`` are samples of a
+    continuous wind on the record grid, written into JSBSim's gust properties at each
+    substep, linearly interpolated between the record's samples: the forces at t_k use
+    sample k, the value booked at t_k (``turb_u/v/w``, ``wind_*``).
 
     Parameters
     ----------

@@ -14,10 +14,10 @@ its models in the order propagate -> FCS -> ... -> aerodynamics -> accelerations
 after each ``run()`` every property belongs to the new state. ``step(controls)`` sets
 the controls before the last substep of the interval: the returned sample at t_k holds
 the state at t_k, the surfaces at ``controls`` and the forces they produce, and those
-controls act from t_k on (held for one interval). A record therefore pairs each state
-with the surface positions acting at that instant, with no hidden delay; a controller
-driving ``step`` sees a one-sample transport delay, like a digital flight computer.
-Gust and turbulence samples k are written before the substeps that lead to t_k.
+controls act from t_k on (held for one interval): a record pairs each state with the
+surfaces acting then, and a controller driving ``step`` sees a one-sample delay. Gusts
+are written before each substep, linear between the record's samples
+(``atmosphere.substep_gusts``): the forces at t_k use sample k, the gust booked at t_k.
 
 Controls are increments on the trim values: de, da, dr in rad (project signs,
 flightid/channels.py), throttle as a fraction. Surface increments are mapped to JSBSim's
@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from flightid.record import FlightRecord, RecordMeta
-from flightid.sim.flight.atmosphere import Atmosphere, fill_calm
+from flightid.sim.flight.atmosphere import Atmosphere, fill_calm, substep_gusts
 from flightid.sim.flight.controls import (
     Control,
     command_schedule,
@@ -177,7 +177,8 @@ class Simulation(SimulationBase):
         record grid (at least duration_s * rate_hz + 1 samples), callables of time (s) or
         constants. ``wind`` (gusts, booked as wind_north/east/down) and ``turbulence``
         (booked as turb_u/v/w): n x 3 NED velocities (m/s) on the record grid, written
-        into JSBSim's gust properties and held over the substeps. ``progress(k, n)`` is
+        into JSBSim's gust properties at each substep, linear between the record's samples
+        (sample k acting at t_k). ``progress(k, n)`` is
         called every second of flight. Raises DepartureError with the record up to the
         departure.
         """
@@ -201,15 +202,13 @@ class Simulation(SimulationBase):
         gust_fps = extra / FT
         self._reset(trim, {c: float(v[0]) for c, v in inputs.items()})
         # JSBSim's pilot commands and gust velocities are inputs that no JSBSim model writes:
-        # set at reset, they need writing again only when they change; turbulence changes
-        # every sample and is written every sample
+        # set at reset, they need writing again only when they change
         commands = schedule_writes(command_schedule(
             self._cmd_setters, self._maps, self._trim_cmd, self._trim_pos, self._trim_throttle,
             self._throttle_setters, inputs, n), n)
-        every_sample = np.count_nonzero(np.any(np.diff(extra, axis=0), axis=1)) > n // 4
-        gusts = schedule_writes(
-            [] if every_sample else zip(self._gust_setters, gust_fps.T, strict=True), n)
-        gust_n, gust_e, gust_d = gust_fps.T.tolist() if every_sample else ([], [], [])
+        # gusts: a continuous wind, written at each substep where it changes
+        changed, *ramps = substep_gusts(gust_fps, self.substeps)
+        next_n, next_e, next_d = (iter(ramp).__next__ for ramp in ramps)
         set_n, set_e, set_d = self._gust_setters
         if np.any(extra[0]):  # (reset left the gusts at zero)
             for set_gust, value in zip(self._gust_setters, gust_fps[0].tolist(), strict=True):
@@ -233,14 +232,18 @@ class Simulation(SimulationBase):
         every = max(1, int(round(rate_hz)))
         k = 1
         while departure is None and k < n:
-            if every_sample:
-                set_n(gust_n[k])
-                set_e(gust_e[k])
-                set_d(gust_d[k])
-            for set_gust, value in gusts[k]:
-                set_gust(value)
-            for _ in substeps:
-                run()
+            if changed[k]:
+                for _ in substeps:
+                    set_n(next_n())
+                    set_e(next_e())
+                    set_d(next_d())
+                    run()
+                set_n(next_n())
+                set_e(next_e())
+                set_d(next_d())
+            else:
+                for _ in substeps:
+                    run()
             for set_cmd, value in commands[k]:
                 set_cmd(value)
             run()
