@@ -1,5 +1,6 @@
 """Leads for the next rules of the gap blind check, measured on development cases re-flown
-from their seeds (docs/gap_benchmark.md, "Leads for the seed-10 rules"). Changes no rule.
+from their seeds (docs/gap_benchmark.md, "Leads for the seed-10 rules" and "Leads for the
+seed-11 rules"). Changes no rule.
 
 ``backlash``: for each case (a lateral backlash), the play's own signal on the axis's outputs
 (the case flown in calm air less the plain aircraft in calm air, same seed) against light
@@ -13,6 +14,13 @@ evaluated in full on the light record: screening rank, delta BIC, held-out cost 
 gain against the confirmation level, the fitted value, and whether the held-out data tell
 each from the inertia scale (``rank.tied``); beside them the top of the ranking.
 
+``detect``: for each case (a single), the effect's visibility per channel of its axis (its
+energy in calm air, less the plain aircraft's, over light turbulence's, as ``backlash``),
+the window test per channel on the light record with the effect and on the same flight
+without it, and the injected entry's own candidate evaluated in full on the light record
+(held-out gain against the confirmation level). ``--grow g``: a sensor scale's offset
+from 1 times g (the case otherwise as drawn).
+
     E="control_effectiveness(de);derivative_delta(Cm_de,stability);actuator_lag(de)"
     .venv/bin/python benchmarks/gap_leads.py backlash --seed 9 \
         --cases 1,27,32,112,114,121,131,148 -o benchmarks/results/gap_leads/backlash_seed9.jsonl
@@ -20,6 +28,19 @@ each from the inertia scale (``rank.tied``); beside them the top of the ranking.
         --labels "$E;tail_ice();rate_limit(dr)" -o benchmarks/results/gap_leads/inertia_seed9.jsonl
     .venv/bin/python benchmarks/gap_leads.py ranking --seed 9 --cases 38,42,62,99,132 \
         --labels "scale(q);scale(az)" -o benchmarks/results/gap_leads/scale_seed9.jsonl
+    S0=4,19,24,29,30,35,38,39,45,47,52,56,58,67,72,88,95,111,115,120,124,125,134,141,142
+    S10=0,1,6,11,12,22,23,35,36,37,38,39,41,44,51,59,64,67,71,73,79,86,90,96,97,105,112
+    S10=$S10,119,123,124,129,132,134,135,139,145,147
+    .venv/bin/python benchmarks/gap_leads.py detect --seed 0 --cases $S0 \
+        -o benchmarks/results/gap_leads/detect_seed0.jsonl
+    .venv/bin/python benchmarks/gap_leads.py detect --seed 10 --cases $S10 \
+        -o benchmarks/results/gap_leads/detect_seed10.jsonl
+    for g in 1.5 2; do
+      .venv/bin/python benchmarks/gap_leads.py detect --seed 0 --cases 67,111,134 --grow $g \
+          -o benchmarks/results/gap_leads/detect_scale_grown_seed0.jsonl
+      .venv/bin/python benchmarks/gap_leads.py detect --seed 10 --cases 39,41,79,96,124,134 \
+          --grow $g -o benchmarks/results/gap_leads/detect_scale_grown_seed10.jsonl
+    done
 """
 
 from __future__ import annotations
@@ -191,12 +212,59 @@ def ranking_row(case, truth, labels: list[str]) -> dict:
     return out
 
 
+def tests_of(before) -> dict:
+    """The window test's figures per channel: p-values and shares of the main, plain
+    (without the other outputs' residuals) and high-band tests, and the gap above null."""
+    return {ch: {"p": t.p_value, "share": t.share, "above_null": t.level, "gap": t.gap,
+                 "plain_p": t.plain.p_value if t.plain else None,
+                 "plain_share": t.plain.share if t.plain else None,
+                 "high_p": t.high.p_value if t.high else None,
+                 "high_share": t.high.explained if t.high else None}
+            for ch, t in before.channels.items()}
+
+
+def detect_row(case, truth) -> dict:
+    """The detection measurement of one case (module docstring)."""
+    e = case.effects[0]
+    axis, plain = axis_of(e), replace(case, category="null", effects=())
+    light, calm = fly_case(case, "light", truth), fly_case(case, "calm", truth)
+    plain_light, plain_calm = fly_case(plain, "light", truth), fly_case(plain, "calm", truth)
+    ranker, before, _, lin = ranker_of(light, case.aircraft, axis)
+    _, without, _, _ = ranker_of(plain_light, case.aircraft, axis)
+    row = {"index": case.index, "aircraft": case.aircraft, "label": e.label, "axis": axis,
+           "visibility": {}, "with_effect": tests_of(before), "without": tests_of(without)}
+    for ch in before.channels:
+        d = np.asarray(calm[ch]) - np.interp(calm.time, plain_calm.time, plain_calm[ch])
+        gust = (np.asarray(plain_light[ch])
+                - np.interp(plain_light.time, plain_calm.time, plain_calm[ch]))
+        row["visibility"][ch] = float(np.sum((d - d.mean()) ** 2)
+                                      / np.sum((gust - gust.mean()) ** 2))
+    want = e.label.split(" ")[0]
+    cands = catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces)
+    found = next((c for c in cands if c.label == want), None)
+    if found is not None:
+        r = ranker.evaluate_linkage(found) if is_linkage(found) else ranker.evaluate(found)
+        row["true_candidate"] = None if r is None else figures(ranker, r)
+    return row
+
+
+def grown(case, times: float):
+    """``case`` (a sensor scale single) with its factor's offset from 1 times ``times``."""
+    e = case.effects[0]
+    if e.entry != "scale":
+        raise SystemExit(f"--grow: case {case.index} is {e.entry}, not a sensor scale")
+    factor = 1.0 + (e.magnitude["factor"] - 1.0) * times
+    return replace(case, effects=(replace(e, magnitude={"factor": factor}),))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("part", choices=("backlash", "ranking"))
-    ap.add_argument("--seed", type=int, required=True, help="a development seed (0-9)")
+    ap.add_argument("part", choices=("backlash", "ranking", "detect"))
+    ap.add_argument("--seed", type=int, required=True, help="a development seed (0-10)")
     ap.add_argument("--cases", required=True, help="case indices, comma-separated")
     ap.add_argument("--labels", default="", help="candidate labels, ';'-separated")
+    ap.add_argument("--grow", type=float, default=1.0,
+                    help="detect: a sensor scale's offset from 1 times this")
     ap.add_argument("-o", "--output", type=Path, required=True)
     a = ap.parse_args()
     idx = [int(k) for k in a.cases.split(",")]
@@ -205,8 +273,9 @@ def main() -> None:
     a.output.parent.mkdir(parents=True, exist_ok=True)
     with threadpool_limits(1), open(a.output, "a") as f:
         for k in idx:
-            case = drawn[k]
+            case = drawn[k] if a.grow == 1.0 else grown(drawn[k], a.grow)
             row = (backlash_row(case, t[case.aircraft]) if a.part == "backlash" else
+                   detect_row(case, t[case.aircraft]) if a.part == "detect" else
                    ranking_row(case, t[case.aircraft], a.labels.split(";")))
             f.write(json.dumps({"seed": a.seed, **row}, default=float) + "\n")
             f.flush()
