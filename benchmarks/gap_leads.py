@@ -159,12 +159,10 @@ def backlash_row(case, truth) -> dict:
     ranker, _, windows, _ = ranker_of(light, case.aircraft, "lateral")
     fits, recs = ranker.base, {s.label: s.record for s in windows}
     for ch in LATERAL:
-        d = np.asarray(calm[ch]) - np.interp(calm.time, plain_calm.time, plain_calm[ch])
-        gust = (np.asarray(plain_light[ch])
-                - np.interp(plain_light.time, plain_calm.time, plain_calm[ch]))
+        d, gust = effect_and_gust(ch, calm, plain_calm, plain_light)
         over, linear = linear_part(d, calm, fits, recs, AXIS_INPUTS["lateral"], ch, dt)
         row["channels"][ch] = {
-            "visibility": float(np.sum((d - d.mean()) ** 2) / np.sum((gust - gust.mean()) ** 2)),
+            "visibility": visibility(d, gust),
             "visibility_highpassed": float(np.sum(highpass(d, dt) ** 2)
                                            / np.sum(highpass(gust, dt) ** 2)),
             "bands": band_shares(d, dt), "highpassed_over_measured": over,
@@ -172,12 +170,7 @@ def backlash_row(case, truth) -> dict:
     for tag, rec in (("with_play", light), ("without", plain_light)):
         ranker, before, _, _ = ranker_of(rec, case.aircraft, "lateral")
         row[tag] = {"gap": before.gap, "test": {
-            ch: {"p": t.p_value, "share": t.share,
-                 "plain_p": t.plain.p_value if t.plain else None,
-                 "plain_share": t.plain.share if t.plain else None,
-                 "high_p": t.high.p_value if t.high else None,
-                 "high_share": t.high.explained if t.high else None}
-            for ch, t in before.channels.items()}}
+            ch: window_figures(t) for ch, t in before.channels.items()}}
         found = ranker.evaluate_linkage(linkage("backlash", surface))
         row[tag]["backlash_candidate"] = None if found is None else figures(ranker, found)
     return row
@@ -212,15 +205,34 @@ def ranking_row(case, truth, labels: list[str]) -> dict:
     return out
 
 
+def window_figures(t) -> dict:
+    """One channel's window test: p-values and shares of the main, plain (without the other
+    outputs' residuals) and high-band tests."""
+    return {"p": t.p_value, "share": t.share,
+            "plain_p": t.plain.p_value if t.plain else None,
+            "plain_share": t.plain.share if t.plain else None,
+            "high_p": t.high.p_value if t.high else None,
+            "high_share": t.high.explained if t.high else None}
+
+
 def tests_of(before) -> dict:
-    """The window test's figures per channel: p-values and shares of the main, plain
-    (without the other outputs' residuals) and high-band tests, and the gap above null."""
-    return {ch: {"p": t.p_value, "share": t.share, "above_null": t.level, "gap": t.gap,
-                 "plain_p": t.plain.p_value if t.plain else None,
-                 "plain_share": t.plain.share if t.plain else None,
-                 "high_p": t.high.p_value if t.high else None,
-                 "high_share": t.high.explained if t.high else None}
+    """The window test's figures per channel (``window_figures``) and the gap above null."""
+    return {ch: {**window_figures(t), "above_null": t.level, "gap": t.gap}
             for ch, t in before.channels.items()}
+
+
+def effect_and_gust(ch: str, calm, plain_calm, plain_light) -> tuple[np.ndarray, np.ndarray]:
+    """A channel's effect signal (the case in calm air less the plain aircraft in calm air)
+    and light turbulence's (the plain aircraft in light turbulence less calm air)."""
+    d = np.asarray(calm[ch]) - np.interp(calm.time, plain_calm.time, plain_calm[ch])
+    gust = (np.asarray(plain_light[ch])
+            - np.interp(plain_light.time, plain_calm.time, plain_calm[ch]))
+    return d, gust
+
+
+def visibility(d: np.ndarray, gust: np.ndarray) -> float:
+    """The effect's energy over turbulence's, each about its mean."""
+    return float(np.sum((d - d.mean()) ** 2) / np.sum((gust - gust.mean()) ** 2))
 
 
 def detect_row(case, truth) -> dict:
@@ -234,11 +246,7 @@ def detect_row(case, truth) -> dict:
     row = {"index": case.index, "aircraft": case.aircraft, "label": e.label, "axis": axis,
            "visibility": {}, "with_effect": tests_of(before), "without": tests_of(without)}
     for ch in before.channels:
-        d = np.asarray(calm[ch]) - np.interp(calm.time, plain_calm.time, plain_calm[ch])
-        gust = (np.asarray(plain_light[ch])
-                - np.interp(plain_light.time, plain_calm.time, plain_calm[ch]))
-        row["visibility"][ch] = float(np.sum((d - d.mean()) ** 2)
-                                      / np.sum((gust - gust.mean()) ** 2))
+        row["visibility"][ch] = visibility(*effect_and_gust(ch, calm, plain_calm, plain_light))
     want = e.label.split(" ")[0]
     cands = catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces)
     found = next((c for c in cands if c.label == want), None)
