@@ -34,6 +34,7 @@ from threadpoolctl import threadpool_limits
 from flightid.scenarios.gap_benchmark import cases as drawn
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, KINDS, Case, _effect
 from flightid.scenarios.gap_benchmark.run import fly_case, truths
+from gap_leads import ranker_of
 
 OUTPUTS = {"lateral": ("beta", "p", "r", "ay"), "longitudinal": ("alpha", "q", "az")}
 
@@ -50,6 +51,21 @@ def visibility(case: Case, axis: str, calm, light, truth) -> float:
     ratios = [energy(rec, calm, c) / energy(light, calm, c) for c in OUTPUTS[axis]
               if c in rec and c in calm]
     return float(np.mean(ratios))
+
+
+def test_shares(record, aircraft: str, axis: str) -> dict[str, float]:
+    """The main window test's share per tested channel of ``axis`` (input-explained energy
+    less chance, over the measured energy; ``verdict.ChannelTest.share``) on ``record``,
+    as the diagnosis's null test computes it; the slow channels (high band only) left out."""
+    _, before, _, _ = ranker_of(record, aircraft, axis)
+    return {ch: float(t.share) for ch, t in before.channels.items() if not t.slow}
+
+
+def share_added(case: Case, axis: str, plain: dict[str, float], truth) -> float:
+    """The largest share the effect adds over the plain flight's on a tested channel of
+    ``axis``, both in light turbulence with the same seed."""
+    shares = test_shares(fly_case(case, "light", truth), case.aircraft, axis)
+    return max(v - plain.get(ch, 0.0) for ch, v in shares.items())
 
 
 def turbulence_share(calm, light) -> dict[str, dict[str, float]]:
@@ -69,6 +85,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--unsized", action="store_true",
                     help="the bases before sizing by visibility (cases.VISIBILITY emptied)")
+    ap.add_argument("--test-share", action="store_true",
+                    help="the window test's share the effect adds (light turbulence), "
+                         "not the energy over turbulence's")
     ap.add_argument("--shares", action="store_true",
                     help="only the plain aircraft's turbulence share of the measured energy")
     ap.add_argument("-o", "--output", type=Path, required=True)
@@ -84,6 +103,8 @@ def main() -> None:
         for name in AIRCRAFT:
             plain = Case(0, a.seed, name, "null")
             calm, light = fly_case(plain, "calm", t[name]), fly_case(plain, "light", t[name])
+            plain_shares = {ax: test_shares(light, name, ax) for ax in OUTPUTS} \
+                if a.test_share else {}
             if a.shares:
                 f.write(json.dumps({"aircraft": name, "seed": a.seed,
                                     "turbulence_share": turbulence_share(calm, light)}) + "\n")
@@ -109,7 +130,9 @@ def main() -> None:
                             else (kind.axis,)
                         t0 = time.process_time()
                         try:
-                            vis = {ax: visibility(case, ax, calm, light, t[name]) for ax in axes}
+                            vis = {ax: share_added(case, ax, plain_shares[ax], t[name])
+                                   if a.test_share else
+                                   visibility(case, ax, calm, light, t[name]) for ax in axes}
                         except Exception as exc:  # noqa: BLE001  (a departure: listed)
                             vis = {"error": f"{type(exc).__name__}: {exc}"}
                         f.write(json.dumps({"aircraft": name, "kind": kind.name,

@@ -6,10 +6,10 @@ elevator doublet and a 3211 (``SCHEDULE``, 64 s at 50 Hz), so both axes have two
 that can be held out; the research sensor suite with the vane-position and accelerometer
 lever-arm effects dropped (air data and accelerations corrected to the CG, as after a
 compatibility check: the diagnosis's models do not carry them); light turbulence by
-default. The record's surface channels hold the commands (``commands``): the positions of
-the plain aircraft's surfaces (the flight core maps commands statically), ahead of an
-actuator lag or rate limit; its mass-property channels hold the plain aircraft's values
-(the weight-and-balance sheet's), whatever mass, inertia or CG was injected.
+default. On a case with an actuator lag or rate limit the record's surface channels hold the
+commands (``commands``: the trim plus the designed inputs, ahead of every actuator); its
+mass-property channels hold the plain aircraft's values (the weight-and-balance sheet's),
+whatever mass, inertia or CG was injected.
 
 The diagnosis (``identification.gap.diagnose``, both axes) sees the blinded record
 (``blind``: what was injected removed from its metadata) and the plain aircraft's name.
@@ -45,6 +45,7 @@ from flightid.scenarios.gap_benchmark.cases import (
 )
 from flightid.scenarios.gap_benchmark.outside_catalogue import RECORD, cm_alpha_break
 from flightid.scenarios.gap_benchmark.scoring import CaseResult, score
+from flightid.scenarios.inputs import inputs_from_list, total_signals
 from flightid.sim.effects.catalogue import CATALOGUE
 from flightid.sim.jsbsim.condition import FlightCondition
 from flightid.sim.jsbsim.model import load
@@ -173,42 +174,33 @@ def truths(aircraft: tuple[str, ...] = tuple(AIRCRAFT)) -> dict[str, dict[str, f
     return out
 
 
-def commands(measured: FlightRecord, truth: FlightRecord, plain: FlightRecord | None,
-             flown: Card) -> FlightRecord:
-    """``measured`` as is (surface positions, as a research aircraft's recorder has them)
-    without ``plain``. With ``plain`` (the truth of the same card on the plain aircraft;
-    the cases with an effect behind the surface position, ``BEHIND_POSITION``): marked as
-    holding the surface commands (``SURFACES_META``), each surface channel the plain
-    aircraft's positions (trim plus the plain flight's increments) measured by the card's
-    sensors with the same seed: what an actuator lag or rate limit hides from the
-    positions. Only those cases are command records: a command record of the plain
-    aircraft has its own actuators' rate limit between command and position (40 deg/s on
-    the Twin Otter, reached by every doublet), which the linear model does not carry, so
-    null flights recorded as commands are not at the null level (measured: every channel
-    of a Twin Otter null flight above it).
+def commands(measured: FlightRecord, truth: FlightRecord, flown: Card) -> FlightRecord:
+    """``measured`` marked as holding the surface commands (``SURFACES_META``), each surface
+    channel the command (the trim position plus the card's designed inputs, as the flight
+    core writes it ahead of the aircraft's own actuators) measured by the card's sensors
+    with the same seed: what an actuator lag or rate limit hides from the positions. The
+    diagnosis runs a command record through the plain aircraft's own actuators
+    (``identification.gap.model.surfaces.actuated``), so the injected lag or rate limit is
+    what the model lacks.
 
     Parameters
     ----------
     measured : FlightRecord
         The measured record of the flight.
     truth : FlightRecord
-        Its truth record.
-    plain : FlightRecord or None
-        Truth of the same card on the plain aircraft, or None.
+        Its truth record (the trim positions and the designed inputs).
     flown : Card
         The flown card (its sensors and seed).
 
     Returns
     -------
     FlightRecord
-        ``measured``, or the command record.
+        The command record.
     """
-    if plain is None:
-        return measured
-    surfaces = [s for s in CONTROL_SURFACES if s in measured and s in truth and s in plain]
+    designed = total_signals(inputs_from_list(truth.meta.extra["inputs"]), truth.time)
+    surfaces = [s for s in CONTROL_SURFACES if s in measured and s in truth]
     commanded = truth.with_channels(**{
-        s: truth[s][0] + np.interp(truth.time, plain.time, plain[s] - plain[s][0])
-        for s in surfaces})
+        s: truth[s][0] + designed.get(s, np.zeros_like(truth.time)) for s in surfaces})
     again = measure(commanded, flown.sensors, sub_seed(flown.seed, "sensors"))
     out = measured.with_channels(**{s: again[s] for s in surfaces})
     out.meta = replace(out.meta, extra={**out.meta.extra, SURFACES_META[0]: SURFACES_META[1]})
@@ -286,12 +278,12 @@ def fly_case(case: Case, turbulence: str = "light",
                                  e.magnitude["delta"], AUGMENT_CACHE)
     flown = card(case.aircraft, case.seed, effects, turbulence, mounting, disturbances, xml)
     measured, truth_record = fly_card(flown)
-    plain = None
-    if any(e.entry in (*BEHIND_POSITION, *MASS_EFFECTS) for e in case.effects):
+    record = measured
+    if any(e.entry in BEHIND_POSITION for e in case.effects):
+        record = commands(measured, truth_record, flown)
+    if any(e.entry in MASS_EFFECTS for e in case.effects):
+        # the weight-and-balance sheet's values: the plain aircraft's
         plain = fly_card(card(case.aircraft, case.seed, turbulence="calm"))[1]
-    record = commands(measured, truth_record, plain if any(
-        e.entry in BEHIND_POSITION for e in case.effects) else None, flown)
-    if plain is not None:  # the weight-and-balance sheet's values: the plain aircraft's
         record = record.with_channels(**{
             c: np.interp(record.time, plain.time, plain[c]) for c in MASS_CHANNELS
             if c in record and c in plain})

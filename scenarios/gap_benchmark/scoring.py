@@ -69,7 +69,8 @@ def _label(r: Ranked) -> str:
 
 def _relative_error(effect: Effect, r: Ranked) -> float:
     """Mean over the injected (sized) parameters of |estimate - injected| / |injected -
-    neutral|; nan when the diagnosis gives none of them."""
+    neutral| (|injected| for a neutral at infinity: a rate limit's); nan when the diagnosis
+    gives none of them."""
     errors = []
     for name, injected in effect.magnitude.items():
         est = (r.parameters or {}).get(name)
@@ -77,7 +78,9 @@ def _relative_error(effect: Effect, r: Ranked) -> float:
             continue
         neutral = CATALOGUE[effect.entry].parameter(name).zero
         value = float(est["value"]) if isinstance(est, dict) else float(est)
-        if injected != neutral:
+        if not math.isfinite(neutral):
+            errors.append(abs(value - injected) / abs(injected))
+        elif injected != neutral:
             errors.append(abs(value - injected) / abs(injected - neutral))
     return float(np.mean(errors)) if errors else math.nan
 

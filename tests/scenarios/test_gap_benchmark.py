@@ -19,6 +19,7 @@ from flightid.cli.app import app
 from flightid.cli.gap_benchmark import COLUMNS, kind_table
 from flightid.identification.gap.candidates.build import Candidate, pair
 from flightid.identification.gap.candidates.ranges import INERTIAL, INERTIAL_SCALE
+from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.ranked import Ranked
 from flightid.scenarios.gap_benchmark import (
     KINDS,
@@ -280,9 +281,12 @@ def test_classes_accept_what_the_data_cannot_tell_apart():
 
 def test_blinded_record_shows_commands_and_the_sheet_not_the_effect():
     """The record the diagnosis sees names the plain aircraft and keeps no trace of what
-    was injected; an actuator lag leaves its surface channel holding the command (the
-    plain flight's surface, to the quantization), an Izz scale leaves the Izz channel at
-    the weight-and-balance sheet's value, while both change the flight."""
+    was injected; an actuator lag leaves its surface channels holding the commands (run
+    through the plain Navion's own actuators, 0.05 s and 60 deg/s, they give the plain
+    flight's positions: measured rms 0.048 deg on the 8 deg aileron doublets, against
+    0.35 deg as recorded, the actuators' lag; the residue is the rate limit acting after
+    the recorder's anti-alias filter rather than before it), an Izz scale leaves the Izz
+    channel at the weight-and-balance sheet's value, while both change the flight."""
     plain = fly_case(Case(NULL_INDEX, 3, "navion", NULL), "calm")
     lag = fly_case(Case(0, 3, "navion", SINGLE, (Effect(
         "actuator_lag", "lateral", "card", {"surface": "da"}, {"tau": 0.1}),)), "calm")
@@ -293,8 +297,11 @@ def test_blinded_record_shows_commands_and_the_sheet_not_the_effect():
         assert set(rec.meta.extra) <= set(KEPT)
         assert "effect" not in rec.meta.scenario["card"]
     assert lag.meta.extra["surfaces"] == "command" and "surfaces" not in izz.meta.extra
-    quantum = 0.005 * np.pi / 180  # the research suite's aileron quantization
-    assert np.max(np.abs(lag["da"] - plain["da"])) <= 2 * quantum
+    rms = lambda x: float(np.sqrt(np.mean(x ** 2)))  # noqa: E731
+    through = actuated([lag], "navion")[0]
+    for s in ("da", "dr", "de"):
+        assert rms(through[s] - plain[s]) < 0.2 * rms(lag[s] - plain[s]), s
+    assert rms(through["da"] - plain["da"]) < np.radians(0.1)
     assert np.max(np.abs(lag["p"] - plain["p"])) > 0.01  # rad/s: the lag is flown
     assert np.array_equal(izz["Izz"], plain["Izz"])
     assert np.max(np.abs(izz["r"] - plain["r"])) > 0.005
