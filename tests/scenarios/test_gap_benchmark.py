@@ -31,9 +31,11 @@ from flightid.scenarios.gap_benchmark import (
     draw,
     fly_case,
     run_case,
+    scoring,
     summary,
 )
 from flightid.scenarios.gap_benchmark.cases import (
+    AIM,
     AIRCRAFT,
     CG_CHORDS,
     DELTA_FRACTION,
@@ -49,11 +51,9 @@ from flightid.scenarios.gap_benchmark.cases import (
     SINGLE,
     SIZE_CAP,
     SIZED_BASE,
-    SPREAD,
     STABLE_SIGN,
     THRUST_ARM_M,
     VISIBILITY,
-    VISIBLE_FRACTION,
     size_multiple,
 )
 from flightid.scenarios.gap_benchmark.run import KEPT, truths
@@ -173,19 +173,22 @@ RESIZED_RANGE = {"x": (0.025, 0.15), "factor": (0.0, 0.5), "width": (0.0, 1.5 * 
 
 
 def test_sizing_by_visibility_reaches_the_fraction_inside_the_physical_ranges(big):
-    """Each row under 1.5 times the fraction is enlarged by sqrt(1.5 fraction / visibility)
-    (the energy of a small effect grows as its size squared), unless its physical cap
-    binds; its draws stay inside that cap and the catalogue's range."""
+    """Each row whose smallest draw would add less than the window test's ``MATERIAL``
+    share is enlarged by sqrt(AIM / share) (a small effect's share grows as its size
+    squared; AIM = MATERIAL / 0.5^2), unless its physical cap binds; its draws stay inside
+    that cap and the catalogue's range."""
     for kind, per_aircraft in VISIBILITY.items():
         entry = kind.split("/")[0]
         for aircraft, v in per_aircraft.items():
             m = size_multiple(kind, aircraft)
             assert 1.0 < m <= SIZE_CAP[entry]
-            assert m * m * v == pytest.approx(SPREAD * VISIBLE_FRACTION) \
+            assert m * m * v == pytest.approx(AIM) \
                 or m == SIZE_CAP[entry]
     assert size_multiple("rate_limit/lateral", "navion") == 1.0
-    assert size_multiple("tail_ice/longitudinal", "twinotter") == pytest.approx(
-        math.sqrt(1.5 * 0.02 / 0.0097))
+    assert AIM == pytest.approx(0.08)
+    assert size_multiple("cg_offset/longitudinal", "navion") == pytest.approx(
+        math.sqrt(0.08 / 0.059))
+    assert size_multiple("tail_ice/longitudinal", "twinotter") == SIZE_CAP["tail_ice"]
     seen = Counter()
     for c in big:
         for e in c.effects:
@@ -430,3 +433,16 @@ def test_kind_table_headings_whole_with_every_kind(flown):
     assert "…" not in text
     header = next(line for line in text.splitlines() if line.split()[:1] == ["kind"])
     assert header.split() == ["kind", "n", *(head for head, _ in COLUMNS)]
+
+
+def test_magnitude_error_of_a_rate_limit_is_against_the_injected_rate():
+    """A rate limit's neutral is at infinity: its error is |fitted - injected| / injected
+    (0.33 rad/s fitted for 0.30 injected: 10 %), not the 0 that measuring from the
+    neutral would give; a factor's is measured from its neutral 1 (0.75 for 0.8: 25 %)."""
+    limit = Effect("rate_limit", "lateral", "card", {"surface": "da"}, {"rate": 0.30})
+    fitted = _named("rate_limit", {"surface": "da"}, {"rate": {"value": 0.33}})
+    assert scoring._relative_error(limit, fitted) == pytest.approx(0.1)
+    factor = Effect("control_effectiveness", "lateral", "card", {"surface": "da"},
+                    {"factor": 0.8})
+    fitted = _named("control_effectiveness", {"surface": "da"}, {"factor": 0.75})
+    assert scoring._relative_error(factor, fitted) == pytest.approx(0.25)
