@@ -37,6 +37,7 @@ from flightid.identification.gap.fit import fit
 from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
 from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
+from flightid.identification.gap.lines import Line, spectral_line, with_line
 from flightid.identification.gap.model.linearise import Linearised, linearise
 from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.nonlinearity import (
@@ -114,6 +115,7 @@ class GapResult:
     # the nonlinear-structure test of the model as is (``nonlinearity``): structure the
     # linear test and the catalogue cannot express; when found, the axis is not explained
     structure: NonlinearTest | None = None
+    line: Line | None = None  # the spectral-line check (``lines``): engine vibration
 
     @property
     def trim_named(self) -> list[TrimOffset]:
@@ -212,6 +214,7 @@ class GapResult:
                 "null_before": self.null_before.to_json() if self.null_before else None,
                 "null_after": self.null_after.to_json() if self.null_after else None,
                 "structure": self.structure.to_json() if self.structure else None,
+                "line": self.line.to_json() if self.line else None,
                 "named": [r.candidate.label for r in self.named]}
 
     def axes(self) -> dict[str, GapResult]:
@@ -312,9 +315,10 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         axes = [axis]
     else:
         raise ValueError(f"gap: axis must be both, {', '.join(AXIS_NAMES)}; got {axis!r}")
-    results = {a: _with_trim(_diagnose_axis(a, records, aircraft, validate, names,
-                                            validate_names, try_pairs, steps, surfaces),
-                             [o for o in offsets if o.axis == a], trim_note) for a in axes}
+    results = {a: with_line(_with_trim(_diagnose_axis(
+        a, records, aircraft, validate, names, validate_names, try_pairs, steps, surfaces),
+        [o for o in offsets if o.axis == a], trim_note), spectral_line(records, a))
+        for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     result.undiagnosed = {
         a: (f"not asked for (--axis {axis})" if a in excited else

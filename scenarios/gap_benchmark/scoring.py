@@ -160,7 +160,8 @@ def score(case: Case, result: GapResult) -> CaseResult:
     """
     per_axis = {a: g for a in AXES if (g := axis_result(result, a)) is not None}
     out = CaseResult(case, {a: verdict(g) for a, g in per_axis.items()},
-                     {a: [_label(r) for r in g.named] for a, g in per_axis.items()})
+                     {a: [_label(r) for r in g.named] + ([g.line.label] if _line(g) else [])
+                      for a, g in per_axis.items()})
     out.trim = {a: {o.label: f"{o.entry}({o.channel}) {o.value:+.5f} +- {o.bound:.5f}"
                     for o in g.trim if o.named} for a, g in per_axis.items()}
     if case.category == NULL:
@@ -169,7 +170,7 @@ def score(case: Case, result: GapResult) -> CaseResult:
         out.all_named = all(
             any(classes.same(e, p) for a in _effect_axes(e) if a in per_axis
                 for r in per_axis[a].named for p in (_parts(r) if r.candidate.parts else [r]))
-            or _at_trim(e, per_axis) is not None
+            or _at_trim(e, per_axis) is not None or _at_line(e, per_axis)
             for e in case.effects)
     elif case.category != OUT:
         e = case.effects[0]
@@ -181,6 +182,8 @@ def score(case: Case, result: GapResult) -> CaseResult:
         exact = [r for r in firsts if classes.exact(e, r)]
         if exact:
             out.magnitude_error = _relative_error(e, exact[0])
+        elif _at_line(e, per_axis):  # its amplitude is seen after the anti-alias filter
+            out.right = out.listed = True
         elif (offset := _at_trim(e, per_axis)) is not None:
             out.right = out.listed = True
             if offset.entry == e.entry and e.magnitude.get(offset.parameter):
@@ -201,6 +204,17 @@ def _at_trim(effect: Effect, per_axis: dict[str, GapResult]) -> TrimOffset | Non
     names = classes.classes_of(effect)
     return next((o for a in _effect_axes(effect) if a in per_axis
                  for o in per_axis[a].trim if o.named and o.label in names), None)
+
+
+def _line(g: GapResult) -> bool:
+    return g.line is not None and g.line.named
+
+
+def _at_line(effect: Effect, per_axis: dict[str, GapResult]) -> bool:
+    """A spectral line (``identification.gap.lines``) named on ``effect``'s axes as its
+    entry."""
+    return any(_line(per_axis[a]) and per_axis[a].line.entry == effect.entry
+               for a in _effect_axes(effect) if a in per_axis)
 
 
 def _parts(r: Ranked) -> list[Any]:

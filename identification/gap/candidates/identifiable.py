@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from flightid.identification.gap.candidates.build import catalogue_candidates
+from flightid.identification.gap.lines import ENTRY as LINE_ENTRY
 from flightid.identification.gap.model.surfaces import SURFACES_KEY, surfaces_of
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
@@ -18,6 +19,8 @@ COMMANDS = (f"a record of the commands (meta.extra[{SURFACES_KEY!r}] = 'command'
             "surfaces='command' option) makes it identifiable")
 BIAS = ("a constant offset is absorbed by the model's output and state biases (trim "
         "offsets, fitted on every window)")
+# the IMU channels the spectral-line check (gap.lines) reads on either axis
+LINE_CHANNELS = ("ax", "ay", "az", "p", "q", "r")
 # the entries that are never candidates of the linear screening, and why
 ALWAYS: dict[str, str] = {
     "noise": "white noise is no model error: it is the null level the gap is tested "
@@ -40,10 +43,6 @@ ALWAYS: dict[str, str] = {
     "lowpass": "in the rigid-body band a low-pass filter is a delay of its group delay: "
                "the delay or lag candidate of the channel stands for it",
     "sample": "sampling and aliasing act above the rigid-body band the linear model fits",
-    "engine_vibration": "narrowband lines at the engine and blade-passing frequencies "
-                        "(tens of Hz) lie above the rigid-body band the linear model "
-                        "fits; the gap map's highest frequency band carries them. A "
-                        "model of the lines from the rpm would make it identifiable",
     "wind": "a steady wind leaves the air-relative motion unchanged; the ground-relative "
             "velocities (GPS) against the airspeed would make it identifiable",
     "gust": "a discrete gust is an unmeasured input in one time span (the gap map's "
@@ -94,6 +93,10 @@ def _reason(name: str, model: LinearModel, surfaces: str) -> str:
             return ("the record's surfaces are positions: the actuator has already acted "
                     "on what was recorded; " + COMMANDS)
         return "the model has no surface input"
+    if name == LINE_ENTRY:
+        return (f"needs the IMU channels {', '.join(LINE_CHANNELS)} (gap.lines: a "
+                "narrowband line on them, above the rigid-body band); a record with "
+                "them makes it identifiable")
     if name == "derivative_table":
         return TABLE
     if name == "tail_ice":
@@ -136,6 +139,8 @@ def not_identifiable(model: LinearModel, records: Sequence[FlightRecord] = (), *
     """
     kind = surfaces_of(records, surfaces)
     found = {c.entry for c in catalogue_candidates(model, surfaces=kind)}
+    if any(all(c in r for c in LINE_CHANNELS) for r in records):  # the line check runs
+        found.add(LINE_ENTRY)
     out = {name: _reason(name, model, kind) for name in CATALOGUE if name not in found}
     out.update({f"misalignment({axis})": why for axis, why in MISALIGNMENT.items()})
     return out

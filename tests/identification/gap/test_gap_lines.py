@@ -1,0 +1,92 @@
+"""The spectral-line check of the gap diagnosis (identification/gap/lines.py): engine
+vibration named from a narrowband line on the IMU channels, a null flight and a
+structural mode not.
+
+JSBSim flights of the blind check's card (``scenarios.gap_benchmark.run``: 64 s at 50 Hz,
+research sensors with 4-pole 10 Hz anti-alias filters, light turbulence) on seeds the
+development of the thresholds did not use (it flew seeds 0 and 10). The c172p's engine
+turns at 2090-2150 rpm (35 Hz), above the 25 Hz Nyquist frequency: its line shows at the
+alias |f - 50 Hz| near 14.6 Hz."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from flightid.identification.gap import diagnose
+from flightid.identification.gap.lines import SHARE, spectral_line
+from flightid.scenarios.cards import fly_card
+from flightid.scenarios.gap_benchmark.cases import NULL, NULL_INDEX, SINGLE, Case, Effect
+from flightid.scenarios.gap_benchmark.outside_catalogue import structural_mode
+from flightid.scenarios.gap_benchmark.run import card, fly_case
+from flightid.scenarios.gap_benchmark.scoring import score
+
+RATE = 50.0
+# the injected amplitudes: half the blind check's smallest c172p draw (m/s^2, rad/s)
+VIBRATION = {"ax": 2.0, "ay": 2.0, "az": 3.0, "p": 0.035, "q": 0.035, "r": 0.0175}
+BIN_HZ = 1 / 5.12  # the check's segments: 256 samples at 50 Hz
+
+
+@pytest.fixture(scope="module")
+def vibrated():
+    """(measured, truth) of a c172p flight with the engine vibration on the IMU."""
+    return fly_card(card("c172p", 43, disturbances=[
+        {"kind": "engine_vibration", **VIBRATION}]))
+
+
+def _alias(f: np.ndarray) -> np.ndarray:
+    return np.abs(f - np.round(f / RATE) * RATE)
+
+
+def test_engine_line_named_at_its_alias_with_its_filtered_amplitude(vibrated):
+    measured, truth = vibrated
+    for axis in ("lateral", "longitudinal"):
+        line = spectral_line([measured], axis)
+        assert line is not None and line.named, line
+        # the rotation line at its alias: the rpm drifts 2.5 % with the airspeed over the
+        # maneuvers, so the segments' median peak lies within two bins of the median alias
+        rotation = truth["rpm"] / 60.0
+        assert abs(line.frequency_hz - float(np.median(_alias(rotation)))) <= 2 * BIN_HZ
+        assert any(abs(a - float(np.median(rotation))) < 2 * BIN_HZ for a in line.aliases())
+        # the amplitude as seen: the injected one through the 4-pole Butterworth at the
+        # true frequency; within 25 %: the Hann window's scallop loss (up to 15 %) and the
+        # line's drift within a segment spread it
+        b, a = signal.butter(4, 2 * np.pi * 10.0, analog=True)
+        _, h = signal.freqs(b, a, worN=[2 * np.pi * float(np.median(rotation))])
+        for ch, amp in line.amplitudes.items():
+            assert amp == pytest.approx(VIBRATION[ch] * abs(h[0]), rel=0.25), ch
+
+
+def test_engine_vibration_named_in_the_diagnosis_and_scored_right():
+    effect = Effect("engine_vibration", "both", "disturbance", {}, VIBRATION)
+    case = Case(0, 43, "c172p", SINGLE, (effect,))
+    result = diagnose([fly_case(case)], "c172p", try_pairs=False, steps=1)
+    for axis, g in result.axes().items():
+        assert g.line is not None and g.line.named, axis
+        assert g.verdict != "no_gap"
+        assert g.axis_json()["line"]["entry"] == "engine_vibration"
+    scored = score(case, result)
+    assert scored.right is True
+    assert all("engine_vibration()" in n for n in scored.named.values())
+
+
+@pytest.fixture(scope="module")
+def null_record():
+    return fly_case(Case(NULL_INDEX, 44, "c172p", NULL))
+
+
+def test_null_flight_names_no_line(null_record):
+    for axis in ("lateral", "longitudinal"):
+        line = spectral_line([null_record], axis)
+        # 0-38 % of segments above the threshold on the development's null flights
+        assert line is not None and not line.named
+        assert line.share < SHARE / 2
+
+
+@pytest.mark.parametrize(("axis", "frequency_hz"), [("lateral", 5.5), ("longitudinal", 4.4)])
+def test_structural_mode_is_not_named_engine_vibration(null_record, axis, frequency_hz):
+    # the blind check's structural mode: light damping, ringing after each surface step
+    record = structural_mode(null_record, frequency_hz, 0.03, 0.9, axis=axis)
+    line = spectral_line([record], axis)
+    assert line is not None and not line.named
