@@ -237,6 +237,10 @@ def _print_axis(console: Console, axis: str, g: GapResult) -> None:
             console.print(f"named at trim level: {o.text()}")
     if g.trim_note:
         console.print(f"trim-level check: {g.trim_note}")
+    if g.line is not None and g.line.named:
+        console.print(f"named from a spectral line: {g.line.text()}")
+    elif g.line is not None and g.line.resonance:
+        console.print(f"structure outside the catalogue: {g.line.resonance_text()}")
     if g.verdict == "no_gap" or not g.named and (not g.null_before or not g.null_before.gap):
         return
     named = {r.candidate.label: k for k, r in enumerate(g.named, start=1)}

@@ -151,7 +151,8 @@ def html_report(result: GapResult, records: Records | None = None,
     verdicts = "".join(
         f"<tr><td>{a}</td><td><b>{html.escape(g.verdict)}</b></td><td>"
         f"{html.escape(g.evidence)}</td><td>"
-        + html.escape(", ".join(_with_alternatives(r) for r in g.named) or "-") + "</td></tr>"
+        + html.escape(", ".join([*(_with_alternatives(r) for r in g.named), *_line(g)])
+                      or "-") + "</td></tr>"
         for a, g in result.axes().items())
     verdicts += "".join(f"<tr><td>{a}</td><td>not diagnosed</td><td colspan=2>"
                         f"{html.escape(why)}</td></tr>" for a, why in result.undiagnosed.items())
@@ -269,3 +270,12 @@ def _with_alternatives(r: Ranked) -> str:
         return r.candidate.label
     return (f"{r.candidate.label} (not told apart from "
             + ", ".join(a.candidate.label for a in r.alternatives) + ")")
+
+
+def _line(g: GapResult) -> list[str]:
+    """The spectral-line check's finding on one axis (``gap.lines``), as text."""
+    if g.line is not None and g.line.named:
+        return [g.line.text()]
+    if g.line is not None and g.line.resonance:
+        return [g.line.resonance_text()]
+    return []

@@ -15,7 +15,7 @@ import pytest
 from scipy import signal
 
 from flightid.identification.gap import diagnose
-from flightid.identification.gap.lines import SHARE, spectral_line
+from flightid.identification.gap.lines import RESONANCE, spectral_line
 from flightid.scenarios.cards import fly_card
 from flightid.scenarios.gap_benchmark.cases import NULL, NULL_INDEX, SINGLE, Case, Effect
 from flightid.scenarios.gap_benchmark.outside_catalogue import structural_mode
@@ -79,14 +79,22 @@ def null_record():
 def test_null_flight_names_no_line(null_record):
     for axis in ("lateral", "longitudinal"):
         line = spectral_line([null_record], axis)
-        # 0-38 % of segments above the threshold on the development's null flights
-        assert line is not None and not line.named
-        assert line.share < SHARE / 2
+        # the development's 200 null flights: a peak near a common frequency in at most 2
+        # of 24 segments per axis
+        assert line is not None and not line.named and not line.resonance
+        assert line.found < RESONANCE
 
 
-@pytest.mark.parametrize(("axis", "frequency_hz"), [("lateral", 5.5), ("longitudinal", 4.4)])
-def test_structural_mode_is_not_named_engine_vibration(null_record, axis, frequency_hz):
-    # the blind check's structural mode: light damping, ringing after each surface step
+@pytest.mark.parametrize(("axis", "frequency_hz", "rung"),
+                         [("lateral", 5.5, True), ("longitudinal", 4.4, False)])
+def test_structural_mode_is_not_named_engine_vibration(null_record, axis, frequency_hz, rung):
+    # the blind check's structural mode: light damping, ringing after each surface step.
+    # Laterally it rings after the aileron and rudder steps (4 maneuvers over 40 s): found
+    # near 5.5 Hz in about half the segments, a resonance; the elevator's two maneuvers in
+    # the last 22 s ring in fewer segments than the resonance needs
     record = structural_mode(null_record, frequency_hz, 0.03, 0.9, axis=axis)
     line = spectral_line([record], axis)
     assert line is not None and not line.named
+    assert line.resonance is rung
+    if rung:
+        assert abs(line.frequency_hz - frequency_hz) <= 2 * BIN_HZ
