@@ -27,6 +27,9 @@ flow angle (``FLOW_ANGLES``: it follows the gusts) is not checked on such a span
 Telemaster's 2 s sideslip segment put null flights at 4.2 sigma with n_eff, at 5.7 sigma
 and 3 deg with one sample).
 
+The kinematic check (``imu_pitch_offset``: the accelerometers' pitch against the measured
+attitude, whole records, no trim) names an IMU pitch misalignment or an a_x bias.
+
 A difference is named when |d| > ``Z`` sigma (two-sided p = 1e-3) and
 |d| >= ``MATERIAL``, as its equivalence class (``CHECKED``: the offset and the model's
 zero term are one constant to a record at one condition), with its value in catalogue
@@ -70,7 +73,20 @@ CHECKED: dict[str, tuple[str, str, str, str, str]] = {
     "da": ("lateral", "aileron", "actuator_bias", "bias", "aileron bias or Cl_0 mismatch"),
     "dr": ("lateral", "rudder", "actuator_bias", "bias", "rudder bias or Cn_0 mismatch"),
 }
-CLASSES = tuple(v[4] for v in CHECKED.values())
+# the kinematic check (no trim): channel -> (axis, the entry, its parameter, the class)
+KINEMATIC: dict[str, tuple[str, str, str, str]] = {
+    "ax": ("longitudinal", "misalignment", "angle", "ax bias or IMU pitch misalignment"),
+}
+CLASSES = tuple(v[4] for v in CHECKED.values()) + tuple(v[3] for v in KINEMATIC.values())
+G = 9.80665  # m/s^2
+# the kinematic check's test: the batch-means sigma overstates the spread of d on null
+# flights 2.5-5 times (40 null flights of the blind check's seed 0, light turbulence:
+# std of d 0.11-0.32 deg per aircraft against a median sigma of 0.18-0.81 deg; the
+# maneuvers' kinematic residue is locked to them, not random), so materiality carries the
+# false-alarm control: null |d| at most 0.80 deg on those 40 flights
+KINEMATIC_Z = 1.5
+KINEMATIC_MATERIAL = math.radians(1.0)
+SMOOTH_S = 1.0  # s: the moving mean under the du/dt of the kinematic check
 
 
 @dataclass(frozen=True)
@@ -91,33 +107,38 @@ class TrimOffset:
 
     @property
     def entry(self) -> str:
-        return CHECKED[self.channel][2]
+        return KINEMATIC[self.channel][1] if self.kinematic else CHECKED[self.channel][2]
 
     @property
     def parameter(self) -> str:
-        return CHECKED[self.channel][3]
+        return KINEMATIC[self.channel][2] if self.kinematic else CHECKED[self.channel][3]
 
     @property
     def label(self) -> str:
         """The equivalence class it is named as."""
-        return CHECKED[self.channel][4]
+        return KINEMATIC[self.channel][3] if self.kinematic else CHECKED[self.channel][4]
+
+    @property
+    def kinematic(self) -> bool:
+        """A check of the record's own kinematics (``imu_pitch_offset``), not of a trim."""
+        return self.channel in KINEMATIC
 
     @property
     def value(self) -> float:
         """The catalogue entry's parameter (rad): a sensor bias is measured minus true, an
         actuator bias aerodynamic minus measured."""
-        return self.difference if self.entry == "bias" else -self.difference
+        return self.difference if self.entry in ("bias", "misalignment") else -self.difference
 
     @property
     def bound(self) -> float:
-        """``Z`` sigma (rad)."""
-        return Z * self.sigma
+        """``Z`` sigma (rad; ``KINEMATIC_Z`` sigma for a kinematic check)."""
+        return (KINEMATIC_Z if self.kinematic else Z) * self.sigma
 
     @property
     def named(self) -> bool:
         """Significant and material."""
         d = abs(self.difference)
-        return d > self.bound and d >= MATERIAL
+        return d > self.bound and d >= (KINEMATIC_MATERIAL if self.kinematic else MATERIAL)
 
     def text(self) -> str:
         return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
@@ -214,10 +235,55 @@ def _pooled(parts: list[FlightRecord], channel: str, speed: float = 0.0,
     return _mean_sigma(x, _rate(parts[0]))
 
 
+def imu_pitch_offset(records: Sequence[FlightRecord]) -> TrimOffset | None:
+    """The accelerometers' pitch against the measured pitch attitude, over whole records:
+    the body-x specific force of rigid-body flight (Stevens, Lewis & Johnson 2016, eq.
+    2.5-14; Morelli & Klein 2016 ch. 10, kinematic consistency) is
+    a_x = du/dt + q w - r v + g sin(theta), so
+
+        d(t) = (a_x - q w + r v - du/dt) / g - sin(theta),   d = mean d(t)
+
+    with u, v, w from V, alpha and beta and du/dt the derivative of u under a ``SMOOTH_S``
+    moving mean. An IMU block pitched by a about body y measures a_x' = g sin(theta + a)
+    in steady flight (``sim.effects.mounting.Misalignment``), so d = a cos(theta), about a;
+    an a_x bias b gives b / g: one class. Sigma as the trim check's (``_mean_sigma``).
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records; each needs ax, q, r, V, alpha, beta and theta (else it is skipped).
+
+    Returns
+    -------
+    TrimOffset or None
+        Channel "ax", measured d (rad), model 0; None when no record has the channels.
+    """
+    need = ("ax", "q", "r", "V", "alpha", "beta", "theta")
+    parts = []
+    for r in records:
+        if not all(c in r for c in need) or len(r.time) < 4 * MIN_STEADY:
+            continue
+        v_air, alpha, beta = (np.asarray(r[c], float) for c in ("V", "alpha", "beta"))
+        u = v_air * np.cos(alpha) * np.cos(beta)
+        v = v_air * np.sin(beta)
+        w = v_air * np.sin(alpha) * np.cos(beta)
+        k = max(int(round(SMOOTH_S * _rate(r))), 1) | 1
+        smooth = np.convolve(u, np.ones(k) / k, mode="same")
+        udot = np.gradient(smooth, r.time)
+        udot[:k], udot[-k:] = udot[k], udot[-k - 1]  # the mean's edges: held
+        parts.append((r["ax"] - r["q"] * w + r["r"] * v - udot) / G - np.sin(r["theta"]))
+    if not parts:
+        return None
+    x = np.concatenate(parts)
+    mean, sigma = _mean_sigma(x, _rate(records[0]))
+    return TrimOffset("ax", KINEMATIC["ax"][0], mean, 0.0, sigma, len(x))
+
+
 def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[TrimOffset], str]:
     """Every checked channel's steady value against the ``aircraft``'s trim at the
-    records' steady airspeed and altitude (module docstring), and a note ("" when the
-    check was made; else why not).
+    records' steady airspeed and altitude (module docstring), then the kinematic check
+    (``imu_pitch_offset``) where the records carry its channels, and a note ("" when the
+    trim check was made; else why not).
 
     Parameters
     ----------
@@ -231,6 +297,13 @@ def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[T
     (list of TrimOffset, str)
         Per checked channel the measured and model values (rad) and sigma; the note.
     """
+    offsets, note = _against_trim(records, aircraft)
+    kinematic = imu_pitch_offset(records)
+    return offsets + ([kinematic] if kinematic is not None else []), note
+
+
+def _against_trim(records: Sequence[FlightRecord], aircraft: str
+                  ) -> tuple[list[TrimOffset], str]:
     spans = {axis: [s for r in records if (s := steady(r, axis)) is not None]
              for axis in ("longitudinal", "lateral")}
     condition = spans["longitudinal"] or spans["lateral"]
