@@ -6,10 +6,11 @@ initial states absorb it. Against the model trimmed at the record's measured air
 altitude (level flight, the model's weight) it shows (Morelli & Klein 2016 ch. 10, the
 bias terms of data compatibility; Jategaonkar 2015 ch. 10, trim and bias estimation).
 
-For x in alpha, beta and the surfaces de, da, dr (rad), over its axis's steady span (the
+For x in alpha, beta and the surfaces de, da, dr (rad), over its axis's steady spans (the
 record before its first maneuver on the axis's surfaces, ``data.axes.AXIS_INPUTS``: alpha
 and de before the first elevator maneuver, beta, da and dr before the first aileron or
-rudder maneuver; the records' maneuver list):
+rudder maneuver; and from ``SETTLE_S`` after the end of its last one to the record's end;
+the records' maneuver list):
 
     d(t) = x(t) - x_trim(V_bar) - (dx_trim/dV) (V(t) - V_bar),   d = mean d(t)
 
@@ -58,12 +59,21 @@ Z = 3.29  # two-sided p = 1e-3 under a normal difference
 # rad: the largest null offset of the seed-0 development flights was 0.115 deg (a c172p
 # aileron at 3.4 sigma); the blind check draws biases of 0.25 deg and more
 MATERIAL = math.radians(0.15)
+# rad: the sideslip's material level. On the span after the lateral maneuvers an aircraft
+# left banked by its spiral mode flies a steady sideslip the trim does not have: the Twin
+# Otter's null flights of seeds 0 and 10 read -0.27 to -0.36 deg there (6 of 200 named at
+# 0.15 deg); the blind check draws beta biases of 0.29-0.86 deg
+MATERIAL_OF = {"beta": math.radians(0.5)}
 FLOW_ANGLES = ("alpha", "beta")  # they follow the gusts; the surfaces do not (open loop)
 DV_M_S = 1.0  # the airspeed step of the trim's sensitivity
 MIN_STEADY = 25  # samples: fewer and the span's spread is no estimate of its noise
 # s of span per independent sample at most: the shortest gust correlation time L/V of the
 # blind check's flights (MIL-F-8785C, the Telemaster at 30 m and 15 m/s: about 2 s)
 GUST_S = 2.0
+# s after an axis's last maneuver before its steady again: the slowest rigid-body mode the
+# check must not average (the Dutch roll: period 2-4 s, damping ratio 0.1-0.2 on the blind
+# check's aircraft, so its amplitude falls below 10 % within about 6 s) with margin
+SETTLE_S = 8.0
 # channel -> (axis, the Trim's field, the catalogue entry, its parameter, the class)
 CHECKED: dict[str, tuple[str, str, str, str, str]] = {
     "alpha": ("longitudinal", "alpha", "bias", "value", "alpha bias or CL_0 mismatch"),
@@ -138,7 +148,8 @@ class TrimOffset:
     def named(self) -> bool:
         """Significant and material."""
         d = abs(self.difference)
-        return d > self.bound and d >= (KINEMATIC_MATERIAL if self.kinematic else MATERIAL)
+        return d > self.bound and d >= (KINEMATIC_MATERIAL if self.kinematic
+                                        else MATERIAL_OF.get(self.channel, MATERIAL))
 
     def text(self) -> str:
         return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
@@ -179,9 +190,10 @@ def effective_samples(x: np.ndarray) -> float:
     return max(n / (1.0 + 2.0 * total), 1.0)
 
 
-def steady(record: FlightRecord, axis: str) -> FlightRecord | None:
-    """The record before its first maneuver on ``axis``'s surfaces (None without a
-    maneuver list, or with fewer than ``MIN_STEADY`` samples before it).
+def steady(record: FlightRecord, axis: str) -> list[FlightRecord]:
+    """The record's steady spans for ``axis``: before its first maneuver on the axis's
+    surfaces, and from ``SETTLE_S`` after the end of its last one to the record's end;
+    each kept with at least ``MIN_STEADY`` samples (none without a maneuver list).
 
     Parameters
     ----------
@@ -192,18 +204,26 @@ def steady(record: FlightRecord, axis: str) -> FlightRecord | None:
 
     Returns
     -------
-    FlightRecord or None
+    list of FlightRecord
+        The spans, in time order.
     """
     items = windows.maneuvers(record)
     if not items:
-        return None
-    starts = [float(m["start"]) for m in items
-              if set(m.get("surfaces") or ()) & set(AXIS_INPUTS[axis])]
-    first = min(starts) if starts else float(record.time[-1]) + 1.0
-    keep = record.time < first
-    if int(keep.sum()) < MIN_STEADY:
-        return None
-    return record.slice(float(record.time[0]), float(record.time[keep][-1]))
+        return []
+    on_axis = [m for m in items if set(m.get("surfaces") or ()) & set(AXIS_INPUTS[axis])]
+    t = record.time
+    if not on_axis:
+        bounds = [(float(t[0]), float(t[-1]) + 1.0)]
+    else:
+        first = min(float(m["start"]) for m in on_axis)
+        last = max(float(m.get("end", m["start"])) for m in on_axis) + SETTLE_S
+        bounds = [(float(t[0]), first), (last, float(t[-1]) + 1.0)]
+    out = []
+    for lo, hi in bounds:
+        keep = (t >= lo) & (t < hi)
+        if int(keep.sum()) >= MIN_STEADY:
+            out.append(record.slice(float(t[keep][0]), float(t[keep][-1])))
+    return out
 
 
 def _mean_sigma(x: np.ndarray, rate_hz: float) -> tuple[float, float]:
@@ -304,7 +324,7 @@ def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[T
 
 def _against_trim(records: Sequence[FlightRecord], aircraft: str
                   ) -> tuple[list[TrimOffset], str]:
-    spans = {axis: [s for r in records if (s := steady(r, axis)) is not None]
+    spans = {axis: [s for r in records for s in steady(r, axis)]
              for axis in ("longitudinal", "lateral")}
     condition = spans["longitudinal"] or spans["lateral"]
     if not condition:
@@ -325,16 +345,18 @@ def _against_trim(records: Sequence[FlightRecord], aircraft: str
         return [], f"the model does not trim at the record's condition: {exc}"
     out, skipped = [], []
     for ch, (axis, field_, *_rest) in CHECKED.items():
-        if ch in FLOW_ANGLES and spans[axis] and min(
-                float(s.time[-1] - s.time[0]) for s in spans[axis]) < 2 * GUST_S:
-            skipped.append(ch)
-            continue
+        parts = spans[axis]
+        if ch in FLOW_ANGLES:  # only the spans of two gust blocks or more
+            parts = [s for s in parts if float(s.time[-1] - s.time[0]) >= 2 * GUST_S]
+            if spans[axis] and not parts:
+                skipped.append(ch)
+                continue
         slope = (getattr(above, field_) - getattr(at, field_)) / DV_M_S
-        stats = _pooled(spans[axis], ch, speed[0], slope)
+        stats = _pooled(parts, ch, speed[0], slope)
         if stats is None:
             continue
         out.append(TrimOffset(ch, axis, stats[0], float(getattr(at, field_)), stats[1],
-                              sum(len(s.time) for s in spans[axis])))
+                              sum(len(s.time) for s in parts)))
     note = (f"{', '.join(skipped)} not checked: a steady span shorter than {2 * GUST_S:g} s "
             "(two gust correlation times) does not fix a flow angle's mean in turbulence"
             if skipped else "")

@@ -39,9 +39,10 @@ FAST = {"try_pairs": False, "steps": 1}
 def test_null_flight_names_nothing_at_trim(aircraft, seed, turbulence):
     record = fly_case(Case(NULL_INDEX, seed, aircraft, NULL), turbulence)
     offsets, note = trim_offsets([record], aircraft)
-    # the card's first lateral maneuver is at 2 s: too short a span for the sideslip
-    assert note.startswith("beta not checked")
-    assert {o.channel for o in offsets} == (set(CHECKED) - {"beta"}) | set(KINEMATIC)
+    # the card's first lateral maneuver is at 2 s, too short a span for the sideslip: it is
+    # checked on the span from 8 s after the last one (34 s) to the end (64 s)
+    assert note == ""
+    assert {o.channel for o in offsets} == set(CHECKED) | set(KINEMATIC)
     assert not [o.text() for o in offsets if o.named]
     # in calm air only sensor noise and the lateral maneuvers' load factor move the
     # steady means: every offset below the material level
@@ -131,3 +132,15 @@ def test_trim_classes_hold_what_the_trim_cannot_tell_apart():
                           ("dr", "rudder bias or Cn_0 mismatch")):
         band = Effect("deadband", "lateral", "card", {"surface": surface}, {"width": 0.02})
         assert classes_of(band) == [name]
+
+
+def test_beta_bias_named_on_the_span_after_the_lateral_maneuvers():
+    """The card's lateral maneuvers start at 2 s, too soon to fix the sideslip's mean; the
+    span from 8 s after the last one ends (34 s) to the record's end (64 s) does: a 0.86 deg
+    vane bias is named as its class within its bound (Z sigma)."""
+    bias = Effect("bias", "lateral", "measured", {"channel": "beta"}, {"value": 0.015})
+    record = fly_case(Case(0, 37, "navion", SINGLE, (bias,)), "light")
+    found = {o.channel: o for o in trim_offsets([record], "navion")[0]}["beta"]
+    assert found.named and found.label == "beta bias or CY_0 / asymmetry"
+    assert abs(found.value - 0.015) <= found.bound
+    assert found.samples > 1000  # the late span's 22 s at 50 Hz, with the 2 s left out
