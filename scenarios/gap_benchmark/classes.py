@@ -36,7 +36,10 @@ the held-out seed is run).
   (seed-10 rules) passes a command c as c - sign(c) w/2: a surface trimmed off zero sits
   w/2 from its command, a rigging bias at trim, so the aileron's and rudder's deadbands
   are in their surface's class (seed 0: a c172p aileron deadband of 0.0226 rad measured at
-  trim as a bias of 0.0109, a Navion rudder one of 0.0110 rad as 0.0057).
+  trim as a bias of 0.0109, a Navion rudder one of 0.0110 rad as 0.0057);
+- the kinematic class (``trim_level.KINEMATIC``, seed-11 rules): an IMU block pitched by a
+  about body y reads a_x = g sin(theta + a) in steady flight, an a_x bias b reads as b / g:
+  ax bias or IMU pitch misalignment.
 """
 
 from __future__ import annotations
@@ -92,6 +95,8 @@ CLASSES: dict[str, tuple[Member, ...]] = {
                                       _delta("Cl_0"), Member("deadband", {"surface": "da"})),
     "rudder bias or Cn_0 mismatch": (Member("actuator_bias", {"surface": "dr"}),
                                      _delta("Cn_0"), Member("deadband", {"surface": "dr"})),
+    "ax bias or IMU pitch misalignment": (Member("misalignment"),
+                                          Member("bias", {"channel": "ax"})),
 }
 
 
