@@ -98,3 +98,12 @@ def test_structural_mode_is_not_named_engine_vibration(null_record, axis, freque
     assert line.resonance is rung
     if rung:
         assert abs(line.frequency_hz - frequency_hz) <= 2 * BIN_HZ
+
+
+def test_structural_resonance_leaves_its_axis_unexplained(null_record):
+    # the lateral mode of the test above, diagnosed: not named, and not "no gap"
+    record = structural_mode(null_record, 5.5, 0.03, 0.9, axis="lateral")
+    g = diagnose([record], "c172p", try_pairs=False, steps=1).axes()["lateral"]
+    assert g.line is not None and g.line.resonance
+    assert g.verdict in ("unexplained", "partly_unexplained")
+    assert "engine_vibration" not in {r.candidate.entry for r in g.named}
