@@ -37,7 +37,7 @@ from flightid.identification.gap.fit import fit
 from flightid.identification.gap.jsbsim.refine import NotRefined, Refined
 from flightid.identification.gap.jsbsim.refine import refine as refit
 from flightid.identification.gap.jsbsim.symmetry import even_terms
-from flightid.identification.gap.lines import Line, spectral_line, with_line
+from flightid.identification.gap.lines import Line, spectral_line, with_line, without_line
 from flightid.identification.gap.model.linearise import Linearised, linearise
 from flightid.identification.gap.model.surfaces import actuated
 from flightid.identification.gap.nonlinearity import (
@@ -315,10 +315,11 @@ def diagnose(records: Records, aircraft: str, validate: Records | None = None,
         axes = [axis]
     else:
         raise ValueError(f"gap: axis must be both, {', '.join(AXIS_NAMES)}; got {axis!r}")
+    lines = {a: spectral_line(records, a) for a in axes}  # named: the others run without it
     results = {a: with_line(_with_trim(_diagnose_axis(
-        a, records, aircraft, validate, names, validate_names, try_pairs, steps, surfaces),
-        [o for o in offsets if o.axis == a], trim_note), spectral_line(records, a))
-        for a in axes}
+        a, without_line(records, lines[a]), aircraft, without_line(validate, lines[a]), names,
+        validate_names, try_pairs, steps, surfaces), [o for o in offsets if o.axis == a],
+        trim_note), lines[a]) for a in axes}
     result = next(iter(results.values())) if len(results) == 1 else _merged(results)
     result.undiagnosed = {
         a: (f"not asked for (--axis {axis})" if a in excited else

@@ -52,6 +52,7 @@ from flightid.record import FlightRecord
 
 ENTRY = "engine_vibration"  # the catalogue entry a line is named as
 CHANNELS = {"lateral": ("ay", "p", "r"), "longitudinal": ("ax", "az", "q")}
+ALL_IMU = ("ax", "ay", "az", "p", "q", "r")  # a named line is taken out of them all
 SEGMENT_S = 5.12  # s: 256 samples at 50 Hz, 0.2 Hz bins
 LOCAL_HZ = 4.0  # Hz: the local median's span
 F_MIN_HZ = 2.0  # Hz: above the rigid-body response (short period, dutch roll <= 1 Hz)
@@ -213,6 +214,40 @@ def spectral_line(records: Sequence[FlightRecord], axis: str) -> Line | None:
                 int(hit.sum()), int(peak.size), float(np.median(peak[where])), rate,
                 {c: float(np.sqrt(np.median(np.concatenate(a)[where]))) for c, a in
                  amps.items()})
+
+
+def without_line(records: Sequence[FlightRecord] | None, line: Line | None
+                 ) -> list[FlightRecord] | None:
+    """``records`` with a named line taken out of every IMU channel: a zero-phase
+    band-stop (4th-order Butterworth, forward and backward) over the line's range widened
+    by ``TRACK_HZ`` / 2 either side, so the other tests see the record without it. The
+    rigid-body band keeps its phase (zero-phase) and its power to 3e-3 below 1.5 Hz for a
+    line as low as ``F_MIN_HZ`` (2-3.5 Hz stopped), to 1e-5 below 10 Hz for the c172p's
+    line (13.4-15.5 Hz stopped). Unchanged when no line is named.
+
+    Parameters
+    ----------
+    records : sequence of FlightRecord or None
+        The records.
+    line : Line or None
+        ``spectral_line`` of an axis.
+
+    Returns
+    -------
+    list of FlightRecord or None
+        The records, the line removed.
+    """
+    if records is None or line is None or not line.named:
+        return None if records is None else list(records)
+    out = []
+    for r in records:
+        nyquist = _rate(r) / 2
+        low = max(line.low_hz - TRACK_HZ / 2, F_MIN_HZ)
+        high = min(line.high_hz + TRACK_HZ / 2, 0.99 * nyquist)
+        sos = signal.butter(4, [low, high], btype="bandstop", fs=2 * nyquist, output="sos")
+        out.append(r.with_channels(**{c: signal.sosfiltfilt(sos, np.asarray(r[c], float))
+                                      for c in ALL_IMU if c in r}))
+    return out
 
 
 def with_line(result: Any, line: Line | None) -> Any:

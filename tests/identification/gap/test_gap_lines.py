@@ -15,7 +15,7 @@ import pytest
 from scipy import signal
 
 from flightid.identification.gap import diagnose
-from flightid.identification.gap.lines import RESONANCE, spectral_line
+from flightid.identification.gap.lines import RESONANCE, spectral_line, without_line
 from flightid.scenarios.cards import fly_card
 from flightid.scenarios.gap_benchmark.cases import NULL, NULL_INDEX, SINGLE, Case, Effect
 from flightid.scenarios.gap_benchmark.outside_catalogue import structural_mode
@@ -56,6 +56,20 @@ def test_engine_line_named_at_its_alias_with_its_filtered_amplitude(vibrated):
         _, h = signal.freqs(b, a, worN=[2 * np.pi * float(np.median(rotation))])
         for ch, amp in line.amplitudes.items():
             assert amp == pytest.approx(VIBRATION[ch] * abs(h[0]), rel=0.25), ch
+
+
+def test_a_named_line_taken_out_leaves_the_rigid_body_band(vibrated):
+    measured, _ = vibrated
+    line = spectral_line([measured], "longitudinal")
+    (clean,) = without_line([measured], line)
+    assert not spectral_line([clean], "longitudinal").named
+    assert not spectral_line([clean], "lateral").named
+    # below 2 Hz the band-stop (13-16 Hz) passes the signal: its power gain there is
+    # 1 - 1e-11 (docstring); the zero-phase filter's end transients stay within 1e-3
+    low = signal.butter(4, 2.0, fs=RATE, output="sos")
+    for ch in ("az", "q", "p"):
+        a, b = (signal.sosfiltfilt(low, r[ch]) for r in (measured, clean))
+        assert np.std(a - b) < 1e-3 * np.std(a), ch
 
 
 def test_engine_vibration_named_in_the_diagnosis_and_scored_right():
