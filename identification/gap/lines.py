@@ -32,15 +32,18 @@ step) in 0-12. No null flight named a line.
 
 The line is seen as sampled: an engine turning faster than half the sample rate shows at
 its alias |f - k fs|, after the anti-alias filter. The amplitude per channel (m/s^2,
-rad/s) is the one on the record, not the catalogue's amplitude before the filter: that
-needs the true frequency (the rpm), which the record does not carry.
+rad/s) is the one on the record. The catalogue's amplitude is before the filter, which
+needs the true frequency (the rpm), which the record does not carry: for the seen
+frequency and its first two aliases, it is given as the seen amplitude over the filter's
+gain there (a Butterworth, 1 / sqrt(1 + (f / fc)^(2n)), its cutoff and order from the
+record's measurement metadata).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -83,6 +86,10 @@ class Line:
     rate_hz: float  # the records' sample rate
     # per channel: the line's amplitude as seen on the record (m/s^2, rad/s)
     amplitudes: dict[str, float] = field(default_factory=dict)
+    # per true frequency it may be (Hz, ``aliases``): each channel's amplitude before the
+    # record's anti-alias filter (the catalogue's amplitude for a single line), when the
+    # record's measurement metadata gives the filter
+    before_filter: dict[float, dict[str, float]] = field(default_factory=dict)
 
     @property
     def share(self) -> float:
@@ -122,7 +129,10 @@ class Line:
                 f"engine turns faster than {self.rate_hz / 2:g} Hz: "
                 f"{', '.join(f'{a:.2f}' for a in self.aliases())} Hz) in "
                 f"{self.found} of {self.segments} segments; amplitude as seen "
-                f"(m/s^2, rad/s): {amps}")
+                f"(m/s^2, rad/s): {amps}" + "".join(
+                    f"; before the anti-alias filter if at {f:.2f} Hz: "
+                    + ", ".join(f"{c} {a:.3g}" for c, a in v.items())
+                    for f, v in self.before_filter.items()))
 
     def resonance_text(self) -> str:
         return (f"a resonance at {self.frequency_hz:.2f} Hz as sampled, in {self.found} of "
@@ -135,7 +145,10 @@ class Line:
                 "frequency_hz": self.frequency_hz, "range_hz": [self.low_hz, self.high_hz],
                 "aliases_hz": self.aliases(), "found": self.found,
                 "segments": self.segments, "share": self.share, "peak": self.peak,
-                "amplitudes_as_seen": self.amplitudes, "named": self.named,
+                "amplitudes_as_seen": self.amplitudes,
+                "amplitudes_before_filter": {f"{f:.3f}": v for f, v in
+                                             self.before_filter.items()},
+                "named": self.named,
                 "note": "frequency and amplitudes as sampled, after the anti-alias filter"}
 
 
@@ -210,10 +223,32 @@ def spectral_line(records: Sequence[FlightRecord], axis: str) -> Line | None:
         else float(np.median(freq))
     hit = (peak > THRESHOLD) & (np.abs(freq - centre) <= TRACK_HZ)
     where = hit if hit.any() else np.ones_like(hit)
-    return Line(axis, centre, float(freq[where].min()), float(freq[where].max()),
+    line = Line(axis, centre, float(freq[where].min()), float(freq[where].max()),
                 int(hit.sum()), int(peak.size), float(np.median(peak[where])), rate,
                 {c: float(np.sqrt(np.median(np.concatenate(a)[where]))) for c, a in
                  amps.items()})
+    filters = {c: _antialias(records[0], c) for c in channels}
+    if not all(filters.values()):
+        return line
+    before = {f: {c: a / _gain(f, *filters[c]) for c, a in line.amplitudes.items()}
+              for f in [line.frequency_hz, *line.aliases(2)]}
+    return replace(line, before_filter=before)
+
+
+def _antialias(record: FlightRecord, channel: str) -> tuple[float, float] | None:
+    """(cutoff Hz, order) of ``channel``'s anti-alias filter from the record's measurement
+    metadata (``meta.extra["measurement"]["definition"]``), or None."""
+    chain = (((record.meta.extra or {}).get("measurement") or {}).get("definition")
+             or {}).get("channels", {}).get(channel) or []
+    for step in chain:
+        if isinstance(step, dict) and float(step.get("antialias") or 0) > 0:
+            return float(step["antialias"]), float(step.get("order") or 0)
+    return None
+
+
+def _gain(f: float, cutoff: float, order: float) -> float:
+    """The Butterworth filter's gain at ``f`` (Hz): 1 / sqrt(1 + (f / fc)^(2 n))."""
+    return 1.0 / math.sqrt(1.0 + (f / cutoff) ** (2 * order))
 
 
 def without_line(records: Sequence[FlightRecord] | None, line: Line | None

@@ -56,6 +56,10 @@ def test_engine_line_named_at_its_alias_with_its_filtered_amplitude(vibrated):
         _, h = signal.freqs(b, a, worN=[2 * np.pi * float(np.median(rotation))])
         for ch, amp in line.amplitudes.items():
             assert amp == pytest.approx(VIBRATION[ch] * abs(h[0]), rel=0.25), ch
+        # the catalogue's amplitude, before the filter, at the alias that is the engine's
+        (at,) = [f for f in line.before_filter if abs(f - np.median(rotation)) < 2 * BIN_HZ]
+        for ch, amp in line.before_filter[at].items():
+            assert amp == pytest.approx(VIBRATION[ch], rel=0.25), ch
 
 
 def test_a_named_line_taken_out_leaves_the_rigid_body_band(vibrated):
