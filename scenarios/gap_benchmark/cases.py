@@ -134,53 +134,41 @@ CG_CHORDS = 0.05
 # the sized rows' base magnitudes (drawn 0.5-1.5 times, measured from neutral)
 SIZED_BASE = {"delay": 0.1, "lag": 0.1, "actuator_lag": 0.1, "inertia_scale": 1.2}
 
-# Sizing by visibility (the seed-11 rules; docs/gap_benchmark.md "Sizing by visibility"):
-# per row and aircraft the base above is multiplied by sqrt(AIM / V), V the share the row
-# adds at that base (k = 1) to the main window test's share (``verdict.ChannelTest.share``:
-# input-explained energy less chance, over the measured energy) on the most affected
-# tested channel of its axis, over the plain flight's, in light turbulence (the larger
-# axis for a row on both; a sensor scale's per 0.2 of offset): the median over the row's
-# options, the mean of flight seeds 12 and 13 (benchmarks/gap_visibility.py --test-share;
-# benchmarks/results/gap_visibility/share_k1_seed12_unsized.jsonl, ..._seed13_...). A
-# small effect's share grows as the square of its offset from neutral, so the smallest
-# draw (k = K_RANGE[0]) reaches the test's ``MATERIAL``: AIM = MATERIAL / K_RANGE[0]^2.
-# Listed: the rows under the aim. Not re-sized: the trim-level entries, named against the
-# trim (bias, actuator bias, mass scale), derivative deltas (DELTA_FRACTION of the
-# aircraft's own value) and rate limits (neutral at infinity).
+# Sizing by visibility (seed-11 rules; docs/gap_benchmark.md): per row and aircraft the
+# base is multiplied by sqrt(AIM / V), V the share (``verdict.ChannelTest.share``) the row
+# adds at its base (k = 1) on its axis's most affected tested channel over the plain
+# flight's, light turbulence (the larger axis for a row on both; a sensor scale's per 0.2
+# of offset), median over the row's options, mean of flight seeds 12 and 13
+# (benchmarks/gap_visibility.py --test-share). A small effect's share grows as its offset
+# squared, so the smallest draw (k = K_RANGE[0]) reaches ``MATERIAL``. Not re-sized: the
+# trim-level entries (bias, actuator bias, mass scale), derivative deltas, rate limits.
 AIM = MATERIAL / K_RANGE[0] ** 2
-VISIBILITY = {
-    "actuator_lag/lateral": {"c172p": 0.053, "navion": 0.034, "twinotter": 0.05},
-    "actuator_lag/longitudinal": {"navion": 0.061},
-    "backlash/lateral": {"c172p": 0.005, "navion": 0.0036,
-                         "telemaster": 0.044, "twinotter": 0.0038},
-    "backlash/longitudinal": {"c172p": 0.0072, "navion": 0.01,
-                              "telemaster": 0.035, "twinotter": 0.05},
-    "cg_offset/longitudinal": {"c172p": 0.0086, "navion": 0.059,
-                               "telemaster": 0.034, "twinotter": 0.026},
-    "control_effectiveness/lateral": {"c172p": 0.033, "navion": 0.026,
-                                      "telemaster": 0.036, "twinotter": 0.029},
-    "control_effectiveness/longitudinal": {"c172p": 0.039, "navion": 0.057, "telemaster": 0.061},
-    "deadband/lateral": {"c172p": 0.0037, "navion": 0.005,
-                         "telemaster": 0.018, "twinotter": 0.0034},
-    "delay/lateral": {"c172p": 0.073, "navion": 0.055, "telemaster": 0.069, "twinotter": 0.049},
-    "delay/longitudinal": {"navion": 0.039},
-    "engine_vibration/both": {"c172p": 0.0033, "navion": 0.00088,
-                              "telemaster": 0.0017, "twinotter": 0.0028},
-    "inertia_scale/lateral": {"c172p": 0.012, "navion": 0.015,
-                              "telemaster": 0.014, "twinotter": 0.011},
-    "inertia_scale/longitudinal": {"c172p": 0.011, "navion": 0.01,
-                                   "telemaster": 0.013, "twinotter": 0.019},
-    "lag/lateral": {"c172p": 0.045, "navion": 0.048, "telemaster": 0.06, "twinotter": 0.045},
-    "lag/longitudinal": {"navion": 0.048, "twinotter": 0.068},
-    "misalignment/both": {"c172p": 0.00089, "navion": 0.00096,
-                          "telemaster": 0.0014, "twinotter": 0.00072},
-    "scale/lateral": {"c172p": 0.019, "navion": 0.024, "telemaster": 0.022, "twinotter": 0.027},
-    "scale/longitudinal": {"c172p": 0.018, "navion": 0.018,
-                           "telemaster": 0.021, "twinotter": 0.021},
-    "tail_ice/longitudinal": {"c172p": 0.0061, "navion": 0.013,
-                              "telemaster": 0.0058, "twinotter": 0.015},
-    "thrust_moment/longitudinal": {"c172p": 0.003, "navion": 0.0032, "twinotter": 0.00037},
+# V per aircraft in the order of ``_SHARE_OF`` (None: at or above the aim)
+_SHARE_OF = ("c172p", "navion", "telemaster", "twinotter")
+_SHARES = {
+    "actuator_lag/lateral": (0.053, 0.034, None, 0.05),
+    "actuator_lag/longitudinal": (None, 0.061, None, None),
+    "backlash/lateral": (0.005, 0.0036, 0.044, 0.0038),
+    "backlash/longitudinal": (0.0072, 0.01, 0.035, 0.05),
+    "cg_offset/longitudinal": (0.0086, 0.059, 0.034, 0.026),
+    "control_effectiveness/lateral": (0.033, 0.026, 0.036, 0.029),
+    "control_effectiveness/longitudinal": (0.039, 0.057, 0.061, None),
+    "deadband/lateral": (0.0037, 0.005, 0.018, 0.0034),
+    "delay/lateral": (0.073, 0.055, 0.069, 0.049),
+    "delay/longitudinal": (None, 0.039, None, None),
+    "engine_vibration/both": (0.0033, 0.00088, 0.0017, 0.0028),
+    "inertia_scale/lateral": (0.012, 0.015, 0.014, 0.011),
+    "inertia_scale/longitudinal": (0.011, 0.01, 0.013, 0.019),
+    "lag/lateral": (0.045, 0.048, 0.06, 0.045),
+    "lag/longitudinal": (None, 0.048, None, 0.068),
+    "misalignment/both": (0.00089, 0.00096, 0.0014, 0.00072),
+    "scale/lateral": (0.019, 0.024, 0.022, 0.027),
+    "scale/longitudinal": (0.018, 0.018, 0.021, 0.021),
+    "tail_ice/longitudinal": (0.0061, 0.013, 0.0058, 0.015),
+    "thrust_moment/longitudinal": (0.003, 0.0032, None, 0.00037),
 }
+VISIBILITY = {kind: {a: v for a, v in zip(_SHARE_OF, shares, strict=True) if v is not None}
+              for kind, shares in _SHARES.items()}
 # the largest multiple per entry: the physical range its largest draw (1.5 x the base) keeps
 SIZE_CAP = {
     "actuator_lag": 1.5,  # base <= 0.15 s: draws <= 0.225 s (a slow servo under load)

@@ -10,9 +10,7 @@ the held-out seed is run).
 - aileron, rudder, elevator power: the surface's effectiveness factor, the delta of its
   main moment derivative (Cl_da, Cn_dr, Cm_de: the other terms of the surface are small);
   the elevator's is the horizontal-tail effectiveness class, with tail ice and an elevator
-  play (seed-9 rules): on the card's elevator doublet and 3211 the held-out cost tells
-  them apart no better than it differs between them on null flights
-  (docs/gap_benchmark.md, "The rules for the seed-9 run");
+  play (seed-9 rules: the held-out cost tells them apart no better than null flights do);
 - lag or rate limit of one surface (seed-9 rules): on the card's two maneuvers per surface,
   of one amplitude, both slow the surface's edges; the held-out cost favours the injected
   one in 12 of 19 flights of seeds 0, 7, 8 where both are fitted, the wrong one by 1-280
