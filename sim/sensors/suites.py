@@ -137,9 +137,11 @@ WRAPPED_ANGLES = ("psi",)  # channels that jump by 2 pi; measured continuous, re
 def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRecord:
     """The record as measured by ``suite``: channels in SI at the suite's output rate.
 
-    Mounting effects act on the truth at its fast rate; vibrating IMU channels are
-    evaluated on a finer grid (``_vibration_grid``) so that lines above the sensor's
-    Nyquist frequency alias correctly. Channels sampled slower than the output rate are
+    Mounting effects act on the truth at its fast rate; with an engine vibration every
+    channel is evaluated on a finer grid (``_vibration_grid``) so that lines above the
+    sensor's Nyquist frequency alias correctly and every channel's filters act alike (the
+    IMU channels on the fine grid and the air data on the truth's would differ by the
+    discrete filters' delays). Channels sampled slower than the output rate are
     held (zero-order hold, the latest sample, as a recorder logs it); unsampled channels
     are linearly interpolated. ``meta.extra['measurement']`` records how.
 
@@ -193,15 +195,15 @@ def measure(truth: FlightRecord, suite: SensorSuite, seed: int = 0) -> FlightRec
     for name, chain in suite.channels.items():
         x, tc = ch[name], t
         rate = suite.sample_rate(name)
-        if vib is not None and name in AXES and getattr(vib, name) != 0:
+        if vib is not None:  # every channel on the fine grid: its filters act alike on all
             f_max = vib.max_frequency(ch["rpm"])
             tc = _vibration_grid(t, rate or fast_rate, f_max)
-            if tc.size != t.size or not np.allclose(tc, t):
+            fine = tc.size != t.size or not np.allclose(tc, t)
+            if fine:
                 x = np.interp(tc, t, x)
-                rpm = np.interp(tc, t, ch["rpm"])
-            else:
-                rpm = ch["rpm"]
-            x = x + vib.signal(tc, rpm, name, phases)
+            if name in AXES and getattr(vib, name) != 0:
+                rpm = np.interp(tc, t, ch["rpm"]) if fine else ch["rpm"]
+                x = x + vib.signal(tc, rpm, name, phases)
         wrapped = name in WRAPPED_ANGLES
         if wrapped:  # filter the continuous angle, not the jump at +-pi
             x = np.unwrap(x)
