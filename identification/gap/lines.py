@@ -152,15 +152,11 @@ class Line:
                 "note": "frequency and amplitudes as sampled, after the anti-alias filter"}
 
 
-def _rate(record: FlightRecord) -> float:
-    return float((len(record.time) - 1) / (record.time[-1] - record.time[0]))
-
-
 def _spectra(record: FlightRecord, channels: Sequence[str], n: int
              ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Frequencies (Hz), the summed normalised ordinates (frequency x segment) and each
     channel's periodogram ('spectrum' scaling: units^2 per bin)."""
-    rate = _rate(record)
+    rate = 1.0 / record.dt
     local = max(int(round(LOCAL_HZ * n / rate)) | 1, 5)
     total, power = None, {}
     freqs = np.zeros(0)
@@ -199,7 +195,7 @@ def spectral_line(records: Sequence[FlightRecord], axis: str) -> Line | None:
     for record in records:
         if not all(c in record for c in channels):
             continue
-        rate = _rate(record)
+        rate = 1.0 / record.dt
         n = int(round(SEGMENT_S * rate))
         if len(record.time) < 2 * n:
             continue
@@ -276,7 +272,7 @@ def without_line(records: Sequence[FlightRecord] | None, line: Line | None
         return None if records is None else list(records)
     out = []
     for r in records:
-        nyquist = _rate(r) / 2
+        nyquist = 0.5 / r.dt
         low = max(line.low_hz - TRACK_HZ / 2, F_MIN_HZ)
         high = min(line.high_hz + TRACK_HZ / 2, 0.99 * nyquist)
         sos = signal.butter(4, [low, high], btype="bandstop", fs=2 * nyquist, output="sos")

@@ -54,6 +54,7 @@ from flightid.identification.gap.model.linearise import record_condition
 from flightid.record import FlightRecord
 from flightid.sim.jsbsim.model import load
 from flightid.sim.jsbsim.trim import Trim, TrimError, trim
+from flightid.units import G0
 
 Z = 3.29  # two-sided p = 1e-3 under a normal difference
 # rad: the largest null offset of the seed-0 development flights was 0.115 deg (a c172p
@@ -88,7 +89,9 @@ KINEMATIC: dict[str, tuple[str, str, str, str]] = {
     "ax": ("longitudinal", "misalignment", "angle", "ax bias or IMU pitch misalignment"),
 }
 CLASSES = tuple(v[4] for v in CHECKED.values()) + tuple(v[3] for v in KINEMATIC.values())
-G = 9.80665  # m/s^2
+# channel -> (the entry, its parameter, the class) of every check
+NAMING = {**{ch: v[2:] for ch, v in CHECKED.items()},
+          **{ch: v[1:] for ch, v in KINEMATIC.items()}}
 # the kinematic check's test: the batch-means sigma overstates the spread of d on null
 # flights 2.5-5 times (40 null flights of the blind check's seed 0, light turbulence:
 # std of d 0.11-0.32 deg per aircraft against a median sigma of 0.18-0.81 deg; the
@@ -96,6 +99,7 @@ G = 9.80665  # m/s^2
 # false-alarm control: null |d| at most 0.80 deg on those 40 flights
 KINEMATIC_Z = 1.5
 KINEMATIC_MATERIAL = math.radians(1.0)
+MATERIAL_OF["ax"] = KINEMATIC_MATERIAL
 SMOOTH_S = 1.0  # s: the moving mean under the du/dt of the kinematic check
 
 
@@ -117,16 +121,16 @@ class TrimOffset:
 
     @property
     def entry(self) -> str:
-        return KINEMATIC[self.channel][1] if self.kinematic else CHECKED[self.channel][2]
+        return NAMING[self.channel][0]
 
     @property
     def parameter(self) -> str:
-        return KINEMATIC[self.channel][2] if self.kinematic else CHECKED[self.channel][3]
+        return NAMING[self.channel][1]
 
     @property
     def label(self) -> str:
         """The equivalence class it is named as."""
-        return KINEMATIC[self.channel][3] if self.kinematic else CHECKED[self.channel][4]
+        return NAMING[self.channel][2]
 
     @property
     def kinematic(self) -> bool:
@@ -148,8 +152,7 @@ class TrimOffset:
     def named(self) -> bool:
         """Significant and material."""
         d = abs(self.difference)
-        return d > self.bound and d >= (KINEMATIC_MATERIAL if self.kinematic
-                                        else MATERIAL_OF.get(self.channel, MATERIAL))
+        return d > self.bound and d >= MATERIAL_OF.get(self.channel, MATERIAL)
 
     def text(self) -> str:
         return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
@@ -241,10 +244,6 @@ def _mean_sigma(x: np.ndarray, rate_hz: float) -> tuple[float, float]:
                                   batch)
 
 
-def _rate(record: FlightRecord) -> float:
-    return float((len(record.time) - 1) / (record.time[-1] - record.time[0]))
-
-
 def _pooled(parts: list[FlightRecord], channel: str, speed: float = 0.0,
             slope: float = 0.0) -> tuple[float, float] | None:
     """The mean and sigma of ``channel`` over ``parts``, each sample moved along the trim
@@ -252,7 +251,7 @@ def _pooled(parts: list[FlightRecord], channel: str, speed: float = 0.0,
     if not parts or not all(channel in p for p in parts):
         return None
     x = np.concatenate([p[channel] - slope * (p["V"] - speed) for p in parts])
-    return _mean_sigma(x, _rate(parts[0]))
+    return _mean_sigma(x, 1.0 / parts[0].dt)
 
 
 def imu_pitch_offset(records: Sequence[FlightRecord]) -> TrimOffset | None:
@@ -287,15 +286,15 @@ def imu_pitch_offset(records: Sequence[FlightRecord]) -> TrimOffset | None:
         u = v_air * np.cos(alpha) * np.cos(beta)
         v = v_air * np.sin(beta)
         w = v_air * np.sin(alpha) * np.cos(beta)
-        k = max(int(round(SMOOTH_S * _rate(r))), 1) | 1
+        k = max(int(round(SMOOTH_S / r.dt)), 1) | 1
         smooth = np.convolve(u, np.ones(k) / k, mode="same")
         udot = np.gradient(smooth, r.time)
         udot[:k], udot[-k:] = udot[k], udot[-k - 1]  # the mean's edges: held
-        parts.append((r["ax"] - r["q"] * w + r["r"] * v - udot) / G - np.sin(r["theta"]))
+        parts.append((r["ax"] - r["q"] * w + r["r"] * v - udot) / G0 - np.sin(r["theta"]))
     if not parts:
         return None
     x = np.concatenate(parts)
-    mean, sigma = _mean_sigma(x, _rate(records[0]))
+    mean, sigma = _mean_sigma(x, 1.0 / records[0].dt)
     return TrimOffset("ax", KINEMATIC["ax"][0], mean, 0.0, sigma, len(x))
 
 
