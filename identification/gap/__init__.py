@@ -3,9 +3,10 @@ of the catalogue causes it, and how far the gap shrinks on held-out data.
 
 ``model`` (the model under test: the aircraft linearised at the record's condition, with
 its actuators on a record of commands), ``segments`` (maneuver windows), ``fit`` (output
-error on one window), ``verdict`` (is there a gap), ``residual_map`` (where the gap lies),
-``candidates`` (the catalogue's entries as candidates, their physical ranges and
-equivalence classes), ``rank`` (which effect), ``sequence`` (several effects, and how far
+error or filter error on one window), ``verdict`` (is there a gap), ``residual_map``
+(where the gap lies), ``candidates`` (the catalogue's entries as candidates, their physical
+ranges and equivalence classes), ``rank`` (which effect), ``turbulence`` (the leading
+candidates judged with the turbulence modelled), ``sequence`` (several effects, and how far
 the gap shrinks), ``jsbsim`` (the corrected aircraft written, refined and flown again),
 ``diagnosis`` (all of it: ``diagnose``), ``report`` (HTML); ``envelope`` (records from
 several conditions: each diagnosed at its own, where in the envelope the model departs)

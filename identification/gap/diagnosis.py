@@ -45,18 +45,13 @@ from flightid.identification.gap.nonlinearity import (
     named_sensor,
     nonlinear_test,
 )
-from flightid.identification.gap.rank import (
-    Folds,
-    Ranker,
-    rank,
-    rank_key,
-    ranked_pairs,
-)
+from flightid.identification.gap.rank import Folds, Ranker, rank_key
 from flightid.identification.gap.ranked import Ranked, mean_gap
 from flightid.identification.gap.residual_map import GapMap, gap_map, heat_map
 from flightid.identification.gap.segments import Segment, segments, split
 from flightid.identification.gap.sequence import STEPS, fixed, following, shrinkage
 from flightid.identification.gap.trim_level import TrimOffset, trim_offsets
+from flightid.identification.gap.turbulence.leading import judged_ranking
 from flightid.identification.gap.verdict import (
     EXPLAINED,
     NO_GAP,
@@ -396,8 +391,8 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
                                  -found.test.statistic + math.log(max(samples, 2)))]
         ranked[0].confirmed, ranked[0].note, both = True, found.note, []
     else:
-        ranked = rank(ranker, catalogue_candidates(lin.model, lin.axes, surfaces=lin.surfaces))
-        both = ranked_pairs(ranker, ranked) if try_pairs else []
+        ranked, both = judged_ranking(ranker, catalogue_candidates(
+            lin.model, lin.axes, surfaces=lin.surfaces), try_pairs)
     if both and both[0].confirmed:
         named = [both[0]]
     elif ranked and ranked[0].confirmed:

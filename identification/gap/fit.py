@@ -1,11 +1,14 @@
-"""Output-error fits of the linearised model on one window (the only fitting the gap uses).
+"""Output-error and filter-error fits of the linearised model on one window (the only
+fitting the gap uses).
 
 ``fit`` estimates the given parameters with the nuisance ones (the biases, which take the
 trim offsets, and the initial state) by output error (``methods.output_error``: Gauss-Newton,
 Cramer-Rao bounds corrected for colored residuals; Morelli & Klein 2016 ch. 6; Jategaonkar
 2015 ch. 4); every other parameter is held at its value in the model. With no parameter
 given it is the model as is (only the nuisance fitted): the baseline of the diagnosis and
-the evaluation of a held-out window.
+the evaluation of a held-out window. ``filter_fit`` is the same fit by filter error
+(``methods.filter_error``: the model given process noise, the turbulence; Jategaonkar 2015
+ch. 5), which the leading candidates are judged by (``turbulence.leading``).
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flightid.identification.gap.model.linearise import nuisance
-from flightid.identification.methods import output_error
+from flightid.identification.methods import filter_error, output_error
 from flightid.identification.models.linear import LinearModel
 from flightid.record import FlightRecord
 
@@ -137,3 +140,56 @@ def held(model: LinearModel, values: dict[str, float], record: FlightRecord) -> 
         As ``fit`` with no parameter freed.
     """
     return fit(model.with_start(**values) if values else model, record, ())
+
+
+@dataclass
+class FilterFit:
+    """One window's filter-error fit: the freed parameters and the negative log-likelihood
+    of the innovations (Jategaonkar 2015 eq. 5.23)."""
+
+    values: dict[str, float]  # the freed parameters (not the nuisance or noise ones)
+    std: dict[str, float]
+    unidentifiable: dict[str, str]
+    cost: float
+    samples: int
+
+
+def filter_fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
+               airframe: Sequence[str] | None = None) -> FilterFit:
+    """Fit ``free`` (with the biases, the process noise and the measurement noise) of
+    ``model`` on ``record`` by filter error.
+
+    The relaxation between the Gauss-Newton passes and the closed-form measurement-noise
+    update (Jategaonkar 2015 sec. 5.8; ``joint_noise=False``), about a third of the joint
+    noise fit's time; no identifiability refit and no condition correction (a window is
+    short and near its trim).
+
+    Parameters
+    ----------
+    model : LinearModel
+        The linearised aircraft (with a candidate's edits).
+    record : FlightRecord
+        One window.
+    free : sequence of str
+        The model's parameters fitted besides the nuisance ones (none: the model as is).
+    airframe : sequence of str or None
+        The states of the aircraft's motion, whose equations the gusts drive (those but the
+        Euler angles carry process noise); None: ``model``'s. A candidate's own states (a
+        lag's or a delay's) carry none.
+
+    Returns
+    -------
+    FilterFit
+        The freed parameters with their bounds (the sandwich for colored innovations,
+        ``filter_error.estimate(colored=True)``) and the cost J (1).
+    """
+    states = model.states if airframe is None else airframe
+    est = filter_error.estimate(
+        record, model, free=[*free, *nuisance(model)], initial_state="measured", hold="foh",
+        process_noise=[s for s in states if s not in filter_error.KINEMATIC_STATES],
+        joint_noise=False, check_identifiability=False, condition_correction=False,
+        colored=True)
+    values = {n: float(est.values[est.names.index(n)]) for n in free}
+    std = {n: float(est.std[est.names.index(n)]) for n in free}
+    return FilterFit(values=values, std=std, unidentifiable={}, cost=float(est.fit["cost"]),
+                     samples=int(est.fit["samples"]))

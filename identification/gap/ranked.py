@@ -5,12 +5,13 @@ effect's parameters combined over the windows (inverse-variance mean)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from flightid.identification.gap.candidates.build import Candidate
-from flightid.identification.gap.fit import WindowFit, noise_energy
+from flightid.identification.gap.fit import FilterFit, WindowFit, noise_energy
 
 
 def pooled_fractions(fits: list[WindowFit]) -> dict[str, float]:
@@ -121,7 +122,7 @@ class Ranked:
                 "class": self.equivalent or None}
 
 
-def combine(fits: list[WindowFit], names: tuple[str, ...]
+def combine(fits: Sequence[WindowFit | FilterFit], names: tuple[str, ...]
             ) -> tuple[dict[str, float], dict[str, float]] | None:
     """Inverse-variance mean of the windows' estimates.
 

@@ -53,7 +53,7 @@ def actuator_lag(surface: str) -> Candidate:
         def build(v: Mapping[str, complex]) -> tuple:
             return lagged_input(model.build(v), column, v[name])
 
-        return extended(model, {name: TAU_START}, build, (name,))
+        return extended(model, {name: TAU_START}, build, (name,), surface)
 
     return Candidate("actuator_lag", {"surface": surface}, (name,), wrap, catalogue=("tau",))
 

@@ -10,10 +10,10 @@
 - ``mass_scale`` (factor): the aerodynamic accelerations per unit coefficient fall as
   1/m: every force derivative (CY_*, CL_*, CD_* but the trim terms CL_0 and CD_0, which
   the heavier trim raises by the same factor) and the thrust input are divided by it;
-- ``inertia_scale`` (ixx, izz on the lateral axis; iyy on the longitudinal): the
-  reference condition's inertia scaled (Ixz by sqrt(ixx izz), as the catalogue injects
-  it); the angular accelerations are I^-1 M, with M the model's moments. An Izz scale
-  and a scaling of every Cn term are one equivalence class;
+- ``inertia_scale`` (ixx or izz on the lateral axis, a candidate each; iyy on the
+  longitudinal): the reference condition's inertia scaled (Ixz by sqrt(ixx izz), as the
+  catalogue injects it); the angular accelerations are I^-1 M, with M the model's
+  moments. An Izz scale and a scaling of every Cn term are one equivalence class;
 - ``thrust_moment`` (arm, m): qdot gets arm dT/Iyy, on a longitudinal model whose
   thrust is an input (``linearise``: records with the measured thrust).
 """
@@ -115,8 +115,10 @@ def mass_scale(model: LinearModel) -> Candidate | None:
     return Candidate("mass_scale", {}, (name,), wrap)
 
 
-def inertia_scale(model: LinearModel) -> Candidate | None:
-    """The inertias of the model's axis scaled (ixx, izz lateral; iyy longitudinal).
+def inertia_scales(model: LinearModel) -> list[Candidate]:
+    """The inertias of the model's axis scaled, one candidate per inertia (ixx and izz
+    lateral, iyy longitudinal): a candidate freeing both lateral inertias would lose every
+    tie to a one-parameter derivative delta (``rank.simplest``) where only one is off.
 
     Parameters
     ----------
@@ -125,12 +127,12 @@ def inertia_scale(model: LinearModel) -> Candidate | None:
 
     Returns
     -------
-    Candidate or None
-        None without a reference condition or a p, r or q state.
+    list of Candidate
+        Empty without a reference condition or a p, r or q state.
     """
     c = model.condition
     if c is None:
-        return None
+        return []
     if {"p", "r"} <= set(model.states):
         names = ("inertia_ixx", "inertia_izz")
         rows = ("p", "r")
@@ -138,26 +140,29 @@ def inertia_scale(model: LinearModel) -> Candidate | None:
     elif "q" in model.states:
         names, rows, inertia = ("inertia_iyy",), ("q",), np.array([[c.Iyy]])
     else:
-        return None
+        return []
 
-    def wrap(m: LinearModel) -> LinearModel:
-        idx = [m.states.index(s) for s in rows]
-        inv = np.linalg.inv(inertia)
+    def scaled(name: str) -> Candidate:
+        def wrap(m: LinearModel) -> LinearModel:
+            idx = [m.states.index(s) for s in rows]
+            inv = np.linalg.inv(inertia)
 
-        def build(v: Mapping[str, complex]) -> tuple:
-            A, B, C, D = m.build(v)
-            root = np.array([np.sqrt(v[n]) for n in names])
-            # I' = S I S with S = diag(sqrt(factor)): I'^-1 I = S^-1 I^-1 S^-1 I
-            change = (inv / np.outer(root, root)) @ inertia
-            dtype = np.result_type(A.dtype, change.dtype)
-            A, B = A.astype(dtype), B.astype(dtype)
-            A[idx], B[idx] = change @ A[idx], change @ B[idx]
-            return A, B, C, D
+            def build(v: Mapping[str, complex]) -> tuple:
+                A, B, C, D = m.build(v)
+                root = np.array([np.sqrt(v[n]) if n == name else 1.0 for n in names])
+                # I' = S I S with S = diag(sqrt(factor)): I'^-1 I = S^-1 I^-1 S^-1 I
+                change = (inv / np.outer(root, root)) @ inertia
+                dtype = np.result_type(A.dtype, change.dtype)
+                A, B = A.astype(dtype), B.astype(dtype)
+                A[idx], B[idx] = change @ A[idx], change @ B[idx]
+                return A, B, C, D
 
-        return extended(m, dict.fromkeys(names, 1.0), build)
+            return extended(m, {name: 1.0}, build)
 
-    return Candidate("inertia_scale", {}, names, wrap,
-                     catalogue=tuple(n.removeprefix("inertia_") for n in names))
+        return Candidate("inertia_scale", {}, (name,), wrap,
+                         catalogue=(name.removeprefix("inertia_"),))
+
+    return [scaled(n) for n in names]
 
 
 def thrust_moment(model: LinearModel) -> Candidate | None:
@@ -205,5 +210,5 @@ def mass_candidates(model: LinearModel) -> list[Candidate]:
     list of Candidate
         Those that apply to the model.
     """
-    return [c for f in (cg_offset, mass_scale, inertia_scale, thrust_moment)
-            if (c := f(model)) is not None]
+    return [*(c for f in (cg_offset, mass_scale, thrust_moment) if (c := f(model)) is not None),
+            *inertia_scales(model)]

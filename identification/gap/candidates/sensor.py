@@ -85,7 +85,7 @@ def _time_constant(entry: str, channel: str) -> Candidate:
         def build(v: Mapping[str, complex]) -> tuple:
             return lagged_output(model.build(v), row, v[name], pade)
 
-        return extended(model, {name: TAU_START}, build, (name,))
+        return extended(model, {name: TAU_START}, build, (name,), channel)
 
     return Candidate(entry, {"channel": channel}, (name,), wrap, catalogue=("tau",))
 

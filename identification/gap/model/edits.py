@@ -75,7 +75,7 @@ def identity(model: LinearModel) -> LinearModel:
 
 def extended(model: LinearModel, start: Mapping[str, float],
              build: Callable[[Mapping[str, complex]], Matrices],
-             states: tuple[str, ...] = ()) -> LinearModel:
+             states: tuple[str, ...] = (), channel: str = "") -> LinearModel:
     """``model`` with the parameters ``start`` (name -> start value) added, the new
     ``build`` and the new ``states`` appended to its states.
 
@@ -89,14 +89,18 @@ def extended(model: LinearModel, start: Mapping[str, float],
         The new (A, B, C, D) from the parameter values.
     states : tuple of str
         The new states' names.
+    channel : str
+        The record's channel the new states start from (a lag's state is the lagged
+        signal: its measured initial value, ``initial_state='measured'``); "" for none.
 
     Returns
     -------
     LinearModel
     """
+    channels = {**model.state_channels, **(dict.fromkeys(states, channel) if channel else {})}
     return LinearModel(model.name, (*model.states, *states), model.inputs, model.outputs,
                        (*model.parameters, *start), {**model.start, **start}, build,
-                       model.condition, model.description, dict(model.state_channels))
+                       model.condition, model.description, channels)
 
 
 def _dtype(*arrays: np.ndarray, extra: complex | float = 0.0) -> np.dtype:

@@ -11,7 +11,11 @@ airspeed leaving the reference condition). The package exports
 the method's API.
 """
 
-from flightid.identification.methods.filter_error.estimation import ID, estimate
+from flightid.identification.methods.filter_error.estimation import (
+    ID,
+    KINEMATIC_STATES,
+    estimate,
+)
 from flightid.identification.methods.filter_error.method import METHOD, Options, run
 
-__all__ = ["ID", "METHOD", "Options", "estimate", "run"]
+__all__ = ["ID", "KINEMATIC_STATES", "METHOD", "Options", "estimate", "run"]

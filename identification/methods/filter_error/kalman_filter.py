@@ -7,6 +7,7 @@ Gauss-Newton pass with R fixed and the measurement-noise step with the F-compens
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -29,6 +30,11 @@ MEASUREMENT_NOISE_PREFIX = "sigma_"
 # relative step of the central differences of the filter matrices: truncation error
 # ~1e-10, rounding of the Riccati solution (~1e-13 relative) amplified to ~1e-8
 RELATIVE_STEP = 1e-5
+# the Riccati solutions kept: a parameter that moves only B or D (a bias, a control
+# derivative) leaves Phi, C, Q_d and R, so the finite-difference sensitivities of
+# ``evaluate`` reuse the filter's P instead of solving again (most of the method's time)
+RICCATI_CACHE = 8
+_riccati: OrderedDict[bytes, tuple[np.ndarray, np.ndarray]] = OrderedDict()
 
 
 def process_noise_name(state: str) -> str:
@@ -166,6 +172,20 @@ def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarr
     n = A.shape[0]
     phi, gamma, _, _ = discretize(A, B, dt, np.zeros((0, n, n)),
                                      np.zeros((0, *B.shape)), hold)
+    qd, P = _covariances(A, C, F, R, dt, phi)
+    S = C @ P @ C.T + R
+    K = np.linalg.solve(S, C @ P).T  # P C^T S^-1 (S symmetric)
+    return SteadyStateFilter(phi, gamma, C, D, qd, P, 0.5 * (S + S.T), K)
+
+
+def _covariances(A: np.ndarray, C: np.ndarray, F: np.ndarray, R: np.ndarray, dt: float,
+                 phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(Q_d, P): the process-noise covariance and the Riccati solution (``RICCATI_CACHE``)."""
+    key = b"".join(np.ascontiguousarray(m, dtype=float).tobytes() for m in (A, C, F, R)) \
+        + np.float64(dt).tobytes() + np.array(C.shape).tobytes()
+    if key in _riccati:
+        _riccati.move_to_end(key)
+        return _riccati[key]
     qd = process_noise_covariance(A, F, dt)
     if np.any(qd):
         # solve_discrete_are(a, b, q, r) is the control form; the filter's predicted
@@ -173,10 +193,11 @@ def steady_state_filter(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarr
         P = scipy.linalg.solve_discrete_are(phi.T, C.T, qd, R)
         P = 0.5 * (P + P.T)
     else:
-        P = np.zeros((n, n))
-    S = C @ P @ C.T + R
-    K = np.linalg.solve(S, C @ P).T  # P C^T S^-1 (S symmetric)
-    return SteadyStateFilter(phi, gamma, C, D, qd, P, 0.5 * (S + S.T), K)
+        P = np.zeros((A.shape[0], A.shape[0]))
+    _riccati[key] = (qd, P)
+    if len(_riccati) > RICCATI_CACHE:
+        _riccati.popitem(last=False)
+    return qd, P
 
 
 def innovations(flt: SteadyStateFilter, u: np.ndarray, w: np.ndarray, z: np.ndarray,

@@ -100,6 +100,26 @@ def test_steady_state_gain_is_the_limit_of_the_time_varying_filter():
     assert np.allclose(flt.S, C @ P @ C.T + R, rtol=1e-8)
 
 
+def test_a_filter_whose_phi_c_f_and_r_are_unchanged_reuses_the_riccati_solution():
+    """A bias or control derivative moves B or D only: the cached P is the one a new
+    solve gives, to the last bit, and a changed A is solved again."""
+    model = lm.lateral(CONDITIONS["navion"])
+    A, B, C, D = model.matrices(LATERAL_TRUTH["navion"])
+    F = np.diag([0.01, 0.03, 0.01, 0.0])
+    R = np.diag([NOISE[o] ** 2 for o in model.outputs])
+    kf._riccati.clear()
+    first = kf.steady_state_filter(A, B, C, D, F, R, 0.02)
+    moved = B.copy()
+    moved[:, -1] += 0.01  # a bias: the constant input's column
+    again = kf.steady_state_filter(A, moved, C, D, F, R, 0.02)
+    assert len(kf._riccati) == 1 and again.P is first.P
+    kf._riccati.clear()
+    fresh = kf.steady_state_filter(A, moved, C, D, F, R, 0.02)
+    assert np.array_equal(fresh.P, again.P) and np.array_equal(fresh.K, again.K)
+    kf.steady_state_filter(1.01 * A, B, C, D, F, R, 0.02)
+    assert len(kf._riccati) == 2
+
+
 def test_likelihood_gradient_equals_finite_differences():
     model, truth, rec = turbulent_flight("navion", 5, PROCESS_NOISE, duration=6.0)
     data = problem_from_record(rec, model)
