@@ -60,6 +60,7 @@ from flightid.identification.methods.filter_error.kalman_filter import (
     is_noise_parameter,
     measurement_noise_name,
     process_noise_name,
+    require_filter,
 )
 from flightid.identification.methods.filter_error.relaxation import Relaxed, relax, two_starts
 from flightid.identification.methods.output_error_problem import problem_from_record
@@ -253,6 +254,7 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
     names = prob.names
     d = prob.data
     ev = fit.evaluation
+    require_filter(ev)
     correction = np.zeros(len(names))
     if names:
         innovations = ev.nu

@@ -16,6 +16,7 @@ from flightid.identification.methods.filter_error.kalman_filter import (
     FilterEvaluation,
     FilterProblem,
     evaluate,
+    require_filter,
 )
 
 
@@ -118,7 +119,8 @@ def measurement_noise(ev: FilterEvaluation, lower: np.ndarray) -> np.ndarray:
         Diagonal R, shape (ny, ny), output units squared.
     """
     innovation = np.mean(ev.nu**2, axis=0)
-    predicted = np.diag(ev.flt.C @ ev.flt.P @ ev.flt.C.T)
+    flt = require_filter(ev)
+    predicted = np.diag(flt.C @ flt.P @ flt.C.T)
     return np.diag(np.maximum(innovation - predicted, lower))
 
 
@@ -155,7 +157,8 @@ def noise_step(prob: FilterProblem, theta: np.ndarray, R: np.ndarray, R_new: np.
     """
     for a in (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125):
         R_try = np.diag(np.diag(R) ** (1 - a) * np.diag(R_new) ** a)
-        for candidate in (compensate_process_noise(prob, theta, R, R_try, ev.flt.C), theta):
+        for candidate in (compensate_process_noise(prob, theta, R, R_try, require_filter(ev).C),
+                          theta):
             cost = evaluate(prob, candidate, R_try, x0, sensitivities=False).cost
             if np.isfinite(cost) and cost < ev.cost:
                 return candidate, R_try

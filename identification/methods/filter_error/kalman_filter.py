@@ -352,6 +352,31 @@ class FilterEvaluation:
     matrix_sensitivities: dict[str, np.ndarray] | None = None
 
 
+def require_filter(ev: FilterEvaluation) -> SteadyStateFilter:
+    """``ev``'s filter.
+
+    Parameters
+    ----------
+    ev : FilterEvaluation
+        An evaluation (``evaluate``).
+
+    Returns
+    -------
+    SteadyStateFilter
+
+    Raises
+    ------
+    ValueError
+        The filter could not be built at the evaluation's parameters (no stabilising
+        Riccati solution, or a model that is not finite there).
+    """
+    if ev.flt is None:
+        raise ValueError("filter error: no steady-state Kalman filter at these parameters "
+                         "(the Riccati equation has no stabilising solution, or the model "
+                         "is not finite there)")
+    return ev.flt
+
+
 def negative_log_likelihood(nu: np.ndarray, S: np.ndarray) -> float:
     """1/2 sum nu^T S^-1 nu + N/2 ln det S (Jategaonkar eq. 5.9, constant dropped).
 

@@ -120,6 +120,14 @@ def test_a_filter_whose_phi_c_f_and_r_are_unchanged_reuses_the_riccati_solution(
     assert len(kf._riccati) == 2
 
 
+def test_a_filter_that_cannot_be_built_is_a_clear_error():
+    """An evaluation whose filter could not be built (``evaluate`` returns no filter) is a
+    ValueError that says so, not an AttributeError deep in the result."""
+    failed = kf.FilterEvaluation(float("inf"), np.empty(0), np.empty(0), None)
+    with pytest.raises(ValueError, match="no steady-state Kalman filter"):
+        kf.require_filter(failed)
+
+
 def test_likelihood_gradient_equals_finite_differences():
     model, truth, rec = turbulent_flight("navion", 5, PROCESS_NOISE, duration=6.0)
     data = problem_from_record(rec, model)
