@@ -14,10 +14,11 @@ ch. 5), which the leading candidates are judged by (``turbulence.leading``).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from flightid.identification.estimate import Estimate
 from flightid.identification.gap.model.linearise import nuisance
 from flightid.identification.methods import filter_error, output_error
 from flightid.identification.models.linear import LinearModel
@@ -152,10 +153,13 @@ class FilterFit:
     unidentifiable: dict[str, str]
     cost: float
     samples: int
+    # the whole estimate (the noise, the biases): a warm start for a model containing this
+    estimate: Estimate | None = field(default=None, compare=False, repr=False)
 
 
 def filter_fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (),
-               airframe: Sequence[str] | None = None) -> FilterFit:
+               airframe: Sequence[str] | None = None, warm: FilterFit | None = None
+               ) -> FilterFit:
     """Fit ``free`` (with the biases, the process noise and the measurement noise) of
     ``model`` on ``record`` by filter error.
 
@@ -176,6 +180,10 @@ def filter_fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (
         The states of the aircraft's motion, whose equations the gusts drive (those but the
         Euler angles carry process noise); None: ``model``'s. A candidate's own states (a
         lag's or a delay's) carry none.
+    warm : FilterFit or None
+        A fit of the same record by a model that ``model`` contains (``model`` with
+        ``free`` at their start values): started from its end point
+        (``filter_error.estimate(warm_start=...)``) instead of from output error.
 
     Returns
     -------
@@ -188,8 +196,8 @@ def filter_fit(model: LinearModel, record: FlightRecord, free: Sequence[str] = (
         record, model, free=[*free, *nuisance(model)], initial_state="measured", hold="foh",
         process_noise=[s for s in states if s not in filter_error.KINEMATIC_STATES],
         joint_noise=False, check_identifiability=False, condition_correction=False,
-        colored=True)
+        colored=True, warm_start=None if warm is None else warm.estimate)
     values = {n: float(est.values[est.names.index(n)]) for n in free}
     std = {n: float(est.std[est.names.index(n)]) for n in free}
     return FilterFit(values=values, std=std, unidentifiable={}, cost=float(est.fit["cost"]),
-                     samples=int(est.fit["samples"]))
+                     samples=int(est.fit["samples"]), estimate=est)

@@ -79,7 +79,7 @@ SETTLE_S = 8.0
 CHECKED: dict[str, tuple[str, str, str, str, str]] = {
     "alpha": ("longitudinal", "alpha", "bias", "value", "alpha bias or CL_0 mismatch"),
     "de": ("longitudinal", "elevator", "actuator_bias", "bias",
-           "elevator bias or Cm_0 mismatch"),
+           "elevator bias, Cm_0 mismatch or tail effectiveness"),
     "beta": ("lateral", "beta", "bias", "value", "beta bias or CY_0 / asymmetry"),
     "da": ("lateral", "aileron", "actuator_bias", "bias", "aileron bias or Cl_0 mismatch"),
     "dr": ("lateral", "rudder", "actuator_bias", "bias", "rudder bias or Cn_0 mismatch"),
@@ -154,16 +154,29 @@ class TrimOffset:
         d = abs(self.difference)
         return d > self.bound and d >= MATERIAL_OF.get(self.channel, MATERIAL)
 
+    @property
+    def tail_effectiveness(self) -> float | None:
+        """The elevator's: the horizontal-tail effectiveness factor k that moves the model's
+        trim elevator to the measured one (Cm_de k de = Cm_de de_model at trim:
+        k = de_model / de_measured); None for another channel or a measured trim elevator
+        within ``MATERIAL`` of zero or of the other sign (no factor moves it there)."""
+        if self.channel != "de" or abs(self.measured) < MATERIAL \
+                or self.model * self.measured <= 0.0:
+            return None
+        return self.model / self.measured
+
     def text(self) -> str:
+        k = self.tail_effectiveness
         return (f"{self.label}: {self.entry}({self.channel}) {self.parameter} "
                 f"{self.value:+.4f} +- {self.bound:.4f} rad ({math.degrees(self.value):+.2f} "
-                f"deg)")
+                f"deg)" + (f", or a tail effectiveness factor of {k:.3f}" if k else ""))
 
     def to_json(self) -> dict[str, Any]:
         return {"channel": self.channel, "class": self.label, "entry": self.entry,
                 "parameter": self.parameter, "value": self.value, "bound": self.bound,
                 "measured": self.measured, "model": self.model, "sigma": self.sigma,
-                "samples": self.samples, "named": self.named}
+                "samples": self.samples, "named": self.named,
+                "tail_effectiveness": self.tail_effectiveness}
 
 
 def effective_samples(x: np.ndarray) -> float:

@@ -30,11 +30,11 @@ the held-out seed is run).
   lift offset CL_trim = W / (qbar S), so it is in the alpha class; a thrust-line offset
   (``thrust_moment``: arm x the trim thrust) and a CG offset along x (a Cm offset
   CL dx / cbar at trim) are pitching-moment offsets, so they are in the elevator class
-  (the CG offset is in the pitch stiffness class too). A deadband of width w around zero
-  (seed-10 rules) passes a command c as c - sign(c) w/2: a surface trimmed off zero sits
-  w/2 from its command, a rigging bias at trim, so the aileron's and rudder's deadbands
-  are in their surface's class (seed 0: a c172p aileron deadband of 0.0226 rad measured at
-  trim as a bias of 0.0109, a Navion rudder one of 0.0110 rad as 0.0057);
+  (the CG offset is in the pitch stiffness class too), and so is a tail of effectiveness k
+  (an elevator factor, a Cm_de delta, tail ice; seed-13 rules): it trims at de_model / k.
+  A deadband of width w around zero (seed-10 rules) passes a command c as c - sign(c) w/2:
+  a surface trimmed off zero sits w/2 from its command, a rigging bias at trim, so the
+  aileron's and rudder's deadbands are in their surface's class;
 - the kinematic class (``trim_level.KINEMATIC``, seed-11 rules): an IMU block pitched by a
   about body y reads a_x = g sin(theta + a) in steady flight, an a_x bias b reads as b / g:
   ax bias or IMU pitch misalignment.
@@ -86,9 +86,10 @@ CLASSES: dict[str, tuple[Member, ...]] = {
     "alpha bias or CL_0 mismatch": (Member("bias", {"channel": "alpha"}), _delta("CL_0"),
                                     Member("mass_scale")),
     "beta bias or CY_0 / asymmetry": (Member("bias", {"channel": "beta"}), _delta("CY_0")),
-    "elevator bias or Cm_0 mismatch": (Member("actuator_bias", {"surface": "de"}),
-                                       _delta("Cm_0"), Member("thrust_moment"),
-                                       Member("cg_offset")),
+    "elevator bias, Cm_0 mismatch or tail effectiveness": (
+        Member("actuator_bias", {"surface": "de"}), _delta("Cm_0"), Member("thrust_moment"),
+        Member("cg_offset"), Member("control_effectiveness", {"surface": "de"}),
+        _delta("Cm_de"), Member("tail_ice")),
     "aileron bias or Cl_0 mismatch": (Member("actuator_bias", {"surface": "da"}),
                                       _delta("Cl_0"), Member("deadband", {"surface": "da"})),
     "rudder bias or Cn_0 mismatch": (Member("actuator_bias", {"surface": "dr"}),

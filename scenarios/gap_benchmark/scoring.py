@@ -184,7 +184,8 @@ def score(case: Case, result: GapResult) -> CaseResult:
             out.magnitude_error = _relative_error(e, exact[0])
         elif _at_line(e, per_axis):  # its amplitude is seen after the anti-alias filter
             out.right = out.listed = True
-        elif (offset := _at_trim(e, per_axis)) is not None:
+        elif not firsts and (offset := _at_trim(e, per_axis)) is not None:
+            # named at trim level only: the first thing the report names on its axes
             out.right = out.listed = True
             if offset.entry == e.entry and e.magnitude.get(offset.parameter):
                 injected = e.magnitude[offset.parameter]

@@ -53,16 +53,17 @@ ALWAYS: dict[str, str] = {
                   "a record of positions the limit has already acted on what was recorded",
     "deadband": "a candidate on the aileron and rudder (gap.candidates.linkage); the "
                 "elevator is trimmed away from zero, where a deadband is a constant "
-                "offset: the trim-level check's 'elevator bias or Cm_0 mismatch'",
+                "offset: the trim-level check's 'elevator bias, Cm_0 mismatch or tail "
+                "effectiveness'",
     "backlash": "a candidate on the model's surface inputs (gap.candidates.linkage); the "
                 "model has none",
     "actuator_bias": BIAS + "; the trim-level check (gap.trim_level) names a surface's "
-                     "steady deflection against the model's trim one as 'elevator bias "
-                     "or Cm_0 mismatch', 'aileron bias or Cl_0 mismatch' or 'rudder bias "
-                     "or Cn_0 mismatch' (on a record of positions, a rigging offset "
-                     "between the measured and the aerodynamic deflection or the model's "
-                     "zero moment; on a record of commands, an actuator bias or that "
-                     "mismatch)",
+                     "steady deflection against the model's trim one as 'elevator bias, "
+                     "Cm_0 mismatch or tail effectiveness', 'aileron bias or Cl_0 "
+                     "mismatch' or 'rudder bias or Cn_0 mismatch' (on a record of "
+                     "positions, a rigging offset between the measured and the "
+                     "aerodynamic deflection or the model's zero moment; on a record of "
+                     "commands, an actuator bias or that mismatch)",
 }
 # the condition-dependent delta: a model linearised at one condition holds one value of it
 TABLE = ("a delta that changes with airspeed or alpha: at one condition it is the "

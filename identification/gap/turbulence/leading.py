@@ -21,21 +21,21 @@ delta better by filter error, delta BIC -567 against -373), provided it is bette
 the model on the held-out windows under filter error too (each filtered with the
 effect's parameters from the other windows, its biases and noise fitted as the model's
 are: ``held_out``). An effect so named takes its filter-error values (output error's
-choice, when kept, its own). An effect output
-error named that filter error finds no better than the model (nor any other leading
-candidate) is not named. A pair of effects output error confirmed is named only when its
-second effect lowers the filter-error delta BIC of the first by ``PAIR_SHARE`` of the
-first's.
-
-The judgement is made on the first named effect and its pairs (``diagnosis``); the later
-effects of the sequence (``sequence.following``) are named by output error alone, as a
-judgement per step would cost as much again.
+choice, when kept, its own). An effect output error named that filter error finds no
+better than the model (nor any other leading candidate) is not named. A pair output error
+confirmed is named only when its second effect lowers the filter-error delta BIC of the
+first by ``PAIR_SHARE`` of the first's. Only the first named effect and its pairs are
+judged (``diagnosis``): a judgement per step of the sequence would cost as much again.
 
 Time constants (lags, delays) are held at their output-error values: Gauss-Newton on a
 time constant under process noise leaves for far worse points (a lag of V started at
 0.01 s: J -9890, the model as is -11776, held at 0.01 s -11800). A nonlinear actuator
 candidate (``candidates.linkage``) is scored at its grid value, with the record's surface
 passed through it.
+
+A candidate contains the model as is, so its optimum is at or below the model's; a window
+fit from output error's values that ends above it (a worse local optimum of the noise) is
+fitted again from the model's end point (``fit.filter_fit(warm=...)``), the lower J kept.
 """
 
 from __future__ import annotations
@@ -128,32 +128,47 @@ def _time_constants(cand: Candidate) -> set[str]:
     return {n for c in (cand.parts or (cand,)) if c.catalogue == ("tau",) for n in c.free}
 
 
-def _fitter(model: LinearModel, r: Ranked) -> Callable[[FlightRecord, dict[str, float] | None],
-                                                        FilterFit]:
-    """fit(record, held values or None): the candidate's filter-error fit of a window, its
-    parameters free or held at the given values (module note)."""
+def _fitter(model: LinearModel, r: Ranked, from_model: bool = False
+            ) -> Callable[[FlightRecord, dict[str, float] | None, FilterFit | None],
+                          FilterFit]:
+    """fit(record, held values or None, warm start or None): the candidate's filter-error
+    fit of a window, its parameters free or held at the given values (module note);
+    started from output error's values, or with ``from_model`` from the model as is (the
+    time constants at output error's values) and the given fit of the model's end point."""
     cand = r.candidate
     if is_linkage(cand):
         surface, value = cand.options["surface"], next(iter(r.values.values()))
 
-        def linkage(record: FlightRecord, _: dict[str, float] | None = None) -> FilterFit:
+        def linkage(record: FlightRecord, _: dict[str, float] | None = None,
+                    __: FilterFit | None = None) -> FilterFit:
             f = filter_fit(model, transformed(record, cand.entry, surface, value))
             return FilterFit(dict(r.values), dict(r.std), {}, f.cost, f.samples)
 
         return linkage
-    start = cand.wrap(model).with_start(**r.values)  # output error's estimate: near the optimum
     taus = _time_constants(cand)
+    # output error's estimate (near the optimum), or the model as is
+    start = cand.wrap(model).with_start(**(
+        {n: r.values[n] for n in taus} if from_model else r.values))
     free = tuple(n for n in cand.free if n not in taus)
 
-    def edit(record: FlightRecord, values: dict[str, float] | None = None) -> FilterFit:
+    def edit(record: FlightRecord, values: dict[str, float] | None = None,
+             warm: FilterFit | None = None) -> FilterFit:
         if values is not None:
             return filter_fit(start.with_start(**values), record, (), model.states)
-        f = filter_fit(start, record, free, model.states)
+        f = filter_fit(start, record, free, model.states, warm)
         for n in taus:
             f.values[n], f.std[n] = r.values[n], r.std[n]
         return f
 
     return edit
+
+
+def _fit_or_none(fitted: Callable[..., FilterFit], record: FlightRecord,
+                 warm: FilterFit | None = None) -> FilterFit | None:
+    try:
+        return fitted(record, None, warm)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
 
 
 class FilterJudge:
@@ -195,12 +210,18 @@ class FilterJudge:
         if id(r) not in self._evidence:
             base = self.base()
             fitted = _fitter(self.ranker.lin.model, r)
-            fits: list[FilterFit | None] = []
-            for s in self.ranker.folds.fit:
-                try:
-                    fits.append(fitted(s.record, None) if base else None)
-                except (ValueError, np.linalg.LinAlgError):
-                    fits.append(None)
+            fits = [_fit_or_none(fitted, s.record) if base else None
+                    for s in self.ranker.folds.fit]
+            if base and not is_linkage(r.candidate):
+                # a fit from output error's values that ends above the model it contains
+                # is on a worse local optimum of the noise: again from the model's end point
+                again = _fitter(self.ranker.lin.model, r, from_model=True)
+                for i, s in enumerate(self.ranker.folds.fit):
+                    f = fits[i]
+                    if f is None or f.cost > base[s.label].cost:
+                        g = _fit_or_none(again, s.record, base[s.label])
+                        if g is not None and (f is None or g.cost < f.cost):
+                            fits[i] = g
             self._fits[id(r)] = fits
             self._evidence[id(r)] = _evidence(self.ranker.folds.fit, fits, r, base)
         return self._evidence[id(r)]

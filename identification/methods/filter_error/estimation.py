@@ -99,6 +99,7 @@ def estimate(
     condition_correction: bool = True,
     colored: bool = False,
     joint_noise: bool = True,
+    warm_start: Estimate | None = None,
 ) -> Estimate:
     """Filter-error maximum-likelihood estimate of ``model``'s parameters from ``record``.
 
@@ -154,6 +155,14 @@ def estimate(
         with the other parameters, by Gauss-Newton on the full likelihood from the
         output-error start and from the relaxation's end point, keeping the lower J
         (default True), instead of the relaxation alone with the closed-form R update.
+    warm_start : Estimate or None, optional
+        A filter-error estimate of the same record by a model that this one contains
+        (the same outputs and process-noise states): the iteration starts from its end
+        point (its parameters, process noise, measurement noise and noise floor; this
+        model's other parameters at their start values) instead of from an output-error
+        fit. From the contained model's optimum the relaxation can only lower J, where
+        a start from output error may end on a worse local optimum of the noise
+        parameters (docs/gap.md, step 4b). Default None.
 
     Returns
     -------
@@ -188,9 +197,11 @@ def estimate(
                          "it the method is output error (use output_error.estimate)")
     names = list(model.parameters if free is None else free)
 
-    # output error first: start values, measurement noise and identifiability
-    oe_fit = oe.estimate(record, model, free=names, initial_state=initial_state, hold=hold,
-                         check_identifiability=check_identifiability)
+    # output error first (start values, measurement noise and identifiability), or the
+    # end point of a contained model's filter-error fit
+    oe_fit = warm_start if warm_start is not None else oe.estimate(
+        record, model, free=names, initial_state=initial_state, hold=hold,
+        check_identifiability=check_identifiability)
     data = problem_from_record(record, model, initial_state, hold)
     unidentifiable = dict(oe_fit.unidentifiable)
     R = np.diag([oe_fit.fit["noise_std"][o] ** 2 for o in model.outputs])
@@ -198,7 +209,9 @@ def estimate(
     for s in noise_states:
         channel = model.state_channels.get(s, s)
         sigma = oe_fit.fit["noise_std"].get(channel, np.sqrt(np.mean(np.diag(R))))
-        f_start[process_noise_name(s)] = 0.5 * sigma
+        name = process_noise_name(s)
+        f_start[name] = (abs(oe_fit[name]) if warm_start is not None and name in oe_fit.names
+                         else 0.5 * sigma)
     for k, v in (process_noise_start or {}).items():
         if k not in f_start:
             raise ValueError(f"process_noise_start has {k!r}; process-noise parameters are "
@@ -215,6 +228,8 @@ def estimate(
 
     # lower bound of R: a fixed fraction of the output-error residual variance
     floor = np.maximum(data.noise_floor, MIN_NOISE_FRACTION**2 * np.diag(R))
+    if warm_start is not None:  # the contained model's floor: its optimum stays feasible
+        floor = np.array([warm_start.fit["noise_floor"][o] ** 2 for o in model.outputs])
 
     def fit(active: list[str], current: dict[str, float]) -> Relaxed:
         # parameters found unidentifiable stay at the values of the fit that found them,
@@ -296,6 +311,7 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
         "cost_history": list(fit.cost_history),
         "cost": ev.cost,
         "noise_std": {o: float(np.sqrt(fit.R[j, j])) for j, o in enumerate(outs)},
+        "noise_floor": {o: float(np.sqrt(fit.lower[j])) for j, o in enumerate(outs)},
         # the relaxation's R update stops at the floor; the joint fit's sigma_<output> has
         # no bound, and one estimated below the floor is reported as such
         "noise_at_lower_bound": [o for j, o in enumerate(outs) if o not in joint
@@ -318,7 +334,8 @@ def _result(prob: FilterProblem, fit: Relaxed, unidentifiable: dict[str, str],
                                  dict(zip(names, correction.tolist(), strict=True))),
         "samples": int(d.z.shape[0]),
         "high_correlations": ident.high_correlations(names, cov, 0.9) if names else [],
-        "output_error": {"cost": oe_fit.fit["cost"], "converged": oe_fit.fit["converged"]},
+        "output_error": oe_fit.fit["output_error"] if oe_fit.method == ID else
+        {"cost": oe_fit.fit["cost"], "converged": oe_fit.fit["converged"]},
     }
     return Estimate(
         method=ID,

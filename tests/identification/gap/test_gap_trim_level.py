@@ -90,6 +90,23 @@ def test_alpha_bias_named_as_its_class_within_its_bound():
         "alpha bias or CL_0 mismatch")
 
 
+@pytest.mark.parametrize("aircraft", ["navion", "telemaster", "c172p"])
+def test_tail_effectiveness_read_from_the_trim_elevator(aircraft):
+    """A tail of effectiveness 0.8 trims at de_model / 0.8: the elevator offset is named as
+    its class, and the factor that moves the model's trim elevator to the measured one,
+    de_model / de_measured, is within its bound of 0.8 (the offset's Z sigma carried through
+    k = m / x: Z sigma k / |x|; measured 0.767 +- 0.16, 0.795 +- 0.07, 0.800 +- 0.04)."""
+    tail = Effect("control_effectiveness", "longitudinal", "card", {"surface": "de"},
+                  {"factor": 0.8})
+    offsets, _ = trim_offsets([fly_case(Case(0, 5, aircraft, SINGLE, (tail,)), "light")],
+                              aircraft)
+    o = next(o for o in offsets if o.channel == "de")
+    assert o.named and o.label == "elevator bias, Cm_0 mismatch or tail effectiveness"
+    k = o.tail_effectiveness
+    assert k is not None and abs(k - 0.8) <= o.bound * k / abs(o.measured)
+    assert "tail effectiveness factor" in o.text()
+
+
 def test_rudder_bias_named_on_a_record_of_commands():
     bias = -math.radians(0.5)  # aerodynamic minus commanded deflection, rad
     case = Case(1, 35, "twinotter", SINGLE, (Effect(
@@ -125,7 +142,14 @@ def test_trim_classes_hold_what_the_trim_cannot_tell_apart():
     cg = Effect("cg_offset", "longitudinal", "card", {}, {"x": 0.05})
     rudder = Effect("actuator_bias", "lateral", "card", {"surface": "dr"}, {"bias": 0.01})
     assert classes_of(mass) == ["alpha bias or CL_0 mismatch"]
-    assert classes_of(cg) == ["pitch stiffness", "elevator bias or Cm_0 mismatch"]
+    assert classes_of(cg) == ["pitch stiffness",
+                              "elevator bias, Cm_0 mismatch or tail effectiveness"]
+    # a tail of effectiveness k trims the elevator at de_model / k (seed-13 rules)
+    for tail in (Effect("control_effectiveness", "longitudinal", "card", {"surface": "de"},
+                        {"factor": 0.85}),
+                 Effect("tail_ice", "longitudinal", "card", {},
+                        {"elevator": 0.85, "stability": 0.9, "damping": 0.9})):
+        assert "elevator bias, Cm_0 mismatch or tail effectiveness" in classes_of(tail)
     assert classes_of(rudder) == ["rudder bias or Cn_0 mismatch"]
     # a deadband offsets a surface trimmed off zero by half its width (seed-10 rules)
     for surface, name in (("da", "aileron bias or Cl_0 mismatch"),
