@@ -174,14 +174,22 @@ def estimate(
     Raises
     ------
     ValueError
-        An invalid ``initial_state``, process noise on an unknown state or on none, or an
-        unknown ``process_noise_start`` key.
+        An invalid ``initial_state``, process noise on an unknown state or on none, an
+        unknown ``process_noise_start`` key, or a ``warm_start`` that is not a
+        filter-error estimate of this model's outputs.
     """
     if initial_state not in ("measured", "zero"):
         raise ValueError(
             f"filter error takes initial_state 'measured' or 'zero', got {initial_state!r} "
             "(the Kalman filter forgets the initial state, so it is not estimated)"
         )
+    if warm_start is not None and not (
+            warm_start.method == ID
+            and set(model.outputs) <= set(warm_start.fit.get("noise_floor", {}))):
+        raise ValueError(
+            "warm_start must be a filter-error estimate of the same record by a model this "
+            f"one contains (outputs {', '.join(model.outputs)}); got a "
+            f"{warm_start.method!r} estimate")
     if start:
         model = model.with_start(**start)
     if isinstance(process_noise, str):  # 'beta' or 'beta,p,r' from the command line

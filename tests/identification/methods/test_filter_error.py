@@ -303,6 +303,8 @@ def test_bad_input_is_reported_clearly():
         fe.estimate(rec, model, process_noise=[])
     with pytest.raises(ValueError, match="process_noise_start has 'F_phi'"):
         fe.estimate(rec, model, process_noise_start={"F_phi": 0.1})
+    with pytest.raises(ValueError, match="warm_start must be a filter-error estimate.*'oe'"):
+        fe.estimate(rec, model, warm_start=oe.estimate(rec, model))
     with pytest.raises(ValueError, match="process noise on unknown state"):
         kf.simulate_process_noise(model, LATERAL_TRUTH["navion"], {"q": 0.1}, rec.time,
                                   np.zeros((rec.time.size, 2)))
