@@ -90,7 +90,10 @@ def discretize(
     for j in range(order - 1):  # the chain I/dt: tau^(j+1) / (j+1)!
         rows = slice(2 * n + j * m, 2 * n + (j + 1) * m)
         big[:, rows, 2 * n + (j + 1) * m:2 * n + (j + 2) * m] = np.eye(m)
-    e = scipy.linalg.expm(big)
+    # a trial step of an optimiser may make A explode: the non-finite matrices that follow
+    # are rejected by the caller's cost, not warned about
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = scipy.linalg.expm(big)
     phi = e[0, :n, :n]
     dphi = e[:npar, n:2 * n, :n]
     g = [e[:, :, 2 * n + j * m:2 * n + (j + 1) * m] for j in range(order)]

@@ -149,7 +149,10 @@ def inertia_scales(model: LinearModel) -> list[Candidate]:
 
             def build(v: Mapping[str, complex]) -> tuple:
                 A, B, C, D = m.build(v)
-                root = np.array([np.sqrt(v[n]) if n == name else 1.0 for n in names])
+                # a non-positive trial factor (no physical inertia) gives NaN, which the
+                # fit rejects
+                with np.errstate(invalid="ignore"):
+                    root = np.array([np.sqrt(v[n]) if n == name else 1.0 for n in names])
                 # I' = S I S with S = diag(sqrt(factor)): I'^-1 I = S^-1 I^-1 S^-1 I
                 change = (inv / np.outer(root, root)) @ inertia
                 dtype = np.result_type(A.dtype, change.dtype)

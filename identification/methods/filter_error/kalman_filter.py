@@ -129,9 +129,12 @@ def process_noise_covariance(A: np.ndarray, F: np.ndarray, dt: float) -> np.ndar
     big[:n, :n] = -A * dt
     big[:n, n:] = F @ F.T * dt
     big[n:, n:] = A.T * dt
-    e = scipy.linalg.expm(big)
-    phi = e[n:, n:].T
-    q = phi @ e[:n, n:]
+    # a trial step of the optimiser may make A explode: the non-finite Q_d that follows is
+    # rejected by the caller (``iteration``), not warned about
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = scipy.linalg.expm(big)
+        phi = e[n:, n:].T
+        q = phi @ e[:n, n:]
     return 0.5 * (q + q.T)
 
 

@@ -69,3 +69,22 @@ def test_input_matrix_derivatives_are_exact(hold):
                              np.zeros((0, 2, 1)), hold)
     # forward difference of a smooth map: error ~ h |d2 Gamma| ~ 1e-8 of dGamma's scale
     assert np.max(np.abs((up - gamma) / h - dgamma[0])) < 1e-6 * np.max(np.abs(dgamma))
+
+
+def test_an_exploding_trial_step_is_non_finite_without_a_warning() -> None:
+    """An optimiser's trial step with a pole at +1e5 rad/s (e^2000 per step overflows a
+    float) gives a non-finite transition matrix that the caller's cost rejects, and no
+    RuntimeWarning reaches the user's terminal."""
+    import warnings
+
+    from flightid.identification.methods.filter_error.kalman_filter import (
+        process_noise_covariance,
+    )
+
+    wild = np.array([[1e5, 0.0], [0.0, -0.7]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        phi, _, _, _ = discretize(wild, B, DT, np.zeros((0, 2, 2)), np.zeros((0, 2, 1)), "foh")
+        q = process_noise_covariance(wild, np.eye(2), DT)
+    assert not np.all(np.isfinite(phi))
+    assert not np.all(np.isfinite(q))
