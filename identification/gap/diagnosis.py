@@ -31,6 +31,7 @@ from flightid.identification.gap.candidates.compatibility import (
     sensor_lag,
     undone,
 )
+from flightid.identification.gap.candidates.gyro_scale import gyro_scale
 from flightid.identification.gap.candidates.identifiable import not_identifiable
 from flightid.identification.gap.candidates.linkage import is_linkage, transformed
 from flightid.identification.gap.fit import fit
@@ -370,11 +371,12 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     windows = {"fit": [s.label for s in fit_windows],
                "held_out": sorted({w for _, t in folds.folds for w in (s.label for s in t)})}
     before = null_test(ranker.base, _by_label(fit_windows), inputs)
-    # an accelerometer lag or delay, seen in the relation between measured channels (the
-    # output-error fit loses it in the gusts): named first, the other tests on the record
-    # with it undone
-    found = sensor_lag(ranker.base, _by_label(fit_windows), inputs, axis)
-    found = found if found is not None and found.found else None
+    # an accelerometer lag or delay, or a gyro's scale, seen in a relation between measured
+    # channels (the output-error fit loses them in the gusts or takes them for the
+    # aerodynamics): named first, the other tests on the record with it undone
+    found = next((f for f in (sensor_lag(ranker.base, _by_label(fit_windows), inputs, axis),
+                              gyro_scale(_by_label(fit_windows), axis))
+                  if f is not None and f.found), None)
     structure = nonlinear_test(undone(ranker.base, found) if found else ranker.base,
                                _by_label(fit_windows), inputs, axis)
     unseen = not_identifiable(lin.model, records, surfaces=lin.surfaces)

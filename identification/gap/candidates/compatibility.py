@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flightid.identification.gap.candidates.gyro_scale import GyroScale
 from flightid.identification.gap.candidates.sensor import delay, lag
 from flightid.identification.gap.fit import WindowFit
 from flightid.identification.gap.model.edits import Candidate
@@ -94,6 +95,20 @@ class SensorLag:
         return bool(self.test.passes(*LEVEL)
                     and TAU_RANGE_S[0] <= self.tau <= TAU_RANGE_S[1] and self.pooled > 0
                     and self.holds >= RELATION_HOLDS)
+
+    def corrected(self, measured: np.ndarray, time: np.ndarray) -> np.ndarray:
+        """The accelerometer's measured samples with the lag or delay undone: a lag's
+        a_m + tau da_m/dt, a delay's a_m(t + tau) (the last samples held)."""
+        a = np.asarray(measured, float)
+        return (a + self.tau * np.gradient(a, time) if self.entry == "lag"
+                else np.interp(time + self.tau, time, a))
+
+    def candidate(self) -> tuple[Candidate, dict[str, float], dict[str, float]]:
+        """The linear model's ``lag`` or ``delay`` candidate at this time constant, and its
+        std (s)."""
+        cand = (lag if self.entry == "lag" else delay)(self.channel)
+        (name,) = cand.free
+        return cand, {name: self.tau}, {name: self.std}
 
     def to_json(self) -> dict:
         return {"entry": self.entry, "channel": self.channel, "tau_s": self.tau,
@@ -224,49 +239,42 @@ def sensor_lag(fits: Mapping[str, WindowFit], records: Mapping[str, FlightRecord
                default=None)
 
 
-def undone(fits: Mapping[str, WindowFit], found: SensorLag) -> dict[str, WindowFit]:
-    """The windows' fits with the accelerometer's measurement undone by ``found``: a lag's
-    a_m + tau da_m/dt, a delay's a_m(t + tau) (the last samples held), for the tests that
-    read the measured channels (``nonlinearity.nonlinear_test``).
+def undone(fits: Mapping[str, WindowFit],
+           found: SensorLag | GyroScale) -> dict[str, WindowFit]:
+    """The windows' fits with the sensor's measurement undone by ``found`` (an
+    accelerometer's lag or delay, a gyro's scale), for the tests that read the measured
+    channels (``nonlinearity.nonlinear_test``).
 
     Parameters
     ----------
     fits : mapping of str to WindowFit
         The windows' fits.
-    found : SensorLag
-        The accelerometer's lag or delay.
+    found : SensorLag or GyroScale
+        The sensor's lag, delay or scale.
 
     Returns
     -------
     dict of str to WindowFit
         The fits with the channel's measured samples corrected (the rest unchanged).
     """
-    out = {}
-    for k, f in fits.items():
-        if found.channel not in f.measured:
-            out[k] = f
-            continue
-        a, t = np.asarray(f.measured[found.channel], float), f.time
-        fixed = (a + found.tau * np.gradient(a, t) if found.entry == "lag"
-                 else np.interp(t + found.tau, t, a))
-        out[k] = dataclasses.replace(f, measured={**f.measured, found.channel: fixed})
-    return out
+    return {k: (dataclasses.replace(f, measured={
+        **f.measured, found.channel: found.corrected(f.measured[found.channel], f.time)})
+        if found.channel in f.measured else f) for k, f in fits.items()}
 
 
-def as_candidate(found: SensorLag) -> tuple[Candidate, dict[str, float], dict[str, float]]:
-    """The lag or delay as the linear model's candidate (``candidates.sensor``) with its
-    time constant at the relation's estimate, for ``rank.Ranker.held_at``.
+def as_candidate(found: SensorLag | GyroScale
+                 ) -> tuple[Candidate, dict[str, float], dict[str, float]]:
+    """The sensor effect as the linear model's candidate (``candidates.sensor``) at the
+    relation's estimate, for ``rank.Ranker.held_at``.
 
     Parameters
     ----------
-    found : SensorLag
-        A found accelerometer lag or delay.
+    found : SensorLag or GyroScale
+        A found accelerometer lag or delay, or a gyro's scale.
 
     Returns
     -------
     tuple of (Candidate, dict of str to float, dict of str to float)
-        The candidate, its parameter's value and standard error (s).
+        The candidate, its parameter's value and standard error.
     """
-    cand = (lag if found.entry == "lag" else delay)(found.channel)
-    (name,) = cand.free
-    return cand, {name: found.tau}, {name: found.std}
+    return found.candidate()

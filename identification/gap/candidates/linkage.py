@@ -9,13 +9,14 @@ acts: the record's surface (already through the aircraft's own actuators,
 ``model.surfaces.actuated``) is passed through the entry at a trial value, in series as
 JSBSim runs it (``run_actuators`` for the rate limit; the play and deadband operators of
 ``nonlinearity``), and the model as is is fitted on that record (only the nuisance
-parameters: ``fit.fit``). The value is found on a grid (``GRIDS``, geometric, 0.25 to 3
-times the catalogue default) with a parabola through the best point and its neighbours in
-log-value; a minimum at the grid's edge is no estimate (a rate limit that never acts, a
-play wider than the maneuvers). The evidence is the linear candidates': delta BIC on the
-fitted windows and the cost and gap on each held-out window with the value chosen on the
-other windows (``rank.Ranker.judge``), so they are ranked with them. A surface nonlinearity
-is not a state of the linear model, so the sequence of ``sequence.following`` stops at it.
+parameters: ``fit.fit``). The value is found on a grid (``GRIDS``, geometric, 0.25 to 6
+times the catalogue default: a worn linkage's 1.5 deg play lies inside it) with a parabola
+through the best point and its neighbours in log-value; a minimum at the grid's edge is
+no estimate (a rate limit that never acts, a play wider than the maneuvers). The evidence
+is the linear candidates': delta BIC on the fitted windows and the cost and gap on each
+held-out window with the value chosen on the other windows (``rank.Ranker.judge``), so
+they are ranked with them. A surface nonlinearity is not a state of the linear model, so
+the sequence of ``sequence.following`` stops at it.
 """
 
 from __future__ import annotations
@@ -33,12 +34,15 @@ from flightid.record import FlightRecord
 from flightid.sim.augment.actuators import Actuator
 from flightid.units import DEG
 
-# per entry: (catalogue parameter, catalogue default, trial values). Geometric grids of 9
-# values over 0.25-3 x the default (rate limit 20 deg/s; widths 0.5 deg)
+# per entry: (catalogue parameter, catalogue default, trial values). Geometric grids of 11
+# values over 0.25-6 x the default (rate limit 20 deg/s; widths 0.5 deg). The top is twice
+# the widest play or deadband the blind check draws (1.5 deg): with the grid's top at
+# 3 x the default (1.5 deg), 0 of 8 seen single plays of 1.2-1.5 deg were named, their
+# minimum at the edge (docs/gap_benchmark.md, "The rules for the seed-14 run")
 ENTRIES = ("rate_limit", "backlash", "deadband")
 DEFAULTS = {"rate_limit": ("rate", 20.0 * DEG), "backlash": ("width", 0.5 * DEG),
             "deadband": ("width", 0.5 * DEG)}
-GRID_FACTORS = tuple(float(f) for f in np.geomspace(0.25, 3.0, 9))
+GRID_FACTORS = tuple(float(f) for f in np.geomspace(0.25, 6.0, 11))
 GRIDS = {e: tuple(d * f for f in GRID_FACTORS) for e, (_, d) in DEFAULTS.items()}
 
 

@@ -95,3 +95,20 @@ def test_elevator_play_is_named_backlash():
     result = diagnose([fly_case(case, "light")], "navion", axis="longitudinal")
     assert result.named and same(effect, result.named[0]), [
         r.candidate.label for r in result.effects[:3]]
+
+
+def test_worn_elevator_play_is_inside_the_grid_and_named():
+    """Seed 13's case 2: a Navion elevator play of 1.23 deg (0.0215 rad, a worn linkage;
+    the blind check draws to 1.5 deg), light turbulence. With the grid's top at 3 x the
+    default (1.5 deg) the minimum fell on the edge, no estimate, and ``inertia_scale()``
+    was named; with the top at 6 x (3 deg) ``backlash(de)`` is named first with an
+    estimate inside the grid (measured 0.0225 rad; plays come out up to twice the injected
+    width, docs/gap_benchmark.md, so the width is held to that factor)."""
+    effect = Effect("backlash", "longitudinal", "card", {"surface": "de"},
+                    {"width": 0.021474052858557566})
+    case = Case(2, 2091194417, "navion", SINGLE, (effect,))
+    result = diagnose([fly_case(case, "light")], "navion", axis="longitudinal")
+    assert result.named and same(effect, result.named[0]), [
+        r.candidate.label for r in result.effects[:3]]
+    width = result.named[0].values["backlash_de"]
+    assert 0.5 * 0.0215 < width < 2.0 * 0.0215
