@@ -118,17 +118,17 @@ def _relation(record: FlightRecord, axis: str) -> tuple[np.ndarray, ...] | None:
     phi, theta, p, q, r = (np.asarray(record[c], float) for c in ("phi", "theta", "p", "q",
                                                                     "r"))
     if axis == "lateral":  # r beside: an IMU pitched on its mount reads p cos a - r sin a
-        rate, other, beside = p, np.tan(theta) * (q * np.sin(phi) + r * np.cos(phi)), r
+        rate, other, beside = p, np.tan(theta) * (q * np.sin(phi) + r * np.cos(phi)), [r]
     else:
-        rate, other, beside = q * np.cos(phi), -r * np.sin(phi), phi * 0.0
+        rate, other, beside = q * np.cos(phi), -r * np.sin(phi), []
     b, a = signal.butter(4, LOWPASS_HZ * 2 * dt)
     rdot = np.gradient(rate, dt)
     low = [signal.filtfilt(b, a, v) for v in
            (np.gradient(phi if attitude == "phi" else theta, dt) - rate - other, rate,
-            other, rdot, np.gradient(rdot, dt), beside)]
+            other, rdot, np.gradient(rdot, dt), *beside)]
     keep = slice(edge, len(t) - edge)
     e, x, *z = (v[keep] for v in low)
-    return e, x, np.column_stack([*(v for v in z if np.any(v)), np.ones_like(e)])
+    return e, x, np.column_stack([*z, np.ones_like(e)])
 
 
 def _residual(e: np.ndarray, x: np.ndarray, z: np.ndarray, c: float | None) -> np.ndarray:
