@@ -33,7 +33,7 @@ from flightid.identification.gap.candidates.sensor import delay, lag
 from flightid.identification.gap.fit import WindowFit
 from flightid.identification.gap.model.edits import Candidate
 from flightid.identification.gap.nonlinearity import known_regressors, signals
-from flightid.identification.gap.verdict import ChannelTest, channel_test
+from flightid.identification.gap.verdict import ChannelTest, channel_test, p_text
 from flightid.identification.gap.window.regressors import highpass
 from flightid.record import FlightRecord
 
@@ -73,7 +73,7 @@ class SensorLag:
         """The evidence, in words."""
         return (f"seen in the relation of {self.channel} to the measured flow angle, rates "
                 f"and surfaces (data compatibility): tau {self.tau:.3f} +- {self.std:.3f} s, "
-                f"p {self.test.p_value:.1e}, share {self.test.share:.2f}, held-out share "
+                f"p {p_text(self.test.p_value)}, share {self.test.share:.2f}, held-out share "
                 f"{self.pooled:.2f}")
 
     # the held-out windows pooled: the residual energy removed over what the known set

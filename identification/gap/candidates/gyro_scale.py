@@ -41,7 +41,7 @@ from scipy import signal
 from flightid.identification.gap.candidates.ranges import INERTIAL_SCALE
 from flightid.identification.gap.candidates.sensor import scale
 from flightid.identification.gap.model.edits import Candidate
-from flightid.identification.gap.verdict import ChannelTest, channel_test
+from flightid.identification.gap.verdict import ChannelTest, channel_test, p_text
 from flightid.record import FlightRecord
 
 # per axis: (the gyro, the attitude whose rate it drives)
@@ -76,7 +76,7 @@ class GyroScale:
         return (f"seen in the attitude kinematics (data compatibility: d{self.attitude}/dt "
                 f"against {self.channel}): {self.channel} reads {self.factor:.4f} +- "
                 f"{self.std:.4f} times the rate ({self.attitude} scale "
-                f"{1.0 / self.factor:.4f} reads the same), p {self.test.p_value:.1e}, "
+                f"{1.0 / self.factor:.4f} reads the same), p {p_text(self.test.p_value)}, "
                 f"held-out share {self.pooled:.2f}")
 
     @property
