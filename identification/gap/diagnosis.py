@@ -26,11 +26,7 @@ from flightid.identification.data.axes import AXIS_INPUTS, AXIS_NAMES, excited_a
 from flightid.identification.engine.threads import one_blas_thread
 from flightid.identification.gap.candidates.build import catalogue_candidates
 from flightid.identification.gap.candidates.classes import class_text
-from flightid.identification.gap.candidates.compatibility import (
-    as_candidate,
-    sensor_lag,
-    undone,
-)
+from flightid.identification.gap.candidates.compatibility import sensor_lag, undone
 from flightid.identification.gap.candidates.gyro_scale import gyro_scale
 from flightid.identification.gap.candidates.identifiable import not_identifiable
 from flightid.identification.gap.candidates.linkage import is_linkage, transformed
@@ -389,7 +385,7 @@ def _diagnose_axis(axis: str, records: list[FlightRecord], aircraft: str,
     named: list[Ranked] = []
     if found is not None:
         samples = sum(f.samples for f in ranker.base.values())
-        ranked = [ranker.held_at(*as_candidate(found),
+        ranked = [ranker.held_at(*found.candidate(),
                                  -found.test.statistic + math.log(max(samples, 2)))]
         ranked[0].confirmed, ranked[0].note, both = True, found.note, []
     else:

@@ -261,20 +261,3 @@ def undone(fits: Mapping[str, WindowFit],
         **f.measured, found.channel: found.corrected(f.measured[found.channel], f.time)})
         if found.channel in f.measured else f) for k, f in fits.items()}
 
-
-def as_candidate(found: SensorLag | GyroScale
-                 ) -> tuple[Candidate, dict[str, float], dict[str, float]]:
-    """The sensor effect as the linear model's candidate (``candidates.sensor``) at the
-    relation's estimate, for ``rank.Ranker.held_at``.
-
-    Parameters
-    ----------
-    found : SensorLag or GyroScale
-        A found accelerometer lag or delay, or a gyro's scale.
-
-    Returns
-    -------
-    tuple of (Candidate, dict of str to float, dict of str to float)
-        The candidate, its parameter's value and standard error.
-    """
-    return found.candidate()
