@@ -98,16 +98,11 @@ class GyroScale:
         (name,) = cand.free
         return cand, {name: self.factor}, {name: self.std}
 
-    def to_json(self) -> dict:
-        return {"entry": "scale", "channel": self.channel, "factor": self.factor,
-                "std": self.std, "p_value": self.test.p_value, "heldout_gain": self.heldout,
-                "heldout_pooled": self.pooled, "found": self.found}
-
 
 def _relation(record: FlightRecord, axis: str) -> tuple[np.ndarray, ...] | None:
     """The residual of the nominal relation, the gyro, and the nuisance regressors of one
     window, filtered and cut (None without the channels or samples)."""
-    gyro, attitude = GYROS[axis]
+    attitude = GYROS[axis][1]
     if not all(c in record for c in ("phi", "theta", "p", "q", "r")):
         return None
     t = np.asarray(record.time, float)

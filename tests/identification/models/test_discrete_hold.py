@@ -10,10 +10,13 @@ samples; Catmull-Rom ('cubic'), O(dt^3), exact for quadratics.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.integrate
 
+from flightid.identification.methods.filter_error.kalman_filter import process_noise_covariance
 from flightid.identification.models.discrete import discretize, hold_inputs, propagate
 
 A = np.array([[-1.3, 2.0], [-4.0, -0.7]])
@@ -75,12 +78,6 @@ def test_an_exploding_trial_step_is_non_finite_without_a_warning() -> None:
     """An optimiser's trial step with a pole at +1e5 rad/s (e^2000 per step overflows a
     float) gives a non-finite transition matrix that the caller's cost rejects, and no
     RuntimeWarning reaches the user's terminal."""
-    import warnings
-
-    from flightid.identification.methods.filter_error.kalman_filter import (
-        process_noise_covariance,
-    )
-
     wild = np.array([[1e5, 0.0], [0.0, -0.7]])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
